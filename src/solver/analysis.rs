@@ -1,0 +1,674 @@
+//! The exact minimisation: the upper envelope of the bounds, the objective piece by piece, its
+//! least value over the allowed range and its local minima over the graspable range.
+//!
+//! On each piece of the envelope the active bound is one sinusoid `f(θ)`, and
+//! - `norm2`: `P² ∝ Σ (T_i + w_i max(f, 0))²` is a quadratic form in `(sin θ, cos θ)`, whose
+//!   stationary points are closed forms;
+//! - `norm1`: `P ∝ Σ |T_i + w_i α*|` with `α*` one of `f`, or the zero of a friction force, is a
+//!   positive sinusoid between the zeros of its terms, hence concave: its minima lie at breakpoints;
+//! - `internal_force`: `P ∝ max(f, 0)` is a sinusoid or zero.
+//!
+//! So the minimiser is one of a short list of closed-form angles, each of which is evaluated.
+
+use super::frame::GraspFrame;
+use super::paper::{self, FORCE_SCALE};
+use super::sinusoid::{next_periodic, wrap_angle, Angle, QuadForm, Sinusoid};
+use super::{
+    AllowedRange, CandidateC, ConeMiss, GraspCase, InvalidInput, LocalMinimum, NoForceClosure,
+    Objective, PaperCandidate, Recommendation,
+};
+use std::f64::consts::TAU;
+
+/// Two angles closer than this (rad) are the same point, for labels and duplicates.
+const SAME_ANGLE: f64 = 1e-9;
+/// Objective values closer than this, relative to themselves or to the weight, tie; the smaller
+/// wrist rotation wins.
+const TIE: f64 = 1e-12;
+/// Bounds larger than this many times the scale are ignored in tie-breaks of the envelope.
+const ENVELOPE_TIE: f64 = 1e-12;
+
+/// The objective on one interval of θ.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Shape {
+    /// `P = weight · FORCE_SCALE · sqrt(Q)`.
+    Quad(QuadForm),
+    /// `P = weight · FORCE_SCALE · S`.
+    Sin(Sinusoid),
+}
+
+impl Shape {
+    /// Value of the part before scaling (`Q` or `S`); monotone in `P`.
+    fn raw(&self, at: &Angle) -> f64 {
+        match self {
+            Shape::Quad(q) => q.value(at),
+            Shape::Sin(s) => s.value(at),
+        }
+    }
+
+    /// Sign-faithful slope (of `Q` or `S`).
+    fn slope(&self, at: &Angle) -> f64 {
+        match self {
+            Shape::Quad(q) => q.slope(at),
+            Shape::Sin(s) => s.slope(at),
+        }
+    }
+
+    fn minima_between(&self, lo: f64, hi: f64, out: &mut Vec<f64>) {
+        match self {
+            Shape::Quad(q) => q.minima_between(lo, hi, out),
+            Shape::Sin(s) => s.minima_between(lo, hi, out),
+        }
+    }
+
+    fn is_constant(&self) -> bool {
+        match self {
+            Shape::Quad(q) => q.is_constant(),
+            Shape::Sin(s) => s.a == 0.0 && s.b == 0.0,
+        }
+    }
+}
+
+/// One interval of θ on which the objective is a single [`Shape`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Segment {
+    lo: f64,
+    hi: f64,
+    shape: Shape,
+}
+
+/// The objective at one orientation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointValue {
+    /// `α_min(θ)`, the least feasible internal-force parameter (normalised units).
+    pub alpha_min: f64,
+    /// The α the objective chooses.
+    pub alpha: f64,
+    /// Objective value, N.
+    pub power: f64,
+    /// Squeeze force each finger adds, N.
+    pub internal_force: f64,
+    /// `(N1, F1, N2, F2)`, N, paper labelling and paper tangents.
+    pub forces: [f64; 4],
+}
+
+/// A grasp with force closure, analysed for one objective.
+#[derive(Debug, Clone)]
+pub struct Analysis {
+    frame: GraspFrame,
+    objective: Objective,
+    /// `α_1 .. α_6`.
+    alphas: [Sinusoid; 6],
+    /// `F_T / FORCE_SCALE`.
+    particular: [Sinusoid; 4],
+    /// `F_N / FORCE_SCALE`.
+    internal: [f64; 4],
+    graspable: (f64, f64),
+    segments: Vec<Segment>,
+}
+
+impl Analysis {
+    /// Checks force closure and builds the objective over the graspable range.
+    pub fn new(frame: &GraspFrame, objective: Objective) -> Result<Self, NoForceClosure> {
+        let misses = paper::closure_misses(frame);
+        if misses.iter().any(Option::is_some) {
+            return Err(NoForceClosure {
+                misses: misses
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(i, m)| {
+                        m.map(|(half_angle, angle_to_other)| ConeMiss {
+                            contact: frame.candidate_contact(i == 0),
+                            half_angle,
+                            angle_to_other,
+                        })
+                    })
+                    .collect(),
+                friction_safety_factor: frame.friction_safety_factor,
+            });
+        }
+        let mut analysis = Self {
+            frame: *frame,
+            objective,
+            alphas: paper::alpha_bounds(frame),
+            particular: paper::balance_particular(frame),
+            internal: paper::balance_internal(frame),
+            graspable: paper::graspable_range(frame),
+            segments: Vec::with_capacity(16),
+        };
+        analysis.build_segments();
+        Ok(analysis)
+    }
+
+    /// The grasp in the paper frame.
+    pub fn frame(&self) -> &GraspFrame {
+        &self.frame
+    }
+
+    /// The six bounds `α_1 .. α_6` (normalised units: lengths over the contact distance).
+    pub fn alphas(&self) -> &[Sinusoid; 6] {
+        &self.alphas
+    }
+
+    /// The graspable range `(θ_min, θ_max)`, rad.
+    pub fn graspable_range(&self) -> (f64, f64) {
+        self.graspable
+    }
+
+    /// The from-above range, rad.
+    pub fn from_above_range(&self) -> (f64, f64) {
+        paper::from_above_range(&self.frame)
+    }
+
+    /// The bounds whose envelope is the objective's α: `α_3 .. α_6`, and zero where the objective
+    /// never asks for a negative squeeze.
+    fn envelope_functions(&self) -> ([Sinusoid; 5], usize) {
+        let [_, _, a3, a4, a5, a6] = self.alphas;
+        match self.objective {
+            Objective::Norm1 => ([a3, a4, a5, a6, Sinusoid::ZERO], 4),
+            Objective::Norm2 | Objective::InternalForce => ([a3, a4, a5, a6, Sinusoid::ZERO], 5),
+        }
+    }
+
+    /// Walks the upper envelope over the graspable range and turns each piece into segments of
+    /// the objective.
+    fn build_segments(&mut self) {
+        let (funcs, n) = self.envelope_functions();
+        let funcs = &funcs[..n];
+        let (lo, hi) = self.graspable;
+        let scale = funcs.iter().map(Sinusoid::amplitude).fold(0.0, f64::max);
+        let tol = ENVELOPE_TIE * scale.max(f64::MIN_POSITIVE);
+        let mut t = lo;
+        let mut active = top_at(funcs, t, tol);
+        // Each step moves to a crossing of the active bound; there are at most two crossings per
+        // pair in a range shorter than 2π, so this bound is never reached on real input.
+        for _ in 0..64 {
+            let mut next = f64::INFINITY;
+            for (j, g) in funcs.iter().enumerate() {
+                if j != active {
+                    if let Some(r) = g.minus(&funcs[active]).next_rise(t) {
+                        next = next.min(r);
+                    }
+                }
+            }
+            let end = next.min(hi);
+            if end > t {
+                self.push_piece(t, end, &funcs[active]);
+            }
+            if next >= hi {
+                break;
+            }
+            t = next;
+            active = top_at(funcs, t, tol);
+        }
+    }
+
+    /// Adds the objective's segments for one envelope piece `[lo, hi]` with active bound `f`.
+    fn push_piece(&mut self, lo: f64, hi: f64, f: &Sinusoid) {
+        let t = &self.particular;
+        let w = &self.internal;
+        match self.objective {
+            Objective::Norm2 => {
+                let terms: [Sinusoid; 4] = std::array::from_fn(|i| t[i].plus_scaled(w[i], f));
+                self.segments.push(Segment {
+                    lo,
+                    hi,
+                    shape: Shape::Quad(QuadForm::sum_of_squares(&terms)),
+                });
+            }
+            Objective::InternalForce => self.segments.push(Segment {
+                lo,
+                hi,
+                shape: Shape::Sin(*f),
+            }),
+            Objective::Norm1 => {
+                // Breakpoints inside the piece: where a friction force at α = f changes sign,
+                // and where the two friction zeros cross (r1 = r2 ⇔ c2 T_F1 - c1 T_F2 = 0).
+                let mut cuts = Vec::with_capacity(8);
+                cuts.push(lo);
+                t[1].plus_scaled(w[1], f).zeros_between(lo, hi, &mut cuts);
+                t[3].plus_scaled(w[3], f).zeros_between(lo, hi, &mut cuts);
+                if w[1] != 0.0 && w[3] != 0.0 {
+                    t[1].scaled(w[3])
+                        .minus(&t[3].scaled(w[1]))
+                        .zeros_between(lo, hi, &mut cuts);
+                }
+                cuts.push(hi);
+                cuts.sort_by(f64::total_cmp);
+                for pair in cuts.windows(2) {
+                    let (a, b) = (pair[0], pair[1]);
+                    if b > a {
+                        let shape = Shape::Sin(self.norm1_piece(f, 0.5 * (a + b)));
+                        self.segments.push(Segment {
+                            lo: a,
+                            hi: b,
+                            shape,
+                        });
+                    }
+                }
+            }
+        }
+    }
+
+    /// The friction-force zero `r_i = -T_Fi / c_i` as a sinusoid (`i` = 1 or 3 in `(N1,F1,N2,F2)`).
+    fn friction_zero(&self, i: usize) -> Option<Sinusoid> {
+        (self.internal[i] != 0.0).then(|| self.particular[i].scaled(-1.0 / self.internal[i]))
+    }
+
+    /// The α the 1-norm chooses at `at` given `α_min` there, and its sinusoid on the piece.
+    fn norm1_alpha(&self, f: &Sinusoid, at: &Angle) -> (f64, Sinusoid) {
+        let alpha_min = f.value(at);
+        let mut best = (self.norm1_at(alpha_min, at), alpha_min, *f);
+        for i in [1, 3] {
+            if let Some(r) = self.friction_zero(i) {
+                let alpha = r.value(at);
+                if alpha > alpha_min {
+                    let v = self.norm1_at(alpha, at);
+                    if v < best.0 {
+                        best = (v, alpha, r);
+                    }
+                }
+            }
+        }
+        (best.1, best.2)
+    }
+
+    /// `Σ |T_i + α w_i|` at one angle.
+    fn norm1_at(&self, alpha: f64, at: &Angle) -> f64 {
+        (0..4)
+            .map(|i| (self.particular[i].value(at) + alpha * self.internal[i]).abs())
+            .sum()
+    }
+
+    /// The 1-norm as one sinusoid on a stretch where signs and choices do not change.
+    fn norm1_piece(&self, f: &Sinusoid, mid: f64) -> Sinusoid {
+        let at = Angle::new(mid);
+        let (_, alpha) = self.norm1_alpha(f, &at);
+        (0..4).fold(Sinusoid::ZERO, |acc, i| {
+            let term = self.particular[i].plus_scaled(self.internal[i], &alpha);
+            let sign = if term.value(&at) < 0.0 { -1.0 } else { 1.0 };
+            acc.plus_scaled(sign, &term)
+        })
+    }
+
+    /// `P` in newtons from a shape's raw value.
+    fn power_from_raw(&self, shape: &Shape, raw: f64) -> f64 {
+        let k = self.frame.weight * FORCE_SCALE;
+        match shape {
+            Shape::Quad(_) => k * raw.max(0.0).sqrt(),
+            Shape::Sin(_) => k * raw,
+        }
+    }
+
+    /// The objective and the forces at any gravity angle, computed point-wise.
+    pub fn evaluate(&self, theta: f64) -> PointValue {
+        let at = Angle::new(theta);
+        let [_, _, a3, a4, a5, a6] = self.alphas;
+        let alpha_min = [a3, a4, a5, a6]
+            .iter()
+            .map(|a| a.value(&at))
+            .fold(f64::NEG_INFINITY, f64::max);
+        let alpha = match self.objective {
+            Objective::Norm2 | Objective::InternalForce => alpha_min.max(0.0),
+            Objective::Norm1 => {
+                let f = Sinusoid::new(alpha_min * at.sin, alpha_min * at.cos);
+                self.norm1_alpha(&f, &at).0
+            }
+        };
+        let scale = self.frame.weight * FORCE_SCALE;
+        let forces: [f64; 4] = std::array::from_fn(|i| {
+            scale * (self.particular[i].value(&at) + alpha * self.internal[i])
+        });
+        let power = match self.objective {
+            Objective::Norm2 => forces.iter().map(|v| v * v).sum::<f64>().sqrt(),
+            Objective::Norm1 => forces.iter().map(|v| v.abs()).sum(),
+            Objective::InternalForce => scale * alpha,
+        };
+        PointValue {
+            alpha_min,
+            alpha,
+            power,
+            internal_force: scale * alpha,
+            forces,
+        }
+    }
+
+    /// `θ` shifted by a multiple of 2π into `[θ_min, θ_min + 2π)`.
+    fn representative(&self, theta: f64) -> f64 {
+        let lo = self.graspable.0;
+        lo + (theta - lo).rem_euclid(TAU)
+    }
+
+    /// The paper's candidates A–E that fall in the graspable range, with their angles, in the
+    /// paper's labelling.
+    fn labelled_angles(&self) -> Vec<(PaperCandidate, f64)> {
+        let c = paper::candidate_angles(&self.frame);
+        let (lo, hi) = self.graspable;
+        let mut out = vec![
+            (PaperCandidate::A, c.theta_min),
+            (PaperCandidate::E, c.theta_max),
+        ];
+        for (label, theta) in [
+            (PaperCandidate::B, c.theta_36),
+            (PaperCandidate::C, c.theta_34),
+            (PaperCandidate::D, c.theta_45),
+        ] {
+            let t = next_periodic(theta, TAU, lo - SAME_ANGLE);
+            if t <= hi + SAME_ANGLE {
+                out.push((label, t));
+            }
+        }
+        out
+    }
+
+    fn label_of(&self, labels: &[(PaperCandidate, f64)], theta: f64) -> Option<PaperCandidate> {
+        labels
+            .iter()
+            .find(|(_, t)| (t - theta).abs() <= SAME_ANGLE)
+            .map(|(l, _)| {
+                if self.frame.swapped {
+                    l.relabelled()
+                } else {
+                    *l
+                }
+            })
+    }
+
+    /// Every local minimum of the objective over the closed graspable range.
+    fn local_minima(&self) -> Vec<(f64, f64)> {
+        let mut found: Vec<(f64, f64)> = Vec::with_capacity(8);
+        let mut push = |theta: f64, shape: &Shape| {
+            let at = Angle::new(theta);
+            let p = self.power_from_raw(shape, shape.raw(&at));
+            if found
+                .last()
+                .is_none_or(|(t, _)| (theta - t).abs() > SAME_ANGLE)
+            {
+                found.push((theta, p));
+            }
+        };
+        let segs = &self.segments;
+        let mut interior = Vec::with_capacity(4);
+        for (k, seg) in segs.iter().enumerate() {
+            let start = Angle::new(seg.lo);
+            let right = seg.shape.slope(&start);
+            let left = if k == 0 {
+                f64::NEG_INFINITY
+            } else {
+                segs[k - 1].shape.slope(&start)
+            };
+            if left <= 0.0 && right >= 0.0 {
+                push(seg.lo, &seg.shape);
+            }
+            interior.clear();
+            seg.shape.minima_between(seg.lo, seg.hi, &mut interior);
+            for &t in &interior {
+                push(t, &seg.shape);
+            }
+        }
+        if let Some(last) = segs.last() {
+            if last.shape.slope(&Angle::new(last.hi)) <= 0.0 {
+                push(last.hi, &last.shape);
+            }
+        }
+        found
+    }
+
+    /// The allowed range as intervals inside the graspable range.
+    fn allowed_intervals(&self, range: &AllowedRange) -> Result<Vec<(f64, f64)>, InvalidInput> {
+        let (glo, ghi) = self.graspable;
+        match *range {
+            AllowedRange::FromAbove => Ok(vec![self.from_above_range()]),
+            AllowedRange::Graspable => Ok(vec![(glo, ghi)]),
+            AllowedRange::Bounds { lo, hi } => {
+                if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+                    return Err(InvalidInput::RangeBounds { lo, hi });
+                }
+                // Angles are periodic: meet every 2π shift of the bounds with the range.
+                let mut out = Vec::with_capacity(3);
+                let first = ((glo - hi) / TAU).floor() as i64;
+                let last = ((ghi - lo) / TAU).ceil() as i64;
+                for k in first..=last {
+                    let shift = TAU * k as f64;
+                    let (a, b) = ((lo + shift).max(glo), (hi + shift).min(ghi));
+                    if a <= b {
+                        out.push((a, b));
+                    }
+                }
+                if out.is_empty() {
+                    Err(InvalidInput::RangeOutsideGraspable {
+                        lo,
+                        hi,
+                        graspable_lo: glo,
+                        graspable_hi: ghi,
+                    })
+                } else {
+                    Ok(out)
+                }
+            }
+        }
+    }
+
+    /// The orientation of least objective over `range`, with everything the answer reports.
+    pub fn recommend(&self, range: &AllowedRange) -> Result<Recommendation, InvalidInput> {
+        let allowed = self.allowed_intervals(range)?;
+        let current = self.representative(self.frame.current_theta);
+        let rotation_to = |theta: f64| wrap_angle(current - theta).abs();
+        let weight = self.frame.weight;
+        // (θ, objective) of the best point so far.
+        let mut best: Option<(f64, f64)> = None;
+        let mut consider = |theta: f64, power: f64| {
+            let better = match best {
+                None => true,
+                Some((bt, bp)) => {
+                    // Relative to the weight too: a plateau at zero must tie with rounding residue.
+                    let tie = (power - bp).abs() <= TIE * bp.abs().max(power.abs()).max(weight);
+                    if tie {
+                        rotation_to(theta) < rotation_to(bt)
+                    } else {
+                        power < bp
+                    }
+                }
+            };
+            if better {
+                best = Some((theta, power));
+            }
+        };
+        let mut interior = Vec::with_capacity(4);
+        for seg in &self.segments {
+            for &(a, b) in &allowed {
+                let (lo, hi) = (seg.lo.max(a), seg.hi.min(b));
+                if lo > hi {
+                    continue;
+                }
+                interior.clear();
+                interior.extend([lo, hi]);
+                seg.shape.minima_between(lo, hi, &mut interior);
+                if seg.shape.is_constant() {
+                    interior.push(current.clamp(lo, hi));
+                }
+                for &t in &interior {
+                    let p = self.power_from_raw(&seg.shape, seg.shape.raw(&Angle::new(t)));
+                    consider(t, p);
+                }
+            }
+        }
+        // The allowed intervals lie inside the graspable range, which the segments cover.
+        let (theta, _) = best.unwrap_or((allowed[0].0, f64::NAN));
+        Ok(self.report(theta, current, &allowed))
+    }
+
+    /// Everything the answer reports for the recommended angle `theta`.
+    fn report(&self, theta: f64, current: f64, allowed: &[(f64, f64)]) -> Recommendation {
+        let f = &self.frame;
+        let at_best = self.evaluate(theta);
+        let at_current = self.evaluate(current);
+        let labels = self.labelled_angles();
+        let minima: Vec<LocalMinimum> = self
+            .local_minima()
+            .into_iter()
+            .map(|(t, p)| LocalMinimum {
+                gravity_angle: t,
+                power: p,
+                label: self.label_of(&labels, t),
+            })
+            .collect();
+        let recommended_label = self.label_of(&labels, theta);
+        let c_angle = labels
+            .iter()
+            .find(|(l, _)| *l == PaperCandidate::C)
+            .map(|(_, t)| *t);
+        let candidate_c = match c_angle {
+            Some(tc)
+                if allowed
+                    .iter()
+                    .any(|&(a, b)| tc >= a - SAME_ANGLE && tc <= b + SAME_ANGLE) =>
+            {
+                if recommended_label == Some(PaperCandidate::C) {
+                    CandidateC::Recommended
+                } else if minima
+                    .iter()
+                    .any(|m| (m.gravity_angle - tc).abs() <= SAME_ANGLE)
+                {
+                    CandidateC::Beaten
+                } else {
+                    CandidateC::NotAMinimum
+                }
+            }
+            _ => CandidateC::OutOfRange,
+        };
+        let cones = paper::cones_contain_center_of_mass(f);
+        let cones = if f.swapped {
+            [cones[1], cones[0]]
+        } else {
+            cones
+        };
+        let grasp_case = match cones {
+            [true, true] => GraspCase::A,
+            [true, false] => GraspCase::B,
+            [false, true] => GraspCase::C,
+            [false, false] => GraspCase::D,
+        };
+        // Paper tangent at contact 1 is minus "inward normal turned +90°"; at contact 2 it is the
+        // same. Then put the contacts back in the candidate's order.
+        let [n1, f1, n2, f2] = at_best.forces;
+        let contact_forces = if f.swapped {
+            [n2, f2, n1, -f1]
+        } else {
+            [n1, -f1, n2, f2]
+        };
+        Recommendation {
+            objective: self.objective,
+            gravity_angle: theta,
+            wrist_rotation: wrap_angle(current - theta),
+            gravity_direction: f.gravity_direction(theta),
+            gripping_power: at_best.power,
+            internal_force: at_best.internal_force,
+            contact_forces,
+            gripping_power_current: at_current.power,
+            internal_force_current: at_current.internal_force,
+            current_gravity_angle: current,
+            grasp_case,
+            local_minima: minima,
+            recommended_label,
+            candidate_c,
+        }
+    }
+}
+
+/// Index of the largest function at `t`; near-ties go to the steeper one (it stays on top).
+fn top_at(funcs: &[Sinusoid], t: f64, tol: f64) -> usize {
+    let at = Angle::new(t);
+    let top = funcs
+        .iter()
+        .map(|f| f.value(&at))
+        .fold(f64::NEG_INFINITY, f64::max);
+    let mut best = 0;
+    let mut best_slope = f64::NEG_INFINITY;
+    for (i, f) in funcs.iter().enumerate() {
+        if f.value(&at) >= top - tol {
+            let s = f.slope(&at);
+            if s > best_slope {
+                best = i;
+                best_slope = s;
+            }
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solver::{Candidate, Settings};
+    use nalgebra::Vector2;
+    use std::f64::consts::PI;
+
+    fn table_case(p1: (f64, f64), p2x: f64, phi: (f64, f64), mu: (f64, f64)) -> Candidate {
+        Candidate {
+            contact_1: Vector2::new(p1.0, p1.1),
+            contact_2: Vector2::new(p2x, p1.1),
+            normal_1: Vector2::new(-phi.0.sin(), -phi.0.cos()),
+            normal_2: Vector2::new(phi.1.sin(), -phi.1.cos()),
+            friction_1: mu.0,
+            friction_2: mu.1,
+            center_of_mass: Vector2::zeros(),
+            mass: 1.0,
+            gravity: Vector2::new(0.0, -1.0),
+        }
+    }
+
+    fn analysis(c: &Candidate, objective: Objective) -> Analysis {
+        let f = GraspFrame::new(c, 1.0).expect("valid");
+        Analysis::new(&f, objective).expect("force closure")
+    }
+
+    /// The segments tile the graspable range and each one's shape matches the point-wise value.
+    #[test]
+    fn segments_tile_the_range_and_agree_with_pointwise_values() {
+        let c = table_case((5.0, 4.0), -3.0, (0.785, 0.785), (1.5, 2.5));
+        for objective in [Objective::Norm2, Objective::Norm1, Objective::InternalForce] {
+            let a = analysis(&c, objective);
+            let (lo, hi) = a.graspable_range();
+            assert_eq!(a.segments[0].lo, lo);
+            assert_eq!(a.segments.last().map(|s| s.hi), Some(hi));
+            for w in a.segments.windows(2) {
+                assert_eq!(w[0].hi, w[1].lo);
+            }
+            for seg in &a.segments {
+                for k in 1..10 {
+                    let t = seg.lo + (seg.hi - seg.lo) * k as f64 / 10.0;
+                    let shape = a.power_from_raw(&seg.shape, seg.shape.raw(&Angle::new(t)));
+                    let point = a.evaluate(t).power;
+                    assert!(
+                        (shape - point).abs() < 1e-12 * point.abs().max(1.0),
+                        "{objective:?} at {t}: {shape} vs {point}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn recommendation_is_no_worse_than_a_fine_scan() {
+        let c = table_case(
+            (1.0, 1.0),
+            -1.0,
+            (PI / 2.0, PI / 2.0),
+            (3f64.sqrt(), 1.0 / 3f64.sqrt()),
+        );
+        for objective in [Objective::Norm2, Objective::Norm1, Objective::InternalForce] {
+            let a = analysis(&c, objective);
+            let r = a
+                .recommend(&Settings::default().range)
+                .expect("valid range");
+            let (lo, hi) = a.from_above_range();
+            for k in 0..=20_000 {
+                let t = lo + (hi - lo) * k as f64 / 20_000.0;
+                assert!(
+                    a.evaluate(t).power >= r.gripping_power - 1e-12,
+                    "{objective:?} {t}"
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,347 @@
+//! Validation of a candidate and its mapping into the paper's object frame.
+
+use super::{Candidate, Contact, InvalidInput};
+use nalgebra::Vector2;
+
+/// Largest accepted coordinate magnitude, m.
+pub const MAX_COORDINATE: f64 = 1e6;
+/// Largest accepted normal component magnitude (normals may have any length up to this).
+pub const MAX_NORMAL_COMPONENT: f64 = 1e9;
+/// Largest accepted friction coefficient.
+pub const MAX_FRICTION: f64 = 1e3;
+/// Largest accepted mass, kg.
+pub const MAX_MASS: f64 = 1e9;
+/// Largest accepted gravity component magnitude, m/s².
+pub const MAX_GRAVITY: f64 = 1e4;
+/// Contacts closer than this fraction of their distance to the centre of mass coincide.
+const COINCIDENT_FRACTION: f64 = 1e-9;
+
+/// A candidate expressed in the paper's object frame (module docs of [`crate::solver`]).
+///
+/// Lengths are divided by the contact distance, so `x1 + x2 = 1`; forces computed from it are
+/// in units of the weight `m |g|`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GraspFrame {
+    /// Contact 1 is at `(x1, y)`.
+    pub x1: f64,
+    /// Contact 2 is at `(-x2, y)`.
+    pub x2: f64,
+    /// Height of the contact line above the centre of mass, `>= 0`.
+    pub y: f64,
+    /// `sin φ1`, where the inward normal at contact 1 is `(-sin φ1, -cos φ1)`.
+    pub s1: f64,
+    /// `cos φ1`.
+    pub c1: f64,
+    /// `sin φ2`, where the inward normal at contact 2 is `(sin φ2, -cos φ2)`.
+    pub s2: f64,
+    /// `cos φ2`.
+    pub c2: f64,
+    /// Friction coefficient at contact 1 after the safety factor.
+    pub mu1: f64,
+    /// Friction coefficient at contact 2 after the safety factor.
+    pub mu2: f64,
+    /// The safety factor that divided the friction coefficients.
+    pub friction_safety_factor: f64,
+    /// Gravity angle of the current pose, rad in (-π, π].
+    pub current_theta: f64,
+    /// `m |g|` with the in-plane part of `g`, N.
+    pub weight: f64,
+    /// Distance between the contacts, m.
+    pub contact_distance: f64,
+    /// Whether the paper's contact 1 is the candidate's `contact_2`.
+    pub swapped: bool,
+    /// Paper x axis in the candidate frame.
+    pub e_x: Vector2<f64>,
+    /// Paper y axis in the candidate frame.
+    pub e_y: Vector2<f64>,
+}
+
+fn finite(field: &'static str, v: f64) -> Result<f64, InvalidInput> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(InvalidInput::NotFinite { field })
+    }
+}
+
+fn bounded(
+    field: &'static str,
+    v: f64,
+    limit: f64,
+    unit: &'static str,
+) -> Result<f64, InvalidInput> {
+    finite(field, v)?;
+    if v.abs() > limit {
+        Err(InvalidInput::OutOfRange {
+            field,
+            value: v,
+            limit,
+            unit,
+        })
+    } else {
+        Ok(v)
+    }
+}
+
+fn positive(
+    field: &'static str,
+    v: f64,
+    limit: f64,
+    unit: &'static str,
+) -> Result<f64, InvalidInput> {
+    bounded(field, v, limit, unit)?;
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(InvalidInput::NotPositive { field, value: v })
+    }
+}
+
+fn vector(
+    fields: [&'static str; 2],
+    v: &Vector2<f64>,
+    limit: f64,
+    unit: &'static str,
+) -> Result<(), InvalidInput> {
+    bounded(fields[0], v.x, limit, unit)?;
+    bounded(fields[1], v.y, limit, unit)?;
+    Ok(())
+}
+
+fn unit_in_plane(field: &'static str, v: &Vector2<f64>) -> Result<Vector2<f64>, InvalidInput> {
+    let n = v.x.hypot(v.y);
+    if n > 0.0 {
+        Ok(v / n)
+    } else {
+        Err(InvalidInput::ZeroInPlane { field })
+    }
+}
+
+/// Checks every field of a candidate, naming the first one at fault.
+pub fn validate(c: &Candidate) -> Result<(), InvalidInput> {
+    vector(
+        ["contact_1.x", "contact_1.y"],
+        &c.contact_1,
+        MAX_COORDINATE,
+        "m",
+    )?;
+    vector(
+        ["contact_2.x", "contact_2.y"],
+        &c.contact_2,
+        MAX_COORDINATE,
+        "m",
+    )?;
+    vector(
+        ["normal_1.x", "normal_1.y"],
+        &c.normal_1,
+        MAX_NORMAL_COMPONENT,
+        "",
+    )?;
+    vector(
+        ["normal_2.x", "normal_2.y"],
+        &c.normal_2,
+        MAX_NORMAL_COMPONENT,
+        "",
+    )?;
+    positive("friction_1", c.friction_1, MAX_FRICTION, "")?;
+    positive("friction_2", c.friction_2, MAX_FRICTION, "")?;
+    vector(
+        ["center_of_mass.x", "center_of_mass.y"],
+        &c.center_of_mass,
+        MAX_COORDINATE,
+        "m",
+    )?;
+    positive("mass", c.mass, MAX_MASS, "kg")?;
+    vector(["gravity.x", "gravity.y"], &c.gravity, MAX_GRAVITY, "m/s^2")?;
+    unit_in_plane("normal_1", &c.normal_1)?;
+    unit_in_plane("normal_2", &c.normal_2)?;
+    unit_in_plane("gravity", &c.gravity)?;
+    let d = (c.contact_1 - c.contact_2).norm();
+    let reach = (c.contact_1 - c.center_of_mass)
+        .norm()
+        .max((c.contact_2 - c.center_of_mass).norm());
+    if d == 0.0 || d <= COINCIDENT_FRACTION * reach {
+        return Err(InvalidInput::CoincidentContacts);
+    }
+    for (contact, p, q, n) in [
+        (Contact::First, c.contact_1, c.contact_2, c.normal_1),
+        (Contact::Second, c.contact_2, c.contact_1, c.normal_2),
+    ] {
+        // A convex object lies in the half-plane its inward normal points into, so the other
+        // contact and the centre of mass must lie there too.
+        if n.dot(&(q - p)) < 0.0 {
+            return Err(InvalidInput::NormalOutward { contact });
+        }
+        let to_com = c.center_of_mass - p;
+        if n.dot(&to_com) < -1e-12 * n.norm() * to_com.norm() {
+            return Err(InvalidInput::CenterOfMassOutside { contact });
+        }
+    }
+    Ok(())
+}
+
+impl GraspFrame {
+    /// Validates `c` and maps it into the paper frame, dividing friction by `safety`.
+    pub fn new(c: &Candidate, safety: f64) -> Result<Self, InvalidInput> {
+        if !(safety.is_finite() && safety >= 1.0) {
+            return Err(InvalidInput::SafetyFactor { value: safety });
+        }
+        validate(c)?;
+        let (mut p1, mut p2, mut n1, mut n2) = (c.contact_1, c.contact_2, c.normal_1, c.normal_2);
+        let (mut mu1, mut mu2) = (c.friction_1 / safety, c.friction_2 / safety);
+        let com = c.center_of_mass;
+        let d = (p1 - p2).norm();
+        let mut e_x = (p1 - p2) / d;
+        let mut e_y = Vector2::new(-e_x.y, e_x.x);
+        // Height of the contact line above the centre of mass, averaged over both contacts.
+        let height = |e_y: &Vector2<f64>, p1: &Vector2<f64>, p2: &Vector2<f64>| {
+            0.5 * ((p1 - com).dot(e_y) + (p2 - com).dot(e_y)) / d
+        };
+        let mut y = height(&e_y, &p1, &p2);
+        let swapped = y < 0.0;
+        if swapped {
+            std::mem::swap(&mut p1, &mut p2);
+            std::mem::swap(&mut n1, &mut n2);
+            std::mem::swap(&mut mu1, &mut mu2);
+            e_x = -e_x;
+            e_y = -e_y;
+            y = height(&e_y, &p1, &p2);
+        }
+        let x1 = (p1 - com).dot(&e_x) / d;
+        let x2 = -(p2 - com).dot(&e_x) / d;
+        let to_paper = |v: &Vector2<f64>| {
+            let u = v / v.norm();
+            Vector2::new(u.dot(&e_x), u.dot(&e_y))
+        };
+        let n1p = to_paper(&n1);
+        let n2p = to_paper(&n2);
+        let g = Vector2::new(c.gravity.x, c.gravity.y);
+        let gp = to_paper(&g);
+        Ok(Self {
+            x1,
+            x2,
+            y: y.max(0.0),
+            s1: -n1p.x,
+            c1: -n1p.y,
+            s2: n2p.x,
+            c2: -n2p.y,
+            mu1,
+            mu2,
+            friction_safety_factor: safety,
+            current_theta: gp.x.atan2(-gp.y),
+            weight: c.mass * g.norm(),
+            contact_distance: d,
+            swapped,
+            e_x,
+            e_y,
+        })
+    }
+
+    /// The contact of the candidate's labelling that is the paper's contact `paper_index` (1 or 2).
+    pub fn candidate_contact(&self, paper_first: bool) -> Contact {
+        match (paper_first, self.swapped) {
+            (true, false) | (false, true) => Contact::First,
+            _ => Contact::Second,
+        }
+    }
+
+    /// Gravity direction in the candidate frame for gravity angle `theta`.
+    pub fn gravity_direction(&self, theta: f64) -> Vector2<f64> {
+        let (s, c) = theta.sin_cos();
+        self.e_x * s - self.e_y * c
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::FRAC_PI_3;
+
+    fn circle_case_a() -> Candidate {
+        // Table 1 (a): a circle of radius 10, contacts at ±60° from the top, gravity along -y.
+        let r3 = 3f64.sqrt();
+        Candidate {
+            contact_1: Vector2::new(5.0 * r3, 5.0),
+            contact_2: Vector2::new(-5.0 * r3, 5.0),
+            normal_1: Vector2::new(-r3 / 2.0, -0.5),
+            normal_2: Vector2::new(r3 / 2.0, -0.5),
+            friction_1: 1.5,
+            friction_2: 1.0,
+            center_of_mass: Vector2::zeros(),
+            mass: 1.0,
+            gravity: Vector2::new(0.0, -1.0),
+        }
+    }
+
+    #[test]
+    fn paper_frame_of_table_1_a() {
+        let f = GraspFrame::new(&circle_case_a(), 1.0).expect("valid");
+        let d = 10.0 * 3f64.sqrt();
+        assert!(!f.swapped);
+        assert!((f.x1 - 5.0 * 3f64.sqrt() / d).abs() < 1e-15);
+        assert!((f.y - 5.0 / d).abs() < 1e-15);
+        assert!((f.s1 - FRAC_PI_3.sin()).abs() < 1e-15 && (f.c1 - FRAC_PI_3.cos()).abs() < 1e-15);
+        assert!((f.s2 - FRAC_PI_3.sin()).abs() < 1e-15 && (f.c2 - FRAC_PI_3.cos()).abs() < 1e-15);
+        assert_eq!(f.current_theta, 0.0);
+    }
+
+    #[test]
+    fn left_handed_labelling_is_swapped() {
+        let mut c = circle_case_a();
+        std::mem::swap(&mut c.contact_1, &mut c.contact_2);
+        std::mem::swap(&mut c.normal_1, &mut c.normal_2);
+        let f = GraspFrame::new(&c, 1.0).expect("valid");
+        assert!(f.swapped);
+        assert!((f.mu1 - 1.0).abs() < 1e-15 && (f.mu2 - 1.5).abs() < 1e-15);
+        assert!(f.y > 0.0);
+    }
+
+    #[test]
+    fn validation_names_the_field() {
+        let mut c = circle_case_a();
+        c.mass = f64::NAN;
+        assert_eq!(
+            GraspFrame::new(&c, 1.0),
+            Err(InvalidInput::NotFinite { field: "mass" })
+        );
+        let mut c = circle_case_a();
+        c.contact_1.x = 1e300;
+        assert!(matches!(
+            GraspFrame::new(&c, 1.0),
+            Err(InvalidInput::OutOfRange {
+                field: "contact_1.x",
+                ..
+            })
+        ));
+        let mut c = circle_case_a();
+        c.normal_2 = -c.normal_2;
+        assert_eq!(
+            GraspFrame::new(&c, 1.0),
+            Err(InvalidInput::NormalOutward {
+                contact: Contact::Second
+            })
+        );
+        let mut c = circle_case_a();
+        c.contact_2 = c.contact_1;
+        assert_eq!(
+            GraspFrame::new(&c, 1.0),
+            Err(InvalidInput::CoincidentContacts)
+        );
+        let mut c = circle_case_a();
+        c.gravity = Vector2::zeros();
+        assert_eq!(
+            GraspFrame::new(&c, 1.0),
+            Err(InvalidInput::ZeroInPlane { field: "gravity" })
+        );
+        let mut c = circle_case_a();
+        c.center_of_mass = Vector2::new(0.0, 30.0);
+        assert!(matches!(
+            GraspFrame::new(&c, 1.0),
+            Err(InvalidInput::CenterOfMassOutside { .. })
+        ));
+        assert_eq!(
+            GraspFrame::new(&circle_case_a(), 0.5),
+            Err(InvalidInput::SafetyFactor { value: 0.5 })
+        );
+    }
+}

@@ -1,0 +1,285 @@
+//! The two kinds of function every piece of the problem is made of: sinusoids
+//! `a sin θ + b cos θ` and quadratic forms `p sin²θ + q cos²θ + r sin θ cos θ`.
+//!
+//! Their zeros, crossings and stationary points are closed forms (`atan2`), which is what makes
+//! the solver exact: no grid, no iteration.
+
+use std::f64::consts::{PI, TAU};
+
+/// `sin θ` and `cos θ` of one angle, computed once and shared by every evaluation at it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Angle {
+    /// The angle, rad.
+    pub theta: f64,
+    /// `sin θ`.
+    pub sin: f64,
+    /// `cos θ`.
+    pub cos: f64,
+}
+
+impl Angle {
+    /// The angle `theta` with its sine and cosine.
+    pub fn new(theta: f64) -> Self {
+        let (sin, cos) = theta.sin_cos();
+        Self { theta, sin, cos }
+    }
+}
+
+/// `a sin θ + b cos θ`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Sinusoid {
+    /// Coefficient of `sin θ`.
+    pub a: f64,
+    /// Coefficient of `cos θ`.
+    pub b: f64,
+}
+
+impl Sinusoid {
+    /// The function that is zero everywhere.
+    pub const ZERO: Sinusoid = Sinusoid { a: 0.0, b: 0.0 };
+
+    /// `a sin θ + b cos θ`.
+    pub const fn new(a: f64, b: f64) -> Self {
+        Self { a, b }
+    }
+
+    /// Value at `at`.
+    #[inline]
+    pub fn value(&self, at: &Angle) -> f64 {
+        self.a * at.sin + self.b * at.cos
+    }
+
+    /// Derivative with respect to θ at `at`.
+    #[inline]
+    pub fn slope(&self, at: &Angle) -> f64 {
+        self.a * at.cos - self.b * at.sin
+    }
+
+    /// Amplitude `sqrt(a² + b²)`.
+    pub fn amplitude(&self) -> f64 {
+        self.a.hypot(self.b)
+    }
+
+    /// `self - other`.
+    pub fn minus(&self, other: &Sinusoid) -> Sinusoid {
+        Sinusoid::new(self.a - other.a, self.b - other.b)
+    }
+
+    /// `self + k · other`.
+    pub fn plus_scaled(&self, k: f64, other: &Sinusoid) -> Sinusoid {
+        Sinusoid::new(self.a + k * other.a, self.b + k * other.b)
+    }
+
+    /// `k · self`.
+    pub fn scaled(&self, k: f64) -> Sinusoid {
+        Sinusoid::new(k * self.a, k * self.b)
+    }
+
+    /// The angles in `[0, 2π)`-periodic form where the function rises through zero.
+    ///
+    /// # Formula
+    /// `a sin θ + b cos θ = R sin(θ + γ)` with `γ = atan2(b, a)`, so the rising zeros are
+    /// `θ = -γ + 2kπ` and the falling zeros `θ = π - γ + 2kπ`.
+    ///
+    /// Returns `None` for the zero function.
+    pub fn rising_zero(&self) -> Option<f64> {
+        if self.a == 0.0 && self.b == 0.0 {
+            None
+        } else {
+            Some(-self.b.atan2(self.a))
+        }
+    }
+
+    /// The first rising zero strictly after `after`, or `None` for the zero function.
+    pub fn next_rise(&self, after: f64) -> Option<f64> {
+        self.rising_zero().map(|t0| next_periodic(t0, TAU, after))
+    }
+
+    /// Every zero (rising or falling) strictly inside `(lo, hi)`, in increasing order, appended to
+    /// `out`.
+    pub fn zeros_between(&self, lo: f64, hi: f64, out: &mut Vec<f64>) {
+        if let Some(t0) = self.rising_zero() {
+            // Zeros repeat every π.
+            let mut t = next_periodic(t0, PI, lo);
+            while t < hi {
+                out.push(t);
+                t += PI;
+            }
+        }
+    }
+
+    /// Stationary minima strictly inside `(lo, hi)` (where the value is `-R`), appended to `out`.
+    ///
+    /// # Formula
+    /// `R sin(θ + γ)` is least at `θ + γ = -π/2 (mod 2π)`.
+    pub fn minima_between(&self, lo: f64, hi: f64, out: &mut Vec<f64>) {
+        if let Some(t0) = self.rising_zero() {
+            let mut t = next_periodic(t0 - 0.5 * PI, TAU, lo);
+            while t < hi {
+                out.push(t);
+                t += TAU;
+            }
+        }
+    }
+}
+
+/// The least `t0 + k·period` strictly greater than `after` (k any integer).
+pub fn next_periodic(t0: f64, period: f64, after: f64) -> f64 {
+    let k = ((after - t0) / period).floor() + 1.0;
+    let mut t = t0 + k * period;
+    // Guard the rounding of `floor`; a point within rounding of `after` counts as `after`.
+    if t <= after {
+        t += period;
+    }
+    t
+}
+
+/// `p sin²θ + q cos²θ + r sin θ cos θ`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct QuadForm {
+    /// Coefficient of `sin²θ`.
+    pub p: f64,
+    /// Coefficient of `cos²θ`.
+    pub q: f64,
+    /// Coefficient of `sin θ cos θ`.
+    pub r: f64,
+}
+
+impl QuadForm {
+    /// `Σ terms[i]²`: the squared Euclidean norm of a vector whose entries are sinusoids.
+    pub fn sum_of_squares(terms: &[Sinusoid]) -> Self {
+        terms.iter().fold(QuadForm::default(), |acc, t| QuadForm {
+            p: acc.p + t.a * t.a,
+            q: acc.q + t.b * t.b,
+            r: acc.r + 2.0 * t.a * t.b,
+        })
+    }
+
+    /// Value at `at`.
+    #[inline]
+    pub fn value(&self, at: &Angle) -> f64 {
+        self.p * at.sin * at.sin + self.q * at.cos * at.cos + self.r * at.sin * at.cos
+    }
+
+    /// Derivative with respect to θ at `at`: `(p - q) sin 2θ + r cos 2θ`.
+    #[inline]
+    pub fn slope(&self, at: &Angle) -> f64 {
+        let sin2 = 2.0 * at.sin * at.cos;
+        let cos2 = at.cos * at.cos - at.sin * at.sin;
+        (self.p - self.q) * sin2 + self.r * cos2
+    }
+
+    /// Whether the form is the same for every θ.
+    pub fn is_constant(&self) -> bool {
+        self.p == self.q && self.r == 0.0
+    }
+
+    /// Stationary minima strictly inside `(lo, hi)`, appended to `out`.
+    ///
+    /// # Formula
+    /// `Q(θ) = (p+q)/2 + A cos 2θ + B sin 2θ` with `A = (q-p)/2`, `B = r/2`; it is least where
+    /// `2θ = atan2(B, A) + π (mod 2π)`, so at `θ = (atan2(B, A) + π)/2 + kπ`.
+    pub fn minima_between(&self, lo: f64, hi: f64, out: &mut Vec<f64>) {
+        if self.is_constant() {
+            return;
+        }
+        let t0 = 0.5 * ((0.5 * self.r).atan2(0.5 * (self.q - self.p)) + PI);
+        let mut t = next_periodic(t0, PI, lo);
+        while t < hi {
+            out.push(t);
+            t += PI;
+        }
+    }
+}
+
+/// `x` wrapped into `(-π, π]`.
+pub fn wrap_angle(x: f64) -> f64 {
+    let w = (x + PI).rem_euclid(TAU) - PI;
+    if w <= -PI {
+        w + TAU
+    } else {
+        w
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rising_zero_is_a_rising_zero() {
+        for &(a, b) in &[
+            (1.0, 0.0),
+            (0.0, 1.0),
+            (-2.0, 0.5),
+            (0.3, -4.0),
+            (-1.0, -1.0),
+        ] {
+            let f = Sinusoid::new(a, b);
+            let t = f.rising_zero().expect("non-zero");
+            let at = Angle::new(t);
+            assert!(f.value(&at).abs() < 1e-12, "value {}", f.value(&at));
+            assert!(f.slope(&at) > 0.0);
+        }
+    }
+
+    #[test]
+    fn next_periodic_is_strictly_after() {
+        for &after in &[-10.0, -PI, 0.0, 0.1, PI, 7.0] {
+            let t = next_periodic(0.1, PI, after);
+            assert!(t > after && t - PI <= after + 1e-12, "{t} after {after}");
+        }
+        assert_eq!(next_periodic(0.1, PI, 0.1), 0.1 + PI);
+    }
+
+    #[test]
+    fn zeros_between_finds_both_zeros_per_turn() {
+        let f = Sinusoid::new(1.0, 0.0); // sin θ
+        let mut z = Vec::new();
+        f.zeros_between(-0.5, 2.0 * PI - 0.5, &mut z);
+        assert_eq!(z.len(), 2);
+        assert!(z[0].abs() < 1e-15 && (z[1] - PI).abs() < 1e-15);
+    }
+
+    #[test]
+    fn quad_minimum_matches_dense_scan() {
+        let q = QuadForm {
+            p: 3.0,
+            q: 1.0,
+            r: -1.5,
+        };
+        let mut m = Vec::new();
+        q.minima_between(-PI, PI, &mut m);
+        assert_eq!(m.len(), 2);
+        let best = (0..200_000)
+            .map(|i| -PI + TAU * i as f64 / 200_000.0)
+            .min_by(|x, y| {
+                q.value(&Angle::new(*x))
+                    .total_cmp(&q.value(&Angle::new(*y)))
+            })
+            .expect("non-empty");
+        assert!(m.iter().any(|t| (t - best).abs() < 1e-4));
+        for t in m {
+            assert!(q.slope(&Angle::new(t)).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn sum_of_squares_is_the_squared_norm() {
+        let terms = [Sinusoid::new(1.0, 2.0), Sinusoid::new(-0.5, 0.25)];
+        let q = QuadForm::sum_of_squares(&terms);
+        for i in 0..50 {
+            let at = Angle::new(-3.0 + 0.13 * i as f64);
+            let direct: f64 = terms.iter().map(|t| t.value(&at).powi(2)).sum();
+            assert!((q.value(&at) - direct).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn wrap_angle_lands_in_half_open_interval() {
+        assert_eq!(wrap_angle(PI), PI);
+        assert_eq!(wrap_angle(-PI), PI);
+        assert!((wrap_angle(3.0 * PI / 2.0) + PI / 2.0).abs() < 1e-15);
+        assert!((wrap_angle(0.25) - 0.25).abs() < 1e-15);
+    }
+}
