@@ -7,4 +7,7 @@
 //! 3. [`config`]: the typed settings read from `config/grasp_orient.yaml`.
 //! 4. [`cli`]: one `run` per subcommand.
 
+pub mod cli;
+pub mod config;
+pub mod msg;
 pub mod solver;

@@ -1,0 +1,193 @@
+//! Wire structs mirroring `msg/*.msg` field by field (serde, CDR-compatible in declaration order),
+//! and their conversions to and from solver types.
+//!
+//! Each struct is declared through [`ros_message!`], which also derives its ROS field list from
+//! the Rust field types, so `tests/msg_contract.rs` can check it against the `.msg` file.
+
+mod contract;
+mod convert;
+
+pub use contract::{RosMessage, RosType};
+pub use convert::{answer, invalid, MessageLimits, MAX_TEXT_BYTES};
+
+use serde::{Deserialize, Serialize};
+
+/// Declares a wire struct, its constants, and its [`RosMessage`] description.
+macro_rules! ros_message {
+    (
+        $(#[$meta:meta])*
+        $name:ident = $type_name:literal
+        [ $( $cname:ident : $cty:ty = $cval:expr ),* $(,)? ]
+        {
+            $( $(#[$fmeta:meta])* $field:ident : $fty:ty ),* $(,)?
+        }
+    ) => {
+        $(#[$meta])*
+        #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+        #[serde(deny_unknown_fields)]
+        pub struct $name {
+            $( $(#[$fmeta])* pub $field: $fty, )*
+        }
+
+        impl $name {
+            $( #[allow(missing_docs)] pub const $cname: $cty = $cval; )*
+        }
+
+        impl RosMessage for $name {
+            const TYPE_NAME: &'static str = $type_name;
+            fn fields() -> Vec<(&'static str, String)> {
+                vec![ $( (stringify!($field), <$fty as RosType>::ros_type()) ),* ]
+            }
+            fn constants() -> Vec<(&'static str, String, String)> {
+                vec![ $( (stringify!($cname), <$cty as RosType>::ros_type(), ($cval).to_string()) ),* ]
+            }
+        }
+    };
+}
+
+ros_message! {
+    /// `builtin_interfaces/Time`.
+    Time = "builtin_interfaces/msg/Time" [] {
+        /// Seconds since the epoch.
+        sec: i32,
+        /// Nanoseconds within the second.
+        nanosec: u32,
+    }
+}
+
+ros_message! {
+    /// `std_msgs/Header`.
+    Header = "std_msgs/msg/Header" [] {
+        /// Time of the data.
+        #[serde(default)]
+        stamp: Time,
+        /// Frame the data is expressed in.
+        #[serde(default)]
+        frame_id: String,
+    }
+}
+
+ros_message! {
+    /// `geometry_msgs/Point`, m.
+    Point = "geometry_msgs/msg/Point" [] {
+        /// x, m.
+        x: f64,
+        /// y, m.
+        y: f64,
+        /// z, m (ignored by the planar solver).
+        #[serde(default)]
+        z: f64,
+    }
+}
+
+ros_message! {
+    /// `geometry_msgs/Vector3`.
+    Vector3 = "geometry_msgs/msg/Vector3" [] {
+        /// x.
+        x: f64,
+        /// y.
+        y: f64,
+        /// z (ignored by the planar solver).
+        #[serde(default)]
+        z: f64,
+    }
+}
+
+ros_message! {
+    /// `geometry_msgs/Quaternion`.
+    Quaternion = "geometry_msgs/msg/Quaternion" [] {
+        /// x.
+        x: f64,
+        /// y.
+        y: f64,
+        /// z.
+        z: f64,
+        /// w.
+        w: f64,
+    }
+}
+
+ros_message! {
+    /// `msg/GraspCandidate.msg`: a two-finger planar grasp to orient. SI units; vectors in the
+    /// x-y plane of `header.frame_id`.
+    GraspCandidate = "grasp_orient/msg/GraspCandidate" [] {
+        /// Stamp and frame of the candidate.
+        #[serde(default)]
+        header: Header,
+        /// Caller's name for this candidate.
+        #[serde(default)]
+        id: String,
+        /// Contact point 1, m.
+        contact_1: Point,
+        /// Contact point 2, m.
+        contact_2: Point,
+        /// Inward surface normal at contact 1, any length > 0.
+        normal_1: Vector3,
+        /// Inward surface normal at contact 2, any length > 0.
+        normal_2: Vector3,
+        /// Coulomb coefficient at contact 1, > 0.
+        friction_1: f64,
+        /// Coulomb coefficient at contact 2, > 0.
+        friction_2: f64,
+        /// Centre of mass, m.
+        center_of_mass: Point,
+        /// Mass, kg, > 0.
+        mass: f64,
+        /// Gravitational acceleration at the current pose, m/s².
+        gravity: Vector3,
+    }
+}
+
+ros_message! {
+    /// `msg/GripRecommendation.msg`: the answer to one [`GraspCandidate`].
+    GripRecommendation = "grasp_orient/msg/GripRecommendation" [
+        STATUS_OK: u8 = 0,
+        STATUS_NO_FORCE_CLOSURE: u8 = 1,
+        STATUS_INVALID_INPUT: u8 = 2,
+        CANDIDATE_C_RECOMMENDED: u8 = 0,
+        CANDIDATE_C_NOT_A_MINIMUM: u8 = 1,
+        CANDIDATE_C_BEATEN: u8 = 2,
+        CANDIDATE_C_OUT_OF_RANGE: u8 = 3,
+    ] {
+        /// Stamp and frame of the candidate.
+        header: Header,
+        /// Id of the candidate answered.
+        candidate_id: String,
+        /// `STATUS_*`.
+        status: u8,
+        /// Why, when status is not OK; empty otherwise.
+        message: String,
+        /// Rotation of the object about +z of the frame, rad in (-π, π].
+        wrist_rotation: f64,
+        /// The same rotation.
+        rotation: Quaternion,
+        /// Unit vector: gravity in the frame after the rotation.
+        gravity_direction: Vector3,
+        /// Recommended θ in the paper's object frame, rad.
+        gravity_angle: f64,
+        /// Objective value at the recommendation, N.
+        gripping_power: f64,
+        /// Squeeze force needed there, N.
+        internal_force: f64,
+        /// `(N1, F1, N2, F2)` there, N, candidate's labelling.
+        contact_forces: [f64; 4],
+        /// Objective value at the current pose, N (inf where it cannot be held).
+        gripping_power_current: f64,
+        /// Squeeze force needed at the current pose, N (inf where it cannot be held).
+        internal_force_current: f64,
+        /// `"a"` .. `"d"` of Theorem 1.
+        grasp_case: String,
+        /// Local minima over the graspable range, rad.
+        local_minima: Vec<f64>,
+        /// Objective at each local minimum, N.
+        local_minima_power: Vec<f64>,
+        /// `"A"` .. `"E"` where a minimum is a paper candidate, `""` otherwise.
+        local_minima_labels: Vec<String>,
+        /// Objective minimised.
+        objective: String,
+        /// The paper candidate the recommendation is, or `""`.
+        recommended_label: String,
+        /// `CANDIDATE_C_*`.
+        candidate_c: u8,
+    }
+}
