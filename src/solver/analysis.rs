@@ -53,7 +53,7 @@ impl Shape {
         }
     }
 
-    fn minima_between(&self, lo: f64, hi: f64, out: &mut Vec<f64>) {
+    fn minima_between(&self, lo: f64, hi: f64, out: &mut impl Extend<f64>) {
         match self {
             Shape::Quad(q) => q.minima_between(lo, hi, out),
             Shape::Sin(s) => s.minima_between(lo, hi, out),
@@ -68,12 +68,53 @@ impl Shape {
     }
 }
 
+/// Up to two angles, collected without allocating (a piece shorter than 2π has at most two
+/// stationary minima).
+#[derive(Debug, Default)]
+struct AtMostTwo {
+    values: [f64; 2],
+    len: usize,
+}
+
+impl Extend<f64> for AtMostTwo {
+    fn extend<I: IntoIterator<Item = f64>>(&mut self, iter: I) {
+        for v in iter {
+            if self.len < 2 {
+                self.values[self.len] = v;
+                self.len += 1;
+            }
+        }
+    }
+}
+
 /// One interval of θ on which the objective is a single [`Shape`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Segment {
     lo: f64,
     hi: f64,
     shape: Shape,
+    /// Stationary minima of the shape strictly inside `(lo, hi)` (at most two).
+    minima: [f64; 2],
+    /// How many of `minima` are set.
+    n_minima: usize,
+}
+
+impl Segment {
+    fn new(lo: f64, hi: f64, shape: Shape) -> Self {
+        let mut found = AtMostTwo::default();
+        shape.minima_between(lo, hi, &mut found);
+        Self {
+            lo,
+            hi,
+            shape,
+            minima: found.values,
+            n_minima: found.len,
+        }
+    }
+
+    fn minima(&self) -> &[f64] {
+        &self.minima[..self.n_minima]
+    }
 }
 
 /// The objective at one orientation.
@@ -103,6 +144,10 @@ pub struct Analysis {
     /// `F_N / FORCE_SCALE`.
     internal: [f64; 4],
     graspable: (f64, f64),
+    from_above: (f64, f64),
+    /// `θ_36`, `θ_34`, `θ_45`: where `α_3` rises through `α_6`, `α_4` through `α_3` and `α_5`
+    /// through `α_4` (eqs. 36, 42, 39 up to 2π; see `paper::candidate_angles`).
+    crossings: [Option<f64>; 3],
     segments: Vec<Segment>,
 }
 
@@ -126,13 +171,16 @@ impl Analysis {
                 friction_safety_factor: frame.friction_safety_factor,
             });
         }
+        let (graspable, from_above) = paper::ranges(frame);
         let mut analysis = Self {
             frame: *frame,
             objective,
             alphas: paper::alpha_bounds(frame),
             particular: paper::balance_particular(frame),
             internal: paper::balance_internal(frame),
-            graspable: paper::graspable_range(frame),
+            graspable,
+            from_above,
+            crossings: [None; 3],
             segments: Vec::with_capacity(16),
         };
         analysis.build_segments();
@@ -156,7 +204,7 @@ impl Analysis {
 
     /// The from-above range, rad.
     pub fn from_above_range(&self) -> (f64, f64) {
-        paper::from_above_range(&self.frame)
+        self.from_above
     }
 
     /// The bounds whose envelope is the objective's α: `α_3 .. α_6`, and zero where the objective
@@ -175,21 +223,35 @@ impl Analysis {
         let (funcs, n) = self.envelope_functions();
         let funcs = &funcs[..n];
         let (lo, hi) = self.graspable;
-        let scale = funcs.iter().map(Sinusoid::amplitude).fold(0.0, f64::max);
+        let scale = funcs
+            .iter()
+            .map(|f| f.a.abs().max(f.b.abs()))
+            .fold(0.0, f64::max);
         let tol = ENVELOPE_TIE * scale.max(f64::MIN_POSITIVE);
+        // Where `funcs[j]` rises through `funcs[i]`, for every pair: one atan2 per pair, since
+        // `funcs[i]` rises through `funcs[j]` half a turn later.
+        let mut rise = [[None::<f64>; 5]; 5];
+        for i in 0..n {
+            for j in (i + 1)..n {
+                if let Some(r) = funcs[j].minus(&funcs[i]).rising_zero() {
+                    rise[i][j] = Some(r);
+                    rise[j][i] = Some(r + std::f64::consts::PI);
+                }
+            }
+        }
+        // funcs = [α3, α4, α5, α6, 0]: B, C, D are where α3 rises through α6, α4 through α3,
+        // α5 through α4.
+        self.crossings = [rise[3][0], rise[0][1], rise[1][2]];
         let mut t = lo;
         let mut active = top_at(funcs, t, tol);
         // Each step moves to a crossing of the active bound; there are at most two crossings per
         // pair in a range shorter than 2π, so this bound is never reached on real input.
         for _ in 0..64 {
-            let mut next = f64::INFINITY;
-            for (j, g) in funcs.iter().enumerate() {
-                if j != active {
-                    if let Some(r) = g.minus(&funcs[active]).next_rise(t) {
-                        next = next.min(r);
-                    }
-                }
-            }
+            let next = rise[active][..n]
+                .iter()
+                .flatten()
+                .map(|&r| next_periodic(r, TAU, t))
+                .fold(f64::INFINITY, f64::min);
             let end = next.min(hi);
             if end > t {
                 self.push_piece(t, end, &funcs[active]);
@@ -209,17 +271,13 @@ impl Analysis {
         match self.objective {
             Objective::Norm2 => {
                 let terms: [Sinusoid; 4] = std::array::from_fn(|i| t[i].plus_scaled(w[i], f));
-                self.segments.push(Segment {
+                self.segments.push(Segment::new(
                     lo,
                     hi,
-                    shape: Shape::Quad(QuadForm::sum_of_squares(&terms)),
-                });
+                    Shape::Quad(QuadForm::sum_of_squares(&terms)),
+                ));
             }
-            Objective::InternalForce => self.segments.push(Segment {
-                lo,
-                hi,
-                shape: Shape::Sin(*f),
-            }),
+            Objective::InternalForce => self.segments.push(Segment::new(lo, hi, Shape::Sin(*f))),
             Objective::Norm1 => {
                 // Breakpoints inside the piece: where a friction force at α = f changes sign,
                 // and where the two friction zeros cross (r1 = r2 ⇔ c2 T_F1 - c1 T_F2 = 0).
@@ -238,11 +296,7 @@ impl Analysis {
                     let (a, b) = (pair[0], pair[1]);
                     if b > a {
                         let shape = Shape::Sin(self.norm1_piece(f, 0.5 * (a + b)));
-                        self.segments.push(Segment {
-                            lo: a,
-                            hi: b,
-                            shape,
-                        });
+                        self.segments.push(Segment::new(a, b, shape));
                     }
                 }
             }
@@ -339,30 +393,50 @@ impl Analysis {
     }
 
     /// The paper's candidates A–E that fall in the graspable range, with their angles, in the
-    /// paper's labelling.
-    fn labelled_angles(&self) -> Vec<(PaperCandidate, f64)> {
-        let c = paper::candidate_angles(&self.frame);
+    /// paper's labelling; `None` where a candidate is outside the range.
+    fn labelled_angles(&self) -> [Option<(PaperCandidate, f64)>; 5] {
         let (lo, hi) = self.graspable;
-        let mut out = vec![
-            (PaperCandidate::A, c.theta_min),
-            (PaperCandidate::E, c.theta_max),
-        ];
-        for (label, theta) in [
-            (PaperCandidate::B, c.theta_36),
-            (PaperCandidate::C, c.theta_34),
-            (PaperCandidate::D, c.theta_45),
-        ] {
-            let t = next_periodic(theta, TAU, lo - SAME_ANGLE);
-            if t <= hi + SAME_ANGLE {
-                out.push((label, t));
-            }
-        }
-        out
+        let inside = |label, theta: Option<f64>| {
+            let t = next_periodic(theta?, TAU, lo - SAME_ANGLE);
+            (t <= hi + SAME_ANGLE).then_some((label, t))
+        };
+        let [b, c, d] = self.crossings;
+        [
+            Some((PaperCandidate::A, lo)),
+            inside(PaperCandidate::B, b),
+            inside(PaperCandidate::C, c),
+            inside(PaperCandidate::D, d),
+            Some((PaperCandidate::E, hi)),
+        ]
     }
 
-    fn label_of(&self, labels: &[(PaperCandidate, f64)], theta: f64) -> Option<PaperCandidate> {
+    /// The paper's candidates A–E inside the graspable range with their angles, in the
+    /// candidate's labelling.
+    pub fn paper_candidates(&self) -> Vec<(PaperCandidate, f64)> {
+        self.labelled_angles()
+            .into_iter()
+            .flatten()
+            .map(|(l, t)| {
+                (
+                    if self.frame.swapped {
+                        l.relabelled()
+                    } else {
+                        l
+                    },
+                    t,
+                )
+            })
+            .collect()
+    }
+
+    fn label_of(
+        &self,
+        labels: &[Option<(PaperCandidate, f64)>],
+        theta: f64,
+    ) -> Option<PaperCandidate> {
         labels
             .iter()
+            .flatten()
             .find(|(_, t)| (t - theta).abs() <= SAME_ANGLE)
             .map(|(l, _)| {
                 if self.frame.swapped {
@@ -387,7 +461,6 @@ impl Analysis {
             }
         };
         let segs = &self.segments;
-        let mut interior = Vec::with_capacity(4);
         for (k, seg) in segs.iter().enumerate() {
             let start = Angle::new(seg.lo);
             let right = seg.shape.slope(&start);
@@ -399,9 +472,7 @@ impl Analysis {
             if left <= 0.0 && right >= 0.0 {
                 push(seg.lo, &seg.shape);
             }
-            interior.clear();
-            seg.shape.minima_between(seg.lo, seg.hi, &mut interior);
-            for &t in &interior {
+            for &t in seg.minima() {
                 push(t, &seg.shape);
             }
         }
@@ -482,7 +553,7 @@ impl Analysis {
                 }
                 interior.clear();
                 interior.extend([lo, hi]);
-                seg.shape.minima_between(lo, hi, &mut interior);
+                interior.extend(seg.minima().iter().filter(|&&t| t > lo && t < hi));
                 if seg.shape.is_constant() {
                     interior.push(current.clamp(lo, hi));
                 }
@@ -513,10 +584,7 @@ impl Analysis {
             })
             .collect();
         let recommended_label = self.label_of(&labels, theta);
-        let c_angle = labels
-            .iter()
-            .find(|(l, _)| *l == PaperCandidate::C)
-            .map(|(_, t)| *t);
+        let c_angle = labels[2].map(|(_, t)| t);
         let candidate_c = match c_angle {
             Some(tc)
                 if allowed

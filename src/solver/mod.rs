@@ -430,6 +430,33 @@ pub enum Verdict {
 /// Solves one candidate: the orientation of least gripping power and the forces it needs.
 ///
 /// Bad input is an `Err`; a valid grasp that cannot be held is `Ok(Verdict::NoForceClosure)`.
+///
+/// # Example
+/// The paper's case study (c) (Table 1): a square held at the middle of two opposite sides,
+/// friction √3 and 1/√3, `Mg = 1`. The least gripping power is at candidate C,
+/// `θ_34 = -π/12` (Table 2 prints +0.261: its sign is wrong, see `tests/paper.rs`).
+/// ```
+/// use grasp_orient::solver::{solve_orientation, Candidate, PaperCandidate, Settings, Verdict};
+/// use nalgebra::Vector2;
+///
+/// let grasp = Candidate {
+///     contact_1: Vector2::new(1.0, 1.0),
+///     contact_2: Vector2::new(-1.0, 1.0),
+///     normal_1: Vector2::new(-1.0, 0.0),
+///     normal_2: Vector2::new(1.0, 0.0),
+///     friction_1: 3f64.sqrt(),
+///     friction_2: 1.0 / 3f64.sqrt(),
+///     center_of_mass: Vector2::zeros(),
+///     mass: 1.0,
+///     gravity: Vector2::new(0.0, -1.0),
+/// };
+/// let Ok(Verdict::Recommended(r)) = solve_orientation(&grasp, &Settings::default()) else {
+///     panic!("the grasp has force closure");
+/// };
+/// assert!((r.gravity_angle + std::f64::consts::PI / 12.0).abs() < 1e-12);
+/// assert_eq!(r.recommended_label, Some(PaperCandidate::C));
+/// assert!((r.gripping_power - 1.0).abs() < 1e-12); // P = Mg here
+/// ```
 pub fn solve_orientation(
     candidate: &Candidate,
     settings: &Settings,

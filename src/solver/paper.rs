@@ -120,7 +120,7 @@ pub fn candidate_angles(f: &GraspFrame) -> CandidateAngles {
     let (a36, b36) = (f.y * (t1p + t2m) - d, f.x2 * t1p - f.x1 * t2m);
     let (a34, b34) = (d - f.y * (t1p + t2p), f.x1 * t2p - f.x2 * t1p);
     let (a45, b45) = (f.y * (t1m + t2p) - d, f.x2 * t1m - f.x1 * t2p);
-    let (lo, hi) = graspable_range(f);
+    let ((lo, hi), _) = ranges(f);
     CandidateAngles {
         theta_min: lo,
         theta_max: hi,
@@ -130,23 +130,17 @@ pub fn candidate_angles(f: &GraspFrame) -> CandidateAngles {
     }
 }
 
-/// The graspable range (8): `(θ_min, θ_max)`.
+/// The graspable range (8) `(θ_min, θ_max)` and the from-above range, which share two angles.
 ///
 /// # Formula
-/// (9) `θ_min = -π + atan2(x2, y)`, (10) `θ_max = π - atan2(x1, y)`.
-pub fn graspable_range(f: &GraspFrame) -> (f64, f64) {
+/// (9) `θ_min = -π + atan2(x2, y)`, (10) `θ_max = π - atan2(x1, y)`; from above
+/// `[-atan2(x1, y), atan2(x2, y)]` (`shared/problem.md`): at its ends the centre of mass hangs
+/// straight below contact 1 or contact 2, at the graspable range's ends it stands straight above
+/// contact 2 or contact 1.
+pub fn ranges(f: &GraspFrame) -> ((f64, f64), (f64, f64)) {
     use std::f64::consts::PI;
-    (-PI + f.x2.atan2(f.y), PI - f.x1.atan2(f.y))
-}
-
-/// The from-above range: gravity angles at which the upward vertical through the centre of mass
-/// meets the segment between the contacts.
-///
-/// # Formula
-/// `[-atan2(x1, y), atan2(x2, y)]` (`shared/problem.md`); at its ends the centre of mass hangs
-/// straight below contact 1 or contact 2.
-pub fn from_above_range(f: &GraspFrame) -> (f64, f64) {
-    (-f.x1.atan2(f.y), f.x2.atan2(f.y))
+    let (t1, t2) = (f.x2.atan2(f.y), f.x1.atan2(f.y));
+    ((-PI + t1, PI - t2), (-t2, t1))
 }
 
 /// Whether the friction cone at the paper's contact 1 and at contact 2 contain the centre of

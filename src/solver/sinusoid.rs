@@ -112,11 +112,11 @@ impl Sinusoid {
     ///
     /// # Formula
     /// `R sin(θ + γ)` is least at `θ + γ = -π/2 (mod 2π)`.
-    pub fn minima_between(&self, lo: f64, hi: f64, out: &mut Vec<f64>) {
+    pub fn minima_between(&self, lo: f64, hi: f64, out: &mut impl Extend<f64>) {
         if let Some(t0) = self.rising_zero() {
             let mut t = next_periodic(t0 - 0.5 * PI, TAU, lo);
             while t < hi {
-                out.push(t);
+                out.extend([t]);
                 t += TAU;
             }
         }
@@ -179,14 +179,14 @@ impl QuadForm {
     /// # Formula
     /// `Q(θ) = (p+q)/2 + A cos 2θ + B sin 2θ` with `A = (q-p)/2`, `B = r/2`; it is least where
     /// `2θ = atan2(B, A) + π (mod 2π)`, so at `θ = (atan2(B, A) + π)/2 + kπ`.
-    pub fn minima_between(&self, lo: f64, hi: f64, out: &mut Vec<f64>) {
+    pub fn minima_between(&self, lo: f64, hi: f64, out: &mut impl Extend<f64>) {
         if self.is_constant() {
             return;
         }
         let t0 = 0.5 * ((0.5 * self.r).atan2(0.5 * (self.q - self.p)) + PI);
         let mut t = next_periodic(t0, PI, lo);
         while t < hi {
-            out.push(t);
+            out.extend([t]);
             t += PI;
         }
     }

@@ -1,0 +1,224 @@
+//! `grasp_orient plot CANDIDATE.json -o OUT.svg`: the six bounds `α_k(θ)` and the gripping power
+//! `P(θ)` over the graspable range, with the paper's candidates and the recommendation marked,
+//! like the paper's Fig. 9.
+
+use super::SolveOptions;
+use crate::msg::GraspCandidate;
+use crate::solver::{Analysis, Candidate, GraspFrame, Recommendation};
+use anyhow::{anyhow, Context};
+use plotters::prelude::*;
+use std::path::PathBuf;
+
+/// Arguments of `plot`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct Args {
+    /// One GraspCandidate as JSON (a single object; the fields of msg/GraspCandidate.msg).
+    pub candidate: PathBuf,
+    /// Where to write the SVG.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Samples per curve.
+    #[arg(long, default_value_t = 2000)]
+    pub samples: usize,
+    #[command(flatten)]
+    pub options: SolveOptions,
+}
+
+const COLOURS: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+];
+
+/// Draws the figure.
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    let settings = args.options.settings()?;
+    let text = std::fs::read_to_string(&args.candidate)
+        .with_context(|| format!("cannot read {}", args.candidate.display()))?;
+    let message: GraspCandidate = serde_json::from_str(&text)
+        .with_context(|| format!("{} is not a GraspCandidate", args.candidate.display()))?;
+    let candidate = Candidate::try_from(&message).map_err(|e| anyhow!("invalid input: {e}"))?;
+    let frame = GraspFrame::new(&candidate, settings.friction_safety_factor)
+        .map_err(|e| anyhow!("invalid input: {e}"))?;
+    let analysis = Analysis::new(&frame, settings.objective).map_err(|e| anyhow!("{e}"))?;
+    let best = analysis
+        .recommend(&settings.range)
+        .map_err(|e| anyhow!("invalid input: {e}"))?;
+    draw(&analysis, &best, args)?;
+    println!(
+        "wrote {}: recommended gravity angle {:.6} rad, wrist rotation {:.6} rad, {} {:.6} N",
+        args.output.display(),
+        best.gravity_angle,
+        best.wrist_rotation,
+        best.objective.name(),
+        best.gripping_power
+    );
+    Ok(())
+}
+
+fn draw(analysis: &Analysis, best: &Recommendation, args: &Args) -> anyhow::Result<()> {
+    let (lo, hi) = analysis.graspable_range();
+    let n = args.samples.max(10);
+    let thetas: Vec<f64> = (0..=n)
+        .map(|k| lo + (hi - lo) * k as f64 / n as f64)
+        .collect();
+    let alphas = analysis.alphas();
+    let alpha_curves: Vec<Vec<(f64, f64)>> = alphas
+        .iter()
+        .map(|a| {
+            thetas
+                .iter()
+                .map(|&t| (t, a.value(&crate::solver::sinusoid::Angle::new(t))))
+                .collect()
+        })
+        .collect();
+    let power: Vec<(f64, f64)> = thetas
+        .iter()
+        .map(|&t| (t, analysis.evaluate(t).power))
+        .collect();
+    let envelope: Vec<(f64, f64)> = thetas
+        .iter()
+        .map(|&t| (t, analysis.evaluate(t).alpha_min))
+        .collect();
+    let span = |values: &mut dyn Iterator<Item = f64>| {
+        values.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        })
+    };
+    let (amin, amax) = span(&mut envelope.iter().map(|p| p.1));
+    let pad = 0.6 * (amax - amin).max(1e-9);
+    let (amin, amax) = (amin - pad, amax + pad);
+    let (pmin, pmax) = span(&mut power.iter().map(|p| p.1));
+    let (pmin, pmax) = (0f64.min(pmin), pmax + 0.1 * (pmax - pmin).max(1e-9));
+
+    let root = SVGBackend::new(&args.output, (1400, 560)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
+    let (left, right) = root.split_horizontally(700);
+    let err = |e: DrawingAreaErrorKind<_>| anyhow!("drawing failed: {e:?}");
+
+    let mut chart = ChartBuilder::on(&left)
+        .caption(
+            "bounds α_k(θ) (lengths / contact distance)",
+            ("sans-serif", 20),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(lo..hi, amin..amax)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("gravity angle θ, rad")
+        .y_desc("α")
+        .draw()
+        .map_err(err)?;
+    for (k, curve) in alpha_curves.iter().enumerate() {
+        let colour = COLOURS[k];
+        chart
+            .draw_series(LineSeries::new(
+                curve.iter().copied().filter(|p| p.1 >= amin && p.1 <= amax),
+                colour.stroke_width(2),
+            ))
+            .map_err(err)?
+            .label(format!("α_{}", k + 1))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
+    }
+    chart
+        .draw_series(LineSeries::new(
+            envelope.iter().copied(),
+            BLACK.stroke_width(1),
+        ))
+        .map_err(err)?
+        .label("α_min")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(err)?;
+
+    let objective = best.objective.name();
+    let mut chart = ChartBuilder::on(&right)
+        .caption(
+            format!("gripping power P(θ), {objective}"),
+            ("sans-serif", 20),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(lo..hi, pmin..pmax)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("gravity angle θ, rad")
+        .y_desc("P, N")
+        .draw()
+        .map_err(err)?;
+    let (above_lo, above_hi) = analysis.from_above_range();
+    chart
+        .draw_series(std::iter::once(Rectangle::new(
+            [(above_lo, pmin), (above_hi, pmax)],
+            RGBColor(230, 240, 255).filled(),
+        )))
+        .map_err(err)?
+        .label("from above")
+        .legend(|(x, y)| {
+            Rectangle::new(
+                [(x, y - 5), (x + 20, y + 5)],
+                RGBColor(200, 220, 255).filled(),
+            )
+        });
+    chart
+        .draw_series(LineSeries::new(
+            power.iter().copied(),
+            BLACK.stroke_width(2),
+        ))
+        .map_err(err)?;
+    for (label, theta) in analysis.paper_candidates() {
+        let p = analysis.evaluate(theta).power;
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                vec![(theta, pmin), (theta, pmax)],
+                RGBColor(150, 150, 150),
+            )))
+            .map_err(err)?;
+        chart
+            .draw_series(std::iter::once(Text::new(
+                label.name().to_string(),
+                (theta, p + 0.04 * (pmax - pmin)),
+                ("sans-serif", 16),
+            )))
+            .map_err(err)?;
+    }
+    chart
+        .draw_series(std::iter::once(Circle::new(
+            (best.gravity_angle, best.gripping_power),
+            6,
+            RED.filled(),
+        )))
+        .map_err(err)?
+        .label("recommended")
+        .legend(|(x, y)| Circle::new((x + 10, y), 5, RED.filled()));
+    chart
+        .draw_series(std::iter::once(Circle::new(
+            (best.current_gravity_angle, best.gripping_power_current),
+            5,
+            BLUE.filled(),
+        )))
+        .map_err(err)?
+        .label("current")
+        .legend(|(x, y)| Circle::new((x + 10, y), 4, BLUE.filled()));
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(err)?;
+    root.present()
+        .map_err(|e| anyhow!("cannot write {}: {e}", args.output.display()))?;
+    Ok(())
+}
