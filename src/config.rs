@@ -44,7 +44,7 @@ impl Default for Config {
             friction_safety_factor: 1.0,
             qos_depth: 100,
             publish_markers: true,
-            record: true,
+            record: false,
             record_dir: "runs".into(),
             record_markers: false,
         }
@@ -108,6 +108,45 @@ impl Config {
             }
         }
         Ok(())
+    }
+
+    /// Sets one parameter from its YAML text (as in `-p name:=value`), without validating.
+    pub fn set_from_yaml(&mut self, name: &str, value: &str) -> Result<(), ConfigError> {
+        let yaml = |source| ConfigError::Yaml {
+            origin: format!("parameter {name}"),
+            source,
+        };
+        let parsed: serde_yaml_ng::Value = serde_yaml_ng::from_str(value).map_err(yaml)?;
+        self.set_value(name, parsed)
+    }
+
+    /// Sets one parameter from a YAML value, without validating.
+    pub fn set_value(
+        &mut self,
+        name: &str,
+        value: serde_yaml_ng::Value,
+    ) -> Result<(), ConfigError> {
+        let yaml = |source| ConfigError::Yaml {
+            origin: format!("parameter {name}"),
+            source,
+        };
+        let mut merged = serde_yaml_ng::to_value(&*self).map_err(yaml)?;
+        if let Some(map) = merged.as_mapping_mut() {
+            map.insert(serde_yaml_ng::Value::String(name.to_string()), value);
+        }
+        *self = serde_yaml_ng::from_value(merged).map_err(yaml)?;
+        Ok(())
+    }
+
+    /// Every parameter as `(name, YAML value)`, in declaration order.
+    pub fn parameters(&self) -> Vec<(String, serde_yaml_ng::Value)> {
+        match serde_yaml_ng::to_value(self) {
+            Ok(serde_yaml_ng::Value::Mapping(map)) => map
+                .into_iter()
+                .filter_map(|(k, v)| k.as_str().map(|k| (k.to_string(), v)))
+                .collect(),
+            _ => Vec::new(),
+        }
     }
 
     /// The compiled-in defaults, then `file` if given, validated.

@@ -5,9 +5,11 @@
 //! 1. [`solver`]: pure math, SI units.
 //! 2. [`msg`]: wire structs mirroring `msg/*.msg`, and conversions to and from solver types.
 //! 3. [`config`]: the typed settings read from `config/grasp_orient.yaml`.
+//! 3. [`node`]: the ROS 2 node on ros2-client.
 //! 4. [`cli`]: one `run` per subcommand.
 
 pub mod cli;
 pub mod config;
 pub mod msg;
+pub mod node;
 pub mod solver;

@@ -19,16 +19,30 @@ enum Command {
     Solve(cli::solve::Args),
     /// Plot the bounds and the gripping power of one candidate to SVG (like the paper's Fig. 9).
     Plot(cli::plot::Args),
+    /// Run the ROS 2 node (ROS arguments follow --ros-args, as from ros2 run or launch).
+    Node(grasp_orient::node::Args),
 }
 
 fn main() -> ExitCode {
-    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("info"))
-        .target(env_logger::Target::Stderr)
-        .init();
-    let cli = Cli::parse();
+    // RustDDS warns about every unreachable locator; its errors still show.
+    env_logger::Builder::from_env(
+        env_logger::Env::default().default_filter_or(
+            "info,rustdds=error,ros2_client=warn,ros2_client::distributions=error",
+        ),
+    )
+    .target(env_logger::Target::Stderr)
+    .init();
+    // Everything from --ros-args on belongs to ROS, not to clap.
+    let argv: Vec<String> = std::env::args().collect();
+    let split = argv
+        .iter()
+        .position(|a| a == "--ros-args")
+        .unwrap_or(argv.len());
+    let cli = Cli::parse_from(&argv[..split]);
     let result = match &cli.command {
         Command::Solve(args) => cli::solve::run(args),
         Command::Plot(args) => cli::plot::run(args),
+        Command::Node(args) => grasp_orient::node::run(args, &argv[split..]),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

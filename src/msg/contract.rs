@@ -22,6 +22,7 @@ primitive! {
     f64 => "float64",
     f32 => "float32",
     u8 => "uint8",
+    i8 => "int8",
     u32 => "uint32",
     i32 => "int32",
     i64 => "int64",

@@ -45,6 +45,11 @@ macro_rules! ros_message {
     };
 }
 
+mod visualization;
+pub use visualization::{
+    ColorRgba, CompressedImage, Duration, Marker, MarkerArray, MeshFile, Pose, UvCoordinate,
+};
+
 ros_message! {
     /// `builtin_interfaces/Time`.
     Time = "builtin_interfaces/msg/Time" [] {

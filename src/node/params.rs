@@ -1,0 +1,144 @@
+//! The node's ROS parameters: the fields of [`Config`], declared with their values, validated as
+//! a whole on every set, and shared with the answering loop.
+
+use crate::config::Config;
+use crate::solver::Settings;
+use ros2_client::ParameterValue;
+use serde_yaml_ng::Value;
+use std::sync::{Arc, Mutex, MutexGuard};
+
+/// A parameter hook as ros2-client takes it: `Err(reason)` refuses the value.
+pub type ParameterHook = Box<dyn Fn(&str, &ParameterValue) -> Result<(), String> + Send + Sync>;
+
+/// Parameters that cannot change while the node runs (they shape its endpoints).
+const FIXED: [&str; 1] = ["qos_depth"];
+
+/// The settings the answering loop reads, kept in step with the parameters.
+#[derive(Debug)]
+pub struct Live {
+    /// Every parameter.
+    pub config: Config,
+    /// The solver settings they imply.
+    pub settings: Settings,
+}
+
+/// [`Live`] shared between parameter services and the answering loop.
+#[derive(Debug, Clone)]
+pub struct Shared(Arc<Mutex<Live>>);
+
+impl Shared {
+    /// Shares a validated config.
+    pub fn new(config: Config, settings: Settings) -> Self {
+        Self(Arc::new(Mutex::new(Live { config, settings })))
+    }
+
+    /// The current settings (a poisoned lock still holds valid settings: sets are atomic).
+    pub fn lock(&self) -> MutexGuard<'_, Live> {
+        self.0.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Whether `name := value` would be accepted, and the config it would give.
+    fn check(&self, name: &str, value: &ParameterValue) -> Result<(Config, Settings), String> {
+        let live = self.lock();
+        let value = to_yaml(value).ok_or_else(|| match value {
+            ParameterValue::NotSet => format!("parameter {name} cannot be deleted"),
+            other => format!("parameter {name}: unsupported value {other:?}"),
+        })?;
+        let current = live
+            .config
+            .parameters()
+            .into_iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v);
+        if FIXED.contains(&name) && current.as_ref() != Some(&value) {
+            return Err(format!(
+                "{name} is fixed while the node runs; restart it with -p {name}:=VALUE"
+            ));
+        }
+        let mut config = live.config.clone();
+        config.set_value(name, value).map_err(|e| e.to_string())?;
+        let settings = config.validate().map_err(|e| e.to_string())?;
+        Ok((config, settings))
+    }
+
+    /// The validator handed to ros2-client: refuses with a reason, keeping the old value.
+    pub fn validator(&self) -> ParameterHook {
+        let shared = self.clone();
+        Box::new(move |name, value| shared.check(name, value).map(|_| ()))
+    }
+
+    /// The set action handed to ros2-client: the next candidate uses the new value.
+    pub fn set_action(&self) -> ParameterHook {
+        let shared = self.clone();
+        Box::new(move |name, value| {
+            let (config, settings) = shared.check(name, value)?;
+            let mut live = shared.lock();
+            if live.config != config {
+                log::info!("parameter {name} set to {value:?}");
+            }
+            live.config = config;
+            live.settings = settings;
+            Ok(())
+        })
+    }
+}
+
+/// A parameter value as YAML; `None` for deletion and for types the config has none of.
+pub fn to_yaml(value: &ParameterValue) -> Option<Value> {
+    Some(match value {
+        ParameterValue::Boolean(b) => Value::Bool(*b),
+        ParameterValue::Integer(i) => Value::Number((*i).into()),
+        ParameterValue::Double(d) => Value::Number((*d).into()),
+        ParameterValue::String(s) => Value::String(s.clone()),
+        _ => return None,
+    })
+}
+
+/// A YAML value as a parameter value.
+pub fn from_yaml(value: &Value) -> Option<ParameterValue> {
+    Some(match value {
+        Value::Bool(b) => ParameterValue::Boolean(*b),
+        Value::Number(n) if n.is_i64() => ParameterValue::Integer(n.as_i64()?),
+        Value::Number(n) => ParameterValue::Double(n.as_f64()?),
+        Value::String(s) => ParameterValue::String(s.clone()),
+        _ => return None,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn shared() -> Shared {
+        let config = Config::default();
+        let settings = config.validate().expect("defaults are valid");
+        Shared::new(config, settings)
+    }
+
+    #[test]
+    fn valid_sets_apply_and_invalid_ones_keep_the_old_value() {
+        let s = shared();
+        let set = s.set_action();
+        let check = s.validator();
+        assert!(set("objective", &ParameterValue::String("norm1".into())).is_ok());
+        assert_eq!(s.lock().settings.objective, crate::solver::Objective::Norm1);
+        let why = check("objective", &ParameterValue::String("norm3".into()))
+            .expect_err("unknown objective");
+        assert!(why.contains("norm3"), "{why}");
+        let why =
+            check("friction_safety_factor", &ParameterValue::Double(0.5)).expect_err("below one");
+        assert!(why.contains("friction_safety_factor"), "{why}");
+        assert!(check("qos_depth", &ParameterValue::Integer(7)).is_err());
+        assert!(check("qos_depth", &ParameterValue::Integer(100)).is_ok());
+        assert!(check("objective", &ParameterValue::NotSet).is_err());
+        assert_eq!(s.lock().config.objective, "norm1");
+    }
+
+    #[test]
+    fn every_parameter_has_a_ros_type() {
+        for (name, value) in Config::default().parameters() {
+            let p = from_yaml(&value).unwrap_or_else(|| panic!("{name} has no ROS type"));
+            assert_eq!(to_yaml(&p).as_ref(), Some(&value), "{name}");
+        }
+    }
+}
