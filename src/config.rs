@@ -44,7 +44,7 @@ impl Default for Config {
             friction_safety_factor: 1.0,
             qos_depth: 100,
             publish_markers: true,
-            record: false,
+            record: true,
             record_dir: "runs".into(),
             record_markers: false,
         }

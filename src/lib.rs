@@ -12,4 +12,6 @@ pub mod cli;
 pub mod config;
 pub mod msg;
 pub mod node;
+pub mod record;
+pub mod replay;
 pub mod solver;

@@ -21,6 +21,12 @@ enum Command {
     Plot(cli::plot::Args),
     /// Run the ROS 2 node (ROS arguments follow --ros-args, as from ros2 run or launch).
     Node(grasp_orient::node::Args),
+    /// Re-solve every candidate of MCAP recordings and compare with the recorded answers.
+    Replay(cli::replay::Args),
+    /// Recover what a killed recording holds into a finished MCAP file.
+    Recover(cli::recover::Args),
+    /// Republish the candidates of a recording to the live ROS graph, like ros2 bag play.
+    Play(grasp_orient::node::play::Args),
 }
 
 fn main() -> ExitCode {
@@ -43,6 +49,9 @@ fn main() -> ExitCode {
         Command::Solve(args) => cli::solve::run(args),
         Command::Plot(args) => cli::plot::run(args),
         Command::Node(args) => grasp_orient::node::run(args, &argv[split..]),
+        Command::Replay(args) => cli::replay::run(args),
+        Command::Recover(args) => cli::recover::run(args),
+        Command::Play(args) => grasp_orient::node::play::run(args, &argv[split..]),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,6 +1,8 @@
 //! The command line: one `run` per subcommand.
 
 pub mod plot;
+pub mod recover;
+pub mod replay;
 pub mod solve;
 
 use crate::config::Config;

@@ -4,8 +4,10 @@
 //! Each struct is declared through [`ros_message!`], which also derives its ROS field list from
 //! the Rust field types, so `tests/msg_contract.rs` can check it against the `.msg` file.
 
+pub mod cdr;
 mod contract;
 mod convert;
+pub mod definitions;
 
 pub use contract::{RosMessage, RosType};
 pub use convert::{answer, invalid, MessageLimits, MAX_TEXT_BYTES};

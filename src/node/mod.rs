@@ -5,10 +5,12 @@
 
 pub mod markers;
 mod params;
+pub mod play;
 pub mod ros_args;
 
 use crate::config::Config;
 use crate::msg::{answer, GraspCandidate, GripRecommendation, MarkerArray};
+use crate::record::{now_ns, Entry, Payload, Recorder, Topics};
 use anyhow::{bail, Context as _};
 use async_signal::{Signal, Signals};
 use futures::{FutureExt, StreamExt};
@@ -214,13 +216,13 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
             }
         ),
     );
-    if config.record {
-        say(
-            &node,
-            LogLevel::Warn,
-            "record is true but recording to MCAP is not built yet; nothing is recorded",
-        );
-    }
+    let topics = Topics {
+        candidates: candidates_name.clone(),
+        recommendations: answers_name.clone(),
+        markers: Some(markers_name.clone()),
+    };
+    let mut recording = Recording::new(topics, config.qos_depth);
+    recording.follow(&node, &config)?;
     if args.echo {
         say(
             &node,
@@ -263,11 +265,21 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
                 }
                 result = demo_done => break result,
                 received = stream.select_next_some() => match received {
-                    Ok((candidate, _info)) => {
-                        let (settings, markers_on) = {
+                    Ok((candidate, info)) => {
+                        let received = info
+                            .received_timestamp()
+                            .map_or_else(now_ns, |t| u64::try_from(t.to_nanos()).unwrap_or(0));
+                        let sent = info
+                            .source_timestamp()
+                            .map_or(received, |t| u64::try_from(t.to_nanos()).unwrap_or(received));
+                        let (settings, markers_on, config) = {
                             let live = shared.lock();
-                            (live.settings, live.config.publish_markers)
+                            (live.settings, live.config.publish_markers, live.config.clone())
                         };
+                        if let Err(e) = recording.follow(&node, &config) {
+                            say(&node, LogLevel::Error, &format!("{e:#}"));
+                        }
+                        recording.record(Payload::Candidate(Box::new(candidate.clone())), received, sent);
                         let reply = if echo {
                             GripRecommendation {
                                 header: candidate.header.clone(),
@@ -290,10 +302,16 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
                         counts.answered += 1;
                         if markers_on && !echo && reply.status == GripRecommendation::STATUS_OK {
                             let array = markers::build(&candidate, &reply);
+                            if config.record_markers {
+                                let t = now_ns();
+                                recording.record(Payload::Markers(Box::new(array.clone())), t, t);
+                            }
                             if let Err(e) = marker_publisher.async_publish(array).await {
                                 log::warn!("cannot publish markers: {e:?}");
                             }
                         }
+                        let t = now_ns();
+                        recording.record(Payload::Recommendation(Box::new(reply.clone())), t, t);
                         if let Err(e) = answers.async_publish(reply).await {
                             say(&node, LogLevel::Error, &format!("cannot publish an answer: {e:?}"));
                         }
@@ -310,6 +328,7 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
         say(&node, LogLevel::Info, &format!(
             "answered {} candidates: {} refused as invalid, {} without force closure, {} undecodable",
             counts.answered, counts.invalid, counts.no_closure, counts.undecodable));
+        recording.stop(&node);
         outcome
     }));
     // Leave the graph in order: endpoints, the node (stops the spinner), the spinner task, the
@@ -329,6 +348,99 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
     drop(executor);
     drop(context);
     outcome
+}
+
+/// The node's recording: started, stopped and restarted as the `record` parameter says.
+struct Recording {
+    topics: Topics,
+    qos_depth: i64,
+    active: Option<Recorder>,
+    /// Whether a start failed for the current settings (not retried for every candidate).
+    failed: bool,
+}
+
+impl Recording {
+    fn new(topics: Topics, qos_depth: i64) -> Self {
+        Self {
+            topics,
+            qos_depth,
+            active: None,
+            failed: false,
+        }
+    }
+
+    /// Starts or stops recording to match `config.record`.
+    fn follow(&mut self, node: &Node, config: &Config) -> anyhow::Result<()> {
+        match (&self.active, config.record) {
+            (None, true) if !self.failed => {
+                let topics = Topics {
+                    markers: config
+                        .record_markers
+                        .then(|| self.topics.markers.clone())
+                        .flatten(),
+                    ..self.topics.clone()
+                };
+                match Recorder::start(
+                    std::path::Path::new(&config.record_dir),
+                    topics,
+                    self.qos_depth,
+                ) {
+                    Ok(r) => {
+                        say(
+                            node,
+                            LogLevel::Info,
+                            &format!("recording to {}", r.path().display()),
+                        );
+                        self.active = Some(r);
+                    }
+                    Err(e) => {
+                        self.failed = true;
+                        return Err(anyhow::Error::new(e).context("recording is off"));
+                    }
+                }
+            }
+            (Some(_), false) => self.stop(node),
+            (None, false) => self.failed = false,
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn record(&self, payload: Payload, log_time: u64, publish_time: u64) {
+        if let Some(r) = &self.active {
+            if !r.record(Entry {
+                payload,
+                log_time,
+                publish_time,
+            }) {
+                log::error!(
+                    "the recording {} stopped; see its error",
+                    r.path().display()
+                );
+            }
+        }
+    }
+
+    /// Finishes the file and says what it holds.
+    fn stop(&mut self, node: &Node) {
+        if let Some(r) = self.active.take() {
+            let path = r.path().to_path_buf();
+            match r.finish() {
+                Ok(w) => say(
+                    node,
+                    LogLevel::Info,
+                    &format!(
+                        "recording {} closed: {} candidates, {} recommendations, {} marker arrays",
+                        path.display(),
+                        w.candidates,
+                        w.recommendations,
+                        w.markers
+                    ),
+                ),
+                Err(e) => say(node, LogLevel::Error, &format!("recording failed: {e}")),
+            }
+        }
+    }
 }
 
 fn truncate(id: &str) -> String {
@@ -408,6 +520,5 @@ async fn run_demo(graph: &Graph, candidates: &str, answers: &str) -> anyhow::Res
             reply.recommended_label
         );
     }
-    println!("Recording: not built yet (MCAP recording is a later issue); nothing was written.");
     Ok(())
 }

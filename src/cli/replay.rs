@@ -1,0 +1,131 @@
+//! `grasp_orient replay BAG...`: re-solve every recorded candidate and compare with the
+//! recorded recommendations; non-zero exit on any difference beyond tolerance.
+
+use super::SolveOptions;
+use crate::record::bag;
+use crate::record::{BagWriter, Entry, Payload, Topics};
+use crate::replay::{replay, Summary, TOLERANCE};
+use anyhow::{bail, Context};
+use std::path::PathBuf;
+
+/// Arguments of `replay`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct Args {
+    /// MCAP files (ours, or any rosbag2 MCAP with a grasp_orient/msg/GraspCandidate topic).
+    #[arg(required = true)]
+    pub bags: Vec<PathBuf>,
+    /// Also write a fresh recording of the replay: the candidates and the new recommendations.
+    #[arg(long, value_name = "OUT.mcap")]
+    pub write: Option<PathBuf>,
+    #[command(flatten)]
+    pub options: SolveOptions,
+}
+
+/// Replays every bag and prints a summary.
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    let settings = args.options.settings()?;
+    let started = std::time::Instant::now();
+    let mut summary = Summary::default();
+    let mut writer = match &args.write {
+        Some(path) => Some(
+            BagWriter::create(
+                path,
+                &Topics {
+                    candidates: "/grasp_candidates".into(),
+                    recommendations: "/grip_recommendations".into(),
+                    markers: None,
+                },
+                100,
+            )
+            .with_context(|| format!("cannot write {}", path.display()))?,
+        ),
+        None => None,
+    };
+    for path in &args.bags {
+        let bag = bag::read(path)?;
+        if bag.candidates.is_empty() {
+            bail!(
+                "{}: no grasp_orient/msg/GraspCandidate messages (cdr) in it",
+                path.display()
+            );
+        }
+        if bag.undecodable_count > 0 {
+            log::warn!(
+                "{}: {} messages did not decode, e.g. {}",
+                path.display(),
+                bag.undecodable_count,
+                bag.undecodable.first().map_or("", String::as_str)
+            );
+        }
+        let bar = indicatif::ProgressBar::new(bag.candidates.len() as u64);
+        if bag.candidates.len() < 100_000 {
+            bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+        }
+        let mut ticks = 0u64;
+        let answers = replay(&bag, &settings, &mut summary, || {
+            ticks += 1;
+            if ticks.is_multiple_of(4096) {
+                bar.set_position(ticks);
+            }
+        });
+        bar.finish_and_clear();
+        if let Some(w) = writer.as_mut() {
+            for (c, a) in bag.candidates.iter().zip(answers) {
+                w.write(&Entry {
+                    payload: Payload::Candidate(Box::new(c.message.clone())),
+                    log_time: c.log_time,
+                    publish_time: c.publish_time,
+                })?;
+                w.write(&Entry {
+                    payload: Payload::Recommendation(Box::new(a.message)),
+                    log_time: a.log_time,
+                    publish_time: a.publish_time,
+                })?;
+            }
+        }
+        println!(
+            "{}: {} candidates, {} recorded recommendations",
+            path.display(),
+            bag.candidates.len(),
+            bag.recommendations.len()
+        );
+    }
+    if let Some(w) = writer {
+        let written = w.finish()?;
+        println!(
+            "wrote {} candidates and {} recommendations to {}",
+            written.candidates,
+            written.recommendations,
+            args.write
+                .as_ref()
+                .map_or(String::new(), |p| p.display().to_string())
+        );
+    }
+    let secs = started.elapsed().as_secs_f64();
+    println!(
+        "replayed {} candidates in {secs:.2} s ({:.0} per second): {} compared with a recorded \
+         recommendation, {} differ beyond {TOLERANCE:e}, {} recorded recommendations unmatched",
+        summary.candidates,
+        summary.candidates as f64 / secs.max(1e-9),
+        summary.compared,
+        summary.differing,
+        summary.unmatched_recommendations
+    );
+    if !summary.largest.is_empty() {
+        println!("largest difference per field:");
+        for (field, gap) in &summary.largest {
+            println!("  {field:<24} {gap:.3e}");
+        }
+    }
+    for example in &summary.examples {
+        println!("  differs: {example}");
+    }
+    if summary.differing > 0 {
+        bail!(
+            "{} of {} compared recommendations differ",
+            summary.differing,
+            summary.compared
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,279 @@
+//! Reading recordings back: ours, or any rosbag2-style MCAP with a `GraspCandidate` topic, and
+//! recovering what a killed recording holds.
+
+use crate::msg::{cdr, GraspCandidate, GripRecommendation};
+use std::collections::{BTreeMap, HashMap};
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+
+/// Schema name of candidates.
+pub const CANDIDATE_TYPE: &str = "grasp_orient/msg/GraspCandidate";
+/// Schema name of recommendations.
+pub const RECOMMENDATION_TYPE: &str = "grasp_orient/msg/GripRecommendation";
+
+/// What goes wrong reading or recovering a bag.
+#[derive(Debug, thiserror::Error)]
+pub enum BagError {
+    /// The file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The file is not a readable MCAP.
+    #[error("{path}: not a readable MCAP file: {source}")]
+    Mcap {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: mcap::McapError,
+    },
+}
+
+/// A message with the times it was recorded at, ns since the epoch.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Recorded<T> {
+    /// The message.
+    pub message: T,
+    /// Receive time.
+    pub log_time: u64,
+    /// Send time.
+    pub publish_time: u64,
+}
+
+/// The grasp_orient messages of one bag, in file order.
+#[derive(Debug, Default)]
+pub struct Bag {
+    /// Every candidate.
+    pub candidates: Vec<Recorded<GraspCandidate>>,
+    /// Every recommendation.
+    pub recommendations: Vec<Recorded<GripRecommendation>>,
+    /// Messages on other topics, left alone.
+    pub other: u64,
+    /// Messages of our types that did not decode, with why (first few).
+    pub undecodable: Vec<String>,
+    /// How many did not decode.
+    pub undecodable_count: u64,
+}
+
+fn io(path: &Path) -> impl Fn(std::io::Error) -> BagError + '_ {
+    move |source| BagError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+fn mcap_err(path: &Path) -> impl Fn(mcap::McapError) -> BagError + '_ {
+    move |source| BagError::Mcap {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// Whether a channel carries `type_name` as CDR (schema names with or without `/msg/`).
+fn carries(channel: &mcap::Channel<'_>, type_name: &str) -> bool {
+    let Some(schema) = &channel.schema else {
+        return false;
+    };
+    let short = type_name.replace("/msg/", "/");
+    channel.message_encoding == "cdr" && (schema.name == type_name || schema.name == short)
+}
+
+impl Bag {
+    fn note_undecodable(&mut self, why: String) {
+        self.undecodable_count += 1;
+        if self.undecodable.len() < 10 {
+            self.undecodable.push(why);
+        }
+    }
+
+    fn take(&mut self, message: &mcap::Message<'_>) {
+        let (log_time, publish_time) = (message.log_time, message.publish_time);
+        if carries(&message.channel, CANDIDATE_TYPE) {
+            match cdr::decode::<GraspCandidate>(&message.data) {
+                Ok(m) => self.candidates.push(Recorded {
+                    message: m,
+                    log_time,
+                    publish_time,
+                }),
+                Err(e) => self.note_undecodable(format!(
+                    "{} #{}: {e}",
+                    message.channel.topic, message.sequence
+                )),
+            }
+        } else if carries(&message.channel, RECOMMENDATION_TYPE) {
+            match cdr::decode::<GripRecommendation>(&message.data) {
+                Ok(m) => self.recommendations.push(Recorded {
+                    message: m,
+                    log_time,
+                    publish_time,
+                }),
+                Err(e) => self.note_undecodable(format!(
+                    "{} #{}: {e}",
+                    message.channel.topic, message.sequence
+                )),
+            }
+        } else {
+            self.other += 1;
+        }
+    }
+}
+
+/// Reads every grasp_orient message of a bag.
+pub fn read(path: &Path) -> Result<Bag, BagError> {
+    let bytes = std::fs::read(path).map_err(io(path))?;
+    let mut bag = Bag::default();
+    for message in mcap::MessageStream::new(&bytes).map_err(mcap_err(path))? {
+        bag.take(&message.map_err(mcap_err(path))?);
+    }
+    Ok(bag)
+}
+
+/// What [`recover`] salvaged.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Recovered {
+    /// Messages per topic.
+    pub per_topic: BTreeMap<String, u64>,
+    /// Why reading stopped, when it did not reach a clean end.
+    pub stopped: Option<String>,
+}
+
+/// Copies every complete message of a recording that was cut short (a killed process, a full
+/// disk) into a fresh, finished MCAP file, with the same schemas, channels and profile.
+pub fn recover(broken: &Path, fixed: &Path) -> Result<Recovered, BagError> {
+    let bytes = std::fs::read(broken).map_err(io(broken))?;
+    let options = enumset::EnumSet::only(mcap::read::Options::IgnoreEndMagic);
+    let profile = mcap::read::LinearReader::new_with_options(&bytes, options)
+        .map_err(mcap_err(broken))?
+        .next()
+        .and_then(|r| match r {
+            Ok(mcap::records::Record::Header(h)) => Some(h.profile),
+            _ => None,
+        })
+        .unwrap_or_default();
+    let file = File::create(fixed).map_err(io(fixed))?;
+    let mut writer = mcap::WriteOptions::new()
+        .profile(profile)
+        .library(concat!("grasp_orient recover ", env!("CARGO_PKG_VERSION")))
+        .compression(Some(mcap::Compression::Zstd))
+        .create(BufWriter::new(file))
+        .map_err(mcap_err(fixed))?;
+    let mut channels: HashMap<u16, u16> = HashMap::new();
+    let mut out = Recovered::default();
+    let stream =
+        mcap::MessageStream::new_with_options(&bytes, options).map_err(mcap_err(broken))?;
+    for message in stream {
+        let message = match message {
+            Ok(m) => m,
+            Err(e) => {
+                out.stopped = Some(e.to_string());
+                break;
+            }
+        };
+        let channel = &message.channel;
+        let id = match channels.get(&channel.id) {
+            Some(id) => *id,
+            None => {
+                let schema = match &channel.schema {
+                    Some(s) => writer
+                        .add_schema(&s.name, &s.encoding, &s.data)
+                        .map_err(mcap_err(fixed))?,
+                    None => 0,
+                };
+                let id = writer
+                    .add_channel(
+                        schema,
+                        &channel.topic,
+                        &channel.message_encoding,
+                        &channel.metadata,
+                    )
+                    .map_err(mcap_err(fixed))?;
+                channels.insert(channel.id, id);
+                id
+            }
+        };
+        let header = mcap::records::MessageHeader {
+            channel_id: id,
+            sequence: message.sequence,
+            log_time: message.log_time,
+            publish_time: message.publish_time,
+        };
+        writer
+            .write_to_known_channel(&header, &message.data)
+            .map_err(mcap_err(fixed))?;
+        *out.per_topic.entry(channel.topic.clone()).or_default() += 1;
+    }
+    writer.finish().map_err(mcap_err(fixed))?;
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::record::{BagWriter, Entry, Payload, Topics};
+
+    fn topics() -> Topics {
+        Topics {
+            candidates: "/grasp_candidates".into(),
+            recommendations: "/grip_recommendations".into(),
+            markers: None,
+        }
+    }
+
+    fn cases() -> Vec<GraspCandidate> {
+        include_str!("../../examples/paper_cases.jsonl")
+            .lines()
+            .map(|l| serde_json::from_str(l).expect("json"))
+            .collect()
+    }
+
+    #[test]
+    fn write_then_read_gives_the_same_messages() {
+        let dir = std::env::temp_dir().join(format!("grasp_orient_bag_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let path = dir.join("round_trip.mcap");
+        let mut w = BagWriter::create(&path, &topics(), 100).expect("create");
+        let settings = crate::solver::Settings::default();
+        for (i, c) in cases().into_iter().enumerate() {
+            let a = crate::msg::answer(&c, &settings);
+            let t = 1_000 + i as u64;
+            w.write(&Entry {
+                payload: Payload::Candidate(Box::new(c)),
+                log_time: t,
+                publish_time: t - 1,
+            })
+            .expect("write");
+            w.write(&Entry {
+                payload: Payload::Recommendation(Box::new(a)),
+                log_time: t,
+                publish_time: t,
+            })
+            .expect("write");
+        }
+        assert_eq!(w.finish().expect("finish").candidates, 4);
+        let bag = read(&path).expect("read");
+        assert_eq!(bag.candidates.len(), 4);
+        assert_eq!(bag.recommendations.len(), 4);
+        let sent = cases();
+        for (got, want) in bag.candidates.iter().zip(&sent) {
+            assert_eq!(&got.message, want);
+        }
+        assert_eq!(bag.candidates[1].publish_time, 1_000);
+
+        // Cut the file short, as a killed process leaves it: recover keeps what is whole.
+        let bytes = std::fs::read(&path).expect("read");
+        let cut = dir.join("cut.mcap");
+        std::fs::write(&cut, &bytes[..bytes.len() * 2 / 3]).expect("write");
+        assert!(read(&cut).is_err(), "a cut file is not readable as it is");
+        let fixed = dir.join("fixed.mcap");
+        let got = recover(&cut, &fixed).expect("recover");
+        let again = read(&fixed).expect("recovered file reads");
+        assert_eq!(
+            got.per_topic.values().sum::<u64>() as usize,
+            again.candidates.len() + again.recommendations.len()
+        );
+    }
+}

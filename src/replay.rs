@@ -1,0 +1,264 @@
+//! Replaying recordings: every recorded candidate is solved again and compared, field by field,
+//! with the recommendation recorded for it.
+
+use crate::msg::{answer, GraspCandidate, GripRecommendation};
+use crate::record::bag::{Bag, Recorded};
+use crate::solver::{Objective, Settings};
+use std::collections::{BTreeMap, HashMap, VecDeque};
+
+/// Two numbers closer than this, relative to `max(1, |a|, |b|)`, are the same.
+pub const TOLERANCE: f64 = 1e-9;
+
+/// How one replay went.
+#[derive(Debug, Clone, Default)]
+pub struct Summary {
+    /// Candidates solved again.
+    pub candidates: u64,
+    /// Of them, with a recorded recommendation to compare with.
+    pub compared: u64,
+    /// Of those, differing beyond tolerance in at least one field.
+    pub differing: u64,
+    /// Largest difference seen per field (0 for equal, 1 for unequal text or counts).
+    pub largest: BTreeMap<&'static str, f64>,
+    /// The first few differences, readable.
+    pub examples: Vec<String>,
+    /// Recorded recommendations no candidate matched.
+    pub unmatched_recommendations: u64,
+}
+
+fn number_gap(a: f64, b: f64) -> f64 {
+    if a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()) {
+        0.0
+    } else if !a.is_finite() || !b.is_finite() {
+        if a == b {
+            0.0
+        } else {
+            f64::INFINITY
+        }
+    } else {
+        (a - b).abs() / 1f64.max(a.abs()).max(b.abs())
+    }
+}
+
+/// Every field of `ours` against `recorded`: `(field, gap)` for each that differs.
+pub fn differences(
+    ours: &GripRecommendation,
+    recorded: &GripRecommendation,
+) -> Vec<(&'static str, f64)> {
+    let mut out = Vec::new();
+    let mut num = |field: &'static str, a: f64, b: f64| {
+        let gap = number_gap(a, b);
+        if gap > 0.0 {
+            out.push((field, gap));
+        }
+    };
+    num(
+        "wrist_rotation",
+        ours.wrist_rotation,
+        recorded.wrist_rotation,
+    );
+    num("rotation.z", ours.rotation.z, recorded.rotation.z);
+    num("rotation.w", ours.rotation.w, recorded.rotation.w);
+    num(
+        "gravity_direction.x",
+        ours.gravity_direction.x,
+        recorded.gravity_direction.x,
+    );
+    num(
+        "gravity_direction.y",
+        ours.gravity_direction.y,
+        recorded.gravity_direction.y,
+    );
+    num("gravity_angle", ours.gravity_angle, recorded.gravity_angle);
+    num(
+        "gripping_power",
+        ours.gripping_power,
+        recorded.gripping_power,
+    );
+    num(
+        "internal_force",
+        ours.internal_force,
+        recorded.internal_force,
+    );
+    for k in 0..4 {
+        num(
+            "contact_forces",
+            ours.contact_forces[k],
+            recorded.contact_forces[k],
+        );
+    }
+    num(
+        "gripping_power_current",
+        ours.gripping_power_current,
+        recorded.gripping_power_current,
+    );
+    num(
+        "internal_force_current",
+        ours.internal_force_current,
+        recorded.internal_force_current,
+    );
+    let pairs = |a: &[f64], b: &[f64], field: &'static str, out: &mut Vec<(&'static str, f64)>| {
+        if a.len() != b.len() {
+            out.push((field, 1.0));
+        } else {
+            let gap = a
+                .iter()
+                .zip(b)
+                .map(|(x, y)| number_gap(*x, *y))
+                .fold(0.0, f64::max);
+            if gap > 0.0 {
+                out.push((field, gap));
+            }
+        }
+    };
+    pairs(
+        &ours.local_minima,
+        &recorded.local_minima,
+        "local_minima",
+        &mut out,
+    );
+    pairs(
+        &ours.local_minima_power,
+        &recorded.local_minima_power,
+        "local_minima_power",
+        &mut out,
+    );
+    let mut text = |field: &'static str, same: bool| {
+        if !same {
+            out.push((field, 1.0));
+        }
+    };
+    text("status", ours.status == recorded.status);
+    text("message", ours.message == recorded.message);
+    text("grasp_case", ours.grasp_case == recorded.grasp_case);
+    text(
+        "local_minima_labels",
+        ours.local_minima_labels == recorded.local_minima_labels,
+    );
+    text("objective", ours.objective == recorded.objective);
+    text(
+        "recommended_label",
+        ours.recommended_label == recorded.recommended_label,
+    );
+    text("candidate_c", ours.candidate_c == recorded.candidate_c);
+    out
+}
+
+/// The key that pairs a recommendation with its candidate.
+fn key(id: &str, header: &crate::msg::Header) -> (String, i32, u32, String) {
+    (
+        id.to_string(),
+        header.stamp.sec,
+        header.stamp.nanosec,
+        header.frame_id.clone(),
+    )
+}
+
+/// Solves every candidate of `bag` again with `settings` (and, for each, the objective its
+/// recorded answer names), compares, and returns the new answers with their candidates' times.
+pub fn replay(
+    bag: &Bag,
+    settings: &Settings,
+    summary: &mut Summary,
+    mut progress: impl FnMut(),
+) -> Vec<Recorded<GripRecommendation>> {
+    let mut recorded: HashMap<(String, i32, u32, String), VecDeque<&GripRecommendation>> =
+        HashMap::new();
+    for r in &bag.recommendations {
+        recorded
+            .entry(key(&r.message.candidate_id, &r.message.header))
+            .or_default()
+            .push_back(&r.message);
+    }
+    let mut answers = Vec::with_capacity(bag.candidates.len());
+    for Recorded {
+        message: candidate,
+        log_time,
+        publish_time,
+    } in &bag.candidates
+    {
+        summary.candidates += 1;
+        let theirs = recorded
+            .get_mut(&key(&candidate.id, &candidate.header))
+            .and_then(VecDeque::pop_front);
+        let ours = solve_like(candidate, settings, theirs);
+        if let Some(theirs) = theirs {
+            summary.compared += 1;
+            let diffs = differences(&ours, theirs);
+            let beyond: Vec<_> = diffs.iter().filter(|(_, g)| *g > TOLERANCE).collect();
+            for (field, gap) in &diffs {
+                let e = summary.largest.entry(field).or_insert(0.0);
+                *e = e.max(*gap);
+            }
+            if !beyond.is_empty() {
+                summary.differing += 1;
+                if summary.examples.len() < 10 {
+                    summary.examples.push(format!(
+                        "candidate {:?}: {}",
+                        candidate.id.chars().take(64).collect::<String>(),
+                        beyond
+                            .iter()
+                            .map(|(f, g)| format!("{f} (gap {g:.3e})"))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ));
+                }
+            }
+        }
+        answers.push(Recorded {
+            message: ours,
+            log_time: *log_time,
+            publish_time: *publish_time,
+        });
+        progress();
+    }
+    summary.unmatched_recommendations += recorded.values().map(|q| q.len() as u64).sum::<u64>();
+    answers
+}
+
+/// Solves as the recording did: with the objective the recorded answer names, if any.
+fn solve_like(
+    candidate: &GraspCandidate,
+    settings: &Settings,
+    recorded: Option<&GripRecommendation>,
+) -> GripRecommendation {
+    let objective = recorded
+        .and_then(|r| Objective::from_name(&r.objective))
+        .unwrap_or(settings.objective);
+    answer(
+        candidate,
+        &Settings {
+            objective,
+            ..*settings
+        },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn equal_answers_have_no_differences_and_changed_ones_are_named() {
+        let line = include_str!("../examples/paper_cases.jsonl")
+            .lines()
+            .next()
+            .expect("case");
+        let c: GraspCandidate = serde_json::from_str(line).expect("json");
+        let a = answer(&c, &Settings::default());
+        assert!(differences(&a, &a.clone()).is_empty());
+        let mut b = a.clone();
+        b.gripping_power *= 1.0 + 1e-6;
+        b.local_minima_labels[0] = "X".into();
+        let d = differences(&a, &b);
+        assert!(d
+            .iter()
+            .any(|(f, g)| *f == "gripping_power" && *g > TOLERANCE));
+        assert!(d.iter().any(|(f, _)| *f == "local_minima_labels"));
+        let nan = answer(&GraspCandidate::default(), &Settings::default());
+        assert!(
+            differences(&nan, &nan.clone()).is_empty(),
+            "NaN equals NaN here"
+        );
+    }
+}
