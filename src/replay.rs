@@ -144,76 +144,155 @@ pub fn differences(
     out
 }
 
-/// The key that pairs a recommendation with its candidate.
-fn key(id: &str, header: &crate::msg::Header) -> (String, i32, u32, String) {
+/// The key that pairs a recommendation with its candidate: id and header, cut to the length an
+/// answer carries them at.
+type Key<'a> = (&'a str, i32, u32, &'a str);
+
+fn key<'a>(id: &'a str, header: &'a crate::msg::Header) -> Key<'a> {
     (
-        id.to_string(),
+        clip(id),
         header.stamp.sec,
         header.stamp.nanosec,
-        header.frame_id.clone(),
+        clip(&header.frame_id),
     )
 }
 
+/// `text` cut as [`crate::msg::clipped`] cuts it, without copying.
+fn clip(text: &str) -> &str {
+    let mut end = text.len().min(crate::msg::MAX_TEXT_BYTES);
+    while !text.is_char_boundary(end) {
+        end -= 1;
+    }
+    &text[..end]
+}
+
+/// For each candidate, the index of its recorded recommendation. A node's recording answers
+/// candidates in order, so that is tried first; otherwise answers are matched by key, in order.
+fn pair(bag: &Bag) -> (Vec<Option<usize>>, u64) {
+    let cands = &bag.candidates;
+    let recs = &bag.recommendations;
+    let aligned = cands.len() == recs.len()
+        && cands.iter().zip(recs).all(|(c, r)| {
+            key(&c.message.id, &c.message.header) == key(&r.message.candidate_id, &r.message.header)
+        });
+    if aligned {
+        return ((0..cands.len()).map(Some).collect(), 0);
+    }
+    let mut by_key: HashMap<Key<'_>, VecDeque<usize>> = HashMap::with_capacity(recs.len());
+    for (i, r) in recs.iter().enumerate() {
+        by_key
+            .entry(key(&r.message.candidate_id, &r.message.header))
+            .or_default()
+            .push_back(i);
+    }
+    let pairs: Vec<Option<usize>> = cands
+        .iter()
+        .map(|c| {
+            by_key
+                .get_mut(&key(&c.message.id, &c.message.header))
+                .and_then(VecDeque::pop_front)
+        })
+        .collect();
+    let unmatched = by_key.values().map(|q| q.len() as u64).sum();
+    (pairs, unmatched)
+}
+
 /// Solves every candidate of `bag` again with `settings` (and, for each, the objective its
-/// recorded answer names), compares, and returns the new answers with their candidates' times.
+/// recorded answer names) and compares. With `keep`, returns the new answers with their
+/// candidates' times (empty otherwise). The work is shared among the machine's cores.
 pub fn replay(
     bag: &Bag,
     settings: &Settings,
     summary: &mut Summary,
-    mut progress: impl FnMut(),
+    keep: bool,
+    progress: impl Fn(u64) + Sync,
 ) -> Vec<Recorded<GripRecommendation>> {
-    let mut recorded: HashMap<(String, i32, u32, String), VecDeque<&GripRecommendation>> =
-        HashMap::new();
-    for r in &bag.recommendations {
-        recorded
-            .entry(key(&r.message.candidate_id, &r.message.header))
-            .or_default()
-            .push_back(&r.message);
-    }
+    let (pairs, unmatched) = pair(bag);
+    summary.unmatched_recommendations += unmatched;
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let chunk = bag.candidates.len().div_ceil(threads).max(1);
+    let progress = &progress;
+    let parts: Vec<(Vec<Recorded<GripRecommendation>>, Summary)> = std::thread::scope(|scope| {
+        let handles: Vec<_> = bag
+            .candidates
+            .chunks(chunk)
+            .zip(pairs.chunks(chunk))
+            .map(|(cands, pairs)| {
+                scope.spawn(move || {
+                    let mut part = Summary::default();
+                    let mut answers = Vec::with_capacity(if keep { cands.len() } else { 0 });
+                    for (k, (c, p)) in cands.iter().zip(pairs).enumerate() {
+                        let theirs = p.map(|i| &bag.recommendations[i].message);
+                        let ours = check(&c.message, settings, theirs, &mut part);
+                        if keep {
+                            answers.push(Recorded {
+                                message: ours,
+                                log_time: c.log_time,
+                                publish_time: c.publish_time,
+                            });
+                        }
+                        if (k + 1) % 4096 == 0 {
+                            progress(4096);
+                        }
+                    }
+                    (answers, part)
+                })
+            })
+            .collect();
+        handles.into_iter().filter_map(|h| h.join().ok()).collect()
+    });
     let mut answers = Vec::with_capacity(bag.candidates.len());
-    for Recorded {
-        message: candidate,
-        log_time,
-        publish_time,
-    } in &bag.candidates
-    {
-        summary.candidates += 1;
-        let theirs = recorded
-            .get_mut(&key(&candidate.id, &candidate.header))
-            .and_then(VecDeque::pop_front);
-        let ours = solve_like(candidate, settings, theirs);
-        if let Some(theirs) = theirs {
-            summary.compared += 1;
-            let diffs = differences(&ours, theirs);
-            let beyond: Vec<_> = diffs.iter().filter(|(_, g)| *g > TOLERANCE).collect();
-            for (field, gap) in &diffs {
-                let e = summary.largest.entry(field).or_insert(0.0);
-                *e = e.max(*gap);
-            }
-            if !beyond.is_empty() {
-                summary.differing += 1;
-                if summary.examples.len() < 10 {
-                    summary.examples.push(format!(
-                        "candidate {:?}: {}",
-                        candidate.id.chars().take(64).collect::<String>(),
-                        beyond
-                            .iter()
-                            .map(|(f, g)| format!("{f} (gap {g:.3e})"))
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    ));
-                }
+    for (a, part) in parts {
+        answers.extend(a);
+        summary.candidates += part.candidates;
+        summary.compared += part.compared;
+        summary.differing += part.differing;
+        for (field, gap) in part.largest {
+            let e = summary.largest.entry(field).or_insert(0.0);
+            *e = e.max(gap);
+        }
+        for example in part.examples {
+            if summary.examples.len() < 10 {
+                summary.examples.push(example);
             }
         }
-        answers.push(Recorded {
-            message: ours,
-            log_time: *log_time,
-            publish_time: *publish_time,
-        });
-        progress();
     }
-    summary.unmatched_recommendations += recorded.values().map(|q| q.len() as u64).sum::<u64>();
     answers
+}
+
+/// Solves one candidate again and compares it with its recorded answer, if any.
+fn check(
+    candidate: &GraspCandidate,
+    settings: &Settings,
+    theirs: Option<&GripRecommendation>,
+    summary: &mut Summary,
+) -> GripRecommendation {
+    summary.candidates += 1;
+    let ours = solve_like(candidate, settings, theirs);
+    if let Some(theirs) = theirs {
+        summary.compared += 1;
+        let diffs = differences(&ours, theirs);
+        for (field, gap) in &diffs {
+            let e = summary.largest.entry(field).or_insert(0.0);
+            *e = e.max(*gap);
+        }
+        let beyond: Vec<_> = diffs.iter().filter(|(_, g)| *g > TOLERANCE).collect();
+        if !beyond.is_empty() {
+            summary.differing += 1;
+            if summary.examples.len() < 10 {
+                summary.examples.push(format!(
+                    "candidate {:?}: {}",
+                    candidate.id.chars().take(64).collect::<String>(),
+                    beyond
+                        .iter()
+                        .map(|(f, g)| format!("{f} (gap {g:.3e})"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ));
+            }
+        }
+    }
+    ours
 }
 
 /// Solves as the recording did: with the objective the recorded answer names, if any.

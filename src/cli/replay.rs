@@ -61,12 +61,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         if bag.candidates.len() < 100_000 {
             bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
         }
-        let mut ticks = 0u64;
-        let answers = replay(&bag, &settings, &mut summary, || {
-            ticks += 1;
-            if ticks.is_multiple_of(4096) {
-                bar.set_position(ticks);
-            }
+        let answers = replay(&bag, &settings, &mut summary, writer.is_some(), |n| {
+            bar.inc(n)
         });
         bar.finish_and_clear();
         if let Some(w) = writer.as_mut() {
@@ -125,6 +121,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             "{} of {} compared recommendations differ",
             summary.differing,
             summary.compared
+        );
+    }
+    if summary.unmatched_recommendations > 0 {
+        bail!(
+            "{} recorded recommendations answer no recorded candidate",
+            summary.unmatched_recommendations
         );
     }
     Ok(())

@@ -82,54 +82,117 @@ fn carries(channel: &mcap::Channel<'_>, type_name: &str) -> bool {
     channel.message_encoding == "cdr" && (schema.name == type_name || schema.name == short)
 }
 
-impl Bag {
-    fn note_undecodable(&mut self, why: String) {
-        self.undecodable_count += 1;
-        if self.undecodable.len() < 10 {
-            self.undecodable.push(why);
+/// Decodes one message of ours into the bag's lists, or notes why it did not decode.
+fn take(out: &mut Bag, message: &mcap::Message<'_>) {
+    let (log_time, publish_time) = (message.log_time, message.publish_time);
+    let failed = |out: &mut Bag, e: cdr::CdrError| {
+        out.undecodable_count += 1;
+        if out.undecodable.len() < 10 {
+            out.undecodable.push(format!(
+                "{} #{}: {e}",
+                message.channel.topic, message.sequence
+            ));
         }
-    }
-
-    fn take(&mut self, message: &mcap::Message<'_>) {
-        let (log_time, publish_time) = (message.log_time, message.publish_time);
-        if carries(&message.channel, CANDIDATE_TYPE) {
-            match cdr::decode::<GraspCandidate>(&message.data) {
-                Ok(m) => self.candidates.push(Recorded {
-                    message: m,
-                    log_time,
-                    publish_time,
-                }),
-                Err(e) => self.note_undecodable(format!(
-                    "{} #{}: {e}",
-                    message.channel.topic, message.sequence
-                )),
-            }
-        } else if carries(&message.channel, RECOMMENDATION_TYPE) {
-            match cdr::decode::<GripRecommendation>(&message.data) {
-                Ok(m) => self.recommendations.push(Recorded {
-                    message: m,
-                    log_time,
-                    publish_time,
-                }),
-                Err(e) => self.note_undecodable(format!(
-                    "{} #{}: {e}",
-                    message.channel.topic, message.sequence
-                )),
-            }
-        } else {
-            self.other += 1;
+    };
+    if carries(&message.channel, CANDIDATE_TYPE) {
+        match cdr::decode::<GraspCandidate>(&message.data) {
+            Ok(m) => out.candidates.push(Recorded {
+                message: m,
+                log_time,
+                publish_time,
+            }),
+            Err(e) => failed(out, e),
         }
+    } else if carries(&message.channel, RECOMMENDATION_TYPE) {
+        match cdr::decode::<GripRecommendation>(&message.data) {
+            Ok(m) => out.recommendations.push(Recorded {
+                message: m,
+                log_time,
+                publish_time,
+            }),
+            Err(e) => failed(out, e),
+        }
+    } else {
+        out.other += 1;
     }
 }
 
-/// Reads every grasp_orient message of a bag.
+impl Bag {
+    /// Appends `next`, which follows `self` in the file.
+    fn append(&mut self, next: Bag) {
+        self.candidates.extend(next.candidates);
+        self.recommendations.extend(next.recommendations);
+        self.other += next.other;
+        self.undecodable_count += next.undecodable_count;
+        let room = 10usize.saturating_sub(self.undecodable.len());
+        self.undecodable
+            .extend(next.undecodable.into_iter().take(room));
+    }
+}
+
+/// Reads every grasp_orient message of a bag, in file order. When the summary indexes every
+/// message into chunks, the chunks are decompressed and decoded on all cores.
 pub fn read(path: &Path) -> Result<Bag, BagError> {
     let bytes = std::fs::read(path).map_err(io(path))?;
+    if let Some(bag) = read_chunks_in_parallel(&bytes).map_err(mcap_err(path))? {
+        return Ok(bag);
+    }
     let mut bag = Bag::default();
     for message in mcap::MessageStream::new(&bytes).map_err(mcap_err(path))? {
-        bag.take(&message.map_err(mcap_err(path))?);
+        take(&mut bag, &message.map_err(mcap_err(path))?);
     }
     Ok(bag)
+}
+
+/// `None` when the file has no summary or not all messages are in indexed chunks.
+fn read_chunks_in_parallel(bytes: &[u8]) -> Result<Option<Bag>, mcap::McapError> {
+    let Some(summary) = mcap::Summary::read(bytes)? else {
+        return Ok(None);
+    };
+    let indexed: u64 = summary
+        .chunk_indexes
+        .iter()
+        .map(|c| c.message_index_offsets.len() as u64)
+        .sum();
+    let total = summary.stats.as_ref().map(|s| s.message_count);
+    if summary.chunk_indexes.is_empty() || total.is_none() || indexed == 0 {
+        return Ok(None);
+    }
+    let mut chunks = summary.chunk_indexes.clone();
+    chunks.sort_by_key(|c| c.chunk_start_offset);
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let per = chunks.len().div_ceil(threads).max(1);
+    let summary = &summary;
+    let parts: Vec<Result<Bag, mcap::McapError>> = std::thread::scope(|scope| {
+        let handles: Vec<_> = chunks
+            .chunks(per)
+            .map(|group| {
+                scope.spawn(move || {
+                    let mut part = Bag::default();
+                    for chunk in group {
+                        for message in summary.stream_chunk(bytes, chunk)? {
+                            take(&mut part, &message?);
+                        }
+                    }
+                    Ok(part)
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().unwrap_or(Err(mcap::McapError::BadIndex)))
+            .collect()
+    });
+    let mut bag = Bag::default();
+    for part in parts {
+        bag.append(part?);
+    }
+    let seen = bag.candidates.len() as u64
+        + bag.recommendations.len() as u64
+        + bag.other
+        + bag.undecodable_count;
+    // Messages outside chunks would be missed: then read the file front to back instead.
+    Ok((Some(seen) == total).then_some(bag))
 }
 
 /// What [`recover`] salvaged.

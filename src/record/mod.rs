@@ -133,10 +133,13 @@ pub fn stamp_name(ns: u64) -> String {
     )
 }
 
-/// rosbag2's `offered_qos_profiles` YAML for a reliable, volatile, keep-last publisher.
+/// rosbag2's `offered_qos_profiles` YAML (Jazzy form) for a reliable, volatile, keep-last
+/// publisher with no deadline, lifespan or lease (rosbag2 writes "infinite" as the largest
+/// `rmw_time_t` it can store).
 pub fn qos_yaml(depth: i64) -> String {
+    let infinite = "\n    sec: 9223372036\n    nsec: 854775807";
     format!(
-        "- history: 1\n  depth: {depth}\n  reliability: 1\n  durability: 2\n  deadline:\n    sec: 0\n    nsec: 0\n  lifespan:\n    sec: 0\n    nsec: 0\n  liveliness: 1\n  liveliness_lease_duration:\n    sec: 0\n    nsec: 0\n  avoid_ros_namespace_conventions: false\n"
+        "- history: keep_last\n  depth: {depth}\n  reliability: reliable\n  durability: volatile\n  deadline:{infinite}\n  lifespan:{infinite}\n  liveliness: automatic\n  liveliness_lease_duration:{infinite}\n  avoid_ros_namespace_conventions: false\n"
     )
 }
 
