@@ -31,11 +31,10 @@ enum Command {
 
 fn main() -> ExitCode {
     // RustDDS warns about every unreachable locator; its errors still show.
-    env_logger::Builder::from_env(
-        env_logger::Env::default().default_filter_or(
-            "info,rustdds=error,ros2_client=warn,ros2_client::distributions=error",
-        ),
-    )
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or(
+        "info,rustdds=error,rustdds::network::udp_listener=off,ros2_client=warn,\
+         ros2_client::distributions=error",
+    ))
     .target(env_logger::Target::Stderr)
     .init();
     // Everything from --ros-args on belongs to ROS, not to clap.

@@ -71,8 +71,8 @@ impl TryFrom<&GraspCandidate> for Candidate {
     }
 }
 
-/// `text` cut to at most [`MAX_TEXT_BYTES`] at a character boundary.
-fn clipped(text: &str) -> String {
+/// `text` cut to at most [`MAX_TEXT_BYTES`] at a character boundary, as answers carry it.
+pub fn clipped(text: &str) -> String {
     if text.len() <= MAX_TEXT_BYTES {
         return text.to_string();
     }
@@ -185,15 +185,17 @@ fn recommended(m: &GraspCandidate, r: &Recommendation) -> GripRecommendation {
 /// Solves one candidate message and builds its answer: status 0 with the recommendation, 1 when
 /// no orientation holds the grasp, 2 when the input is bad.
 pub fn answer(m: &GraspCandidate, settings: &Settings) -> GripRecommendation {
-    let candidate = match Candidate::try_from(m) {
-        Ok(c) => c,
-        Err(e) => return invalid(m, &e),
-    };
-    match solve_orientation(&candidate, settings) {
-        Ok(Verdict::Recommended(r)) => recommended(m, &r),
-        Ok(Verdict::NoForceClosure(why)) => no_closure(m, &why),
+    let mut out = match Candidate::try_from(m) {
         Err(e) => invalid(m, &e),
-    }
+        Ok(candidate) => match solve_orientation(&candidate, settings) {
+            Ok(Verdict::Recommended(r)) => return recommended(m, &r),
+            Ok(Verdict::NoForceClosure(why)) => no_closure(m, &why),
+            Err(e) => invalid(m, &e),
+        },
+    };
+    // A refused answer still says which objective it was asked under.
+    out.objective = settings.objective.name().to_string();
+    out
 }
 
 #[cfg(test)]

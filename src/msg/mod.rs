@@ -10,7 +10,7 @@ mod convert;
 pub mod definitions;
 
 pub use contract::{RosMessage, RosType};
-pub use convert::{answer, invalid, MessageLimits, MAX_TEXT_BYTES};
+pub use convert::{answer, clipped, invalid, MessageLimits, MAX_TEXT_BYTES};
 
 use serde::{Deserialize, Serialize};
 

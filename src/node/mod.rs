@@ -222,7 +222,9 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
         markers: Some(markers_name.clone()),
     };
     let mut recording = Recording::new(topics, config.qos_depth);
-    recording.follow(&node, &config)?;
+    if !args.echo {
+        recording.follow(&node, &config)?;
+    }
     if args.echo {
         say(
             &node,
@@ -276,10 +278,11 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
                             let live = shared.lock();
                             (live.settings, live.config.publish_markers, live.config.clone())
                         };
-                        if let Err(e) = recording.follow(&node, &config) {
-                            say(&node, LogLevel::Error, &format!("{e:#}"));
+                        if !echo {
+                            if let Err(e) = recording.follow(&node, &config) {
+                                say(&node, LogLevel::Error, &format!("{e:#}"));
+                            }
                         }
-                        recording.record(Payload::Candidate(Box::new(candidate.clone())), received, sent);
                         let reply = if echo {
                             GripRecommendation {
                                 header: candidate.header.clone(),
@@ -311,6 +314,7 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
                             }
                         }
                         let t = now_ns();
+                        recording.record(Payload::Candidate(Box::new(candidate)), received, sent);
                         recording.record(Payload::Recommendation(Box::new(reply.clone())), t, t);
                         if let Err(e) = answers.async_publish(reply).await {
                             say(&node, LogLevel::Error, &format!("cannot publish an answer: {e:?}"));

@@ -123,13 +123,13 @@ pub fn validate(c: &Candidate) -> Result<(), InvalidInput> {
         ["contact_1.x", "contact_1.y"],
         &c.contact_1,
         MAX_COORDINATE,
-        "m",
+        " m",
     )?;
     vector(
         ["contact_2.x", "contact_2.y"],
         &c.contact_2,
         MAX_COORDINATE,
-        "m",
+        " m",
     )?;
     vector(
         ["normal_1.x", "normal_1.y"],
@@ -149,10 +149,15 @@ pub fn validate(c: &Candidate) -> Result<(), InvalidInput> {
         ["center_of_mass.x", "center_of_mass.y"],
         &c.center_of_mass,
         MAX_COORDINATE,
-        "m",
+        " m",
     )?;
-    positive("mass", c.mass, MAX_MASS, "kg")?;
-    vector(["gravity.x", "gravity.y"], &c.gravity, MAX_GRAVITY, "m/s^2")?;
+    positive("mass", c.mass, MAX_MASS, " kg")?;
+    vector(
+        ["gravity.x", "gravity.y"],
+        &c.gravity,
+        MAX_GRAVITY,
+        " m/s^2",
+    )?;
     unit_in_plane("normal_1", &c.normal_1)?;
     unit_in_plane("normal_2", &c.normal_2)?;
     unit_in_plane("gravity", &c.gravity)?;

@@ -181,7 +181,7 @@ pub enum InvalidInput {
         value: f64,
     },
     /// A field's magnitude is beyond what the solver accepts.
-    #[error("{field} is out of range: {value} exceeds {limit} {unit} in magnitude")]
+    #[error("{field} is out of range: {value:e} exceeds {limit:e}{unit} in magnitude")]
     OutOfRange {
         /// The field.
         field: &'static str,
@@ -189,7 +189,7 @@ pub enum InvalidInput {
         value: f64,
         /// Largest accepted magnitude.
         limit: f64,
-        /// Unit of the limit.
+        /// Unit of the limit, with its leading space (empty for none).
         unit: &'static str,
     },
     /// A vector has no component in the grasp plane.
