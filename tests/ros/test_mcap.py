@@ -101,7 +101,7 @@ def _sections(schema_text: str) -> tuple[str, list[str]]:
 
 
 def check_conventions(path: Path, topics: dict[str, str], deps: dict[str, set[str]], own_text: bool = True):
-    """rosbag2's MCAP conventions: profile, schemas, encodings, QoS metadata, CDR header, zstd chunks."""
+    """rosbag2's MCAP conventions: profile, schemas, encodings, QoS metadata, CDR header, compressed chunks."""
     from rosbags.rosbag2.metadata import parse_qos
 
     f = mu.mcap_facts(path)
@@ -150,8 +150,8 @@ def check_conventions(path: Path, topics: dict[str, str], deps: dict[str, set[st
             problems.append(f"schema {s['name']}: a dependency appears twice: {names}")
     if not f["chunk_compressions"]:
         problems.append("no chunks (the contract says chunked)")
-    elif set(f["chunk_compressions"]) != {"zstd"}:
-        problems.append(f"chunk compressions {sorted(set(f['chunk_compressions']))}, expected only 'zstd'")
+    elif not set(f["chunk_compressions"]) <= {"lz4", "zstd"}:
+        problems.append(f"chunk compressions {sorted(set(f['chunk_compressions']))}, expected lz4 or zstd")
     assert not problems, f"{path}:\n  " + "\n  ".join(problems)
     return f
 
