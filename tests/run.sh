@@ -17,4 +17,4 @@ cargo test
 echo "== the node against rclpy (pytest tests/ros)"
 # shellcheck disable=SC1090
 source "$ENV_SH"
-GRASP_ORIENT_BIN="$PWD/target/debug/grasp_orient" python -m pytest tests/ros -v
+GRASP_ORIENT_BIN="${CARGO_TARGET_DIR:-$PWD/target}/debug/grasp_orient" python -m pytest tests/ros -v
