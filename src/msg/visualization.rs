@@ -141,17 +141,7 @@ ros_message! {
     }
 }
 
-macro_rules! named {
-    ($($t:ty => $name:literal),* $(,)?) => {
-        $(impl RosType for $t {
-            fn ros_type() -> String {
-                $name.to_string()
-            }
-        })*
-    };
-}
-
-named! {
+super::contract::ros_type_names! {
     ColorRgba => "std_msgs/ColorRGBA",
     Duration => "builtin_interfaces/Duration",
     Pose => "geometry_msgs/Pose",

@@ -4,7 +4,8 @@
 #
 # Usage:  tests/peer/setup.sh            then:  source "<peer dir>/env.sh"
 #
-#   GRASP_ORIENT_PEER_DIR     where to put everything (default: <repo root>/.ros-peer)
+#   GRASP_ORIENT_PEER_DIR     where to put everything (default: ${XDG_CACHE_HOME:-~/.cache}/grasp_orient/ros-peer,
+#                             outside the clone, so that fresh clones and CI runs on one machine share it)
 #   GRASP_ORIENT_PEER_PYTHON  CPython 3.11 interpreter to build the venv from (default: python3.11 on PATH,
 #                             else python3 if it is 3.11; installed with apt-get when none is found)
 #
@@ -20,7 +21,7 @@ trap 'rc=$?; printf "[peer-setup] ERROR: command failed (exit %s) at %s line %s:
 
 SCRIPT_DIR="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 REPO_ROOT="$(cd "$SCRIPT_DIR/../.." && pwd)"
-PEER_DIR="${GRASP_ORIENT_PEER_DIR:-$REPO_ROOT/.ros-peer}"
+PEER_DIR="${GRASP_ORIENT_PEER_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/grasp_orient/ros-peer}"
 REQUIREMENTS="$SCRIPT_DIR/requirements.txt"
 
 [ -f "$REQUIREMENTS" ] || die "missing $REQUIREMENTS"
@@ -180,7 +181,7 @@ if [ -f "$MSG_STAMP" ] && [ "$(cat "$MSG_STAMP")" = "$MSG_HASH" ] && [ -d "$PREF
 else
     log "building grasp_orient interfaces from $REPO_ROOT into $PREFIX"
     rm -rf "$BUILD" "$PREFIX" "$SRC" "$MSG_STAMP"
-    # Build from a copy: with the default peer dir (<repo>/.ros-peer) the venv lies inside the repository,
+    # Build from a copy: with a peer dir inside the repository (e.g. <repo>/.ros-peer) the venv lies inside it,
     # and CMake refuses to export include dirs of the venv (numpy) that are "prefixed in the source directory".
     mkdir -p "$BUILD" "$SRC/msg"
     cp "$REPO_ROOT/CMakeLists.txt" "$REPO_ROOT/package.xml" "$SRC/"

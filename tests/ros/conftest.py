@@ -88,7 +88,7 @@ try:
 except ImportError as e:  # reported by the fixtures as a failure, never a skip
     RCLPY_IMPORT_ERROR = (
         f"cannot import rclpy / grasp_orient.msg ({e}). Run the tests with the ROS peer venv: "
-        f"bash tests/peer/setup.sh && source .ros-peer/env.sh && python -m pytest tests/ros"
+        f"source \"$(bash tests/peer/setup.sh | tail -n 1)\" && python -m pytest tests/ros"
     )
 
 
@@ -117,67 +117,8 @@ def load_paper_cases() -> list[dict]:
     return [json.loads(l) for l in PAPER_CASES.read_text().splitlines() if l.strip()]
 
 
-def _rot(v, a):
-    s, c = math.sin(a), math.cos(a)
-    return (c * v[0] - s * v[1], s * v[0] + c * v[1])
-
-
-def _cone_contains(p, n, mu, q) -> bool:
-    d = (q[0] - p[0], q[1] - p[1])
-    ln = math.hypot(*n)
-    n = (n[0] / ln, n[1] / ln)
-    along = n[0] * d[0] + n[1] * d[1]
-    return along > 0.0 and abs(n[0] * d[1] - n[1] * d[0]) < mu * along
-
-
-def random_grasp(rng: random.Random, cid: str, frame_id: str = "object") -> dict:
-    """A random force-closure grasp in a random frame: the generator of tests/common/mod.rs in Python."""
-    u = rng.uniform
-    while True:
-        p1 = (u(-1, 1), u(-1, 1))
-        p2 = (u(-1, 1), u(-1, 1))
-        if math.hypot(p1[0] - p2[0], p1[1] - p2[1]) < 0.05:
-            continue
-        ln = math.hypot(p2[0] - p1[0], p2[1] - p1[1])
-        along = ((p2[0] - p1[0]) / ln, (p2[1] - p1[1]) / ln)
-        n1 = _rot(along, u(-1.4, 1.4))
-        n2 = _rot((-along[0], -along[1]), u(-1.4, 1.4))
-        mu1, mu2 = u(0.1, 2.0), u(0.1, 2.0)
-        if not _cone_contains(p1, n1, mu1, p2) or not _cone_contains(p2, n2, mu2, p1):
-            continue
-        mid = ((p1[0] + p2[0]) / 2, (p1[1] + p2[1]) / 2)
-        com = (mid[0] + u(-1, 1), mid[1] + u(-1, 1))
-        if (n1[0] * (com[0] - p1[0]) + n1[1] * (com[1] - p1[1]) <= 1e-3
-                or n2[0] * (com[0] - p2[0]) + n2[1] * (com[1] - p2[1]) <= 1e-3):
-            continue
-        angle = u(-math.pi, math.pi)
-        shift = (u(-2, 2), u(-2, 2))
-        scale = 10 ** u(-2, 1)
-
-        def place(p):
-            r = _rot(p, angle)
-            return {"x": r[0] * scale + shift[0], "y": r[1] * scale + shift[1], "z": u(-1, 1)}
-
-        def vec(v, k):
-            r = _rot(v, angle)
-            return {"x": r[0] * k, "y": r[1] * k, "z": 0.0}
-
-        g = 9.81 * u(0.5, 1.5)
-        gv = _rot((0.0, -g), u(-math.pi, math.pi))
-        return {
-            "header": {"stamp": {"sec": rng.randrange(0, 2**31), "nanosec": rng.randrange(0, 10**9)},
-                       "frame_id": frame_id},
-            "id": cid,
-            "contact_1": place(p1),
-            "contact_2": place(p2),
-            "normal_1": vec(n1, u(0.1, 10.0)),
-            "normal_2": vec(n2, u(0.1, 10.0)),
-            "friction_1": mu1,
-            "friction_2": mu2,
-            "center_of_mass": place(com),
-            "mass": 10 ** u(-2, 2),
-            "gravity": {"x": gv[0], "y": gv[1], "z": 0.0},
-        }
+# One generator for every Python test: the port of tests/common/mod.rs random_grasp.
+from mcap_util import random_grasp  # noqa: E402,F401
 
 
 def fill_message(msg, data: dict):

@@ -11,7 +11,7 @@
                         rosbags does not expose publish_time, so it is None there.
     read_mcap(path)     mcap.reader.make_reader + mcap_ros2.decoder.DecoderFactory.
 - mcap_facts(path): profile, schemas, channels with metadata, chunk compressions, raw payload headers.
-- The random force-closure grasp generator of tests/common/mod.rs (the same as conftest.random_grasp).
+- The random force-closure grasp generator of tests/common/mod.rs (conftest re-exports it).
 """
 from __future__ import annotations
 
@@ -83,7 +83,7 @@ def msg_file(type_name: str) -> Path:
         tried.append(str(f))
         if f.is_file():
             return f
-    raise FileNotFoundError(f"no .msg file for {type_name} (tried {tried}); source .ros-peer/env.sh first")
+    raise FileNotFoundError(f"no .msg file for {type_name} (tried {tried}); source \"$(bash tests/peer/setup.sh | tail -n 1)\" first")
 
 
 def _dependencies(text: str, package: str) -> list[str]:

@@ -6,7 +6,7 @@
 - `grasp_orient node -p record:=true` records what it receives and answers, readable by both readers;
 - `grasp_orient recover` salvages a recording whose node was SIGKILLed.
 
-Run with the ROS peer like the rest of tests/ros:  source .ros-peer/env.sh && python -m pytest tests/ros/test_mcap.py
+Run with the ROS peer like the rest of tests/ros:  source "$(bash tests/peer/setup.sh | tail -n 1)" && python -m pytest tests/ros/test_mcap.py
 Nothing here skips: a missing reader library, binary or subcommand fails with the reason.
 """
 from __future__ import annotations
@@ -55,7 +55,7 @@ def _require_readers():
         import rosbags.highlevel  # noqa: F401
     except ImportError as e:
         pytest.fail(f"MCAP reader libraries missing ({e}): run with the ROS peer venv "
-                    f"(bash tests/peer/setup.sh && source .ros-peer/env.sh)", pytrace=False)
+                    f"(source \"$(bash tests/peer/setup.sh | tail -n 1)\")", pytrace=False)
 
 
 @pytest.fixture(scope="session")
@@ -209,7 +209,7 @@ def check_answers_equal_solve(pairs: list[tuple[mu.Rec, mu.Rec]], what: str):
 @pytest.mark.parametrize("name", sorted(GOLDEN))
 def test_golden_bag_decodes_identically_with_rosbags_and_mcap(binary, name):
     path = BAGS / name
-    assert path.is_file(), f"{path} is missing (regenerate: source .ros-peer/env.sh && python bags/make_bags.py)"
+    assert path.is_file(), f"{path} is missing (regenerate: source \"$(bash tests/peer/setup.sh | tail -n 1)\" && python bags/make_bags.py)"
     size = path.stat().st_size
     assert size < MAX_BAG_BYTES, f"{path} is {size} bytes, more than {MAX_BAG_BYTES}"
     recs = both_readers(path)
