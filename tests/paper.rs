@@ -66,9 +66,8 @@ fn computed(case: char) -> [f64; 5] {
 /// Every Table 2 entry, from the paper's own formulas (9), (10), (36)–(44) and Table 1, agrees
 /// to the three printed decimals — except these, which the paper gets wrong:
 /// - (b) θ_max: printed 2.498 (θ_min's magnitude copied); eq. (10) gives π - atan2(5, 4) = 2.246.
-/// - (c) θ_34: printed +0.261; eqs. (42)–(44) give -0.262 (sign lost). With φ = π/2 and
-///   μ1 = √3 > μ2 = 1/√3 the upper cone side at contact 1 is the flatter one, so p_uu lies
-///   towards contact 2 and C tilts the object the other way.
+/// - (c) θ_34: printed +0.261; eqs. (42)–(44) give -0.262 (the sign is lost), and the
+///   reference confirms -π/12 is where both contacts slip and where the power is least.
 /// - (a) θ_36: printed -2.491, formula -2.4915 rounds to -2.492; (c) θ_36: printed -1.921,
 ///   formula -1.9216 rounds to -1.922 (truncated, not rounded).
 #[test]

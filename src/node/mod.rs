@@ -303,21 +303,25 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
                             }
                         }
                         counts.answered += 1;
-                        if markers_on && !echo && reply.status == GripRecommendation::STATUS_OK {
-                            let array = markers::build(&candidate, &reply);
+                        // The answer goes out first; markers and the recording follow it.
+                        let recorded_reply = recording.is_on().then(|| reply.clone());
+                        let array = (markers_on && !echo && reply.status == GripRecommendation::STATUS_OK)
+                            .then(|| markers::build(&candidate, &reply));
+                        if let Err(e) = answers.async_publish(reply).await {
+                            say(&node, LogLevel::Error, &format!("cannot publish an answer: {e:?}"));
+                        }
+                        let t = now_ns();
+                        if let Some(array) = array {
                             if config.record_markers {
-                                let t = now_ns();
                                 recording.record(Payload::Markers(Box::new(array.clone())), t, t);
                             }
                             if let Err(e) = marker_publisher.async_publish(array).await {
                                 log::warn!("cannot publish markers: {e:?}");
                             }
                         }
-                        let t = now_ns();
                         recording.record(Payload::Candidate(Box::new(candidate)), received, sent);
-                        recording.record(Payload::Recommendation(Box::new(reply.clone())), t, t);
-                        if let Err(e) = answers.async_publish(reply).await {
-                            say(&node, LogLevel::Error, &format!("cannot publish an answer: {e:?}"));
+                        if let Some(r) = recorded_reply {
+                            recording.record(Payload::Recommendation(Box::new(r)), t, t);
                         }
                     }
                     Err(e) => {
@@ -408,6 +412,10 @@ impl Recording {
             _ => {}
         }
         Ok(())
+    }
+
+    fn is_on(&self) -> bool {
+        self.active.is_some()
     }
 
     fn record(&self, payload: Payload, log_time: u64, publish_time: u64) {

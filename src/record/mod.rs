@@ -22,6 +22,8 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 /// Longest time between two flushes of the file.
 pub const FLUSH_EVERY: Duration = Duration::from_secs(1);
+/// How often the writer thread takes what the answering loop handed over.
+const BATCH_EVERY: Duration = Duration::from_millis(10);
 /// Chunk size before compression, bytes.
 const CHUNK_SIZE: u64 = 1 << 20;
 
@@ -273,24 +275,34 @@ impl Recorder {
         let thread = std::thread::Builder::new()
             .name("grasp_orient-record".into())
             .spawn(move || {
+                // Wake every BATCH_EVERY and write what has come, rather than once per message:
+                // on a small machine the answering path and DDS keep the cores.
                 let mut last_flush = Instant::now();
                 let mut dirty = false;
                 loop {
-                    let wait = FLUSH_EVERY.saturating_sub(last_flush.elapsed());
-                    match rx.recv_timeout(wait) {
-                        Ok(entry) => {
-                            bag.write(&entry)?;
-                            dirty = true;
+                    std::thread::sleep(BATCH_EVERY);
+                    let mut open = true;
+                    loop {
+                        match rx.try_recv() {
+                            Ok(entry) => {
+                                bag.write(&entry)?;
+                                dirty = true;
+                            }
+                            Err(mpsc::TryRecvError::Empty) => break,
+                            Err(mpsc::TryRecvError::Disconnected) => {
+                                open = false;
+                                break;
+                            }
                         }
-                        Err(mpsc::RecvTimeoutError::Timeout) => {}
-                        Err(mpsc::RecvTimeoutError::Disconnected) => break,
                     }
-                    if dirty && last_flush.elapsed() >= FLUSH_EVERY {
-                        bag.flush()?;
-                        dirty = false;
-                        last_flush = Instant::now();
+                    if !open {
+                        break;
                     }
-                    if !dirty && last_flush.elapsed() >= FLUSH_EVERY {
+                    if last_flush.elapsed() >= FLUSH_EVERY {
+                        if dirty {
+                            bag.flush()?;
+                            dirty = false;
+                        }
                         last_flush = Instant::now();
                     }
                 }

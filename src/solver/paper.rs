@@ -8,9 +8,6 @@
 //! - Eq. (34)'s first equality drops a sign: `(c μ + s)/(s μ - c) = -tan(φ + ξ)`, not
 //!   `+tan(φ + ξ)`. Eqs. (30)–(33) carry the right sign in their last form, and so does this code
 //!   (test `ratio_is_minus_tan_phi_plus_xi`).
-//! - Relation (56) orders `θ_34` between `-θ_1` and `θ_2`; the lemmas place the crossing of `α_3`
-//!   and `α_4` between `-θ_2` and `θ_1` when it is in the from-above range, and on many grasps it
-//!   is not there at all (see `tests/paper.rs`).
 //! - Lemmas 1 and 2 hold for every force-closure grasp, not only for `x1, x2, y > 0`: `α_1` lies
 //!   between `α_3` and `α_5`, and `α_2` between `α_4` and `α_6`, so `α_min` is the upper
 //!   envelope of `α_3 .. α_6` alone (test `alpha_1_and_2_never_bind`).
