@@ -450,3 +450,38 @@ def test_example_script(grasp_node, client, tmp_path):
                        capture_output=True, text=True, timeout=60)
     assert r.returncode == 1 and f"ROS_DOMAIN_ID={DOMAIN_ID}" in r.stderr, (r.returncode, r.stderr)
     assert time.monotonic() - t0 < 20
+
+
+def test_record_switched_off_and_on_by_parameter(peer, client, tmp_path):
+    """record:=false stops the recording at the next candidate; record:=true starts a new file that
+    holds exactly what was answered while it was on (read back with the mcap reader)."""
+    import mcap_util as mu
+
+    params = Params(peer)
+    before = params.get("record", "record_dir")
+    rec_dir = tmp_path / "toggled"
+    try:
+        for name, value in (("record", False), ("record_dir", str(rec_dir))):
+            (r,) = params.set(**{name: value})
+            assert r.successful, f"{name}={value!r} refused: {r.reason!r}"
+        client.send_and_collect(random_batch(5, SEED + 7, "rec-off"))
+        assert not rec_dir.exists() or not list(rec_dir.glob("*.mcap")), "recorded while off"
+        (r,) = params.set(record=True)
+        assert r.successful, r.reason
+        on = random_batch(7, SEED + 8, "rec-on")
+        client.send_and_collect(on)
+        (r,) = params.set(record=False)
+        assert r.successful, r.reason
+        # The next candidate closes the file, and is not recorded itself.
+        client.send_and_collect(random_batch(2, SEED + 9, "rec-after"))
+        files = sorted(rec_dir.glob("*.mcap"))
+        assert len(files) == 1, f"expected one recording, found {files}"
+        recs = mu.read_mcap(files[0])
+        ids = [r.msg["id"] for r in recs if r.topic.endswith("grasp_candidates")]
+        answered = [r.msg["candidate_id"] for r in recs if r.topic.endswith("grip_recommendations")]
+        want = [c["id"] for c in on]
+        assert sorted(ids) == sorted(want), f"recorded candidates {ids}, sent while on {want}"
+        assert sorted(answered) == sorted(want), f"recorded answers {answered}"
+    finally:
+        params.set(record=before[0])
+        params.set(record_dir=before[1])
