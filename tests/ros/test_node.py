@@ -485,3 +485,32 @@ def test_record_switched_off_and_on_by_parameter(peer, client, tmp_path):
     finally:
         params.set(record=before[0])
         params.set(record_dir=before[1])
+
+
+def test_node_logs_to_rosout(peer, client):
+    """A refused candidate is logged to /rosout as a warning naming it, as rclpy nodes log."""
+    from rcl_interfaces.msg import Log
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+    logs = []
+    qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.VOLATILE)
+    sub = peer.node.create_subscription(Log, "/rosout", logs.append, qos)
+    try:
+        bad = copy.deepcopy(load_paper_cases()[0])
+        bad["id"] = "rosout-probe"
+        bad["mass"] = -1.0
+        # Resend until the /rosout subscription has matched and the warning has come.
+        deadline = time.monotonic() + 20.0
+        found = []
+        while time.monotonic() < deadline and not found:
+            ans = client.send_one(bad, timeout=10.0)
+            assert ans.status == GripRecommendation.STATUS_INVALID_INPUT
+            peer.spin_until(lambda: any("rosout-probe" in m.msg for m in logs), 1.0)
+            found = [m for m in logs if "rosout-probe" in m.msg]
+        assert found, f"no /rosout message about the refused candidate; saw {[m.msg[:80] for m in logs][:5]}"
+        assert found[0].level == Log.WARN, f"level {found[0].level}"
+        assert found[0].name.endswith("grasp_orient"), f"logger name {found[0].name!r}"
+        assert "mass" in found[0].msg
+    finally:
+        peer.node.destroy_subscription(sub)
