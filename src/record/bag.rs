@@ -73,13 +73,19 @@ fn mcap_err(path: &Path) -> impl Fn(mcap::McapError) -> BagError + '_ {
     }
 }
 
-/// Whether a channel carries `type_name` as CDR (schema names with or without `/msg/`).
+/// Whether a channel carries `type_name` (`pkg/msg/Name`) as CDR; schema names are accepted
+/// with or without the `/msg/`. Called for every message, so it compares without allocating.
 fn carries(channel: &mcap::Channel<'_>, type_name: &str) -> bool {
     let Some(schema) = &channel.schema else {
         return false;
     };
-    let short = type_name.replace("/msg/", "/");
-    channel.message_encoding == "cdr" && (schema.name == type_name || schema.name == short)
+    channel.message_encoding == "cdr" && short_name(&schema.name) == short_name(type_name)
+}
+
+/// `(pkg, Name)` of `pkg/msg/Name` or `pkg/Name`.
+fn short_name(name: &str) -> Option<(&str, &str)> {
+    name.split_once('/')
+        .map(|(pkg, rest)| (pkg, rest.strip_prefix("msg/").unwrap_or(rest)))
 }
 
 /// Decodes one message of ours into the bag's lists, or notes why it did not decode.
