@@ -43,6 +43,7 @@ pub struct Args {
 }
 
 /// How this process takes part in the DDS graph.
+#[derive(Debug, Clone, Copy)]
 struct Graph {
     domain_id: u16,
     localhost_only: bool,
@@ -96,6 +97,19 @@ fn load_config(ros: &RosArgs, node: &str) -> anyhow::Result<(Config, crate::solv
     }
     let settings = config.validate()?;
     Ok((config, settings))
+}
+
+/// Creates the topic `full_name` (absolute) of type `package/msg/kind`.
+fn create_topic(
+    node: &Node,
+    full_name: &str,
+    package: &str,
+    kind: &str,
+    qos: &QosProfile,
+) -> anyhow::Result<ros2_client::dds::rustdds::Topic> {
+    let parsed = Name::parse(full_name).map_err(|e| anyhow::anyhow!("topic {full_name}: {e:?}"))?;
+    node.create_topic(&parsed, MessageTypeName::new(package, kind), qos)
+        .with_context(|| format!("cannot create topic {full_name}"))
 }
 
 fn qos(depth: i64) -> QosProfile {
@@ -163,31 +177,20 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
         .context("cannot create the node")?;
 
     let qos = qos(config.qos_depth);
-    let topic = |node: &mut Node, base: &str, package: &str, kind: &str| {
+    let topic = |node: &Node, base: &str, package: &str, kind: &str| {
         let full = ros.topic(base, &name);
-        let parsed = Name::parse(&full).map_err(|e| anyhow::anyhow!("topic {full}: {e:?}"))?;
-        node.create_topic(&parsed, MessageTypeName::new(package, kind), &qos)
-            .with_context(|| format!("cannot create topic {full}"))
-            .map(|t| (t, full))
+        create_topic(node, &full, package, kind, &qos).map(|t| (t, full))
     };
-    let (candidates_topic, candidates_name) = topic(
-        &mut node,
-        "grasp_candidates",
-        "grasp_orient",
-        "GraspCandidate",
-    )?;
+    let (candidates_topic, candidates_name) =
+        topic(&node, "grasp_candidates", "grasp_orient", "GraspCandidate")?;
     let (answers_topic, answers_name) = topic(
-        &mut node,
+        &node,
         "grip_recommendations",
         "grasp_orient",
         "GripRecommendation",
     )?;
-    let (markers_topic, markers_name) = topic(
-        &mut node,
-        "grip_markers",
-        "visualization_msgs",
-        "MarkerArray",
-    )?;
+    let (markers_topic, markers_name) =
+        topic(&node, "grip_markers", "visualization_msgs", "MarkerArray")?;
     let subscription = node
         .create_subscription::<GraspCandidate>(&candidates_topic, None)
         .context("cannot subscribe")?;
@@ -235,7 +238,6 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
 
     let (demo_done_tx, demo_done_rx) = smol::channel::bounded::<anyhow::Result<()>>(1);
     let demo = args.demo.then(|| {
-        let graph = Graph { ..graph };
         let (c, a) = (candidates_name.clone(), answers_name.clone());
         executor.spawn(async move {
             let result = run_demo(&graph, &c, &a).await;
@@ -274,11 +276,12 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
                         let sent = info
                             .source_timestamp()
                             .map_or(received, |t| u64::try_from(t.to_nanos()).unwrap_or(received));
-                        let (settings, markers_on, config) = {
+                        let (settings, markers_on, record) = {
                             let live = shared.lock();
-                            (live.settings, live.config.publish_markers, live.config.clone())
+                            (live.settings, live.config.publish_markers, live.config.record)
                         };
-                        if !echo {
+                        if !echo && recording.must_follow(record) {
+                            let config = shared.lock().config.clone();
                             if let Err(e) = recording.follow(&node, &config) {
                                 say(&node, LogLevel::Error, &format!("{e:#}"));
                             }
@@ -312,7 +315,7 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
                         }
                         let t = now_ns();
                         if let Some(array) = array {
-                            if config.record_markers {
+                            if recording.records_markers() {
                                 recording.record(Payload::Markers(Box::new(array.clone())), t, t);
                             }
                             if let Err(e) = marker_publisher.async_publish(array).await {
@@ -363,6 +366,8 @@ struct Recording {
     topics: Topics,
     qos_depth: i64,
     active: Option<Recorder>,
+    /// Whether the active recording has a markers channel (fixed when it starts).
+    markers: bool,
     /// Whether a start failed for the current settings (not retried for every candidate).
     failed: bool,
 }
@@ -373,7 +378,19 @@ impl Recording {
             topics,
             qos_depth,
             active: None,
+            markers: false,
             failed: false,
+        }
+    }
+
+    /// Whether `record` asks for a start or a stop (a failed start is not retried until
+    /// `record` goes false).
+    fn must_follow(&self, record: bool) -> bool {
+        match (self.active.is_some(), record) {
+            (false, true) => !self.failed,
+            (true, false) => true,
+            (false, false) => self.failed,
+            (true, true) => false,
         }
     }
 
@@ -399,6 +416,7 @@ impl Recording {
                             LogLevel::Info,
                             &format!("recording to {}", r.path().display()),
                         );
+                        self.markers = config.record_markers;
                         self.active = Some(r);
                     }
                     Err(e) => {
@@ -416,6 +434,10 @@ impl Recording {
 
     fn is_on(&self) -> bool {
         self.active.is_some()
+    }
+
+    fn records_markers(&self) -> bool {
+        self.is_on() && self.markers
     }
 
     fn record(&self, payload: Payload, log_time: u64, publish_time: u64) {
@@ -471,16 +493,8 @@ async fn run_demo(graph: &Graph, candidates: &str, answers: &str) -> anyhow::Res
         )
         .context("cannot create the demo node")?;
     let qos = qos(100);
-    let topic_in = node.create_topic(
-        &Name::parse(candidates).map_err(|e| anyhow::anyhow!("{e:?}"))?,
-        MessageTypeName::new("grasp_orient", "GraspCandidate"),
-        &qos,
-    )?;
-    let topic_out = node.create_topic(
-        &Name::parse(answers).map_err(|e| anyhow::anyhow!("{e:?}"))?,
-        MessageTypeName::new("grasp_orient", "GripRecommendation"),
-        &qos,
-    )?;
+    let topic_in = create_topic(&node, candidates, "grasp_orient", "GraspCandidate", &qos)?;
+    let topic_out = create_topic(&node, answers, "grasp_orient", "GripRecommendation", &qos)?;
     let publisher = node.create_publisher::<GraspCandidate>(&topic_in, None)?;
     let replies = node.create_subscription::<GripRecommendation>(&topic_out, None)?;
     let cases: Vec<GraspCandidate> = PAPER_CASES

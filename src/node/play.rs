@@ -2,13 +2,13 @@
 //! pace (or `--rate` times it), like `ros2 bag play`.
 
 use super::ros_args::RosArgs;
-use super::{qos, Graph};
+use super::{create_topic, qos, Graph};
 use crate::msg::GraspCandidate;
 use crate::record::bag;
 use anyhow::{bail, Context as _};
 use async_signal::{Signal, Signals};
 use futures::{FutureExt, StreamExt};
-use ros2_client::{MessageTypeName, Name, NodeName, NodeOptions};
+use ros2_client::{NodeName, NodeOptions};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -56,11 +56,7 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
         .context("cannot create the node")?;
     let topic_name = ros.topic("grasp_candidates", &name);
     let qos = qos(args.depth);
-    let topic = node.create_topic(
-        &Name::parse(&topic_name).map_err(|e| anyhow::anyhow!("topic {topic_name}: {e:?}"))?,
-        MessageTypeName::new("grasp_orient", "GraspCandidate"),
-        &qos,
-    )?;
+    let topic = create_topic(&node, &topic_name, "grasp_orient", "GraspCandidate", &qos)?;
     let publisher = node.create_publisher::<GraspCandidate>(&topic, None)?;
     let executor = smol::Executor::new();
     let spinner = executor.spawn(node.spinner().context("cannot start the spinner")?.spin());
