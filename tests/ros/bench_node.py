@@ -3,7 +3,7 @@
 
     source "$(bash tests/peer/setup.sh | tail -n1)"
     cargo build --release     # or debug; pick the binary with --bin / GRASP_ORIENT_BIN
-    python tests/ros/bench_node.py --bin target/release/grasp_orient [--publishers 2] [--json out.json]
+    python tests/ros/bench_node.py --bin target/release/grasp_orient [--rates 1000,10000,20000] [--json out.json]
 
 In one run, for each of
     echo   `grasp_orient node --echo`: answers every candidate with an empty GripRecommendation (same header and
@@ -12,16 +12,22 @@ In one run, for each of
     node_nomarkers  the same with -p publish_markers:=false (with --with-nomarkers),
     node_norecord   the same with -p record:=false (with --with-norecord): what recording costs,
 it measures
-    (a) round-trip latency, rclpy publish -> rclpy receipt of the answer, one candidate at a time: p50, p99, max;
+    (a) round-trip latency, rclpy publish -> rclpy receipt of the answer (raw: its serialized bytes, as in (b)),
+        one candidate at a time: p50, p99, max;
     (b) sustained throughput, none lost:
         windowed  at most --window candidates unanswered at any time (below the default qos_depth 100, so no
                   keep-last history can drop one), from one publisher: answers per second;
         burst     --n-throughput candidates published as fast as possible by --publishers processes, the node run
                   with -p qos_depth:=<n> so no history is short; answers per second over the whole run, and how many
                   were lost (not answered within --idle s of the last one).
+    (c) sustained offered rate, from the rcl peer (tests/peer/rcl_peer.c: C on rcl + rmw_fastrtps_cpp, the stack
+        under rclpy and rclcpp, about a quarter of Python's CPU per message): one process publishes at each of
+        --rates for --seconds, another collects the answers; answers per second, how many were lost, and the lag
+        of each answer behind its scheduled send time (p50, p99, max). The node runs with -p qos_depth:=<n>.
 Plus the peer's own ceiling: the same burst from the same publisher processes to an rclpy subscriber in this
 process, no node in between (rclpy -> rclpy, GraspCandidate). When the node's and echo's throughput sit near
-that ceiling, Python/rclpy is the bottleneck, not the node.
+that ceiling, Python/rclpy is the bottleneck, not the node. On two cores, an rclpy publisher and collector
+saturate the machine near 8,000 messages per second; (c) is the measurement the throughput target is read from.
 
 All traffic stays on this machine (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, one ROS_DOMAIN_ID for the run).
 """
@@ -43,6 +49,7 @@ sys.path.insert(0, str(HERE))
 
 # conftest sets ROS_DOMAIN_ID (GRASP_ORIENT_TEST_DOMAIN_ID or 1 + pid % 100) and localhost discovery before rclpy.
 import conftest as C  # noqa: E402
+import rcl_peer  # noqa: E402
 
 
 def log(*a):
@@ -132,9 +139,24 @@ def finish_workers(procs):
 # ---------------------------------------------------------------------------------------------------
 # Measurements
 # ---------------------------------------------------------------------------------------------------
+def use_raw_answers(peer, client, ns: str):
+    """Replace the client's answer subscription by a raw one (ids read from the CDR bytes, see cdr_id), so that
+    rclpy's deserialization of the node's full answers, which the echo's empty answers do not pay, is not counted
+    against the node. Hooks then receive the id as bytes."""
+    from grasp_orient.msg import GripRecommendation
+
+    peer.node.destroy_subscription(client.sub)
+    client.sub = peer.node.create_subscription(
+        GripRecommendation, f"{ns}/grip_recommendations",
+        lambda raw: client.hook(cdr_id(raw)) if client.hook is not None else None, C.reliable_qos(1000), raw=True)
+    if not peer.spin_until(lambda: client.sub.get_publisher_count() > 0, 15):
+        raise RuntimeError(f"the raw subscription on {ns}/grip_recommendations did not match")
+    peer.spin_for(0.3)
+
+
 def measure_latency(peer, client, n: int, pool) -> dict:
     got = {}
-    client.hook = lambda msg: got.__setitem__(msg.candidate_id, time.perf_counter())
+    client.hook = lambda cid: got.__setitem__(cid.decode(), time.perf_counter())
     lat = []
     ex = peer.executor
     try:
@@ -159,7 +181,7 @@ def measure_latency(peer, client, n: int, pool) -> dict:
 
 def measure_windowed(peer, client, n: int, window: int, pool) -> dict:
     got = set()
-    client.hook = lambda msg: got.add(msg.candidate_id)
+    client.hook = got.add
     ex = peer.executor
     sent = 0
     t0 = time.perf_counter()
@@ -235,6 +257,17 @@ def measure_burst(peer, in_topic: str, out_topic: str, out_type, n: int, k: int,
             "publish_only_per_s": pub_rate, "workers": stats}
 
 
+def offered_count(rate: int, seconds: float) -> int:
+    return max(1, int(round(rate * seconds)))
+
+
+def offered_summary(r: "rcl_peer.Run") -> dict:
+    return {"rate": r.rate, "n": r.count, "answered": r.collector["received"], "lost": r.lost,
+            "duplicates": r.collector["duplicates"], "per_s": r.delivered_per_s,
+            "lag_p50_ms": r.collector["lag_p50_ms"], "lag_p99_ms": r.collector["lag_p99_ms"],
+            "lag_max_ms": r.collector["lag_max_ms"], "publisher": r.publisher, "collector_cpu_s": r.collector["cpu_s"]}
+
+
 # ---------------------------------------------------------------------------------------------------
 def median_of(runs: list[dict], key: str) -> float:
     return statistics.median(r[key] for r in runs) if runs else float("nan")
@@ -268,7 +301,8 @@ def run(args) -> int:
         variants.append(("node_norecord", ["--ros-args", "-p", "record:=false"]))
     names = ["rclpy->rclpy"] + [v[0] for v in variants]
     # every measurement, per variant and kind, one entry per repetition
-    results: dict = {n: {"latency": [], "windowed": [], "burst": [], "errors": []} for n in names}
+    results: dict = {n: {"latency": [], "windowed": [], "burst": [], "offered": {r: [] for r in args.rates},
+                         "errors": []} for n in names}
 
     log(f"[bench] ROS_DOMAIN_ID={C.DOMAIN_ID}, binary {C.binary_path()}, {args.repeat} repetitions, "
         f"echo and node interleaved")
@@ -279,11 +313,15 @@ def run(args) -> int:
         results["rclpy->rclpy"]["burst"].append(r)
         log(f"[bench] #{rep} rclpy->rclpy burst {r['per_s']:.0f}/s, lost {r['lost']}")
         for name, extra in variants:
-            for phase in ("latency+windowed", "burst"):
+            for phase in ("latency+windowed", "burst", "offered"):
                 ns = f"/bench_{name}_{phase.split('+')[0]}_{rep}"
                 ros_args = ["-r", f"__ns:={ns}"]
                 if phase == "burst":
                     ros_args += ["-p", f"qos_depth:={args.n_throughput + 100}"]
+                if phase == "offered":
+                    if not args.rates:
+                        continue
+                    ros_args += ["-p", f"qos_depth:={offered_count(max(args.rates), args.seconds) + 100}"]
                 node_args = [*extra, *ros_args] if "--ros-args" in extra else [*extra, "--ros-args", *ros_args]
                 proc = C.NodeProcess(node_args, C.ros_env(C.DOMAIN_ID), workdir, f"{name} ({phase})")
                 res = results[name]
@@ -294,6 +332,21 @@ def run(args) -> int:
                         log(f"[bench] {name} did not start: {e}")
                         res["errors"].append(str(e).splitlines()[0])
                         continue
+                    if phase == "offered":
+                        for rate in args.rates:
+                            n = offered_count(rate, args.seconds)
+                            try:
+                                r = rcl_peer.offered_load(f"{ns}/grasp_candidates", f"{ns}/grip_recommendations",
+                                                          "recommendation", rate, n, f"{name}{rep}r{rate}",
+                                                          n + 100, idle=args.idle)
+                            except RuntimeError as e:
+                                log(f"[bench] {name} offered {rate}/s: {e}")
+                                res["errors"].append(str(e).splitlines()[0])
+                                continue
+                            res["offered"][rate].append(offered_summary(r))
+                            log(f"[bench] #{rep} {name}: offered {rate}/s -> {r.delivered_per_s:.0f}/s lost {r.lost} "
+                                f"lag p50 {r.collector['lag_p50_ms']:.2f} p99 {r.collector['lag_p99_ms']:.2f} ms")
+                        continue
                     client = C.GraspClient(peer, ns=ns)
                     try:
                         client.ensure_roundtrip()
@@ -302,6 +355,7 @@ def run(args) -> int:
                         res["errors"].append(str(e))
                         continue
                     if phase == "latency+windowed":
+                        use_raw_answers(peer, client, ns)
                         lat = measure_latency(peer, client, args.n_latency, pool)
                         win = measure_windowed(peer, client, args.n_windowed, args.window, pool)
                         res["latency"].append(lat)
@@ -349,6 +403,25 @@ def run(args) -> int:
             line += (f"   burst {median_of(B_, 'per_s'):7.0f}{spread(B_, 'per_s', '.0f')} "
                      f"lost {sum(b['lost'] for b in B_)}   publish {median_of(B_, 'publish_only_per_s'):.0f}")
         print(line)
+    if args.rates:
+        print(f"\n(c) sustained offered rate: one rcl publisher process -> node -> one rcl collector process "
+              f"(C, rmw_fastrtps_cpp), {args.seconds:g} s at each rate, qos_depth <n>;\n"
+              f"    answers per second (first scheduled send to last answer), lost, lag behind the scheduled send "
+              f"p50/p99/max ms")
+        for rate in args.rates:
+            for name in names[1:]:
+                R = results[name]["offered"][rate]
+                if not R:
+                    print(f"    offered {rate:>6}/s  {name:<14} n/a")
+                    continue
+                print(f"    offered {rate:>6}/s  {name:<14} {median_of(R, 'per_s'):7.0f}/s{spread(R, 'per_s', '.0f')} "
+                      f"lost {sum(x['lost'] for x in R)}   lag p50 {median_of(R, 'lag_p50_ms'):.2f} "
+                      f"p99 {median_of(R, 'lag_p99_ms'):.2f} max {max(x['lag_max_ms'] for x in R):.1f}")
+        kept = [rate for rate in args.rates
+                if results["node"]["offered"][rate] and len(results["node"]["offered"][rate]) == args.repeat
+                and all(x["lost"] == 0 and x["per_s"] >= 0.98 * rate for x in results["node"]["offered"][rate])]
+        print(f"    node kept up (none lost, at least 98 % of the offered rate, every repetition) at: "
+              f"{', '.join(f'{r}/s' for r in kept) or 'none of the offered rates'}")
     e, nd = results["echo"], results["node"]
     if e["latency"] and nd["latency"]:
         print(f"\nratios node/echo (medians): latency p50 {median_of(nd['latency'], 'p50_ms') / median_of(e['latency'], 'p50_ms'):.2f}, "
@@ -356,13 +429,21 @@ def run(args) -> int:
               f"windowed throughput {median_of(nd['windowed'], 'per_s') / median_of(e['windowed'], 'per_s'):.2f}"
               + (f"; burst throughput {median_of(nd['burst'], 'per_s') / median_of(e['burst'], 'per_s'):.2f}"
                  if e["burst"] and nd["burst"] else ""))
+    for rate in args.rates:
+        eo, no = e["offered"][rate], nd["offered"][rate]
+        if eo and no:
+            print(f"ratios node/echo at an offered {rate}/s (medians): answers per second "
+                  f"{median_of(no, 'per_s') / median_of(eo, 'per_s'):.2f}, lag p50 "
+                  f"{median_of(no, 'lag_p50_ms') / median_of(eo, 'lag_p50_ms'):.2f}, p99 "
+                  f"{median_of(no, 'lag_p99_ms') / median_of(eo, 'lag_p99_ms'):.2f}")
     ceiling = median_of(results["rclpy->rclpy"]["burst"], "per_s")
     if nd["burst"]:
         print(f"peer ceiling (rclpy -> rclpy, no node, same publishers and collector): {ceiling:.0f}/s; "
               f"node burst / ceiling {median_of(nd['burst'], 'per_s') / ceiling:.2f}")
     if args.json:
         Path(args.json).write_text(json.dumps(results, indent=2))
-    failed = any(r["errors"] for r in results.values()) or any(w["lost"] for r in results.values() for w in r["windowed"])
+    failed = (any(r["errors"] for r in results.values())
+              or any(w["lost"] for r in results.values() for w in r["windowed"]))
     return 1 if failed else 0
 
 
@@ -376,6 +457,9 @@ def main() -> int:
     ap.add_argument("--window", type=int, default=50)
     ap.add_argument("--n-throughput", type=int, default=20000)
     ap.add_argument("--publishers", type=int, default=1, help="publisher processes for the burst (1)")
+    ap.add_argument("--rates", type=lambda v: [int(x) for x in v.split(",") if x.strip()], default=[1000, 10000, 20000],
+                    help="offered rates per second for (c), comma-separated ('' skips (c)); default 1000,10000,20000")
+    ap.add_argument("--seconds", type=float, default=5.0, help="duration of each offered rate in (c) (5 s)")
     ap.add_argument("--idle", type=float, default=5.0, help="burst ends this long after the last answer (5 s)")
     ap.add_argument("--executor", choices=["events", "single"], default="events",
                     help="rclpy executor of the measuring peer (events: rclpy.experimental EventsExecutor)")
@@ -391,6 +475,12 @@ def main() -> int:
     if C.RCLPY_IMPORT_ERROR:
         log(C.RCLPY_IMPORT_ERROR)
         return 1
+    if args.rates:
+        try:
+            rcl_peer.binary()
+        except RuntimeError as e:
+            log(f"{e} (or skip the sustained-rate measurement with --rates '')")
+            return 1
     b = C.binary_path()
     if not b.is_file():
         log(f"no grasp_orient binary at {b}: cargo build, or --bin")

@@ -514,3 +514,24 @@ def test_node_logs_to_rosout(peer, client):
         assert "mass" in found[0].msg
     finally:
         peer.node.destroy_subscription(sub)
+
+
+def test_sustained_load_from_rcl_peer_none_lost(start_node):
+    """10,000 candidates at 5,000 per second from one rcl publisher process (rmw_fastrtps_cpp, no Python per
+    message), answers collected by another: every candidate is answered exactly once. No timing is asserted
+    (the benchmark measures rates); this checks that a sustained stream loses nothing and that the rcl peer
+    works."""
+    import rcl_peer
+
+    count, rate = 10_000, 5_000
+    n = start_node("--ros-args", "-r", "__ns:=/load", "-r", "__node:=load_probe",
+                   "-p", f"qos_depth:={count + 100}", "-p", "publish_markers:=false", "-p", "record:=false",
+                   name="grasp_orient node (load)")
+    run = rcl_peer.offered_load("/load/grasp_candidates", "/load/grip_recommendations", "recommendation",
+                                rate=rate, count=count, tag="load", depth=count + 100, idle=15.0)
+    assert run.publisher["acked"], f"the node did not acknowledge every candidate: {run.publisher}"
+    assert run.lost == 0, f"{run.lost} of {count} candidates unanswered: {run.collector}\n{n.output(20)}"
+    assert run.collector["duplicates"] == 0, f"answered twice: {run.collector}"
+    assert run.collector["other"] == 0, f"answers with ids that were never sent: {run.collector}"
+    n.stop_and_check()
+    assert any(f"answered {count} candidates" in line for line in n.lines), n.output(5)
