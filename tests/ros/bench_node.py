@@ -261,6 +261,11 @@ def offered_count(rate: int, seconds: float) -> int:
     return max(1, int(round(rate * seconds)))
 
 
+def offered_depth(rate: int, seconds: float) -> int:
+    """Keep-last depth for (c): room for the whole run, within the node's limit on qos_depth (100000)."""
+    return min(offered_count(rate, seconds) + 100, 100_000)
+
+
 def offered_summary(r: "rcl_peer.Run") -> dict:
     return {"rate": r.rate, "n": r.count, "answered": r.collector["received"], "lost": r.lost,
             "duplicates": r.collector["duplicates"], "per_s": r.delivered_per_s,
@@ -313,15 +318,16 @@ def run(args) -> int:
         results["rclpy->rclpy"]["burst"].append(r)
         log(f"[bench] #{rep} rclpy->rclpy burst {r['per_s']:.0f}/s, lost {r['lost']}")
         for name, extra in variants:
-            for phase in ("latency+windowed", "burst", "offered"):
+            # (c) starts a fresh node for every rate: in one node, each publisher/collector pair that has come
+            # and gone leaves the next run a higher p99 lag (see the README), which would mix the rates up.
+            for phase in ["latency+windowed", "burst", *(f"offered{rate}" for rate in args.rates)]:
                 ns = f"/bench_{name}_{phase.split('+')[0]}_{rep}"
                 ros_args = ["-r", f"__ns:={ns}"]
+                rate = int(phase[len("offered"):]) if phase.startswith("offered") else None
                 if phase == "burst":
                     ros_args += ["-p", f"qos_depth:={args.n_throughput + 100}"]
-                if phase == "offered":
-                    if not args.rates:
-                        continue
-                    ros_args += ["-p", f"qos_depth:={offered_count(max(args.rates), args.seconds) + 100}"]
+                if rate is not None:
+                    ros_args += ["-p", f"qos_depth:={offered_depth(rate, args.seconds)}"]
                 node_args = [*extra, *ros_args] if "--ros-args" in extra else [*extra, "--ros-args", *ros_args]
                 proc = C.NodeProcess(node_args, C.ros_env(C.DOMAIN_ID), workdir, f"{name} ({phase})")
                 res = results[name]
@@ -332,20 +338,19 @@ def run(args) -> int:
                         log(f"[bench] {name} did not start: {e}")
                         res["errors"].append(str(e).splitlines()[0])
                         continue
-                    if phase == "offered":
-                        for rate in args.rates:
-                            n = offered_count(rate, args.seconds)
-                            try:
-                                r = rcl_peer.offered_load(f"{ns}/grasp_candidates", f"{ns}/grip_recommendations",
-                                                          "recommendation", rate, n, f"{name}{rep}r{rate}",
-                                                          n + 100, idle=args.idle)
-                            except RuntimeError as e:
-                                log(f"[bench] {name} offered {rate}/s: {e}")
-                                res["errors"].append(str(e).splitlines()[0])
-                                continue
-                            res["offered"][rate].append(offered_summary(r))
-                            log(f"[bench] #{rep} {name}: offered {rate}/s -> {r.delivered_per_s:.0f}/s lost {r.lost} "
-                                f"lag p50 {r.collector['lag_p50_ms']:.2f} p99 {r.collector['lag_p99_ms']:.2f} ms")
+                    if rate is not None:
+                        n = offered_count(rate, args.seconds)
+                        try:
+                            r = rcl_peer.offered_load(f"{ns}/grasp_candidates", f"{ns}/grip_recommendations",
+                                                      "recommendation", rate, n, f"{name}{rep}r{rate}",
+                                                      offered_depth(rate, args.seconds), idle=args.idle)
+                        except RuntimeError as e:
+                            log(f"[bench] {name} offered {rate}/s: {e}")
+                            res["errors"].append(str(e).splitlines()[0])
+                            continue
+                        res["offered"][rate].append(offered_summary(r))
+                        log(f"[bench] #{rep} {name}: offered {rate}/s -> {r.delivered_per_s:.0f}/s lost {r.lost} "
+                            f"lag p50 {r.collector['lag_p50_ms']:.2f} p99 {r.collector['lag_p99_ms']:.2f} ms")
                         continue
                     client = C.GraspClient(peer, ns=ns)
                     try:
