@@ -168,6 +168,37 @@ static int read_line(char *line, size_t size)
     return 1;
 }
 
+/* Matched endpoints on the other side of a publisher or a subscription. */
+static size_t publisher_matched(const void *endpoint)
+{
+    size_t n = 0;
+    check(rcl_publisher_get_subscription_count(endpoint, &n), "rcl_publisher_get_subscription_count");
+    return n;
+}
+
+static size_t subscription_matched(const void *endpoint)
+{
+    size_t n = 0;
+    check(rcl_subscription_get_publisher_count(endpoint, &n), "rcl_subscription_get_publisher_count");
+    return n;
+}
+
+/* Waits up to 20 s for `endpoint` to match a `other` on `topic`, then prints "ready"; 0 on timeout. */
+static int announce_when_matched(size_t (*matched)(const void *), const void *endpoint, const char *other,
+                                 const char *topic)
+{
+    for (double until = now_s() + 20; matched(endpoint) == 0;) {
+        if (now_s() > until) {
+            fprintf(stderr, "grasp_orient_rcl_peer: no %s on %s within 20 s\n", other, topic);
+            return 0;
+        }
+        sleep_until(now_s() + 0.01);
+    }
+    printf("ready\n");
+    fflush(stdout);
+    return 1;
+}
+
 static void node_name(char *out, size_t size, const char *role, const char *tag)
 {
     snprintf(out, size, "grasp_orient_bench_%s_", role);
@@ -231,20 +262,9 @@ static int run_pub(const char *topic, const char *pool_path, double rate, long c
     check(rcl_publisher_init(&pub, &ros.node, ROSIDL_GET_MSG_TYPE_SUPPORT(grasp_orient, msg, GraspCandidate), topic,
                              &options),
           "rcl_publisher_init");
-    for (double until = now_s() + 20;;) {
-        size_t matched = 0;
-        check(rcl_publisher_get_subscription_count(&pub, &matched), "rcl_publisher_get_subscription_count");
-        if (matched > 0) {
-            break;
-        }
-        if (now_s() > until) {
-            fprintf(stderr, "grasp_orient_rcl_peer: no subscription on %s within 20 s\n", topic);
-            return 1;
-        }
-        sleep_until(now_s() + 0.01);
+    if (!announce_when_matched(publisher_matched, &pub, "subscription", topic)) {
+        return 1;
     }
-    printf("ready\n");
-    fflush(stdout);
 
     char line[256];
     double start = 0;
@@ -310,20 +330,9 @@ static int run_sub(const char *topic, const char *type, long count, const char *
     rcl_subscription_options_t options = rcl_subscription_get_default_options();
     options.qos = qos(depth);
     check(rcl_subscription_init(&sub, &ros.node, ts, topic, &options), "rcl_subscription_init");
-    for (double until = now_s() + 20;;) {
-        size_t matched = 0;
-        check(rcl_subscription_get_publisher_count(&sub, &matched), "rcl_subscription_get_publisher_count");
-        if (matched > 0) {
-            break;
-        }
-        if (now_s() > until) {
-            fprintf(stderr, "grasp_orient_rcl_peer: no publisher on %s within 20 s\n", topic);
-            return 1;
-        }
-        sleep_until(now_s() + 0.01);
+    if (!announce_when_matched(subscription_matched, &sub, "publisher", topic)) {
+        return 1;
     }
-    printf("ready\n");
-    fflush(stdout);
     char line[256];
     double start = 0, rate = 0;
     if (!read_line(line, sizeof line) || sscanf(line, "go %lf %lf", &start, &rate) != 2) {
