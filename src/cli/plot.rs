@@ -3,9 +3,9 @@
 //! like the paper's Fig. 9.
 
 use super::SolveOptions;
-use crate::msg::GraspCandidate;
-use crate::solver::{Analysis, Candidate, GraspFrame, Recommendation};
 use anyhow::{anyhow, Context};
+use grasp_orient::msg::GraspCandidate;
+use grasp_orient::solver::{Analysis, Candidate, GraspFrame, Recommendation};
 use plotters::prelude::*;
 use std::path::PathBuf;
 
@@ -71,7 +71,7 @@ fn draw(analysis: &Analysis, best: &Recommendation, args: &Args) -> anyhow::Resu
         .map(|a| {
             thetas
                 .iter()
-                .map(|&t| (t, a.value(&crate::solver::sinusoid::Angle::new(t))))
+                .map(|&t| (t, a.value(&grasp_orient::solver::sinusoid::Angle::new(t))))
                 .collect()
         })
         .collect();

@@ -2,10 +2,10 @@
 //! recorded recommendations; non-zero exit on any difference beyond tolerance.
 
 use super::SolveOptions;
-use crate::record::bag;
-use crate::record::{BagWriter, Entry, Payload, Topics};
-use crate::replay::{replay, Summary, TOLERANCE};
 use anyhow::{bail, Context};
+use grasp_orient::record::bag;
+use grasp_orient::record::{BagWriter, Entry, Payload, Topics};
+use grasp_orient::replay::{replay, Summary, TOLERANCE};
 use std::path::PathBuf;
 
 /// Arguments of `replay`.
