@@ -1,7 +1,7 @@
-//! The settings: every parameter declared once ([`params`]), read from ROS 2 params files
-//! (`grasp_orient: ros__parameters:`) and `-p name:=value`, and checked once
-//! ([`Config::solver_settings`]). `config/grasp_orient.yaml` is generated from the declarations
-//! and compiled in as the default.
+//! The settings: every parameter declared once (in `params.rs`, listed by [`PARAMETERS`]), read
+//! from ROS 2 params files (`grasp_orient: ros__parameters:`) and `-p name:=value`, and checked
+//! once ([`Config::solver_settings`]). `config/grasp_orient.yaml` is generated from the
+//! declarations and compiled in as the default.
 
 pub mod choices;
 pub mod declare;
