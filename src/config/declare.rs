@@ -83,7 +83,7 @@ pub struct Parameter {
     pub ros_type: RosType,
     /// The unit (SI), or empty when it has none.
     pub unit: &'static str,
-    /// One line on what it does (as written in the table: with a leading space; see
+    /// What it does, its doc comment's lines joined (each with its leading space; see
     /// [`Parameter::summary`]).
     pub doc: &'static str,
     /// The values it may take.
@@ -190,25 +190,25 @@ impl<T: Choice> Setting for T {
     }
 }
 
-/// Declares the parameters. Each entry is one line after its doc line:
+/// Declares the parameters. Each entry is its doc comment (one sentence or two, joined into one
+/// line) and one line:
 ///
-/// `NAME: TYPE = DEFAULT, "UNIT" [, in DOMAIN];`
+/// `NAME [(fixed)]: TYPE = DEFAULT, "UNIT" [, in DOMAIN];`
 ///
-/// The domain defaults to the type's ([`Setting::DOMAIN`]); `#[fixed]` before the line marks a
-/// parameter that cannot change while the node runs. It generates [`Config`](super::Config) with one documented field
+/// The domain defaults to the type's ([`Setting::DOMAIN`]); `(fixed)` marks a parameter that
+/// cannot change while the node runs. It generates [`Config`](super::Config) with one documented field
 /// per parameter, its `Default`, [`PARAMETERS`](super::PARAMETERS), and by-name access.
 macro_rules! parameters {
     ($(
-        #[doc = $doc:literal]
-        $(#[$fixed:ident])?
-        $name:ident: $ty:ty = $default:expr, $unit:literal $(, in $domain:expr)?;
+        $(#[doc = $doc:literal])+
+        $name:ident $(($fixed:ident))?: $ty:ty = $default:expr, $unit:literal $(, in $domain:expr)?;
     )*) => {
         /// Every setting of grasp_orient, one field per ROS parameter, each value in its domain
         /// once checked ([`Config::solver_settings`]). Declared in `src/config/params.rs`.
         #[derive(Debug, Clone, PartialEq)]
         pub struct Config {
             $(
-                #[doc = $doc]
+                $(#[doc = $doc])+
                 pub $name: $ty,
             )*
         }
@@ -220,20 +220,27 @@ macro_rules! parameters {
         }
 
         /// Every parameter, in declaration order.
-        pub const PARAMETERS: &[Parameter] = &[$(
-            Parameter {
+        pub const PARAMETERS: &[$crate::config::Parameter] = &[$(
+            $crate::config::Parameter {
                 name: stringify!($name),
-                ros_type: <$ty as Setting>::ROS_TYPE,
+                ros_type: <$ty as $crate::config::declare::Setting>::ROS_TYPE,
                 unit: $unit,
-                doc: $doc,
-                domain: $crate::config::declare::domain_or!($($domain)?; <$ty as Setting>::DOMAIN),
+                doc: concat!($($doc),+),
+                domain: $crate::config::declare::domain_or!(
+                    $($domain)?; <$ty as $crate::config::declare::Setting>::DOMAIN
+                ),
                 fixed: $crate::config::declare::is_fixed!($($fixed)?),
             },
         )*];
 
         impl Config {
             /// Sets parameter `name` from a YAML value, checking its type but not its domain.
-            pub fn set_value(&mut self, name: &str, value: Value) -> Result<(), ConfigError> {
+            pub fn set_value(
+                &mut self,
+                name: &str,
+                value: ::serde_yaml_ng::Value,
+            ) -> Result<(), $crate::config::ConfigError> {
+                use $crate::config::{declare::Setting, ConfigError};
                 match name {
                     $(
                         stringify!($name) => {
@@ -248,12 +255,14 @@ macro_rules! parameters {
             }
 
             /// Every parameter as `(name, YAML value)`, in declaration order.
-            pub fn parameters(&self) -> Vec<(&'static str, Value)> {
+            pub fn parameters(&self) -> Vec<(&'static str, ::serde_yaml_ng::Value)> {
+                use $crate::config::declare::Setting;
                 vec![$( (stringify!($name), Setting::to_yaml(&self.$name)), )*]
             }
 
             /// Checks every value against the domain its declaration states.
-            pub(crate) fn check_domains(&self) -> Result<(), ConfigError> {
+            pub(crate) fn check_domains(&self) -> Result<(), $crate::config::ConfigError> {
+                use $crate::config::{declare::Setting, ConfigError};
                 let mut declared = PARAMETERS.iter();
                 $(
                     if let Some(p) = declared.next() {

@@ -209,7 +209,9 @@ async fn serve(
             }
             result = demo_done => return result,
             received = stream.select_next_some() => match received {
-                Ok((candidate, info)) => answer_one(node, endpoints, answerer, candidate, &info).await,
+                Ok((candidate, info)) => {
+                    answer_one(node, endpoints, answerer, candidate, &info).await;
+                }
                 Err(e) => {
                     let note = answerer.undecodable(&endpoints.topics.candidates, &e);
                     tell(node, vec![note]);

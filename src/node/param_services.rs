@@ -22,8 +22,8 @@ use ros2_client::rcl_interfaces::{
     SetParametersRequest, SetParametersResponse,
 };
 use ros2_client::{
-    Message, Name, Node, Parameter, ParameterValue, QosProfile, Server, ServiceMapping,
-    ServiceTypeName,
+    Message, Name, Node, Parameter, ParameterValue, QosProfile, ReadResult, RmwRequestId, Server,
+    ServiceMapping, ServiceTypeName,
 };
 
 /// The servers of the six services.
@@ -92,36 +92,46 @@ impl ParameterServices {
         let mut list = self.list.receive_request_stream();
         let mut describe = self.describe.receive_request_stream();
         loop {
-            let sent = futures::select! {
-                r = get.select_next_some() => match r {
-                    Ok((id, req)) => self.get.async_send_response(id, get_values(node, &req)).await,
-                    Err(e) => { log::warn!("get_parameters request: {e:?}"); continue }
-                },
-                r = get_types.select_next_some() => match r {
-                    Ok((id, req)) => self.get_types.async_send_response(id, get_types_of(node, &req)).await,
-                    Err(e) => { log::warn!("get_parameter_types request: {e:?}"); continue }
-                },
-                r = set.select_next_some() => match r {
-                    Ok((id, req)) => self.set.async_send_response(id, set_each(node, req)).await,
-                    Err(e) => { log::warn!("set_parameters request: {e:?}"); continue }
-                },
-                r = set_atomically.select_next_some() => match r {
-                    Ok((id, req)) => self.set_atomically.async_send_response(id, set_all(node, &self.shared, req)).await,
-                    Err(e) => { log::warn!("set_parameters_atomically request: {e:?}"); continue }
-                },
-                r = list.select_next_some() => match r {
-                    Ok((id, req)) => self.list.async_send_response(id, list_names(node, &req)).await,
-                    Err(e) => { log::warn!("list_parameters request: {e:?}"); continue }
-                },
-                r = describe.select_next_some() => match r {
-                    Ok((id, req)) => self.describe.async_send_response(id, describe_names(node, &req)).await,
-                    Err(e) => { log::warn!("describe_parameters request: {e:?}"); continue }
-                },
-            };
-            if let Err(e) = sent {
+            futures::select! {
+                r = get.select_next_some() => {
+                    respond(&self.get, r, |q| get_values(node, &q)).await;
+                }
+                r = get_types.select_next_some() => {
+                    respond(&self.get_types, r, |q| get_types_of(node, &q)).await;
+                }
+                r = set.select_next_some() => {
+                    respond(&self.set, r, |q| set_each(node, q)).await;
+                }
+                r = set_atomically.select_next_some() => {
+                    respond(&self.set_atomically, r, |q| set_all(node, &self.shared, q)).await;
+                }
+                r = list.select_next_some() => {
+                    respond(&self.list, r, |q| list_names(node, &q)).await;
+                }
+                r = describe.select_next_some() => {
+                    respond(&self.describe, r, |q| describe_names(node, &q)).await;
+                }
+            }
+        }
+    }
+}
+
+/// Answers one request of `server` with `answer`, logging what fails.
+async fn respond<Req, Resp>(
+    server: &Server<Req, Resp>,
+    request: ReadResult<(RmwRequestId, Req)>,
+    answer: impl FnOnce(Req) -> Resp,
+) where
+    Req: Message + 'static,
+    Resp: Message + 'static,
+{
+    match request {
+        Ok((id, req)) => {
+            if let Err(e) = server.async_send_response(id, answer(req)).await {
                 log::warn!("a parameter service response was not sent: {e:?}");
             }
         }
+        Err(e) => log::warn!("a parameter service request did not decode: {e:?}"),
     }
 }
 
