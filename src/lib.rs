@@ -3,12 +3,11 @@
 //!
 //! Layers, imports pointing down only:
 //! 1. [`solver`]: pure math, SI units.
-//! 2. [`msg`]: wire structs mirroring `msg/*.msg`, and conversions to and from solver types.
-//! 3. [`config`]: the typed settings read from `config/grasp_orient.yaml`.
-//! 3. [`node`]: the ROS 2 node on ros2-client.
-//! 4. [`cli`]: one `run` per subcommand.
+//! 2. [`msg`]: wire structs mirroring `msg/*.msg`, and conversions to and from solver types;
+//!    [`config`]: every parameter declared once, typed, read from params files and checked.
+//! 3. [`record`] and [`replay`]: MCAP recordings; [`node`]: the ROS 2 node on ros2-client.
+//! 4. The command line (`src/cli/`, one `run` per subcommand) belongs to the binary.
 
-pub mod cli;
 pub mod config;
 pub mod msg;
 pub mod node;

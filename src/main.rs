@@ -1,8 +1,9 @@
 //! `grasp_orient`: parses arguments, sets up logging, dispatches, and turns the result into an
 //! exit code.
 
+mod cli;
+
 use clap::{Parser, Subcommand};
-use grasp_orient::cli;
 use std::process::ExitCode;
 
 /// The object orientation that minimises gripping power in a two-finger planar grasp.
@@ -20,13 +21,14 @@ enum Command {
     /// Plot the bounds and the gripping power of one candidate to SVG (like the paper's Fig. 9).
     Plot(cli::plot::Args),
     /// Run the ROS 2 node (ROS arguments follow --ros-args, as from ros2 run or launch).
-    Node(grasp_orient::node::Args),
+    #[command(after_help = cli::node::parameters_help())]
+    Node(cli::node::Args),
     /// Re-solve every candidate of MCAP recordings and compare with the recorded answers.
     Replay(cli::replay::Args),
     /// Recover what a killed recording holds into a finished MCAP file.
     Recover(cli::recover::Args),
     /// Republish the candidates of a recording to the live ROS graph, like ros2 bag play.
-    Play(grasp_orient::node::play::Args),
+    Play(cli::play::Args),
 }
 
 fn main() -> ExitCode {
@@ -47,10 +49,10 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Solve(args) => cli::solve::run(args),
         Command::Plot(args) => cli::plot::run(args),
-        Command::Node(args) => grasp_orient::node::run(args, &argv[split..]),
+        Command::Node(args) => cli::node::run(args, &argv[split..]),
         Command::Replay(args) => cli::replay::run(args),
         Command::Recover(args) => cli::recover::run(args),
-        Command::Play(args) => grasp_orient::node::play::run(args, &argv[split..]),
+        Command::Play(args) => cli::play::run(args, &argv[split..]),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,13 +1,15 @@
-//! The command line: one `run` per subcommand.
+//! The command line: one `run` per subcommand. It lives in the binary, not in the library's API.
 
+pub mod node;
+pub mod play;
 pub mod plot;
 pub mod recover;
 pub mod replay;
 pub mod solve;
 
-use crate::config::Config;
-use crate::solver::{AllowedRange, Objective, Settings};
 use anyhow::{bail, Context};
+use grasp_orient::config::{bounds, Config, RangeKind};
+use grasp_orient::solver::{AllowedRange, Objective, Settings};
 use std::path::PathBuf;
 
 /// Options shared by the commands that solve: the config file and overrides of its settings.
@@ -30,19 +32,18 @@ pub struct SolveOptions {
 }
 
 impl SolveOptions {
-    /// The config file with these overrides applied, validated.
+    /// The config file with these overrides applied, checked.
     pub fn settings(&self) -> anyhow::Result<Settings> {
         let mut config = Config::load(self.config.as_deref(), "grasp_orient")?;
         if let Some(o) = &self.objective {
-            if Objective::from_name(o).is_none() {
-                bail!("--objective {o:?} is not one of norm2, norm1, internal_force");
-            }
-            config.objective = o.clone();
+            config.objective = o
+                .parse::<Objective>()
+                .map_err(|e| anyhow::anyhow!("--objective {e}"))?;
         }
         if let Some(s) = self.friction_safety_factor {
             config.friction_safety_factor = s;
         }
-        let mut settings = config.validate()?;
+        let mut settings = config.solver_settings()?;
         if let Some(r) = &self.range {
             settings.range = parse_range(r)?;
         }
@@ -50,22 +51,18 @@ impl SolveOptions {
     }
 }
 
+/// `from_above`, `graspable`, or `LO:HI` bounds in rad.
 fn parse_range(text: &str) -> anyhow::Result<AllowedRange> {
-    Ok(match text {
-        "from_above" => AllowedRange::FromAbove,
-        "graspable" => AllowedRange::Graspable,
-        bounds => {
-            let (lo, hi) = bounds.split_once(':').with_context(|| {
-                format!("--range {text:?}: expected from_above, graspable or LO:HI")
-            })?;
-            let lo: f64 = lo.trim().parse().context("--range lower bound")?;
-            let hi: f64 = hi.trim().parse().context("--range upper bound")?;
-            if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-                bail!("--range {text:?}: bounds must be finite with LO < HI");
-            }
-            AllowedRange::Bounds { lo, hi }
-        }
-    })
+    let Some((lo, hi)) = text.split_once(':') else {
+        return match text.parse::<RangeKind>() {
+            Ok(kind @ (RangeKind::FromAbove | RangeKind::Graspable)) => Ok(kind.allowed(0.0, 0.0)?),
+            _ => bail!("--range {text:?}: expected from_above, graspable or LO:HI"),
+        };
+    };
+    let lo: f64 = lo.trim().parse().context("--range lower bound")?;
+    let hi: f64 = hi.trim().parse().context("--range upper bound")?;
+    bounds(lo, hi)
+        .map_err(|_| anyhow::anyhow!("--range {text:?}: bounds must be finite with LO < HI"))
 }
 
 #[cfg(test)]
@@ -81,5 +78,6 @@ mod tests {
         );
         assert!(parse_range("1:0").is_err());
         assert!(parse_range("sideways").is_err());
+        assert!(parse_range("bounds").is_err());
     }
 }

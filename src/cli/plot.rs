@@ -3,9 +3,9 @@
 //! like the paper's Fig. 9.
 
 use super::SolveOptions;
-use crate::msg::GraspCandidate;
-use crate::solver::{Analysis, Candidate, GraspFrame, Recommendation};
 use anyhow::{anyhow, Context};
+use grasp_orient::msg::GraspCandidate;
+use grasp_orient::solver::{Analysis, Candidate, GraspFrame, Recommendation};
 use plotters::prelude::*;
 use std::path::PathBuf;
 
@@ -59,47 +59,84 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn draw(analysis: &Analysis, best: &Recommendation, args: &Args) -> anyhow::Result<()> {
-    let (lo, hi) = analysis.graspable_range();
-    let n = args.samples.max(10);
-    let thetas: Vec<f64> = (0..=n)
-        .map(|k| lo + (hi - lo) * k as f64 / n as f64)
-        .collect();
-    let alphas = analysis.alphas();
-    let alpha_curves: Vec<Vec<(f64, f64)>> = alphas
-        .iter()
-        .map(|a| {
-            thetas
-                .iter()
-                .map(|&t| (t, a.value(&crate::solver::sinusoid::Angle::new(t))))
-                .collect()
-        })
-        .collect();
-    let power: Vec<(f64, f64)> = thetas
-        .iter()
-        .map(|&t| (t, analysis.evaluate(t).power))
-        .collect();
-    let envelope: Vec<(f64, f64)> = thetas
-        .iter()
-        .map(|&t| (t, analysis.evaluate(t).alpha_min))
-        .collect();
-    let span = |values: &mut dyn Iterator<Item = f64>| {
-        values.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-            (a.min(v), b.max(v))
-        })
-    };
-    let (amin, amax) = span(&mut envelope.iter().map(|p| p.1));
-    let pad = 0.6 * (amax - amin).max(1e-9);
-    let (amin, amax) = (amin - pad, amax + pad);
-    let (pmin, pmax) = span(&mut power.iter().map(|p| p.1));
-    let (pmin, pmax) = (0f64.min(pmin), pmax + 0.1 * (pmax - pmin).max(1e-9));
+/// The curves of the figure, sampled over the graspable range `[lo, hi]`.
+struct Curves {
+    lo: f64,
+    hi: f64,
+    /// `α_1..α_6`.
+    alphas: Vec<Vec<(f64, f64)>>,
+    /// Their upper envelope `α_min`.
+    envelope: Vec<(f64, f64)>,
+    /// The gripping power.
+    power: Vec<(f64, f64)>,
+}
 
+impl Curves {
+    fn sample(analysis: &Analysis, n: usize) -> Self {
+        let (lo, hi) = analysis.graspable_range();
+        let thetas: Vec<f64> = (0..=n)
+            .map(|k| lo + (hi - lo) * k as f64 / n as f64)
+            .collect();
+        let alphas = analysis.alphas();
+        let alpha_curves: Vec<Vec<(f64, f64)>> = alphas
+            .iter()
+            .map(|a| {
+                thetas
+                    .iter()
+                    .map(|&t| (t, a.value(&grasp_orient::solver::sinusoid::Angle::new(t))))
+                    .collect()
+            })
+            .collect();
+        let power: Vec<(f64, f64)> = thetas
+            .iter()
+            .map(|&t| (t, analysis.evaluate(t).power))
+            .collect();
+        let envelope: Vec<(f64, f64)> = thetas
+            .iter()
+            .map(|&t| (t, analysis.evaluate(t).alpha_min))
+            .collect();
+        Self {
+            lo,
+            hi,
+            alphas: alpha_curves,
+            envelope,
+            power,
+        }
+    }
+}
+
+/// The smallest and largest of `values`.
+fn span(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    values.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+        (a.min(v), b.max(v))
+    })
+}
+
+fn drawing_failed(e: impl std::fmt::Debug) -> anyhow::Error {
+    anyhow!("drawing failed: {e:?}")
+}
+
+type Area<'a> = DrawingArea<SVGBackend<'a>, plotters::coord::Shift>;
+
+fn draw(analysis: &Analysis, best: &Recommendation, args: &Args) -> anyhow::Result<()> {
+    let curves = Curves::sample(analysis, args.samples.max(10));
     let root = SVGBackend::new(&args.output, (1400, 560)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
     let (left, right) = root.split_horizontally(700);
-    let err = |e: DrawingAreaErrorKind<_>| anyhow!("drawing failed: {e:?}");
+    draw_bounds(&left, &curves)?;
+    draw_power(&right, analysis, best, &curves)?;
+    root.present()
+        .map_err(|e| anyhow!("cannot write {}: {e}", args.output.display()))?;
+    Ok(())
+}
 
-    let mut chart = ChartBuilder::on(&left)
+/// Left: the six bounds and their envelope.
+fn draw_bounds(area: &Area<'_>, curves: &Curves) -> anyhow::Result<()> {
+    let err = drawing_failed;
+    let (amin, amax) = span(curves.envelope.iter().map(|p| p.1));
+    let pad = 0.6 * (amax - amin).max(1e-9);
+    let (amin, amax) = (amin - pad, amax + pad);
+    let mut chart = ChartBuilder::on(area)
         .caption(
             "bounds α_k(θ) (lengths / contact distance)",
             ("sans-serif", 20),
@@ -107,7 +144,7 @@ fn draw(analysis: &Analysis, best: &Recommendation, args: &Args) -> anyhow::Resu
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(60)
-        .build_cartesian_2d(lo..hi, amin..amax)
+        .build_cartesian_2d(curves.lo..curves.hi, amin..amax)
         .map_err(err)?;
     chart
         .configure_mesh()
@@ -115,7 +152,7 @@ fn draw(analysis: &Analysis, best: &Recommendation, args: &Args) -> anyhow::Resu
         .y_desc("α")
         .draw()
         .map_err(err)?;
-    for (k, curve) in alpha_curves.iter().enumerate() {
+    for (k, curve) in curves.alphas.iter().enumerate() {
         let colour = COLOURS[k];
         chart
             .draw_series(LineSeries::new(
@@ -128,7 +165,7 @@ fn draw(analysis: &Analysis, best: &Recommendation, args: &Args) -> anyhow::Resu
     }
     chart
         .draw_series(LineSeries::new(
-            envelope.iter().copied(),
+            curves.envelope.iter().copied(),
             BLACK.stroke_width(1),
         ))
         .map_err(err)?
@@ -140,9 +177,24 @@ fn draw(analysis: &Analysis, best: &Recommendation, args: &Args) -> anyhow::Resu
         .border_style(BLACK)
         .draw()
         .map_err(err)?;
+    Ok(())
+}
 
+/// Right: the gripping power, the from-above range, the paper's candidates, the recommended and
+/// the current orientation.
+// About 90 lines: one chart drawn series by series, each a short builder chain; split, its
+// pieces would only pass the chart's generic type around.
+fn draw_power(
+    area: &Area<'_>,
+    analysis: &Analysis,
+    best: &Recommendation,
+    curves: &Curves,
+) -> anyhow::Result<()> {
+    let err = drawing_failed;
+    let (pmin, pmax) = span(curves.power.iter().map(|p| p.1));
+    let (pmin, pmax) = (0f64.min(pmin), pmax + 0.1 * (pmax - pmin).max(1e-9));
     let objective = best.objective.name();
-    let mut chart = ChartBuilder::on(&right)
+    let mut chart = ChartBuilder::on(area)
         .caption(
             format!("gripping power P(θ), {objective}"),
             ("sans-serif", 20),
@@ -150,7 +202,7 @@ fn draw(analysis: &Analysis, best: &Recommendation, args: &Args) -> anyhow::Resu
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(60)
-        .build_cartesian_2d(lo..hi, pmin..pmax)
+        .build_cartesian_2d(curves.lo..curves.hi, pmin..pmax)
         .map_err(err)?;
     chart
         .configure_mesh()
@@ -174,7 +226,7 @@ fn draw(analysis: &Analysis, best: &Recommendation, args: &Args) -> anyhow::Resu
         });
     chart
         .draw_series(LineSeries::new(
-            power.iter().copied(),
+            curves.power.iter().copied(),
             BLACK.stroke_width(2),
         ))
         .map_err(err)?;
@@ -218,7 +270,5 @@ fn draw(analysis: &Analysis, best: &Recommendation, args: &Args) -> anyhow::Resu
         .border_style(BLACK)
         .draw()
         .map_err(err)?;
-    root.present()
-        .map_err(|e| anyhow!("cannot write {}: {e}", args.output.display()))?;
     Ok(())
 }

@@ -1,7 +1,7 @@
 //! `grasp_orient recover BROKEN.mcap -o FIXED.mcap`: what a killed recording holds, as a
 //! finished file.
 
-use crate::record::bag;
+use grasp_orient::record::bag;
 use std::path::PathBuf;
 
 /// Arguments of `recover`.

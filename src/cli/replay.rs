@@ -2,11 +2,11 @@
 //! recorded recommendations; non-zero exit on any difference beyond tolerance.
 
 use super::SolveOptions;
-use crate::record::bag;
-use crate::record::{BagWriter, Entry, Payload, Topics};
-use crate::replay::{replay, Summary, TOLERANCE};
 use anyhow::{bail, Context};
-use std::path::PathBuf;
+use grasp_orient::record::bag;
+use grasp_orient::record::{BagWriter, Entry, Payload, Topics};
+use grasp_orient::replay::{replay, Summary, TOLERANCE};
+use std::path::{Path, PathBuf};
 
 /// Arguments of `replay`.
 #[derive(Debug, Clone, clap::Args)]
@@ -26,21 +26,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let settings = args.options.settings()?;
     let started = std::time::Instant::now();
     let mut summary = Summary::default();
-    let mut writer = match &args.write {
-        Some(path) => Some(
-            BagWriter::create(
-                path,
-                &Topics {
-                    candidates: "/grasp_candidates".into(),
-                    recommendations: "/grip_recommendations".into(),
-                    markers: None,
-                },
-                100,
-            )
-            .with_context(|| format!("cannot write {}", path.display()))?,
-        ),
-        None => None,
-    };
+    let mut writer = args.write.as_deref().map(create_writer).transpose()?;
     for path in &args.bags {
         let bag = bag::read(path)?;
         if bag.candidates.is_empty() {
@@ -97,7 +83,25 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                 .map_or(String::new(), |p| p.display().to_string())
         );
     }
-    let secs = started.elapsed().as_secs_f64();
+    report(&summary, started.elapsed().as_secs_f64())
+}
+
+/// A fresh recording of the replay, with the default topic names.
+fn create_writer(path: &Path) -> anyhow::Result<BagWriter> {
+    BagWriter::create(
+        path,
+        &Topics {
+            candidates: "/grasp_candidates".into(),
+            recommendations: "/grip_recommendations".into(),
+            markers: None,
+        },
+        100,
+    )
+    .with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Prints the summary of a replay that took `secs`; `Err` when anything differs or is unmatched.
+fn report(summary: &Summary, secs: f64) -> anyhow::Result<()> {
     println!(
         "replayed {} candidates in {secs:.2} s ({:.0} per second): {} compared with a recorded \
          recommendation, {} differ beyond {TOLERANCE:e}, {} recorded recommendations unmatched",

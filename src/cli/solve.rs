@@ -1,8 +1,8 @@
 //! `grasp_orient solve [FILE]`: JSON lines in, one JSON line out per candidate.
 
 use super::SolveOptions;
-use crate::msg::{answer, invalid, GraspCandidate, GripRecommendation};
 use anyhow::Context;
+use grasp_orient::msg::{answer, invalid, GraspCandidate, GripRecommendation};
 use std::io::{BufRead, BufReader, Write};
 use std::path::PathBuf;
 

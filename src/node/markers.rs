@@ -60,13 +60,10 @@ fn unit(x: f64, y: f64) -> (f64, f64) {
 /// force arrows scale so that the weight `m |g|` is one contact distance long.
 pub fn build(candidate: &GraspCandidate, answer: &GripRecommendation) -> MarkerArray {
     let p = [&candidate.contact_1, &candidate.contact_2];
-    let n = [&candidate.normal_1, &candidate.normal_2];
-    let mu = [candidate.friction_1, candidate.friction_2];
     let com = &candidate.center_of_mass;
     let span = (p[0].x - p[1].x).hypot(p[0].y - p[1].y);
     let thin = 0.02 * span;
     let weight = candidate.mass * candidate.gravity.x.hypot(candidate.gravity.y);
-    let force_scale = span / weight;
 
     let mut contacts = marker(
         candidate,
@@ -77,47 +74,8 @@ pub fn build(candidate: &GraspCandidate, answer: &GripRecommendation) -> MarkerA
     );
     contacts.points = p.iter().map(|q| at(q.x, q.y)).collect();
 
-    let mut cones = marker(
-        candidate,
-        "friction_cones",
-        Marker::LINE_LIST,
-        thin,
-        colour(0.2, 0.7, 0.2),
-    );
-    for i in 0..2 {
-        let (nx, ny) = unit(n[i].x, n[i].y);
-        let half = mu[i].atan();
-        for side in [-half, half] {
-            let (s, c) = side.sin_cos();
-            let (dx, dy) = (c * nx - s * ny, s * nx + c * ny);
-            cones.points.push(at(p[i].x, p[i].y));
-            cones
-                .points
-                .push(at(p[i].x + 0.5 * span * dx, p[i].y + 0.5 * span * dy));
-        }
-    }
-
-    // Forces the fingers apply: normal along the inward normal, friction along it turned +90°.
-    let mut forces = marker(
-        candidate,
-        "contact_forces",
-        Marker::LINE_LIST,
-        thin,
-        colour(0.9, 0.2, 0.1),
-    );
-    for i in 0..2 {
-        let (nx, ny) = unit(n[i].x, n[i].y);
-        let (normal, friction) = (
-            answer.contact_forces[2 * i],
-            answer.contact_forces[2 * i + 1],
-        );
-        let fx = normal * nx - friction * ny;
-        let fy = normal * ny + friction * nx;
-        forces.points.push(at(p[i].x, p[i].y));
-        forces
-            .points
-            .push(at(p[i].x + force_scale * fx, p[i].y + force_scale * fy));
-    }
+    let cones = friction_cones(candidate, span, thin);
+    let forces = contact_forces(candidate, answer, span / weight, thin);
 
     let mut centre = marker(
         candidate,
@@ -150,6 +108,66 @@ pub fn build(candidate: &GraspCandidate, answer: &GripRecommendation) -> MarkerA
             arrow("gravity_recommended", then, colour(0.8, 0.1, 0.8)),
         ],
     }
+}
+
+/// Both friction cones: two edges each, half a contact distance long.
+fn friction_cones(candidate: &GraspCandidate, span: f64, thin: f64) -> Marker {
+    let p = [&candidate.contact_1, &candidate.contact_2];
+    let n = [&candidate.normal_1, &candidate.normal_2];
+    let mu = [candidate.friction_1, candidate.friction_2];
+    let mut cones = marker(
+        candidate,
+        "friction_cones",
+        Marker::LINE_LIST,
+        thin,
+        colour(0.2, 0.7, 0.2),
+    );
+    for i in 0..2 {
+        let (nx, ny) = unit(n[i].x, n[i].y);
+        let half = mu[i].atan();
+        for side in [-half, half] {
+            let (s, c) = side.sin_cos();
+            let (dx, dy) = (c * nx - s * ny, s * nx + c * ny);
+            cones.points.push(at(p[i].x, p[i].y));
+            cones
+                .points
+                .push(at(p[i].x + 0.5 * span * dx, p[i].y + 0.5 * span * dy));
+        }
+    }
+    cones
+}
+
+/// The forces the fingers apply, `force_scale` metres per newton: normal along the inward
+/// normal, friction along it turned +90°.
+fn contact_forces(
+    candidate: &GraspCandidate,
+    answer: &GripRecommendation,
+    force_scale: f64,
+    thin: f64,
+) -> Marker {
+    let p = [&candidate.contact_1, &candidate.contact_2];
+    let n = [&candidate.normal_1, &candidate.normal_2];
+    let mut forces = marker(
+        candidate,
+        "contact_forces",
+        Marker::LINE_LIST,
+        thin,
+        colour(0.9, 0.2, 0.1),
+    );
+    for i in 0..2 {
+        let (nx, ny) = unit(n[i].x, n[i].y);
+        let (normal, friction) = (
+            answer.contact_forces[2 * i],
+            answer.contact_forces[2 * i + 1],
+        );
+        let fx = normal * nx - friction * ny;
+        let fy = normal * ny + friction * nx;
+        forces.points.push(at(p[i].x, p[i].y));
+        forces
+            .points
+            .push(at(p[i].x + force_scale * fx, p[i].y + force_scale * fy));
+    }
+    forces
 }
 
 #[cfg(test)]

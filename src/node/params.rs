@@ -1,17 +1,16 @@
 //! The node's ROS parameters: the fields of [`Config`], declared with their values, validated as
-//! a whole on every set, and shared with the answering loop.
+//! a whole on every set, shared with the answering loop, and described from their declarations
+//! ([`crate::config::PARAMETERS`]).
 
-use crate::config::Config;
+use crate::config::{Config, Domain, Parameter, RosType};
 use crate::solver::Settings;
-use ros2_client::ParameterValue;
+use ros2_client::parameters::{raw, NumericRange, ParameterDescriptor, ParameterType};
+use ros2_client::{NodeOptions, ParameterValue};
 use serde_yaml_ng::Value;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 /// A parameter hook as ros2-client takes it: `Err(reason)` refuses the value.
 pub type ParameterHook = Box<dyn Fn(&str, &ParameterValue) -> Result<(), String> + Send + Sync>;
-
-/// Parameters that cannot change while the node runs (they shape its endpoints).
-const FIXED: [&str; 1] = ["qos_depth"];
 
 /// The settings the answering loop reads, kept in step with the parameters.
 #[derive(Debug)]
@@ -48,17 +47,32 @@ impl Shared {
             .config
             .parameters()
             .into_iter()
-            .find(|(n, _)| n == name)
+            .find(|(n, _)| *n == name)
             .map(|(_, v)| v);
-        if FIXED.contains(&name) && current.as_ref() != Some(&value) {
+        let fixed = Parameter::find(name).is_some_and(|p| p.fixed);
+        if fixed && current.as_ref() != Some(&value) {
             return Err(format!(
                 "{name} is fixed while the node runs; restart it with -p {name}:=VALUE"
             ));
         }
         let mut config = live.config.clone();
         config.set_value(name, value).map_err(|e| e.to_string())?;
-        let settings = config.validate().map_err(|e| e.to_string())?;
+        let settings = config.solver_settings().map_err(|e| e.to_string())?;
         Ok((config, settings))
+    }
+
+    /// Node options that declare every parameter with its current value and validate every set
+    /// through this.
+    pub fn declare(&self, options: NodeOptions) -> NodeOptions {
+        let mut options = options
+            .parameter_validator(self.validator())
+            .parameter_set_action(self.set_action());
+        for (name, value) in self.lock().config.parameters() {
+            if let Some(v) = from_yaml(&value) {
+                options = options.declare_parameter(name, v);
+            }
+        }
+        options
     }
 
     /// The validator handed to ros2-client: refuses with a reason, keeping the old value.
@@ -105,13 +119,58 @@ pub fn from_yaml(value: &Value) -> Option<ParameterValue> {
     })
 }
 
+/// The ROS descriptor of a declared parameter: its type, doc and unit, its range, its other
+/// constraints in words, and whether it is read-only.
+pub fn descriptor(p: &Parameter) -> raw::ParameterDescriptor {
+    let description = if p.unit.is_empty() {
+        p.summary().to_string()
+    } else {
+        format!("{} [{}]", p.summary(), p.unit)
+    };
+    let mut constraints = Vec::new();
+    if let Domain::Choices(_) = p.domain {
+        constraints.push(p.domain.to_string());
+    }
+    if p.fixed {
+        constraints.push("fixed while the node runs".to_string());
+    }
+    let range = match p.domain {
+        Domain::Integer { min, max } => NumericRange::IntegerRange {
+            from_value: min,
+            to_value: max,
+            step: 0,
+        },
+        Domain::Real { min, max } => NumericRange::FloatingPointRange {
+            from_value: min,
+            to_value: max,
+            step: 0.0,
+        },
+        Domain::Any | Domain::Choices(_) => NumericRange::NotSpecified,
+    };
+    ParameterDescriptor {
+        name: p.name.to_string(),
+        param_type: match p.ros_type {
+            RosType::Bool => ParameterType::Bool,
+            RosType::Integer => ParameterType::Integer,
+            RosType::Double => ParameterType::Double,
+            RosType::String => ParameterType::String,
+        },
+        description,
+        additional_constraints: constraints.join("; "),
+        read_only: p.fixed,
+        dynamic_typing: false,
+        range,
+    }
+    .into()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn shared() -> Shared {
         let config = Config::default();
-        let settings = config.validate().expect("defaults are valid");
+        let settings = config.solver_settings().expect("defaults are valid");
         Shared::new(config, settings)
     }
 
@@ -131,7 +190,7 @@ mod tests {
         assert!(check("qos_depth", &ParameterValue::Integer(7)).is_err());
         assert!(check("qos_depth", &ParameterValue::Integer(100)).is_ok());
         assert!(check("objective", &ParameterValue::NotSet).is_err());
-        assert_eq!(s.lock().config.objective, "norm1");
+        assert_eq!(s.lock().config.objective, crate::solver::Objective::Norm1);
     }
 
     #[test]
@@ -140,5 +199,38 @@ mod tests {
             let p = from_yaml(&value).unwrap_or_else(|| panic!("{name} has no ROS type"));
             assert_eq!(to_yaml(&p).as_ref(), Some(&value), "{name}");
         }
+    }
+
+    #[test]
+    fn descriptors_state_type_doc_range_and_fixedness() {
+        for (p, (name, value)) in crate::config::PARAMETERS
+            .iter()
+            .zip(Config::default().parameters())
+        {
+            let d = descriptor(p);
+            assert_eq!(d.name, name);
+            let declared = from_yaml(&value).expect("a ROS value");
+            assert_eq!(
+                d.r#type,
+                ParameterValue::to_parameter_type_raw(&declared),
+                "{name}"
+            );
+            assert!(d.description.starts_with(p.summary()), "{name}");
+        }
+        let find = |name| descriptor(Parameter::find(name).expect("declared"));
+        let q = find("qos_depth");
+        assert!(q.read_only && q.description.ends_with("[messages]"));
+        assert_eq!(
+            (q.integer_range[0].from_value, q.integer_range[0].to_value),
+            (1, 100_000)
+        );
+        let s = find("friction_safety_factor");
+        assert_eq!(s.floating_point_range[0].from_value, 1.0);
+        assert!(!s.read_only && s.integer_range.is_empty());
+        let o = find("objective");
+        assert_eq!(
+            o.additional_constraints,
+            "one of norm2, norm1, internal_force"
+        );
     }
 }

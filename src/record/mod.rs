@@ -7,9 +7,11 @@
 //! killed process loses at most the last second ([`bag::recover`] reads the rest).
 //!
 //! Writing happens on its own thread: the answering loop only hands over messages, so a slow disk
-//! delays the file, never the answers.
+//! delays the file, never the answers. [`lifecycle`] starts and stops the files of a node run as
+//! its `record` parameter says.
 
 pub mod bag;
+pub mod lifecycle;
 
 use crate::msg::{cdr, definitions, GraspCandidate, GripRecommendation, MarkerArray};
 use std::collections::BTreeMap;

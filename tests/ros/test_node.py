@@ -452,6 +452,59 @@ def test_example_script(grasp_node, client, tmp_path):
     assert time.monotonic() - t0 < 20
 
 
+def test_parameters_are_described_listed_and_set_atomically(peer, client):
+    """describe_parameters states each parameter's doc, unit, range and constraints (from the declarations in
+    src/config/params.rs); list_parameters, get_parameter_types and set_parameters_atomically answer as rclcpp's."""
+    from rcl_interfaces.srv import DescribeParameters, GetParameterTypes, ListParameters, SetParametersAtomically
+
+    node = "/grasp_orient"
+    describe = peer.node.create_client(DescribeParameters, f"{node}/describe_parameters")
+    names = ["friction_safety_factor", "qos_depth", "objective", "range_min", "use_sim_time", "no_such_parameter"]
+    ds = peer.call(describe, DescribeParameters.Request(names=names)).descriptors
+    assert [d.name for d in ds] == names, [d.name for d in ds]
+    by = dict(zip(names, ds))
+    f = by["friction_safety_factor"]
+    assert f.type == ParameterType.PARAMETER_DOUBLE and "friction coefficients" in f.description, f
+    assert len(f.floating_point_range) == 1 and f.floating_point_range[0].from_value == 1.0, f
+    assert f.floating_point_range[0].to_value == sys.float_info.max and not f.read_only, f
+    q = by["qos_depth"]
+    assert q.type == ParameterType.PARAMETER_INTEGER and q.read_only and "[messages]" in q.description, q
+    assert [(r.from_value, r.to_value) for r in q.integer_range] == [(1, 100000)], q
+    o = by["objective"]
+    assert o.type == ParameterType.PARAMETER_STRING and "norm2, norm1, internal_force" in o.additional_constraints, o
+    assert by["range_min"].description.endswith("[rad]"), by["range_min"]
+    assert by["use_sim_time"].type == ParameterType.PARAMETER_BOOL
+    assert by["no_such_parameter"].type == ParameterType.PARAMETER_NOT_SET
+
+    listed = peer.call(peer.node.create_client(ListParameters, f"{node}/list_parameters"),
+                       ListParameters.Request()).result.names
+    want = {"objective", "range", "range_min", "range_max", "friction_safety_factor", "qos_depth", "publish_markers",
+            "record", "record_dir", "record_markers", "use_sim_time"}
+    assert set(listed) == want, sorted(listed)
+    types = peer.call(peer.node.create_client(GetParameterTypes, f"{node}/get_parameter_types"),
+                      GetParameterTypes.Request(names=["qos_depth", "record", "nothing"])).types
+    assert list(types) == [ParameterType.PARAMETER_INTEGER, ParameterType.PARAMETER_BOOL,
+                           ParameterType.PARAMETER_NOT_SET], types
+
+    atomic = peer.node.create_client(SetParametersAtomically, f"{node}/set_parameters_atomically")
+    params = Params(peer)
+
+    def set_atomically(**values):
+        req = SetParametersAtomically.Request(parameters=[Parameter(name=k, value=pvalue(v)) for k, v in values.items()])
+        return peer.call(atomic, req).result
+
+    try:
+        r = set_atomically(objective="norm1", friction_safety_factor=0.5)
+        assert not r.successful and "friction_safety_factor" in r.reason, r
+        assert params.get("objective", "friction_safety_factor") == ["norm2", 1.0], "a refused atomic set changed values"
+        r = set_atomically(objective="norm1", friction_safety_factor=1.25)
+        assert r.successful, r.reason
+        assert params.get("objective", "friction_safety_factor") == ["norm1", 1.25]
+    finally:
+        res = params.set(objective="norm2", friction_safety_factor=1.0)
+        assert all(r.successful for r in res), [r.reason for r in res]
+
+
 def test_record_switched_off_and_on_by_parameter(peer, client, tmp_path):
     """record:=false stops the recording at the next candidate; record:=true starts a new file that
     holds exactly what was answered while it was on (read back with the mcap reader)."""

@@ -1,0 +1,42 @@
+//! The parameter table: every setting of grasp_orient, declared once. Each entry gives the doc
+//! line, the name, the type, the default, the unit and, where narrower than the type's, the
+//! domain; `(fixed)` marks what cannot change while the node runs. From this table come
+//! [`Config`], the params file `config/grasp_orient.yaml`, the node's `--help`, the ROS parameter
+//! descriptors and the README's parameter table.
+//!
+//! To add a parameter: add its doc comment and its line here, run
+//! `GRASP_ORIENT_REGENERATE=1 cargo test --lib config` to rewrite the params file and the README
+//! table, and use the new field.
+
+use super::choices::RangeKind;
+use super::declare::{parameters, Domain};
+use crate::solver::Objective;
+use std::f64::consts::PI;
+
+parameters! {
+    /// What is minimised: norm2 (Euclidean norm of the contact forces, the paper's figures),
+    /// norm1 (sum of their magnitudes) or internal_force (the squeeze alone).
+    objective: Objective = Objective::Norm2, "";
+    /// Where the recommended orientation may lie: from_above (the object hangs below the
+    /// fingers), graspable (the paper's whole range, eq. 8) or bounds (range_min to range_max).
+    range: RangeKind = RangeKind::FromAbove, "";
+    /// Lower bound of the gravity angle in the paper's object frame when range is bounds;
+    /// finite and below range_max.
+    range_min: f64 = -PI, "rad";
+    /// Upper bound of the gravity angle in the paper's object frame when range is bounds;
+    /// finite and above range_min.
+    range_max: f64 = PI, "rad";
+    /// Divides both friction coefficients before solving; 1 reproduces the paper.
+    friction_safety_factor: f64 = 1.0, "", in Domain::at_least(1.0);
+    /// QoS history depth (keep-last, reliable, volatile) of every topic.
+    qos_depth (fixed): i64 = 100, "messages", in Domain::Integer { min: 1, max: 100_000 };
+    /// Publish visualization_msgs/MarkerArray on grip_markers.
+    publish_markers: bool = true, "";
+    /// Record candidates and answers to one MCAP file (rosbag2 conventions) named by its start
+    /// time; switching it on while the node runs starts a new file.
+    record: bool = true, "";
+    /// Folder for the recordings, relative to the working directory.
+    record_dir: String = "runs".into(), "";
+    /// Record the markers as well.
+    record_markers: bool = false, "";
+}
