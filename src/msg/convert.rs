@@ -72,25 +72,32 @@ impl TryFrom<&GraspCandidate> for Candidate {
 }
 
 /// `text` cut to at most [`MAX_TEXT_BYTES`] at a character boundary, as answers carry it.
-pub fn clipped(text: &str) -> String {
-    if text.len() <= MAX_TEXT_BYTES {
-        return text.to_string();
-    }
-    let mut end = MAX_TEXT_BYTES;
+pub fn clip(text: &str) -> &str {
+    let mut end = text.len().min(MAX_TEXT_BYTES);
     while !text.is_char_boundary(end) {
         end -= 1;
     }
-    text[..end].to_string()
+    &text[..end]
+}
+
+/// Characters of an id that logs and reports show.
+pub const SHORT_ID_CHARS: usize = 64;
+
+/// An id cut to its first [`SHORT_ID_CHARS`] characters, for logs and reports.
+pub fn short_id(id: &str) -> &str {
+    id.char_indices()
+        .nth(SHORT_ID_CHARS)
+        .map_or(id, |(end, _)| &id[..end])
 }
 
 /// A recommendation whose numbers all say "no answer" (NaN), for a refused candidate.
 fn refused(m: &GraspCandidate, status: u8, message: String) -> GripRecommendation {
     let nan = f64::NAN;
     let mut header = m.header.clone();
-    header.frame_id = clipped(&header.frame_id);
+    header.frame_id = clip(&header.frame_id).to_string();
     GripRecommendation {
         header,
-        candidate_id: clipped(&m.id),
+        candidate_id: clip(&m.id).to_string(),
         status,
         message,
         wrist_rotation: nan,

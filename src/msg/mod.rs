@@ -9,26 +9,28 @@ mod contract;
 mod convert;
 pub mod definitions;
 
-pub use contract::{RosMessage, RosType};
-pub use convert::{answer, clipped, invalid, MessageLimits, MAX_TEXT_BYTES};
+pub use contract::{message_type_name, RosMessage, RosType};
+pub use convert::{answer, clip, invalid, short_id, MessageLimits, MAX_TEXT_BYTES, SHORT_ID_CHARS};
 
 use serde::{Deserialize, Serialize};
 
-/// Declares a wire struct, its constants, and its [`RosMessage`] description.
+/// Declares a wire struct, its constants, and its [`RosMessage`] description; the ROS name is
+/// written `package/Name`. A field whose ROS name is a Rust keyword is written
+/// `rust_name as "ros_name": type`.
 macro_rules! ros_message {
     (
         $(#[$meta:meta])*
-        $name:ident = $type_name:literal
+        $name:ident = $package:ident / $ros_name:ident
         [ $( $cname:ident : $cty:ty = $cval:expr ),* $(,)? ]
         {
-            $( $(#[$fmeta:meta])* $field:ident : $fty:ty ),* $(,)?
+            $( $(#[$fmeta:meta])* $field:ident $(as $wire:literal)? : $fty:ty ),* $(,)?
         }
     ) => {
         $(#[$meta])*
         #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
         #[serde(deny_unknown_fields)]
         pub struct $name {
-            $( $(#[$fmeta])* pub $field: $fty, )*
+            $( $(#[$fmeta])* $(#[serde(rename = $wire)])? pub $field: $fty, )*
         }
 
         impl $name {
@@ -36,14 +38,33 @@ macro_rules! ros_message {
         }
 
         impl RosMessage for $name {
-            const TYPE_NAME: &'static str = $type_name;
+            const PACKAGE: &'static str = stringify!($package);
+            const NAME: &'static str = stringify!($ros_name);
+            const TYPE_NAME: &'static str =
+                concat!(stringify!($package), "/msg/", stringify!($ros_name));
             fn fields() -> Vec<(&'static str, String)> {
-                vec![ $( (stringify!($field), <$fty as RosType>::ros_type()) ),* ]
+                vec![ $( (wire_name!($field $(, $wire)?), <$fty as RosType>::ros_type()) ),* ]
             }
             fn constants() -> Vec<(&'static str, String, String)> {
                 vec![ $( (stringify!($cname), <$cty as RosType>::ros_type(), ($cval).to_string()) ),* ]
             }
         }
+
+        impl RosType for $name {
+            fn ros_type() -> String {
+                concat!(stringify!($package), "/", stringify!($ros_name)).to_string()
+            }
+        }
+    };
+}
+
+/// A field's name on the wire: its Rust name, or the name given with `as`.
+macro_rules! wire_name {
+    ($field:ident) => {
+        stringify!($field)
+    };
+    ($field:ident, $wire:literal) => {
+        $wire
     };
 }
 
@@ -54,7 +75,7 @@ pub use visualization::{
 
 ros_message! {
     /// `builtin_interfaces/Time`.
-    Time = "builtin_interfaces/msg/Time" [] {
+    Time = builtin_interfaces/Time [] {
         /// Seconds since the epoch.
         sec: i32,
         /// Nanoseconds within the second.
@@ -64,7 +85,7 @@ ros_message! {
 
 ros_message! {
     /// `std_msgs/Header`.
-    Header = "std_msgs/msg/Header" [] {
+    Header = std_msgs/Header [] {
         /// Time of the data.
         #[serde(default)]
         stamp: Time,
@@ -76,7 +97,7 @@ ros_message! {
 
 ros_message! {
     /// `geometry_msgs/Point`, m.
-    Point = "geometry_msgs/msg/Point" [] {
+    Point = geometry_msgs/Point [] {
         /// x, m.
         x: f64,
         /// y, m.
@@ -89,7 +110,7 @@ ros_message! {
 
 ros_message! {
     /// `geometry_msgs/Vector3`.
-    Vector3 = "geometry_msgs/msg/Vector3" [] {
+    Vector3 = geometry_msgs/Vector3 [] {
         /// x.
         x: f64,
         /// y.
@@ -102,7 +123,7 @@ ros_message! {
 
 ros_message! {
     /// `geometry_msgs/Quaternion`.
-    Quaternion = "geometry_msgs/msg/Quaternion" [] {
+    Quaternion = geometry_msgs/Quaternion [] {
         /// x.
         x: f64,
         /// y.
@@ -117,7 +138,7 @@ ros_message! {
 ros_message! {
     /// `msg/GraspCandidate.msg`: a two-finger planar grasp to orient. SI units; vectors in the
     /// x-y plane of `header.frame_id`.
-    GraspCandidate = "grasp_orient/msg/GraspCandidate" [] {
+    GraspCandidate = grasp_orient/GraspCandidate [] {
         /// Stamp and frame of the candidate.
         #[serde(default)]
         header: Header,
@@ -147,7 +168,7 @@ ros_message! {
 
 ros_message! {
     /// `msg/GripRecommendation.msg`: the answer to one [`GraspCandidate`].
-    GripRecommendation = "grasp_orient/msg/GripRecommendation" [
+    GripRecommendation = grasp_orient/GripRecommendation [
         STATUS_OK: u8 = 0,
         STATUS_NO_FORCE_CLOSURE: u8 = 1,
         STATUS_INVALID_INPUT: u8 = 2,

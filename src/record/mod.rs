@@ -1,7 +1,7 @@
 //! MCAP recordings in rosbag2's conventions, and reading them back.
 //!
 //! A recording is one file per run: profile `ros2`; one schema per type, encoding `ros2msg`, with
-//! the complete definition ([`crate::msg::definitions`]); message encoding `cdr` with the 4-byte
+//! the complete definition exactly as rosbag2 writes it ([`crate::msg::definitions`]); message encoding `cdr` with the 4-byte
 //! encapsulation header; channel metadata `offered_qos_profiles`; `log_time` the receive time,
 //! `publish_time` the send time. Chunks are lz4-compressed and closed at least once a second, so a
 //! killed process loses at most the last second ([`bag::recover`] reads the rest).
@@ -11,7 +11,7 @@
 
 pub mod bag;
 
-use crate::msg::{cdr, definitions, GraspCandidate, GripRecommendation, MarkerArray};
+use crate::msg::{cdr, definitions, GraspCandidate, GripRecommendation, MarkerArray, RosMessage};
 use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::BufWriter;
@@ -193,16 +193,13 @@ impl BagWriter {
                 .map_err(mcap_error)
         };
         let channels = [
-            Some(channel(
-                &topics.candidates,
-                "grasp_orient/msg/GraspCandidate",
-            )?),
+            Some(channel(&topics.candidates, GraspCandidate::TYPE_NAME)?),
             Some(channel(
                 &topics.recommendations,
-                "grasp_orient/msg/GripRecommendation",
+                GripRecommendation::TYPE_NAME,
             )?),
             match &topics.markers {
-                Some(t) => Some(channel(t, "visualization_msgs/msg/MarkerArray")?),
+                Some(t) => Some(channel(t, MarkerArray::TYPE_NAME)?),
                 None => None,
             },
         ];
