@@ -1,8 +1,8 @@
 //! Replaying recordings: every recorded candidate is solved again and compared, field by field,
 //! with the recommendation recorded for it.
 
-use crate::msg::{answer, GraspCandidate, GripRecommendation};
-use crate::record::bag::{Bag, Recorded};
+use crate::msg::{answer, clip, short_id, GraspCandidate, GripRecommendation};
+use crate::record::bag::{keep_example, Bag, Recorded};
 use crate::solver::{Objective, Settings};
 use std::collections::{BTreeMap, HashMap, VecDeque};
 
@@ -24,6 +24,28 @@ pub struct Summary {
     pub examples: Vec<String>,
     /// Recorded recommendations no candidate matched.
     pub unmatched_recommendations: u64,
+}
+
+impl Summary {
+    /// Adds the summary of a replay of other candidates.
+    pub fn merge(&mut self, other: Summary) {
+        self.candidates += other.candidates;
+        self.compared += other.compared;
+        self.differing += other.differing;
+        self.unmatched_recommendations += other.unmatched_recommendations;
+        for (field, gap) in other.largest {
+            self.note_gap(field, gap);
+        }
+        for example in other.examples {
+            keep_example(&mut self.examples, || example);
+        }
+    }
+
+    /// Keeps `gap` if it is the largest seen for `field`.
+    fn note_gap(&mut self, field: &'static str, gap: f64) {
+        let largest = self.largest.entry(field).or_insert(0.0);
+        *largest = largest.max(gap);
+    }
 }
 
 fn number_gap(a: f64, b: f64) -> f64 {
@@ -157,15 +179,6 @@ fn key<'a>(id: &'a str, header: &'a crate::msg::Header) -> Key<'a> {
     )
 }
 
-/// `text` cut as [`crate::msg::clipped`] cuts it, without copying.
-fn clip(text: &str) -> &str {
-    let mut end = text.len().min(crate::msg::MAX_TEXT_BYTES);
-    while !text.is_char_boundary(end) {
-        end -= 1;
-    }
-    &text[..end]
-}
-
 /// For each candidate, the index of its recorded recommendation. A node's recording answers
 /// candidates in order, so that is tried first; otherwise answers are matched by key, in order.
 fn pair(bag: &Bag) -> (Vec<Option<usize>>, u64) {
@@ -198,20 +211,32 @@ fn pair(bag: &Bag) -> (Vec<Option<usize>>, u64) {
 }
 
 /// Solves every candidate of `bag` again with `settings` (and, for each, the objective its
-/// recorded answer names) and compares. With `keep`, returns the new answers with their
-/// candidates' times (empty otherwise). The work is shared among the machine's cores.
-pub fn replay(
+/// recorded answer names) and compares. The work is shared among the machine's cores; `progress`
+/// hears of every 4096 candidates done.
+pub fn replay(bag: &Bag, settings: &Settings, progress: impl Fn(u64) + Sync) -> Summary {
+    replay_on_cores(bag, settings, false, &progress).0
+}
+
+/// [`replay`], also returning the new answers, each with its candidate's times.
+pub fn replay_with_answers(
     bag: &Bag,
     settings: &Settings,
-    summary: &mut Summary,
-    keep: bool,
     progress: impl Fn(u64) + Sync,
-) -> Vec<Recorded<GripRecommendation>> {
+) -> (Summary, Vec<Recorded<GripRecommendation>>) {
+    replay_on_cores(bag, settings, true, &progress)
+}
+
+/// One share of the candidates per core; the answers are kept only when asked for, since a
+/// replay of millions of candidates need not hold them all.
+fn replay_on_cores(
+    bag: &Bag,
+    settings: &Settings,
+    keep: bool,
+    progress: &(impl Fn(u64) + Sync),
+) -> (Summary, Vec<Recorded<GripRecommendation>>) {
     let (pairs, unmatched) = pair(bag);
-    summary.unmatched_recommendations += unmatched;
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let chunk = bag.candidates.len().div_ceil(threads).max(1);
-    let progress = &progress;
     let parts: Vec<(Vec<Recorded<GripRecommendation>>, Summary)> = std::thread::scope(|scope| {
         let handles: Vec<_> = bag
             .candidates
@@ -241,23 +266,16 @@ pub fn replay(
             .collect();
         handles.into_iter().filter_map(|h| h.join().ok()).collect()
     });
-    let mut answers = Vec::with_capacity(bag.candidates.len());
+    let mut summary = Summary {
+        unmatched_recommendations: unmatched,
+        ..Summary::default()
+    };
+    let mut answers = Vec::with_capacity(if keep { bag.candidates.len() } else { 0 });
     for (a, part) in parts {
         answers.extend(a);
-        summary.candidates += part.candidates;
-        summary.compared += part.compared;
-        summary.differing += part.differing;
-        for (field, gap) in part.largest {
-            let e = summary.largest.entry(field).or_insert(0.0);
-            *e = e.max(gap);
-        }
-        for example in part.examples {
-            if summary.examples.len() < 10 {
-                summary.examples.push(example);
-            }
-        }
+        summary.merge(part);
     }
-    answers
+    (summary, answers)
 }
 
 /// Solves one candidate again and compares it with its recorded answer, if any.
@@ -273,23 +291,22 @@ fn check(
         summary.compared += 1;
         let diffs = differences(&ours, theirs);
         for (field, gap) in &diffs {
-            let e = summary.largest.entry(field).or_insert(0.0);
-            *e = e.max(*gap);
+            summary.note_gap(field, *gap);
         }
         let beyond: Vec<_> = diffs.iter().filter(|(_, g)| *g > TOLERANCE).collect();
         if !beyond.is_empty() {
             summary.differing += 1;
-            if summary.examples.len() < 10 {
-                summary.examples.push(format!(
+            keep_example(&mut summary.examples, || {
+                format!(
                     "candidate {:?}: {}",
-                    candidate.id.chars().take(64).collect::<String>(),
+                    short_id(&candidate.id),
                     beyond
                         .iter()
                         .map(|(f, g)| format!("{f} (gap {g:.3e})"))
                         .collect::<Vec<_>>()
                         .join(", ")
-                ));
-            }
+                )
+            });
         }
     }
     ours

@@ -4,7 +4,7 @@
 use super::SolveOptions;
 use crate::record::bag;
 use crate::record::{BagWriter, Entry, Payload, Topics};
-use crate::replay::{replay, Summary, TOLERANCE};
+use crate::replay::{replay, replay_with_answers, Summary, TOLERANCE};
 use anyhow::{bail, Context};
 use std::path::PathBuf;
 
@@ -61,9 +61,15 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         if bag.candidates.len() < 100_000 {
             bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
         }
-        let answers = replay(&bag, &settings, &mut summary, writer.is_some(), |n| {
-            bar.inc(n)
-        });
+        let progress = |n| bar.inc(n);
+        let answers = if writer.is_some() {
+            let (part, answers) = replay_with_answers(&bag, &settings, progress);
+            summary.merge(part);
+            answers
+        } else {
+            summary.merge(replay(&bag, &settings, progress));
+            Vec::new()
+        };
         bar.finish_and_clear();
         if let Some(w) = writer.as_mut() {
             for (c, a) in bag.candidates.iter().zip(answers) {
