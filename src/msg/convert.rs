@@ -11,6 +11,7 @@ pub const MAX_TEXT_BYTES: usize = 1024;
 
 /// What makes a candidate message unusable before the solver sees it.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum MessageLimits {
     /// A text field is longer than [`MAX_TEXT_BYTES`].
     #[error("{field} is {len} bytes long; at most {MAX_TEXT_BYTES} are accepted")]
@@ -208,51 +209,21 @@ pub fn answer(m: &GraspCandidate, settings: &Settings) -> GripRecommendation {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use approx::assert_abs_diff_eq;
 
+    /// Table 1 (c): a square held at the middle of two opposite sides.
     fn paper_case_c() -> GraspCandidate {
-        let s3 = 3f64.sqrt();
-        GraspCandidate {
-            id: "case-c".into(),
-            contact_1: Point {
-                x: 1.0,
-                y: 1.0,
-                z: 0.0,
-            },
-            contact_2: Point {
-                x: -1.0,
-                y: 1.0,
-                z: 0.0,
-            },
-            normal_1: Vector3 {
-                x: -1.0,
-                y: 0.0,
-                z: 0.0,
-            },
-            normal_2: Vector3 {
-                x: 1.0,
-                y: 0.0,
-                z: 0.0,
-            },
-            friction_1: s3,
-            friction_2: 1.0 / s3,
-            mass: 1.0,
-            gravity: Vector3 {
-                x: 0.0,
-                y: -1.0,
-                z: 0.0,
-            },
-            ..GraspCandidate::default()
-        }
+        crate::msg::paper_cases().swap_remove(2)
     }
 
     #[test]
     fn good_candidate_gets_status_ok_and_a_unit_quaternion() {
         let a = answer(&paper_case_c(), &Settings::default());
         assert_eq!(a.status, GripRecommendation::STATUS_OK, "{}", a.message);
-        assert_eq!(a.candidate_id, "case-c");
+        assert_eq!(a.candidate_id, "paper-c");
         let q = &a.rotation;
-        assert!((q.z * q.z + q.w * q.w - 1.0).abs() < 1e-15);
-        assert!((2.0 * q.z.atan2(q.w) - a.wrist_rotation).abs() < 1e-12);
+        assert_abs_diff_eq!(q.z * q.z + q.w * q.w, 1.0, epsilon = 1e-15);
+        assert_abs_diff_eq!(2.0 * q.z.atan2(q.w), a.wrist_rotation, epsilon = 1e-12);
         assert_eq!(a.local_minima.len(), a.local_minima_labels.len());
         assert_eq!(a.objective, "norm2");
     }

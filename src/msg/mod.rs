@@ -58,6 +58,16 @@ macro_rules! ros_message {
     };
 }
 
+/// The paper's Table 1 as messages (`examples/paper_cases.jsonl`; `tests/paper.rs` holds it to
+/// the solver's Table 1 fixture), for tests.
+#[cfg(test)]
+pub(crate) fn paper_cases() -> Vec<GraspCandidate> {
+    include_str!("../../examples/paper_cases.jsonl")
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("a GraspCandidate"))
+        .collect()
+}
+
 /// A field's name on the wire: its Rust name, or the name given with `as`.
 macro_rules! wire_name {
     ($field:ident) => {

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 
 /// What goes wrong reading or recovering a bag.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum BagError {
     /// The file could not be read or written.
     #[error("{path}: {source}")]
@@ -293,16 +294,13 @@ mod tests {
     }
 
     fn cases() -> Vec<GraspCandidate> {
-        include_str!("../../examples/paper_cases.jsonl")
-            .lines()
-            .map(|l| serde_json::from_str(l).expect("json"))
-            .collect()
+        crate::msg::paper_cases()
     }
 
     #[test]
     fn write_then_read_gives_the_same_messages() {
-        let dir = std::env::temp_dir().join(format!("grasp_orient_bag_{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("dir");
+        let dir = tempfile::tempdir().expect("a temporary folder");
+        let dir = dir.path();
         let path = dir.join("round_trip.mcap");
         let mut w = BagWriter::create(&path, &topics(), 100).expect("create");
         let settings = crate::solver::Settings::default();

@@ -29,6 +29,7 @@ const CHUNK_SIZE: u64 = 1 << 20;
 
 /// What goes wrong with a recording.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum RecordError {
     /// The folder or file could not be made.
     #[error("cannot create the recording {path}: {source}")]
