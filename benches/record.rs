@@ -67,8 +67,8 @@ fn main() {
     let pool: Vec<GraspCandidate> = (0..10_000)
         .map(|i| message(i, &common::random_grasp(&mut rng)))
         .collect();
-    let dir = std::env::temp_dir().join(format!("grasp_orient_bench_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = common::run::temp_dir("bench");
+    let dir = dir.path();
 
     // 1. The answering path with and without a live recording, alternated, best of 5.
     let rounds = 200_000;
@@ -79,7 +79,7 @@ fn main() {
             black_box(answer(&pool[i % pool.len()], &settings));
         }
         off = off.min(t.elapsed().as_secs_f64());
-        let recorder = Recorder::start(&dir, topics(), 100).expect("recorder");
+        let recorder = Recorder::start(dir, topics(), 100).expect("recorder");
         let t = Instant::now();
         for i in 0..rounds {
             let c = &pool[i % pool.len()];
