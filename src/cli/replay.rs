@@ -2,6 +2,7 @@
 //! recorded recommendations; non-zero exit on any difference beyond tolerance.
 
 use super::SolveOptions;
+use crate::msg::{GraspCandidate, RosMessage};
 use crate::record::bag;
 use crate::record::{BagWriter, Entry, Payload, Topics};
 use crate::replay::{replay, replay_with_answers, Summary, TOLERANCE};
@@ -63,8 +64,9 @@ fn replay_file(
     let bag = bag::read(path)?;
     if bag.candidates.is_empty() {
         bail!(
-            "{}: no grasp_orient/msg/GraspCandidate messages (cdr) in it",
-            path.display()
+            "{}: no {} messages (cdr) in it",
+            path.display(),
+            GraspCandidate::TYPE_NAME
         );
     }
     if bag.undecodable_count > 0 {
