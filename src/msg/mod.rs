@@ -1,8 +1,10 @@
-//! Wire structs mirroring `msg/*.msg` field by field (serde, CDR-compatible in declaration order),
-//! and their conversions to and from solver types.
+//! Wire structs mirroring `msg/*.msg` and the standard Jazzy messages field by field (serde,
+//! CDR-compatible in declaration order), their conversions to and from solver types, and their
+//! `.msg` texts ([`definitions`]).
 //!
-//! Each struct is declared through [`ros_message!`], which also derives its ROS field list from
-//! the Rust field types, so `tests/msg_contract.rs` can check it against the `.msg` file.
+//! Each struct is declared through `ros_message!`, which also gives its ROS name and derives its
+//! ROS field list from the Rust field types, so `tests/msg_contract.rs` can check it against the
+//! `.msg` file.
 
 pub mod cdr;
 mod contract;
