@@ -53,6 +53,9 @@ pub enum RecordError {
     /// The writer thread stopped.
     #[error("the recording thread panicked")]
     Thread,
+    /// A type has no complete definition in [`definitions::DEFINITIONS`].
+    #[error("no message definition for {0}")]
+    UnknownType(&'static str),
 }
 
 /// One message for the recording.
@@ -184,8 +187,9 @@ impl BagWriter {
             .create(BufWriter::new(file))
             .map_err(mcap_error)?;
         let metadata = BTreeMap::from([("offered_qos_profiles".to_string(), qos_yaml(qos_depth))]);
-        let mut channel = |topic: &str, type_name: &str| -> Result<u16, RecordError> {
-            let text = definitions::full_text(type_name).unwrap_or_default();
+        let mut channel = |topic: &str, type_name: &'static str| -> Result<u16, RecordError> {
+            let text =
+                definitions::full_text(type_name).ok_or(RecordError::UnknownType(type_name))?;
             let schema = writer
                 .add_schema(type_name, "ros2msg", text.as_bytes())
                 .map_err(mcap_error)?;
