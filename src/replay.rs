@@ -1,8 +1,8 @@
 //! Replaying recordings: every recorded candidate is solved again and compared, field by field,
 //! with the recommendation recorded for it.
 
-use crate::msg::{answer, GraspCandidate, GripRecommendation};
-use crate::record::bag::{Bag, Recorded};
+use crate::msg::{answer, clip, short_id, GraspCandidate, GripRecommendation};
+use crate::record::bag::{keep_example, Bag, Recorded};
 use crate::solver::{Objective, Settings};
 use std::collections::{BTreeMap, HashMap, VecDeque};
 
@@ -26,6 +26,28 @@ pub struct Summary {
     pub unmatched_recommendations: u64,
 }
 
+impl Summary {
+    /// Adds the summary of a replay of other candidates.
+    pub fn merge(&mut self, other: Summary) {
+        self.candidates += other.candidates;
+        self.compared += other.compared;
+        self.differing += other.differing;
+        self.unmatched_recommendations += other.unmatched_recommendations;
+        for (field, gap) in other.largest {
+            self.note_gap(field, gap);
+        }
+        for example in other.examples {
+            keep_example(&mut self.examples, || example);
+        }
+    }
+
+    /// Keeps `gap` if it is the largest seen for `field`.
+    fn note_gap(&mut self, field: &'static str, gap: f64) {
+        let largest = self.largest.entry(field).or_insert(0.0);
+        *largest = largest.max(gap);
+    }
+}
+
 fn number_gap(a: f64, b: f64) -> f64 {
     if a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()) {
         0.0
@@ -40,108 +62,83 @@ fn number_gap(a: f64, b: f64) -> f64 {
     }
 }
 
+/// A number of a recommendation, by field name.
+type NumberField = (&'static str, fn(&GripRecommendation) -> f64);
+/// A list of numbers of a recommendation, by field name.
+type ListField = (&'static str, fn(&GripRecommendation) -> &[f64]);
+/// Whether two recommendations agree on a text or count field, by field name.
+type ExactField = (
+    &'static str,
+    fn(&GripRecommendation, &GripRecommendation) -> bool,
+);
+
+/// Every number compared, in report order.
+const NUMBERS: [NumberField; 14] = [
+    ("wrist_rotation", |r| r.wrist_rotation),
+    ("rotation.z", |r| r.rotation.z),
+    ("rotation.w", |r| r.rotation.w),
+    ("gravity_direction.x", |r| r.gravity_direction.x),
+    ("gravity_direction.y", |r| r.gravity_direction.y),
+    ("gravity_angle", |r| r.gravity_angle),
+    ("gripping_power", |r| r.gripping_power),
+    ("internal_force", |r| r.internal_force),
+    ("contact_forces", |r| r.contact_forces[0]),
+    ("contact_forces", |r| r.contact_forces[1]),
+    ("contact_forces", |r| r.contact_forces[2]),
+    ("contact_forces", |r| r.contact_forces[3]),
+    ("gripping_power_current", |r| r.gripping_power_current),
+    ("internal_force_current", |r| r.internal_force_current),
+];
+
+/// Every list of numbers compared: a different length is a gap of 1.
+const LISTS: [ListField; 2] = [
+    ("local_minima", |r| &r.local_minima),
+    ("local_minima_power", |r| &r.local_minima_power),
+];
+
+/// Every text and count compared: unequal is a gap of 1.
+const EXACT: [ExactField; 7] = [
+    ("status", |a, b| a.status == b.status),
+    ("message", |a, b| a.message == b.message),
+    ("grasp_case", |a, b| a.grasp_case == b.grasp_case),
+    ("local_minima_labels", |a, b| {
+        a.local_minima_labels == b.local_minima_labels
+    }),
+    ("objective", |a, b| a.objective == b.objective),
+    ("recommended_label", |a, b| {
+        a.recommended_label == b.recommended_label
+    }),
+    ("candidate_c", |a, b| a.candidate_c == b.candidate_c),
+];
+
 /// Every field of `ours` against `recorded`: `(field, gap)` for each that differs.
 pub fn differences(
     ours: &GripRecommendation,
     recorded: &GripRecommendation,
 ) -> Vec<(&'static str, f64)> {
-    let mut out = Vec::new();
-    let mut num = |field: &'static str, a: f64, b: f64| {
-        let gap = number_gap(a, b);
-        if gap > 0.0 {
-            out.push((field, gap));
-        }
-    };
-    num(
-        "wrist_rotation",
-        ours.wrist_rotation,
-        recorded.wrist_rotation,
-    );
-    num("rotation.z", ours.rotation.z, recorded.rotation.z);
-    num("rotation.w", ours.rotation.w, recorded.rotation.w);
-    num(
-        "gravity_direction.x",
-        ours.gravity_direction.x,
-        recorded.gravity_direction.x,
-    );
-    num(
-        "gravity_direction.y",
-        ours.gravity_direction.y,
-        recorded.gravity_direction.y,
-    );
-    num("gravity_angle", ours.gravity_angle, recorded.gravity_angle);
-    num(
-        "gripping_power",
-        ours.gripping_power,
-        recorded.gripping_power,
-    );
-    num(
-        "internal_force",
-        ours.internal_force,
-        recorded.internal_force,
-    );
-    for k in 0..4 {
-        num(
-            "contact_forces",
-            ours.contact_forces[k],
-            recorded.contact_forces[k],
-        );
-    }
-    num(
-        "gripping_power_current",
-        ours.gripping_power_current,
-        recorded.gripping_power_current,
-    );
-    num(
-        "internal_force_current",
-        ours.internal_force_current,
-        recorded.internal_force_current,
-    );
-    let pairs = |a: &[f64], b: &[f64], field: &'static str, out: &mut Vec<(&'static str, f64)>| {
-        if a.len() != b.len() {
-            out.push((field, 1.0));
-        } else {
-            let gap = a
-                .iter()
+    let numbers = NUMBERS
+        .iter()
+        .map(|(field, get)| (*field, number_gap(get(ours), get(recorded))));
+    let lists = LISTS.iter().map(|(field, get)| {
+        let (a, b) = (get(ours), get(recorded));
+        let gap = if a.len() == b.len() {
+            a.iter()
                 .zip(b)
                 .map(|(x, y)| number_gap(*x, *y))
-                .fold(0.0, f64::max);
-            if gap > 0.0 {
-                out.push((field, gap));
-            }
-        }
-    };
-    pairs(
-        &ours.local_minima,
-        &recorded.local_minima,
-        "local_minima",
-        &mut out,
-    );
-    pairs(
-        &ours.local_minima_power,
-        &recorded.local_minima_power,
-        "local_minima_power",
-        &mut out,
-    );
-    let mut text = |field: &'static str, same: bool| {
-        if !same {
-            out.push((field, 1.0));
-        }
-    };
-    text("status", ours.status == recorded.status);
-    text("message", ours.message == recorded.message);
-    text("grasp_case", ours.grasp_case == recorded.grasp_case);
-    text(
-        "local_minima_labels",
-        ours.local_minima_labels == recorded.local_minima_labels,
-    );
-    text("objective", ours.objective == recorded.objective);
-    text(
-        "recommended_label",
-        ours.recommended_label == recorded.recommended_label,
-    );
-    text("candidate_c", ours.candidate_c == recorded.candidate_c);
-    out
+                .fold(0.0, f64::max)
+        } else {
+            1.0
+        };
+        (*field, gap)
+    });
+    let exact = EXACT
+        .iter()
+        .map(|(field, same)| (*field, if same(ours, recorded) { 0.0 } else { 1.0 }));
+    numbers
+        .chain(lists)
+        .chain(exact)
+        .filter(|(_, gap)| *gap > 0.0)
+        .collect()
 }
 
 /// The key that pairs a recommendation with its candidate: id and header, cut to the length an
@@ -155,15 +152,6 @@ fn key<'a>(id: &'a str, header: &'a crate::msg::Header) -> Key<'a> {
         header.stamp.nanosec,
         clip(&header.frame_id),
     )
-}
-
-/// `text` cut as [`crate::msg::clipped`] cuts it, without copying.
-fn clip(text: &str) -> &str {
-    let mut end = text.len().min(crate::msg::MAX_TEXT_BYTES);
-    while !text.is_char_boundary(end) {
-        end -= 1;
-    }
-    &text[..end]
 }
 
 /// For each candidate, the index of its recorded recommendation. A node's recording answers
@@ -198,20 +186,32 @@ fn pair(bag: &Bag) -> (Vec<Option<usize>>, u64) {
 }
 
 /// Solves every candidate of `bag` again with `settings` (and, for each, the objective its
-/// recorded answer names) and compares. With `keep`, returns the new answers with their
-/// candidates' times (empty otherwise). The work is shared among the machine's cores.
-pub fn replay(
+/// recorded answer names) and compares. The work is shared among the machine's cores; `progress`
+/// hears of every 4096 candidates done.
+pub fn replay(bag: &Bag, settings: &Settings, progress: impl Fn(u64) + Sync) -> Summary {
+    replay_on_cores(bag, settings, false, &progress).0
+}
+
+/// [`replay`], also returning the new answers, each with its candidate's times.
+pub fn replay_with_answers(
     bag: &Bag,
     settings: &Settings,
-    summary: &mut Summary,
-    keep: bool,
     progress: impl Fn(u64) + Sync,
-) -> Vec<Recorded<GripRecommendation>> {
+) -> (Summary, Vec<Recorded<GripRecommendation>>) {
+    replay_on_cores(bag, settings, true, &progress)
+}
+
+/// One share of the candidates per core; the answers are kept only when asked for, since a
+/// replay of millions of candidates need not hold them all.
+fn replay_on_cores(
+    bag: &Bag,
+    settings: &Settings,
+    keep: bool,
+    progress: &(impl Fn(u64) + Sync),
+) -> (Summary, Vec<Recorded<GripRecommendation>>) {
     let (pairs, unmatched) = pair(bag);
-    summary.unmatched_recommendations += unmatched;
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let chunk = bag.candidates.len().div_ceil(threads).max(1);
-    let progress = &progress;
     let parts: Vec<(Vec<Recorded<GripRecommendation>>, Summary)> = std::thread::scope(|scope| {
         let handles: Vec<_> = bag
             .candidates
@@ -241,23 +241,16 @@ pub fn replay(
             .collect();
         handles.into_iter().filter_map(|h| h.join().ok()).collect()
     });
-    let mut answers = Vec::with_capacity(bag.candidates.len());
+    let mut summary = Summary {
+        unmatched_recommendations: unmatched,
+        ..Summary::default()
+    };
+    let mut answers = Vec::with_capacity(if keep { bag.candidates.len() } else { 0 });
     for (a, part) in parts {
         answers.extend(a);
-        summary.candidates += part.candidates;
-        summary.compared += part.compared;
-        summary.differing += part.differing;
-        for (field, gap) in part.largest {
-            let e = summary.largest.entry(field).or_insert(0.0);
-            *e = e.max(gap);
-        }
-        for example in part.examples {
-            if summary.examples.len() < 10 {
-                summary.examples.push(example);
-            }
-        }
+        summary.merge(part);
     }
-    answers
+    (summary, answers)
 }
 
 /// Solves one candidate again and compares it with its recorded answer, if any.
@@ -273,23 +266,22 @@ fn check(
         summary.compared += 1;
         let diffs = differences(&ours, theirs);
         for (field, gap) in &diffs {
-            let e = summary.largest.entry(field).or_insert(0.0);
-            *e = e.max(*gap);
+            summary.note_gap(field, *gap);
         }
         let beyond: Vec<_> = diffs.iter().filter(|(_, g)| *g > TOLERANCE).collect();
         if !beyond.is_empty() {
             summary.differing += 1;
-            if summary.examples.len() < 10 {
-                summary.examples.push(format!(
+            keep_example(&mut summary.examples, || {
+                format!(
                     "candidate {:?}: {}",
-                    candidate.id.chars().take(64).collect::<String>(),
+                    short_id(&candidate.id),
                     beyond
                         .iter()
                         .map(|(f, g)| format!("{f} (gap {g:.3e})"))
                         .collect::<Vec<_>>()
                         .join(", ")
-                ));
-            }
+                )
+            });
         }
     }
     ours
@@ -319,11 +311,7 @@ mod tests {
 
     #[test]
     fn equal_answers_have_no_differences_and_changed_ones_are_named() {
-        let line = include_str!("../examples/paper_cases.jsonl")
-            .lines()
-            .next()
-            .expect("case");
-        let c: GraspCandidate = serde_json::from_str(line).expect("json");
+        let c = crate::msg::paper_cases().swap_remove(0);
         let a = answer(&c, &Settings::default());
         assert!(differences(&a, &a.clone()).is_empty());
         let mut b = a.clone();

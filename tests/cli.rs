@@ -1,12 +1,11 @@
 //! The `grasp_orient` binary as a user runs it.
 
+mod common;
+
+use common::run::{bin, temp_dir};
 use serde_json::Value;
 use std::io::Write;
-use std::process::{Command, Stdio};
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_grasp_orient"))
-}
+use std::process::Stdio;
 
 fn run_solve(args: &[&str], input: &str) -> (Vec<Value>, String, bool) {
     let mut child = bin()
@@ -101,9 +100,8 @@ fn bad_options_fail_with_a_readable_error() {
     let (_, stderr, ok) = run_solve(&["--objective", "norm3"], "");
     assert!(!ok);
     assert!(stderr.contains("norm3"), "{stderr}");
-    let dir = std::env::temp_dir().join(format!("grasp_orient_cli_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let cfg = dir.join("bad.yaml");
+    let dir = temp_dir("cli");
+    let cfg = dir.path().join("bad.yaml");
     std::fs::write(
         &cfg,
         "grasp_orient:\n  ros__parameters:\n    friction_safety_factor: 0.5\n",
@@ -116,11 +114,10 @@ fn bad_options_fail_with_a_readable_error() {
 
 #[test]
 fn plot_writes_an_svg() {
-    let dir = std::env::temp_dir().join(format!("grasp_orient_plot_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let candidate = dir.join("case.json");
+    let dir = temp_dir("plot");
+    let candidate = dir.path().join("case.json");
     std::fs::write(&candidate, paper_cases().lines().nth(1).expect("case b")).expect("write");
-    let svg = dir.join("case.svg");
+    let svg = dir.path().join("case.svg");
     let out = bin()
         .args([
             "plot",

@@ -1,14 +1,13 @@
 //! Every golden recording in `bags/` replays without a difference: a change in any answer the
 //! solver gives fails here. (`bags/make_bags.py` regenerates them; see `bags/README.md`.)
 
-use std::process::Command;
+mod common;
+
+use common::run::{bin, temp_dir};
 
 fn replay(bag: &str) -> (bool, String) {
     let path = format!("{}/bags/{bag}", env!("CARGO_MANIFEST_DIR"));
-    let out = Command::new(env!("CARGO_BIN_EXE_grasp_orient"))
-        .args(["replay", &path])
-        .output()
-        .expect("binary runs");
+    let out = bin().args(["replay", &path]).output().expect("binary runs");
     (
         out.status.success(),
         String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr),
@@ -52,9 +51,8 @@ fn a_changed_answer_fails_the_replay() {
     use grasp_orient::record::{bag, BagWriter, Entry, Payload, Topics};
     let src = format!("{}/bags/paper_cases.mcap", env!("CARGO_MANIFEST_DIR"));
     let recorded = bag::read(std::path::Path::new(&src)).expect("golden bag reads");
-    let dir = std::env::temp_dir().join(format!("grasp_orient_golden_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("dir");
-    let out = dir.join("tampered.mcap");
+    let dir = temp_dir("golden");
+    let out = dir.path().join("tampered.mcap");
     let topics = Topics {
         candidates: "/grasp_candidates".into(),
         recommendations: "/grip_recommendations".into(),
@@ -82,7 +80,7 @@ fn a_changed_answer_fails_the_replay() {
         .expect("write");
     }
     w.finish().expect("finish");
-    let status = Command::new(env!("CARGO_BIN_EXE_grasp_orient"))
+    let status = bin()
         .args(["replay", out.to_str().expect("utf-8")])
         .output()
         .expect("runs");

@@ -2,6 +2,7 @@
 
 mod common;
 
+use approx::abs_diff_eq;
 use common::{random_grasp, wrap};
 use grasp_orient::solver::{
     solve_orientation, AllowedRange, Candidate, GraspCase, Objective, Recommendation, Settings,
@@ -37,7 +38,7 @@ fn settings(objective: u8, graspable: bool) -> Settings {
 }
 
 fn close(a: f64, b: f64, scale: f64) -> bool {
-    (a - b).abs() <= 1e-9 * scale.max(a.abs()).max(b.abs())
+    abs_diff_eq!(a, b, epsilon = 1e-9 * scale.max(a.abs()).max(b.abs()))
 }
 
 proptest! {
@@ -97,7 +98,7 @@ proptest! {
         prop_assert_eq!(a.local_minima.len(), b.local_minima.len());
         for (m, n) in a.local_minima.iter().zip(b.local_minima.iter()) {
             prop_assert_eq!(m.label, n.label.map(|l| l.relabelled()));
-            prop_assert!((m.gravity_angle - n.gravity_angle).abs() < 1e-9);
+            prop_assert!(abs_diff_eq!(m.gravity_angle, n.gravity_angle, epsilon = 1e-9));
         }
         let swap_case = |g: GraspCase| match g {
             GraspCase::B => GraspCase::C,

@@ -1,17 +1,90 @@
-//! The Rust wire structs cannot drift from `msg/*.msg`: same fields, same order, same types, same
-//! constants.
+//! The message definitions cannot drift:
+//! - every wire struct has the fields, order, types and constants of its `.msg` file: ours in
+//!   `msg/`, the standard ones as ROS 2 Jazzy installs them;
+//! - every embedded definition (`msg::definitions::DEFINITIONS`) is that file, byte for byte.
+//!
+//! The standard files are the ROS 2 peer's (`tests/peer/setup.sh`), found as rosbag2 finds them:
+//! through the ament index on `AMENT_PREFIX_PATH`, which `tests/run.sh` sets to the peer's. With
+//! no `AMENT_PREFIX_PATH`, the peer in setup.sh's default folder is used. Without a peer the tests
+//! fail, saying how to install it.
 
-use grasp_orient::msg::{GraspCandidate, GripRecommendation, RosMessage};
+use grasp_orient::msg::definitions::{split_type_name, DEFINITIONS};
+use grasp_orient::msg::{
+    ColorRgba, CompressedImage, Duration, GraspCandidate, GripRecommendation, Header, Marker,
+    MarkerArray, MeshFile, Point, Pose, Quaternion, RosMessage, Time, UvCoordinate, Vector3,
+};
 use std::collections::BTreeSet;
+use std::path::PathBuf;
+
+/// The install prefixes to look for ROS packages in.
+fn prefixes() -> Vec<PathBuf> {
+    if let Some(path) = std::env::var_os("AMENT_PREFIX_PATH").filter(|p| !p.is_empty()) {
+        return std::env::split_paths(&path).collect();
+    }
+    // tests/peer/setup.sh's default: ${GRASP_ORIENT_PEER_DIR:-${XDG_CACHE_HOME:-~/.cache}/grasp_orient/ros-peer}
+    let peer = std::env::var_os("GRASP_ORIENT_PEER_DIR")
+        .map(PathBuf::from)
+        .or_else(|| {
+            std::env::var_os("XDG_CACHE_HOME")
+                .map(PathBuf::from)
+                .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))
+                .map(|cache| cache.join("grasp_orient/ros-peer"))
+        });
+    peer.map(|p| vec![p.join("install"), p.join("venv")])
+        .unwrap_or_default()
+}
+
+/// The text of a `.msg` file: ours from `msg/`, the others from the ROS 2 install, as
+/// `ament_index_cpp::get_package_share_directory` finds their package.
+fn msg_file(type_name: &str) -> String {
+    let (package, name) = split_type_name(type_name).expect("a message type name");
+    let path = if package == "grasp_orient" {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("msg/{name}.msg"))
+    } else {
+        let prefixes = prefixes();
+        let prefix = prefixes
+            .iter()
+            .find(|p| {
+                p.join("share/ament_index/resource_index/packages")
+                    .join(package)
+                    .is_file()
+            })
+            .unwrap_or_else(|| {
+                panic!(
+                    "ROS 2 package {package} not found in {prefixes:?}: this test reads the \
+                     Jazzy .msg files of the ROS 2 peer. Run `bash tests/run.sh`, or \
+                     `source \"$(bash tests/peer/setup.sh | tail -n 1)\"` before `cargo test`."
+                )
+            });
+        prefix.join(format!("share/{package}/msg/{name}.msg"))
+    };
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
 
 struct Parsed {
+    /// `(name, type)`, relative types qualified with the package.
     fields: Vec<(String, String)>,
+    /// `(name, type, value)`.
     constants: BTreeSet<(String, String, String)>,
 }
 
-fn parse(file: &str) -> Parsed {
-    let path = format!("{}/msg/{file}", env!("CARGO_MANIFEST_DIR"));
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
+const PRIMITIVES: [&str; 15] = [
+    "bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16", "int32",
+    "uint32", "int64", "uint64", "string", "wstring",
+];
+
+/// `Point[]` in package `geometry_msgs` is `geometry_msgs/Point[]`.
+fn qualified(ty: &str, package: &str) -> String {
+    let base = ty.split(['[', '<']).next().unwrap_or(ty);
+    if base.contains('/') || PRIMITIVES.contains(&base) {
+        ty.to_string()
+    } else {
+        format!("{package}/{ty}")
+    }
+}
+
+/// The fields and constants of a `.msg` text (comments, blank lines and default values left out).
+fn parse(text: &str, package: &str) -> Parsed {
     let mut fields = Vec::new();
     let mut constants = BTreeSet::new();
     for line in text.lines() {
@@ -28,42 +101,97 @@ fn parse(file: &str) -> Parsed {
                 value.trim().to_string(),
             ));
         } else {
-            fields.push((rest.to_string(), ty.to_string()));
+            let name = rest.split_whitespace().next().expect("a field name");
+            fields.push((name.to_string(), qualified(ty, package)));
         }
     }
     Parsed { fields, constants }
 }
 
-fn check<M: RosMessage>(file: &str) {
-    let parsed = parse(file);
+/// `M` against its `.msg` file: same fields in the same order, same types, same constants.
+fn check<M: RosMessage>() {
+    let parsed = parse(&msg_file(M::TYPE_NAME), M::PACKAGE);
     let rust: Vec<(String, String)> = M::fields()
         .into_iter()
-        .map(|(n, t)| (n.to_string(), t))
+        .map(|(n, t)| (n.to_string(), qualified(&t, M::PACKAGE)))
         .collect();
     assert_eq!(
-        rust, parsed.fields,
-        "{file}: fields differ from the Rust struct"
+        rust,
+        parsed.fields,
+        "{}: fields differ from the Rust struct",
+        M::TYPE_NAME
     );
     let consts: BTreeSet<(String, String, String)> = M::constants()
         .into_iter()
         .map(|(n, t, v)| (n.to_string(), t, v))
         .collect();
-    assert_eq!(consts, parsed.constants, "{file}: constants differ");
-    assert!(
-        M::TYPE_NAME.ends_with(file.trim_end_matches(".msg")),
-        "{}",
+    assert_eq!(
+        consts,
+        parsed.constants,
+        "{}: constants differ",
         M::TYPE_NAME
+    );
+    assert_eq!(
+        M::TYPE_NAME,
+        format!("{}/msg/{}", M::PACKAGE, M::NAME),
+        "the full name is made of package and name"
     );
 }
 
 #[test]
 fn grasp_candidate_matches_its_msg_file() {
-    check::<GraspCandidate>("GraspCandidate.msg");
+    check::<GraspCandidate>();
 }
 
 #[test]
 fn grip_recommendation_matches_its_msg_file() {
-    check::<GripRecommendation>("GripRecommendation.msg");
+    check::<GripRecommendation>();
+}
+
+/// Every standard wire struct against the file ROS 2 Jazzy installs, and no embedded definition
+/// without its struct.
+#[test]
+fn standard_structs_match_the_jazzy_msg_files() {
+    let checked = [
+        (Time::TYPE_NAME, check::<Time> as fn()),
+        (Duration::TYPE_NAME, check::<Duration>),
+        (Header::TYPE_NAME, check::<Header>),
+        (ColorRgba::TYPE_NAME, check::<ColorRgba>),
+        (Point::TYPE_NAME, check::<Point>),
+        (Vector3::TYPE_NAME, check::<Vector3>),
+        (Quaternion::TYPE_NAME, check::<Quaternion>),
+        (Pose::TYPE_NAME, check::<Pose>),
+        (CompressedImage::TYPE_NAME, check::<CompressedImage>),
+        (UvCoordinate::TYPE_NAME, check::<UvCoordinate>),
+        (MeshFile::TYPE_NAME, check::<MeshFile>),
+        (Marker::TYPE_NAME, check::<Marker>),
+        (MarkerArray::TYPE_NAME, check::<MarkerArray>),
+        (GraspCandidate::TYPE_NAME, check::<GraspCandidate>),
+        (GripRecommendation::TYPE_NAME, check::<GripRecommendation>),
+    ];
+    for (_, check) in &checked {
+        check();
+    }
+    let structs: BTreeSet<&str> = checked.iter().map(|(name, _)| *name).collect();
+    let embedded: BTreeSet<&str> = DEFINITIONS.iter().map(|(name, _)| *name).collect();
+    assert_eq!(
+        structs, embedded,
+        "every embedded definition has its wire struct"
+    );
+}
+
+/// Every embedded definition is its `.msg` file, byte for byte (comments, blank lines, trailing
+/// spaces and final newline included), as rosbag2 reads it.
+#[test]
+fn embedded_definitions_are_the_installed_files() {
+    for (type_name, text) in DEFINITIONS {
+        let file = msg_file(type_name);
+        assert!(
+            text == file,
+            "{type_name}: the embedded text differs from the installed .msg file; copy the \
+             file into src/msg/jazzy/ again.\n--- embedded\n{text}\n--- installed\n{file}"
+        );
+    }
 }
 
 /// The contract in the issue fixes the first fields of GripRecommendation; extra fields may only

@@ -3,46 +3,15 @@
 
 mod common;
 
+use approx::{abs_diff_eq, abs_diff_ne, assert_abs_diff_eq};
+use common::table_1::table_1;
 use common::{random_grasp, wrap, RefObjective, RefRange, Reference};
-use grasp_orient::solver::paper::candidate_angles;
+use grasp_orient::msg::GraspCandidate;
 use grasp_orient::solver::{
-    solve_orientation, Candidate, CandidateC, GraspFrame, Objective, PaperCandidate, Settings,
-    Verdict,
+    analyse, solve_orientation, Analysis, Candidate, CandidateC, PaperCandidate, Settings, Verdict,
 };
-use nalgebra::Vector2;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use std::f64::consts::PI;
-
-/// Table 1 of the paper: `p1`, `p2`, `φ1`, `φ2`, `μ1`, `μ2`, with `Mg = 1`, in the paper frame.
-fn table_1(case: char) -> Candidate {
-    let r3 = 3f64.sqrt();
-    let (p1, p2, phi1, phi2, mu1, mu2) = match case {
-        'a' => (
-            (5.0 * r3, 5.0),
-            (-5.0 * r3, 5.0),
-            PI / 3.0,
-            PI / 3.0,
-            1.5,
-            1.0,
-        ),
-        'b' => ((5.0, 4.0), (-3.0, 4.0), PI / 4.0, PI / 4.0, 1.5, 2.5),
-        'c' => ((1.0, 1.0), (-1.0, 1.0), PI / 2.0, PI / 2.0, r3, 1.0 / r3),
-        'd' => ((1.0, 3.0), (-1.0, 3.0), PI / 2.0, PI / 2.0, r3, 1.0 / r3),
-        _ => unreachable!("Table 1 has four cases"),
-    };
-    Candidate {
-        contact_1: Vector2::new(p1.0, p1.1),
-        contact_2: Vector2::new(p2.0, p2.1),
-        normal_1: Vector2::new(-f64::sin(phi1), -f64::cos(phi1)),
-        normal_2: Vector2::new(f64::sin(phi2), -f64::cos(phi2)),
-        friction_1: mu1,
-        friction_2: mu2,
-        center_of_mass: Vector2::zeros(),
-        mass: 1.0,
-        gravity: Vector2::new(0.0, -1.0),
-    }
-}
 
 /// Table 2 as printed: `θ_min, θ_max, θ_36, θ_34, θ_45`.
 fn table_2(case: char) -> [f64; 5] {
@@ -57,10 +26,47 @@ fn table_2(case: char) -> [f64; 5] {
 
 const NAMES: [&str; 5] = ["theta_min", "theta_max", "theta_36", "theta_34", "theta_45"];
 
+/// The 2-norm objective of a grasp with force closure, with the paper's friction.
+fn analysis(c: &Candidate) -> Analysis {
+    analyse(c, &Settings::default())
+        .expect("valid")
+        .expect("force closure")
+}
+
 fn computed(case: char) -> [f64; 5] {
-    let f = GraspFrame::new(&table_1(case), 1.0).expect("Table 1 is valid");
-    let a = candidate_angles(&f);
+    let a = analysis(&table_1(case)).candidate_angles();
     [a.theta_min, a.theta_max, a.theta_36, a.theta_34, a.theta_45]
+}
+
+/// `examples/paper_cases.jsonl` is Table 1 in SI units: lengths in centimetres written in metres,
+/// `m |g| = 1` N with standard gravity.
+#[test]
+fn paper_cases_jsonl_is_table_1() {
+    let lines = include_str!("../examples/paper_cases.jsonl").lines();
+    let cases: Vec<GraspCandidate> = lines
+        .map(|l| serde_json::from_str(l).expect("a GraspCandidate"))
+        .collect();
+    assert_eq!(cases.len(), 4);
+    for (m, case) in cases.iter().zip(['a', 'b', 'c', 'd']) {
+        assert_eq!(m.id, format!("paper-{case}"));
+        let c = Candidate::try_from(m).expect("valid");
+        let t = table_1(case);
+        for (got, want) in [
+            (c.contact_1 * 100.0, t.contact_1),
+            (c.contact_2 * 100.0, t.contact_2),
+            (c.normal_1, t.normal_1),
+            (c.normal_2, t.normal_2),
+            (c.center_of_mass, t.center_of_mass),
+            (c.gravity / c.gravity.norm(), t.gravity),
+        ] {
+            assert!(
+                abs_diff_eq!(got, want, epsilon = 1e-12),
+                "({case}) {got} vs {want}"
+            );
+        }
+        assert_eq!((c.friction_1, c.friction_2), (t.friction_1, t.friction_2));
+        assert_abs_diff_eq!(c.mass * c.gravity.norm(), 1.0, epsilon = 1e-12);
+    }
 }
 
 /// Every Table 2 entry, from the paper's own formulas (9), (10), (36)–(44) and Table 1, agrees
@@ -81,25 +87,26 @@ fn table_2_follows_from_table_1_except_named_entries() {
             let name = NAMES[k];
             if let Some((_, _, correct)) = wrong.iter().find(|(c, i, _)| *c == case && *i == k) {
                 assert!(
-                    (ours[k] - paper[k]).abs() > 0.1,
+                    abs_diff_ne!(ours[k], paper[k], epsilon = 0.1),
                     "({case}) {name}: expected the paper's {} to be wrong",
                     paper[k]
                 );
                 assert!(
-                    (ours[k] - correct).abs() < 1e-4,
+                    abs_diff_eq!(ours[k], *correct, epsilon = 1e-4),
                     "({case}) {name}: {} vs {correct}",
                     ours[k]
                 );
             } else if truncated.contains(&(case, k)) {
                 assert!(
-                    (ours[k] - paper[k]).abs() < 1e-3 && (ours[k] - paper[k]).abs() > 5e-4,
+                    abs_diff_eq!(ours[k], paper[k], epsilon = 1e-3)
+                        && abs_diff_ne!(ours[k], paper[k], epsilon = 5e-4),
                     "({case}) {name}: {} vs printed {}",
                     ours[k],
                     paper[k]
                 );
             } else {
                 assert!(
-                    (ours[k] - paper[k]).abs() <= 5e-4,
+                    abs_diff_eq!(ours[k], paper[k], epsilon = 5e-4),
                     "({case}) {name}: formula gives {:.5}, paper prints {}",
                     ours[k],
                     paper[k]
@@ -121,11 +128,11 @@ fn theta_34_is_where_both_contacts_slip() {
         let p = reference.at(-theta_34).expect("feasible");
         let [n1, f1, n2, f2] = p.forces;
         assert!(
-            (f1.abs() - c.friction_1 * n1).abs() < 1e-9,
+            abs_diff_eq!(f1.abs(), c.friction_1 * n1, epsilon = 1e-9),
             "({case}) contact 1 not at slip"
         );
         assert!(
-            (f2.abs() - c.friction_2 * n2).abs() < 1e-9,
+            abs_diff_eq!(f2.abs(), c.friction_2 * n2, epsilon = 1e-9),
             "({case}) contact 2 not at slip"
         );
     }
@@ -144,11 +151,17 @@ fn paper_case_studies_recommend_theta_34() {
         let reference = Reference::new(&c, 1.0, RefObjective::Norm2);
         let (w, p) = reference.minimise(RefRange::FromAbove, c.gravity, 20_000);
         assert!(wrap(r.wrist_rotation - w).abs() < 1e-9, "({case})");
-        assert!((r.gripping_power - p).abs() < 1e-12, "({case})");
+        assert!(
+            abs_diff_eq!(r.gripping_power, p, epsilon = 1e-12),
+            "({case})"
+        );
         assert_eq!(r.recommended_label, Some(PaperCandidate::C), "({case})");
         assert_eq!(r.candidate_c, CandidateC::Recommended, "({case})");
         let theta_34 = computed(case)[3];
-        assert!((r.gravity_angle - theta_34).abs() < 1e-12, "({case})");
+        assert!(
+            abs_diff_eq!(r.gravity_angle, theta_34, epsilon = 1e-12),
+            "({case})"
+        );
         println!(
             "({case}) θ = {:.6} rad, P = {:.6} N, squeeze {:.6} N, case {}, minima {:?}",
             r.gravity_angle,
@@ -215,7 +228,7 @@ fn theorem_1_fails_on_random_grasps_and_the_solver_does_not() {
             wrap(r.wrist_rotation - w).abs() < 1e-7,
             "status {k}: solver and reference disagree"
         );
-        assert!((r.gripping_power - p).abs() < 1e-9 * p);
+        assert_abs_diff_eq!(r.gripping_power, p, epsilon = 1e-9 * p);
         println!(
             "status {k}: recommended θ = {:.6} ({:?}), P = {:.6} N, reference P = {p:.6} N",
             r.gravity_angle,
@@ -247,10 +260,8 @@ fn named_counterexamples_to_theorem_1() {
             continue;
         }
         seen[kind] = true;
-        let f = GraspFrame::new(&c, 1.0).expect("valid");
-        let theta_34 = candidate_angles(&f).theta_34;
-        let analysis =
-            grasp_orient::solver::Analysis::new(&f, Objective::Norm2).expect("force closure");
+        let analysis = analysis(&c);
+        let theta_34 = analysis.candidate_angles().theta_34;
         let at_c = analysis.evaluate(theta_34).power;
         // The paper's pick is worse than the solver's.
         assert!(at_c > r.gripping_power, "C must cost more than the optimum");

@@ -1,22 +1,19 @@
 //! `play` feeds a recording to a live node over DDS, and that node's own recording replays
 //! unchanged: play, node, recording and replay end to end, with no ROS install.
 
+mod common;
+
+use common::run::{bin, temp_dir};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_grasp_orient"))
-}
-
 #[test]
 fn played_candidates_are_answered_recorded_and_replay_unchanged() {
-    let dir = std::env::temp_dir().join(format!("grasp_orient_play_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("dir");
+    let dir = temp_dir("play");
     let domain = (200 + std::process::id() % 30).to_string();
     let mut node = bin()
         .args(["node", "--ros-args", "-p"])
-        .arg(format!("record_dir:={}", dir.display()))
+        .arg(format!("record_dir:={}", dir.path().display()))
         .env("ROS_DOMAIN_ID", &domain)
         .env("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
         .stdout(Stdio::null())
@@ -53,7 +50,7 @@ fn played_candidates_are_answered_recorded_and_replay_unchanged() {
         status.is_some_and(|s| s.success()),
         "node did not exit cleanly on SIGINT"
     );
-    let recording = std::fs::read_dir(&dir)
+    let recording = std::fs::read_dir(dir.path())
         .expect("record dir")
         .filter_map(Result::ok)
         .map(|e| e.path())

@@ -3,6 +3,7 @@
 
 mod common;
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use common::{random_grasp, wrap, RefObjective, RefRange, Reference};
 use grasp_orient::solver::{
     solve_orientation, AllowedRange, Candidate, Objective, Recommendation, Settings, Verdict,
@@ -75,7 +76,7 @@ fn check(
     if angle_err > ANGLE_TOL {
         // A flat or twin minimum: allowed only when the power is the same.
         assert!(
-            (r.gripping_power - p_ref).abs() <= VALUE_TOL * scale,
+            abs_diff_eq!(r.gripping_power, p_ref, epsilon = VALUE_TOL * scale),
             "rotation differs by {angle_err} rad with different power ({} vs {p_ref}); grasp {c:?}",
             r.gripping_power
         );
@@ -105,7 +106,11 @@ fn check(
     // The current pose too.
     let current = reference.at(0.0).expect("force closure holds every pose");
     assert!(
-        (current.power - r.gripping_power_current).abs() <= VALUE_TOL * current.power.max(weight),
+        abs_diff_eq!(
+            current.power,
+            r.gripping_power_current,
+            epsilon = VALUE_TOL * current.power.max(weight)
+        ),
         "power at the current pose differs: {} vs {}",
         r.gripping_power_current,
         current.power
@@ -307,7 +312,7 @@ fn local_minima_match_reference() {
                     g.0,
                     w.0
                 );
-                assert!((g.1 - w.1).abs() <= 1e-9 * w.1.abs().max(1e-3));
+                assert_abs_diff_eq!(g.1, w.1, epsilon = 1e-9 * w.1.abs().max(1e-3));
             }
             checked += 1;
         }

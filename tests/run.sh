@@ -13,7 +13,10 @@ cargo clippy --all-targets -- -D warnings
 echo "== ROS 2 Jazzy peer: rclpy + Fast DDS + this package's messages"
 ENV_SH=$(bash tests/peer/setup.sh | tail -n 1)
 echo "== cargo test (clippy above already compiled the benches)"
-cargo test
+# tests/msg_contract.rs holds the embedded message definitions to the peer's Jazzy .msg files,
+# found through the ament index as rosbag2 finds them.
+# shellcheck disable=SC1090
+AMENT_PREFIX_PATH=$(source "$ENV_SH" && printf '%s' "$AMENT_PREFIX_PATH") cargo test
 echo "== the node against rclpy (pytest tests/ros)"
 # shellcheck disable=SC1090
 source "$ENV_SH"

@@ -5,7 +5,7 @@
 use super::SolveOptions;
 use anyhow::{anyhow, Context};
 use grasp_orient::msg::GraspCandidate;
-use grasp_orient::solver::{Analysis, Candidate, GraspFrame, Recommendation};
+use grasp_orient::solver::{analyse, Analysis, Candidate, Recommendation};
 use plotters::prelude::*;
 use std::path::PathBuf;
 
@@ -41,9 +41,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let message: GraspCandidate = serde_json::from_str(&text)
         .with_context(|| format!("{} is not a GraspCandidate", args.candidate.display()))?;
     let candidate = Candidate::try_from(&message).map_err(|e| anyhow!("invalid input: {e}"))?;
-    let frame = GraspFrame::new(&candidate, settings.friction_safety_factor)
-        .map_err(|e| anyhow!("invalid input: {e}"))?;
-    let analysis = Analysis::new(&frame, settings.objective).map_err(|e| anyhow!("{e}"))?;
+    let analysis = analyse(&candidate, &settings)
+        .map_err(|e| anyhow!("invalid input: {e}"))?
+        .map_err(|e| anyhow!("{e}"))?;
     let best = analysis
         .recommend(&settings.range)
         .map_err(|e| anyhow!("invalid input: {e}"))?;
@@ -77,13 +77,13 @@ impl Curves {
         let thetas: Vec<f64> = (0..=n)
             .map(|k| lo + (hi - lo) * k as f64 / n as f64)
             .collect();
-        let alphas = analysis.alphas();
-        let alpha_curves: Vec<Vec<(f64, f64)>> = alphas
-            .iter()
-            .map(|a| {
+        let alphas: Vec<[f64; 6]> = thetas.iter().map(|&t| analysis.alphas_at(t)).collect();
+        let alpha_curves: Vec<Vec<(f64, f64)>> = (0..6)
+            .map(|k| {
                 thetas
                     .iter()
-                    .map(|&t| (t, a.value(&grasp_orient::solver::sinusoid::Angle::new(t))))
+                    .zip(&alphas)
+                    .map(|(&t, a)| (t, a[k]))
                     .collect()
             })
             .collect();

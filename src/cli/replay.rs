@@ -3,9 +3,11 @@
 
 use super::SolveOptions;
 use anyhow::{bail, Context};
+use grasp_orient::msg::{GraspCandidate, RosMessage};
 use grasp_orient::record::bag;
 use grasp_orient::record::{BagWriter, Entry, Payload, Topics};
-use grasp_orient::replay::{replay, Summary, TOLERANCE};
+use grasp_orient::replay::{replay, replay_with_answers, Summary, TOLERANCE};
+use grasp_orient::solver::Settings;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `replay`.
@@ -28,30 +30,61 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let mut summary = Summary::default();
     let mut writer = args.write.as_deref().map(create_writer).transpose()?;
     for path in &args.bags {
-        let bag = bag::read(path)?;
-        if bag.candidates.is_empty() {
-            bail!(
-                "{}: no grasp_orient/msg/GraspCandidate messages (cdr) in it",
-                path.display()
-            );
-        }
-        if bag.undecodable_count > 0 {
-            log::warn!(
-                "{}: {} messages did not decode, e.g. {}",
-                path.display(),
-                bag.undecodable_count,
-                bag.undecodable.first().map_or("", String::as_str)
-            );
-        }
-        let bar = indicatif::ProgressBar::new(bag.candidates.len() as u64);
-        if bag.candidates.len() < 100_000 {
-            bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
-        }
-        let answers = replay(&bag, &settings, &mut summary, writer.is_some(), |n| {
-            bar.inc(n)
-        });
-        bar.finish_and_clear();
-        if let Some(w) = writer.as_mut() {
+        summary.merge(replay_file(path, &settings, writer.as_mut())?);
+    }
+    if let (Some(w), Some(path)) = (writer, &args.write) {
+        let written = w.finish()?;
+        println!(
+            "wrote {} candidates and {} recommendations to {}",
+            written.candidates,
+            written.recommendations,
+            path.display()
+        );
+    }
+    report(&summary, started.elapsed().as_secs_f64())
+}
+
+/// The recording `--write` makes.
+fn create_writer(path: &Path) -> anyhow::Result<BagWriter> {
+    let topics = Topics {
+        candidates: "/grasp_candidates".into(),
+        recommendations: "/grip_recommendations".into(),
+        markers: None,
+    };
+    BagWriter::create(path, &topics, 100)
+        .with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// Replays one bag, writing its candidates and the new answers to `writer` if given.
+fn replay_file(
+    path: &Path,
+    settings: &Settings,
+    writer: Option<&mut BagWriter>,
+) -> anyhow::Result<Summary> {
+    let bag = bag::read(path)?;
+    if bag.candidates.is_empty() {
+        bail!(
+            "{}: no {} messages (cdr) in it",
+            path.display(),
+            GraspCandidate::TYPE_NAME
+        );
+    }
+    if bag.undecodable_count > 0 {
+        log::warn!(
+            "{}: {} messages did not decode, e.g. {}",
+            path.display(),
+            bag.undecodable_count,
+            bag.undecodable.first().map_or("", String::as_str)
+        );
+    }
+    let bar = indicatif::ProgressBar::new(bag.candidates.len() as u64);
+    if bag.candidates.len() < 100_000 {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
+    let progress = |n| bar.inc(n);
+    let summary = match writer {
+        Some(w) => {
+            let (summary, answers) = replay_with_answers(&bag, settings, progress);
             for (c, a) in bag.candidates.iter().zip(answers) {
                 w.write(&Entry {
                     payload: Payload::Candidate(Box::new(c.message.clone())),
@@ -64,43 +97,21 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                     publish_time: a.publish_time,
                 })?;
             }
+            summary
         }
-        println!(
-            "{}: {} candidates, {} recorded recommendations",
-            path.display(),
-            bag.candidates.len(),
-            bag.recommendations.len()
-        );
-    }
-    if let Some(w) = writer {
-        let written = w.finish()?;
-        println!(
-            "wrote {} candidates and {} recommendations to {}",
-            written.candidates,
-            written.recommendations,
-            args.write
-                .as_ref()
-                .map_or(String::new(), |p| p.display().to_string())
-        );
-    }
-    report(&summary, started.elapsed().as_secs_f64())
+        None => replay(&bag, settings, progress),
+    };
+    bar.finish_and_clear();
+    println!(
+        "{}: {} candidates, {} recorded recommendations",
+        path.display(),
+        bag.candidates.len(),
+        bag.recommendations.len()
+    );
+    Ok(summary)
 }
 
-/// A fresh recording of the replay, with the default topic names.
-fn create_writer(path: &Path) -> anyhow::Result<BagWriter> {
-    BagWriter::create(
-        path,
-        &Topics {
-            candidates: "/grasp_candidates".into(),
-            recommendations: "/grip_recommendations".into(),
-            markers: None,
-        },
-        100,
-    )
-    .with_context(|| format!("cannot write {}", path.display()))
-}
-
-/// Prints the summary of a replay that took `secs`; `Err` when anything differs or is unmatched.
+/// Prints the summary; an error when any answer differs or is unmatched.
 fn report(summary: &Summary, secs: f64) -> anyhow::Result<()> {
     println!(
         "replayed {} candidates in {secs:.2} s ({:.0} per second): {} compared with a recorded \

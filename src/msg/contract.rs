@@ -1,6 +1,5 @@
-//! How a wire struct names its fields and types in ROS terms, so tests can hold it to its `.msg`.
-
-use super::{Header, Point, Quaternion, Time, Vector3};
+//! How a wire struct names its fields and types in ROS terms, so tests can hold it to its `.msg`,
+//! and the one place its ROS type name comes from.
 
 /// A Rust type's name in a `.msg` file.
 pub trait RosType {
@@ -8,19 +7,18 @@ pub trait RosType {
     fn ros_type() -> String;
 }
 
-/// Implements [`RosType`] for each `type => "ros/Name"`.
-macro_rules! ros_type_names {
+/// Implements [`RosType`] for each primitive `type => "name"`.
+macro_rules! primitive_names {
     ($($t:ty => $name:literal),* $(,)?) => {
-        $(impl $crate::msg::RosType for $t {
+        $(impl RosType for $t {
             fn ros_type() -> String {
                 $name.to_string()
             }
         })*
     };
 }
-pub(crate) use ros_type_names;
 
-ros_type_names! {
+primitive_names! {
     f64 => "float64",
     f32 => "float32",
     u8 => "uint8",
@@ -30,11 +28,6 @@ ros_type_names! {
     i64 => "int64",
     bool => "bool",
     String => "string",
-    Time => "builtin_interfaces/Time",
-    Header => "std_msgs/Header",
-    Point => "geometry_msgs/Point",
-    Vector3 => "geometry_msgs/Vector3",
-    Quaternion => "geometry_msgs/Quaternion",
 }
 
 impl<T: RosType, const N: usize> RosType for [T; N] {
@@ -49,12 +42,23 @@ impl<T: RosType> RosType for Vec<T> {
     }
 }
 
-/// A wire struct that mirrors a ROS message.
+/// A wire struct that mirrors a ROS message (declared with `ros_message!`, which also makes it a
+/// [`RosType`] named `package/Name`).
 pub trait RosMessage {
-    /// Full type name, `package/msg/Name`.
+    /// ROS package, e.g. `grasp_orient`.
+    const PACKAGE: &'static str;
+    /// Type name within the package, e.g. `GraspCandidate`.
+    const NAME: &'static str;
+    /// Full type name, `package/msg/Name`: the schema name in recordings and the key of
+    /// [`super::definitions::DEFINITIONS`].
     const TYPE_NAME: &'static str;
     /// `(name, ROS type)` of every field, in order.
     fn fields() -> Vec<(&'static str, String)>;
     /// `(name, ROS type, value)` of every constant.
     fn constants() -> Vec<(&'static str, String, String)>;
+}
+
+/// The type name ros2-client announces a topic of `M` under (`package/msg/Name`).
+pub fn message_type_name<M: RosMessage>() -> ros2_client::MessageTypeName {
+    ros2_client::MessageTypeName::new(M::PACKAGE, M::NAME)
 }

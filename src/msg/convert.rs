@@ -11,6 +11,7 @@ pub const MAX_TEXT_BYTES: usize = 1024;
 
 /// What makes a candidate message unusable before the solver sees it.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum MessageLimits {
     /// A text field is longer than [`MAX_TEXT_BYTES`].
     #[error("{field} is {len} bytes long; at most {MAX_TEXT_BYTES} are accepted")]
@@ -72,25 +73,32 @@ impl TryFrom<&GraspCandidate> for Candidate {
 }
 
 /// `text` cut to at most [`MAX_TEXT_BYTES`] at a character boundary, as answers carry it.
-pub fn clipped(text: &str) -> String {
-    if text.len() <= MAX_TEXT_BYTES {
-        return text.to_string();
-    }
-    let mut end = MAX_TEXT_BYTES;
+pub fn clip(text: &str) -> &str {
+    let mut end = text.len().min(MAX_TEXT_BYTES);
     while !text.is_char_boundary(end) {
         end -= 1;
     }
-    text[..end].to_string()
+    &text[..end]
+}
+
+/// Characters of an id that logs and reports show.
+pub const SHORT_ID_CHARS: usize = 64;
+
+/// An id cut to its first [`SHORT_ID_CHARS`] characters, for logs and reports.
+pub fn short_id(id: &str) -> &str {
+    id.char_indices()
+        .nth(SHORT_ID_CHARS)
+        .map_or(id, |(end, _)| &id[..end])
 }
 
 /// A recommendation whose numbers all say "no answer" (NaN), for a refused candidate.
 fn refused(m: &GraspCandidate, status: u8, message: String) -> GripRecommendation {
     let nan = f64::NAN;
     let mut header = m.header.clone();
-    header.frame_id = clipped(&header.frame_id);
+    header.frame_id = clip(&header.frame_id).to_string();
     GripRecommendation {
         header,
-        candidate_id: clipped(&m.id),
+        candidate_id: clip(&m.id).to_string(),
         status,
         message,
         wrist_rotation: nan,
@@ -201,51 +209,21 @@ pub fn answer(m: &GraspCandidate, settings: &Settings) -> GripRecommendation {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use approx::assert_abs_diff_eq;
 
+    /// Table 1 (c): a square held at the middle of two opposite sides.
     fn paper_case_c() -> GraspCandidate {
-        let s3 = 3f64.sqrt();
-        GraspCandidate {
-            id: "case-c".into(),
-            contact_1: Point {
-                x: 1.0,
-                y: 1.0,
-                z: 0.0,
-            },
-            contact_2: Point {
-                x: -1.0,
-                y: 1.0,
-                z: 0.0,
-            },
-            normal_1: Vector3 {
-                x: -1.0,
-                y: 0.0,
-                z: 0.0,
-            },
-            normal_2: Vector3 {
-                x: 1.0,
-                y: 0.0,
-                z: 0.0,
-            },
-            friction_1: s3,
-            friction_2: 1.0 / s3,
-            mass: 1.0,
-            gravity: Vector3 {
-                x: 0.0,
-                y: -1.0,
-                z: 0.0,
-            },
-            ..GraspCandidate::default()
-        }
+        crate::msg::paper_cases().swap_remove(2)
     }
 
     #[test]
     fn good_candidate_gets_status_ok_and_a_unit_quaternion() {
         let a = answer(&paper_case_c(), &Settings::default());
         assert_eq!(a.status, GripRecommendation::STATUS_OK, "{}", a.message);
-        assert_eq!(a.candidate_id, "case-c");
+        assert_eq!(a.candidate_id, "paper-c");
         let q = &a.rotation;
-        assert!((q.z * q.z + q.w * q.w - 1.0).abs() < 1e-15);
-        assert!((2.0 * q.z.atan2(q.w) - a.wrist_rotation).abs() < 1e-12);
+        assert_abs_diff_eq!(q.z * q.z + q.w * q.w, 1.0, epsilon = 1e-15);
+        assert_abs_diff_eq!(2.0 * q.z.atan2(q.w), a.wrist_rotation, epsilon = 1e-12);
         assert_eq!(a.local_minima.len(), a.local_minima_labels.len());
         assert_eq!(a.objective, "norm2");
     }

@@ -1,143 +1,442 @@
-//! Complete message definitions in rosbag2's `ros2msg` form: the type's own `.msg` text first,
-//! then every type it depends on, each after a line of 80 `=` and a line `MSG: pkg/msg/Name`.
-//! MCAP readers (rosbag2, Foxglove, `rosbags`, `mcap-ros2-support`) build decoders from it.
+//! Complete message definitions (`ros2msg` schemas), byte for byte as rosbag2 (Jazzy) writes them
+//! into MCAP, so that every reader that builds decoders from them (Foxglove's `@foxglove/rosmsg`,
+//! `rosbags`, `mcap-ros2-support`, `ros2 bag`) decodes our recordings.
+//!
+//! # What rosbag2 does
+//! Read in ros2/rosbag2, branch `jazzy` (tags 0.26.0 to 0.26.5 build the text the same way; later
+//! commits only changed error handling):
+//! `rosbag2_cpp/src/rosbag2_cpp/message_definitions/local_message_definition_source.cpp`,
+//! `LocalMessageDefinitionSource::get_full_text`, called by `SequentialWriter::create_topic`
+//! (`rosbag2_cpp/src/rosbag2_cpp/writers/sequential_writer.cpp`); `MCAPStorage::create_topic`
+//! (`rosbag2_storage_mcap/src/mcap_storage.cpp`) stores the result unchanged as the schema's data,
+//! with the schema name the topic type (`pkg/msg/Name`) and encoding `ros2msg`. Its unit test
+//! `rosbag2_cpp/test/rosbag2_cpp/test_local_message_definition_source.cpp` (`can_find_msg_deps`)
+//! shows the result.
+//! - **Files**: each type's `.msg` file is read whole and verbatim (comments, blank lines, trailing
+//!   spaces, its final newline) from `<share of pkg>/msg/<Name>.msg`, the share directory found
+//!   through the ament index (`AMENT_PREFIX_PATH`). A name is understood as
+//!   `^([a-zA-Z0-9_]+)/(?:msg/|srv/)?([a-zA-Z0-9_]+)$`, so `pkg/Name` and `pkg/msg/Name` are the
+//!   same file.
+//! - **Dependencies of one text**: every match of
+//!   `(?:^|\n)\s*([a-zA-Z0-9_/]+)(?:\[[^\]]*\])?\s+` (`MSG_FIELD_TYPE_REGEX`), minus the primitive
+//!   types `bool byte char float32 float64 int8 uint8 int16 uint16 int32 uint32 int64 uint64
+//!   string` (`wstring` is not in the list); a name without `/` gets the package of the text in
+//!   front (`Point` in `geometry_msgs/Pose` is `geometry_msgs/Point`). They go into a
+//!   `std::set<std::string>`: deduplicated and sorted byte-wise, not in field order.
+//! - **Order**: depth first. After a type's own text come its dependencies in that sorted order,
+//!   each followed at once by its own dependencies, recursively (at most 50 deep).
+//! - **Each type once**: one set of the names seen so far, as the fields write them (so
+//!   `std_msgs/Header`, never `std_msgs/msg/Header`); a name already in it is skipped. The root
+//!   type is not in the set.
+//! - **Separator**: before each dependency, `"\n"`, a line of exactly 80 `=`, and the line
+//!   `MSG: <name as the field writes it>`. The `"\n"` is added even though the text before it
+//!   already ends with one, so an empty line precedes every separator.
+//! - **End**: nothing is appended; the text ends as the last file ends (with its newline).
+//!
+//! Readers must not depend on the form: recordings made before this matched rosbag2 (headers
+//! `MSG: std_msgs/msg/Header`, comments left out) still read and replay, because
+//! [`crate::record::bag`] picks channels by schema name and decodes CDR with the Rust structs.
+//!
+//! # One table
+//! [`DEFINITIONS`] holds each type's full name (the wire struct's [`RosMessage::TYPE_NAME`]) and
+//! its `.msg` text. Ours are the files in `msg/`; the standard ones are copies of the files ROS 2
+//! Jazzy installs (common_interfaces 5.3.6, rcl_interfaces 2.0.3; Apache-2.0), kept verbatim in
+//! `src/msg/jazzy/<pkg>/<Name>.msg`. `tests/msg_contract.rs` holds every row to the peer's real
+//! file (`share/<pkg>/msg/<Name>.msg`, found through `AMENT_PREFIX_PATH`) and every wire struct to
+//! its file, field for field; `tests/ros` compares the schemas of the node's recordings with an
+//! independent Python port of rosbag2's algorithm over the peer's files.
 
-/// One `.msg` definition by full type name. Ours are the files in `msg/`; the standard ones are
-/// the fields of the Jazzy definitions (comments left out).
-fn definition(type_name: &str) -> Option<&'static str> {
-    Some(match type_name {
-        "grasp_orient/msg/GraspCandidate" => include_str!("../../msg/GraspCandidate.msg"),
-        "grasp_orient/msg/GripRecommendation" => {
-            include_str!("../../msg/GripRecommendation.msg")
-        }
-        "builtin_interfaces/msg/Time" => "int32 sec\nuint32 nanosec\n",
-        "builtin_interfaces/msg/Duration" => "int32 sec\nuint32 nanosec\n",
-        "std_msgs/msg/Header" => "builtin_interfaces/Time stamp\nstring frame_id\n",
-        "std_msgs/msg/ColorRGBA" => "float32 r\nfloat32 g\nfloat32 b\nfloat32 a\n",
-        "geometry_msgs/msg/Point" => "float64 x\nfloat64 y\nfloat64 z\n",
-        "geometry_msgs/msg/Vector3" => "float64 x\nfloat64 y\nfloat64 z\n",
-        "geometry_msgs/msg/Quaternion" => "float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n",
-        "geometry_msgs/msg/Pose" => "Point position\nQuaternion orientation\n",
-        "sensor_msgs/msg/CompressedImage" => "std_msgs/Header header\nstring format\nuint8[] data\n",
-        "visualization_msgs/msg/UVCoordinate" => "float32 u\nfloat32 v\n",
-        "visualization_msgs/msg/MeshFile" => "string filename\nuint8[] data\n",
-        "visualization_msgs/msg/MarkerArray" => "Marker[] markers\n",
-        "visualization_msgs/msg/Marker" => concat!(
-            "int32 ARROW=0\nint32 CUBE=1\nint32 SPHERE=2\nint32 CYLINDER=3\nint32 LINE_STRIP=4\n",
-            "int32 LINE_LIST=5\nint32 CUBE_LIST=6\nint32 SPHERE_LIST=7\nint32 POINTS=8\n",
-            "int32 TEXT_VIEW_FACING=9\nint32 MESH_RESOURCE=10\nint32 TRIANGLE_LIST=11\n",
-            "int32 ARROW_STRIP=12\nint32 ADD=0\nint32 MODIFY=0\nint32 DELETE=2\nint32 DELETEALL=3\n",
-            "std_msgs/Header header\nstring ns\nint32 id\nint32 type\nint32 action\n",
-            "geometry_msgs/Pose pose\ngeometry_msgs/Vector3 scale\nstd_msgs/ColorRGBA color\n",
-            "builtin_interfaces/Duration lifetime\nbool frame_locked\n",
-            "geometry_msgs/Point[] points\nstd_msgs/ColorRGBA[] colors\n",
-            "string texture_resource\nsensor_msgs/CompressedImage texture\n",
-            "UVCoordinate[] uv_coordinates\nstring text\nstring mesh_resource\n",
-            "MeshFile mesh_file\nbool mesh_use_embedded_materials\n",
-        ),
-        _ => return None,
-    })
+use super::{
+    ColorRgba, CompressedImage, Duration, GraspCandidate, GripRecommendation, Header, Marker,
+    MarkerArray, MeshFile, Point, Pose, Quaternion, RosMessage, Time, UvCoordinate, Vector3,
+};
+use std::collections::BTreeSet;
+
+/// Every message type this crate reads or writes, by full name, with its `.msg` text exactly as
+/// its package ships it.
+pub const DEFINITIONS: [(&str, &str); 15] = [
+    (
+        GraspCandidate::TYPE_NAME,
+        include_str!("../../msg/GraspCandidate.msg"),
+    ),
+    (
+        GripRecommendation::TYPE_NAME,
+        include_str!("../../msg/GripRecommendation.msg"),
+    ),
+    (
+        Time::TYPE_NAME,
+        include_str!("jazzy/builtin_interfaces/Time.msg"),
+    ),
+    (
+        Duration::TYPE_NAME,
+        include_str!("jazzy/builtin_interfaces/Duration.msg"),
+    ),
+    (Header::TYPE_NAME, include_str!("jazzy/std_msgs/Header.msg")),
+    (
+        ColorRgba::TYPE_NAME,
+        include_str!("jazzy/std_msgs/ColorRGBA.msg"),
+    ),
+    (
+        Point::TYPE_NAME,
+        include_str!("jazzy/geometry_msgs/Point.msg"),
+    ),
+    (
+        Vector3::TYPE_NAME,
+        include_str!("jazzy/geometry_msgs/Vector3.msg"),
+    ),
+    (
+        Quaternion::TYPE_NAME,
+        include_str!("jazzy/geometry_msgs/Quaternion.msg"),
+    ),
+    (
+        Pose::TYPE_NAME,
+        include_str!("jazzy/geometry_msgs/Pose.msg"),
+    ),
+    (
+        CompressedImage::TYPE_NAME,
+        include_str!("jazzy/sensor_msgs/CompressedImage.msg"),
+    ),
+    (
+        UvCoordinate::TYPE_NAME,
+        include_str!("jazzy/visualization_msgs/UVCoordinate.msg"),
+    ),
+    (
+        MeshFile::TYPE_NAME,
+        include_str!("jazzy/visualization_msgs/MeshFile.msg"),
+    ),
+    (
+        Marker::TYPE_NAME,
+        include_str!("jazzy/visualization_msgs/Marker.msg"),
+    ),
+    (
+        MarkerArray::TYPE_NAME,
+        include_str!("jazzy/visualization_msgs/MarkerArray.msg"),
+    ),
+];
+
+/// The line before each dependency's `MSG: ` line.
+const SEPARATOR: &str =
+    "================================================================================\n";
+
+/// rosbag2's `ROSBAG2_CPP_LOCAL_MESSAGE_DEFINITION_SOURCE_MAX_RECURSION_DEPTH`.
+const MAX_DEPTH: u32 = 50;
+
+/// rosbag2's `PRIMITIVE_TYPES`.
+const PRIMITIVES: [&str; 14] = [
+    "bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16", "int32",
+    "uint32", "int64", "uint64", "string",
+];
+
+/// `(package, Name)` of `package/Name` or `package/msg/Name` (or `package/srv/Name`), as
+/// rosbag2's `PACKAGE_TYPENAME_REGEX` reads a type name; `None` for anything else.
+pub fn split_type_name(name: &str) -> Option<(&str, &str)> {
+    let word = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'_');
+    let (package, rest) = name.split_once('/')?;
+    let base = rest
+        .strip_prefix("msg/")
+        .or_else(|| rest.strip_prefix("srv/"))
+        .unwrap_or(rest);
+    (word(package) && word(base)).then_some((package, base))
 }
 
-/// The field types of a definition that are messages, as full type names, in order.
-fn dependencies(package: &str, text: &str) -> Vec<String> {
+/// The `.msg` text of a type (`pkg/Name` or `pkg/msg/Name`), or `None` for a type this crate
+/// does not know.
+pub fn definition(type_name: &str) -> Option<&'static str> {
+    let wanted = split_type_name(type_name)?;
+    DEFINITIONS
+        .iter()
+        .find(|(name, _)| split_type_name(name) == Some(wanted))
+        .map(|(_, text)| *text)
+}
+
+/// The complete `ros2msg` definition of `type_name` exactly as rosbag2 (Jazzy) writes it (see
+/// the module doc), or `None` when it or one of its dependencies is not in [`DEFINITIONS`].
+pub fn full_text(type_name: &str) -> Option<String> {
+    full_text_from(type_name, &definition)
+}
+
+/// [`full_text`] with the `.msg` texts from `lookup`.
+fn full_text_from<'a>(type_name: &str, lookup: &dyn Fn(&str) -> Option<&'a str>) -> Option<String> {
+    let mut seen = BTreeSet::new();
+    let mut out = String::new();
+    append(type_name, MAX_DEPTH, lookup, &mut seen, &mut out)?;
+    Some(out)
+}
+
+/// rosbag2's `append_recursive`: the type's text, then each dependency not seen yet after its
+/// separator, depth first.
+fn append<'a>(
+    type_name: &str,
+    depth: u32,
+    lookup: &dyn Fn(&str) -> Option<&'a str>,
+    seen: &mut BTreeSet<String>,
+    out: &mut String,
+) -> Option<()> {
+    if depth == 0 {
+        return None;
+    }
+    let (package, _) = split_type_name(type_name)?;
+    let text = lookup(type_name)?;
+    out.push_str(text);
+    for dependency in dependencies(text, package) {
+        if seen.insert(dependency.clone()) {
+            out.push('\n');
+            out.push_str(SEPARATOR);
+            out.push_str("MSG: ");
+            out.push_str(&dependency);
+            out.push('\n');
+            append(&dependency, depth - 1, lookup, seen, out)?;
+        }
+    }
+    Some(())
+}
+
+/// rosbag2's `parse_msg_dependencies`: the non-primitive field types of a text, with the package
+/// put in front of relative names, sorted and deduplicated.
+fn dependencies(text: &str, package: &str) -> BTreeSet<String> {
+    field_types(text)
+        .into_iter()
+        .filter(|ty| !PRIMITIVES.contains(ty))
+        .map(|ty| {
+            if ty.contains('/') {
+                ty.to_string()
+            } else {
+                format!("{package}/{ty}")
+            }
+        })
+        .collect()
+}
+
+/// `\s` of rosbag2's regular expressions (`std::regex`, C locale): space, `\t`, `\n`, `\v`, `\f`,
+/// `\r`.
+fn is_space(b: u8) -> bool {
+    matches!(b, b' ' | b'\t' | b'\n' | 0x0b | 0x0c | b'\r')
+}
+
+/// Every type rosbag2's `MSG_FIELD_TYPE_REGEX`, `(?:^|\n)\s*([a-zA-Z0-9_/]+)(?:\[[^\]]*\])?\s+`,
+/// captures in `text`, in order: one search after another, each starting where the last match
+/// ended. Written out by hand (the library has no regular expression engine); a unit test runs
+/// the same pattern through the `regex` crate and compares.
+fn field_types(text: &str) -> Vec<&str> {
+    let bytes = text.as_bytes();
     let mut out = Vec::new();
-    for line in text.lines() {
-        let line = line.split('#').next().unwrap_or("").trim();
-        let Some(ty) = line.split_whitespace().next() else {
-            continue;
-        };
-        if line.contains('=') && !line.contains(' ') {
-            continue;
+    let mut start = 0;
+    while start < bytes.len() {
+        // A match begins at the start of the text (`^`) or at a line feed.
+        if start == 0 || bytes[start] == b'\n' {
+            if let Some((ty, end)) = field_type_at(bytes, start) {
+                out.push(&text[ty]);
+                start = end;
+                continue;
+            }
         }
-        let base = ty.split('[').next().unwrap_or(ty);
-        let primitive = matches!(
-            base,
-            "bool"
-                | "byte"
-                | "char"
-                | "float32"
-                | "float64"
-                | "int8"
-                | "uint8"
-                | "int16"
-                | "uint16"
-                | "int32"
-                | "uint32"
-                | "int64"
-                | "uint64"
-                | "string"
-                | "wstring"
-        ) || base.starts_with("string<");
-        if primitive {
-            continue;
-        }
-        let full = match base.split_once('/') {
-            Some((pkg, name)) => format!("{pkg}/msg/{name}"),
-            None => format!("{package}/msg/{base}"),
-        };
-        out.push(full);
+        start += 1;
     }
     out
 }
 
-/// The complete `ros2msg` definition of `type_name` (`pkg/msg/Name`), or `None` for a type this
-/// crate does not know.
-pub fn full_text(type_name: &str) -> Option<String> {
-    let mut text = definition(type_name)?.to_string();
-    let mut seen = vec![type_name.to_string()];
-    let mut queue = dependencies(package_of(type_name), &text);
-    while let Some(dep) = queue.first().cloned() {
-        queue.remove(0);
-        if seen.contains(&dep) {
-            continue;
+/// The match of the field-type pattern that begins at `start`, if any: the captured type's byte
+/// range and where the match ends.
+///
+/// Backtracking cannot find another match than the greedy path: after the leading white space
+/// only a name can follow, and a shorter name is followed by a name character, which is neither
+/// `[` nor white space.
+fn field_type_at(bytes: &[u8], start: usize) -> Option<(std::ops::Range<usize>, usize)> {
+    let skip_space = |mut i: usize| {
+        while i < bytes.len() && is_space(bytes[i]) {
+            i += 1;
         }
-        let body = definition(&dep)?;
-        if !text.ends_with('\n') {
-            text.push('\n');
-        }
-        text.push_str(&"=".repeat(80));
-        text.push_str("\nMSG: ");
-        text.push_str(&dep);
-        text.push('\n');
-        text.push_str(body);
-        queue.extend(dependencies(package_of(&dep), body));
-        seen.push(dep);
+        i
+    };
+    // `\n` (or `^`), then `\s*`: the line feed itself is white space too.
+    let name_start = skip_space(start);
+    let mut name_end = name_start;
+    while name_end < bytes.len()
+        && (bytes[name_end].is_ascii_alphanumeric() || matches!(bytes[name_end], b'_' | b'/'))
+    {
+        name_end += 1;
     }
-    Some(text)
-}
-
-fn package_of(type_name: &str) -> &str {
-    type_name.split('/').next().unwrap_or("")
+    if name_end == name_start {
+        return None;
+    }
+    // `(?:\[[^\]]*\])?`: the brackets are tried first; without them `\s+` would face the `[`.
+    let mut after = name_end;
+    if bytes.get(after) == Some(&b'[') {
+        let close = bytes[after..].iter().position(|&b| b == b']')?;
+        after += close + 1;
+    }
+    // `\s+`, greedy.
+    if !bytes.get(after).copied().is_some_and(is_space) {
+        return None;
+    }
+    Some((name_start..name_end, skip_space(after)))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    const TOP_LEVEL: [&str; 3] = [
+        GraspCandidate::TYPE_NAME,
+        GripRecommendation::TYPE_NAME,
+        MarkerArray::TYPE_NAME,
+    ];
+
+    /// The dependency lines of a full text, in order.
+    fn headers(text: &str) -> Vec<&str> {
+        text.lines().filter(|l| l.starts_with("MSG: ")).collect()
+    }
+
     #[test]
-    fn every_dependency_is_known_and_listed_once() {
-        for ty in [
-            "grasp_orient/msg/GraspCandidate",
-            "grasp_orient/msg/GripRecommendation",
-            "visualization_msgs/msg/MarkerArray",
-        ] {
+    fn every_dependency_is_known_and_listed_once_under_the_name_its_field_uses() {
+        for ty in TOP_LEVEL {
             let text = full_text(ty).unwrap_or_else(|| panic!("{ty} has unknown dependencies"));
-            let headers: Vec<&str> = text.lines().filter(|l| l.starts_with("MSG: ")).collect();
-            let mut unique = headers.clone();
-            unique.sort();
-            unique.dedup();
+            let headers = headers(&text);
+            let unique: BTreeSet<&str> = headers.iter().copied().collect();
             assert_eq!(headers.len(), unique.len(), "{ty}");
-            assert!(text.contains(&format!("{}\nMSG: ", "=".repeat(80))));
+            assert!(headers.iter().all(|h| !h.contains("/msg/")), "{headers:?}");
+            assert!(text.starts_with(definition(ty).expect("known")));
+            assert!(text.contains(&format!("\n\n{SEPARATOR}MSG: ")), "{ty}");
         }
-        let candidate = full_text("grasp_orient/msg/GraspCandidate").expect("known");
-        for dep in [
-            "std_msgs/msg/Header",
-            "builtin_interfaces/msg/Time",
-            "geometry_msgs/msg/Point",
-            "geometry_msgs/msg/Vector3",
-        ] {
-            assert!(candidate.contains(&format!("MSG: {dep}\n")), "{dep}");
+        let candidate = full_text(GraspCandidate::TYPE_NAME).expect("known");
+        assert_eq!(
+            headers(&candidate),
+            [
+                "MSG: geometry_msgs/Point",
+                "MSG: geometry_msgs/Vector3",
+                "MSG: std_msgs/Header",
+                "MSG: builtin_interfaces/Time",
+            ]
+        );
+    }
+
+    /// rosbag2's own unit test `can_find_msg_deps`, with its test package's two files.
+    #[test]
+    fn rosbag2s_own_test_case() {
+        let lookup = |name: &str| match split_type_name(name) {
+            Some(("rosbag2_test_msgdefs", "ComplexMsg")) => {
+                Some("rosbag2_test_msgdefs/BasicMsg b\n")
+            }
+            Some(("rosbag2_test_msgdefs", "BasicMsg")) => Some("float32 c\n"),
+            _ => None,
+        };
+        assert_eq!(
+            full_text_from("rosbag2_test_msgdefs/ComplexMsg", &lookup).as_deref(),
+            Some(
+                "rosbag2_test_msgdefs/BasicMsg b\n\n\
+                 ================================================================================\n\
+                 MSG: rosbag2_test_msgdefs/BasicMsg\nfloat32 c\n"
+            )
+        );
+    }
+
+    /// Depth first, siblings sorted, each name once (a diamond and a cycle back to the root,
+    /// which is not in the set of seen names).
+    #[test]
+    fn depth_first_in_sorted_order_each_once() {
+        let lookup = |name: &str| match split_type_name(name)? {
+            ("p", "Root") => Some("p/C c\nB b\nq/A a\n"),
+            ("p", "B") => Some("q/A a\nRoot r\n"),
+            ("p", "C") => Some("int32 x\n"),
+            ("q", "A") => Some("float64 y\n"),
+            _ => None,
+        };
+        let text = full_text_from("p/msg/Root", &lookup).expect("all known");
+        let order: Vec<&str> = text
+            .lines()
+            .filter_map(|l| l.strip_prefix("MSG: "))
+            .collect();
+        assert_eq!(order, ["p/B", "p/Root", "p/C", "q/A"]);
+        assert!(text.ends_with("MSG: q/A\nfloat64 y\n"), "{text}");
+        assert_eq!(full_text_from("p/Missing", &lookup), None);
+    }
+
+    #[test]
+    fn dependencies_are_sorted_deduplicated_and_qualified() {
+        let text = "# comment Foo bar\nPoint b\n  geometry_msgs/Vector3[] v # x\nPoint[3] c\n\
+                    int32 X=1\nstring<=5 s\nwstring w\nfloat64 d 0\n";
+        let deps: Vec<String> = dependencies(text, "geometry_msgs").into_iter().collect();
+        assert_eq!(
+            deps,
+            [
+                "geometry_msgs/Point",
+                "geometry_msgs/Vector3",
+                "geometry_msgs/wstring"
+            ]
+        );
+    }
+
+    #[test]
+    fn names_are_read_as_rosbag2_reads_them() {
+        assert_eq!(
+            split_type_name("std_msgs/Header"),
+            Some(("std_msgs", "Header"))
+        );
+        assert_eq!(
+            split_type_name("std_msgs/msg/Header"),
+            Some(("std_msgs", "Header"))
+        );
+        assert_eq!(split_type_name("std_msgs/msg/a/Header"), None);
+        assert_eq!(split_type_name("Header"), None);
+        assert_eq!(definition("std_msgs/Header"), definition(Header::TYPE_NAME));
+    }
+
+    /// The hand-written scanner against rosbag2's pattern run by the `regex` crate (ASCII `\s`,
+    /// as `std::regex` in the C locale), on every embedded file and on random texts made of the
+    /// characters that matter.
+    #[test]
+    fn field_types_match_rosbag2s_regex() {
+        let regex = regex::bytes::Regex::new(r"(?-u)(?:^|\n)\s*([a-zA-Z0-9_/]+)(?:\[[^\]]*\])?\s+")
+            .expect("rosbag2's pattern compiles");
+        let by_regex = |text: &str| -> Vec<String> {
+            regex
+                .captures_iter(text.as_bytes())
+                .map(|c| String::from_utf8_lossy(&c[1]).into_owned())
+                .collect()
+        };
+        for (name, text) in DEFINITIONS {
+            assert_eq!(field_types(text), by_regex(text), "{name}");
         }
+        let alphabet = [
+            "a",
+            "b/",
+            "_",
+            "9",
+            " ",
+            "  ",
+            "\t",
+            "\n",
+            "\n\n",
+            "\r",
+            "\x0b",
+            "[",
+            "]",
+            "[<=3]",
+            "#",
+            "=",
+            "<",
+            "x ",
+            "Point p\n",
+        ];
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 32) as usize
+        };
+        let mut found = 0;
+        for _ in 0..20_000 {
+            let text: String = (0..next() % 24)
+                .map(|_| alphabet[next() % alphabet.len()])
+                .collect();
+            let types = field_types(&text);
+            assert_eq!(types, by_regex(&text), "{text:?}");
+            found += types.len();
+        }
+        assert!(
+            found > 5_000,
+            "the random texts hold too few field types: {found}"
+        );
     }
 }

@@ -1,34 +1,38 @@
-//! Wire structs mirroring `msg/*.msg` field by field (serde, CDR-compatible in declaration order),
-//! and their conversions to and from solver types.
+//! Wire structs mirroring `msg/*.msg` and the standard Jazzy messages field by field (serde,
+//! CDR-compatible in declaration order), their conversions to and from solver types, and their
+//! `.msg` texts ([`definitions`]).
 //!
-//! Each struct is declared through [`ros_message!`], which also derives its ROS field list from
-//! the Rust field types, so `tests/msg_contract.rs` can check it against the `.msg` file.
+//! Each struct is declared through `ros_message!`, which also gives its ROS name and derives its
+//! ROS field list from the Rust field types, so `tests/msg_contract.rs` can check it against the
+//! `.msg` file.
 
 pub mod cdr;
 mod contract;
 mod convert;
 pub mod definitions;
 
-pub use contract::{RosMessage, RosType};
-pub use convert::{answer, clipped, invalid, MessageLimits, MAX_TEXT_BYTES};
+pub use contract::{message_type_name, RosMessage, RosType};
+pub use convert::{answer, clip, invalid, short_id, MessageLimits, MAX_TEXT_BYTES, SHORT_ID_CHARS};
 
 use serde::{Deserialize, Serialize};
 
-/// Declares a wire struct, its constants, and its [`RosMessage`] description.
+/// Declares a wire struct, its constants, and its [`RosMessage`] description; the ROS name is
+/// written `package/Name`. A field whose ROS name is a Rust keyword is written
+/// `rust_name as "ros_name": type`.
 macro_rules! ros_message {
     (
         $(#[$meta:meta])*
-        $name:ident = $type_name:literal
+        $name:ident = $package:ident / $ros_name:ident
         [ $( $cname:ident : $cty:ty = $cval:expr ),* $(,)? ]
         {
-            $( $(#[$fmeta:meta])* $field:ident : $fty:ty ),* $(,)?
+            $( $(#[$fmeta:meta])* $field:ident $(as $wire:literal)? : $fty:ty ),* $(,)?
         }
     ) => {
         $(#[$meta])*
         #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
         #[serde(deny_unknown_fields)]
         pub struct $name {
-            $( $(#[$fmeta])* pub $field: $fty, )*
+            $( $(#[$fmeta])* $(#[serde(rename = $wire)])? pub $field: $fty, )*
         }
 
         impl $name {
@@ -36,14 +40,43 @@ macro_rules! ros_message {
         }
 
         impl RosMessage for $name {
-            const TYPE_NAME: &'static str = $type_name;
+            const PACKAGE: &'static str = stringify!($package);
+            const NAME: &'static str = stringify!($ros_name);
+            const TYPE_NAME: &'static str =
+                concat!(stringify!($package), "/msg/", stringify!($ros_name));
             fn fields() -> Vec<(&'static str, String)> {
-                vec![ $( (stringify!($field), <$fty as RosType>::ros_type()) ),* ]
+                vec![ $( (wire_name!($field $(, $wire)?), <$fty as RosType>::ros_type()) ),* ]
             }
             fn constants() -> Vec<(&'static str, String, String)> {
                 vec![ $( (stringify!($cname), <$cty as RosType>::ros_type(), ($cval).to_string()) ),* ]
             }
         }
+
+        impl RosType for $name {
+            fn ros_type() -> String {
+                concat!(stringify!($package), "/", stringify!($ros_name)).to_string()
+            }
+        }
+    };
+}
+
+/// The paper's Table 1 as messages (`examples/paper_cases.jsonl`; `tests/paper.rs` holds it to
+/// the solver's Table 1 fixture), for tests.
+#[cfg(test)]
+pub(crate) fn paper_cases() -> Vec<GraspCandidate> {
+    include_str!("../../examples/paper_cases.jsonl")
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("a GraspCandidate"))
+        .collect()
+}
+
+/// A field's name on the wire: its Rust name, or the name given with `as`.
+macro_rules! wire_name {
+    ($field:ident) => {
+        stringify!($field)
+    };
+    ($field:ident, $wire:literal) => {
+        $wire
     };
 }
 
@@ -54,7 +87,7 @@ pub use visualization::{
 
 ros_message! {
     /// `builtin_interfaces/Time`.
-    Time = "builtin_interfaces/msg/Time" [] {
+    Time = builtin_interfaces/Time [] {
         /// Seconds since the epoch.
         sec: i32,
         /// Nanoseconds within the second.
@@ -64,7 +97,7 @@ ros_message! {
 
 ros_message! {
     /// `std_msgs/Header`.
-    Header = "std_msgs/msg/Header" [] {
+    Header = std_msgs/Header [] {
         /// Time of the data.
         #[serde(default)]
         stamp: Time,
@@ -76,7 +109,7 @@ ros_message! {
 
 ros_message! {
     /// `geometry_msgs/Point`, m.
-    Point = "geometry_msgs/msg/Point" [] {
+    Point = geometry_msgs/Point [] {
         /// x, m.
         x: f64,
         /// y, m.
@@ -89,7 +122,7 @@ ros_message! {
 
 ros_message! {
     /// `geometry_msgs/Vector3`.
-    Vector3 = "geometry_msgs/msg/Vector3" [] {
+    Vector3 = geometry_msgs/Vector3 [] {
         /// x.
         x: f64,
         /// y.
@@ -102,7 +135,7 @@ ros_message! {
 
 ros_message! {
     /// `geometry_msgs/Quaternion`.
-    Quaternion = "geometry_msgs/msg/Quaternion" [] {
+    Quaternion = geometry_msgs/Quaternion [] {
         /// x.
         x: f64,
         /// y.
@@ -117,7 +150,7 @@ ros_message! {
 ros_message! {
     /// `msg/GraspCandidate.msg`: a two-finger planar grasp to orient. SI units; vectors in the
     /// x-y plane of `header.frame_id`.
-    GraspCandidate = "grasp_orient/msg/GraspCandidate" [] {
+    GraspCandidate = grasp_orient/GraspCandidate [] {
         /// Stamp and frame of the candidate.
         #[serde(default)]
         header: Header,
@@ -147,7 +180,7 @@ ros_message! {
 
 ros_message! {
     /// `msg/GripRecommendation.msg`: the answer to one [`GraspCandidate`].
-    GripRecommendation = "grasp_orient/msg/GripRecommendation" [
+    GripRecommendation = grasp_orient/GripRecommendation [
         STATUS_OK: u8 = 0,
         STATUS_NO_FORCE_CLOSURE: u8 = 1,
         STATUS_INVALID_INPUT: u8 = 2,

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 
 ros_message! {
     /// `std_msgs/ColorRGBA`.
-    ColorRgba = "std_msgs/msg/ColorRGBA" [] {
+    ColorRgba = std_msgs/ColorRGBA [] {
         /// Red, 0..1.
         r: f32,
         /// Green, 0..1.
@@ -20,7 +20,7 @@ ros_message! {
 
 ros_message! {
     /// `builtin_interfaces/Duration`.
-    Duration = "builtin_interfaces/msg/Duration" [] {
+    Duration = builtin_interfaces/Duration [] {
         /// Seconds.
         sec: i32,
         /// Nanoseconds.
@@ -30,7 +30,7 @@ ros_message! {
 
 ros_message! {
     /// `geometry_msgs/Pose`.
-    Pose = "geometry_msgs/msg/Pose" [] {
+    Pose = geometry_msgs/Pose [] {
         /// Position, m.
         position: Point,
         /// Orientation.
@@ -40,7 +40,7 @@ ros_message! {
 
 ros_message! {
     /// `sensor_msgs/CompressedImage` (a marker's texture; always empty here).
-    CompressedImage = "sensor_msgs/msg/CompressedImage" [] {
+    CompressedImage = sensor_msgs/CompressedImage [] {
         /// Header.
         header: Header,
         /// Image format.
@@ -52,7 +52,7 @@ ros_message! {
 
 ros_message! {
     /// `visualization_msgs/UVCoordinate`.
-    UvCoordinate = "visualization_msgs/msg/UVCoordinate" [] {
+    UvCoordinate = visualization_msgs/UVCoordinate [] {
         /// u.
         u: f32,
         /// v.
@@ -62,7 +62,7 @@ ros_message! {
 
 ros_message! {
     /// `visualization_msgs/MeshFile`.
-    MeshFile = "visualization_msgs/msg/MeshFile" [] {
+    MeshFile = visualization_msgs/MeshFile [] {
         /// File name.
         filename: String,
         /// File bytes.
@@ -72,7 +72,7 @@ ros_message! {
 
 ros_message! {
     /// `visualization_msgs/Marker` (Jazzy layout).
-    Marker = "visualization_msgs/msg/Marker" [
+    Marker = visualization_msgs/Marker [
         ARROW: i32 = 0,
         CUBE: i32 = 1,
         SPHERE: i32 = 2,
@@ -97,9 +97,8 @@ ros_message! {
         ns: String,
         /// Id within the namespace.
         id: i32,
-        /// `ARROW` ..
-        #[serde(rename = "type")]
-        kind: i32,
+        /// `ARROW` .. (`type` on the wire).
+        kind as "type": i32,
         /// `ADD`, `DELETE`, `DELETEALL`.
         action: i32,
         /// Pose of the marker.
@@ -135,18 +134,8 @@ ros_message! {
 
 ros_message! {
     /// `visualization_msgs/MarkerArray`.
-    MarkerArray = "visualization_msgs/msg/MarkerArray" [] {
+    MarkerArray = visualization_msgs/MarkerArray [] {
         /// The markers.
         markers: Vec<Marker>,
     }
-}
-
-super::contract::ros_type_names! {
-    ColorRgba => "std_msgs/ColorRGBA",
-    Duration => "builtin_interfaces/Duration",
-    Pose => "geometry_msgs/Pose",
-    CompressedImage => "sensor_msgs/CompressedImage",
-    UvCoordinate => "UVCoordinate",
-    MeshFile => "MeshFile",
-    Marker => "Marker",
 }

@@ -5,7 +5,7 @@
 
 use super::markers;
 use super::params::Shared;
-use crate::msg::{answer, GraspCandidate, GripRecommendation, MarkerArray};
+use crate::msg::{answer, short_id, GraspCandidate, GripRecommendation, MarkerArray};
 use crate::record::lifecycle::{Recording, Wanted};
 use crate::record::{Payload, RecordError, Topics};
 use log::Level;
@@ -143,7 +143,7 @@ impl Answerer {
                     Level::Warn,
                     format!(
                         "candidate {:?}: {} ({} refused so far)",
-                        truncate(&reply.candidate_id),
+                        short_id(&reply.candidate_id),
                         reply.message,
                         self.counts.invalid
                     ),
@@ -228,22 +228,13 @@ impl Answerer {
     }
 }
 
-/// The first 64 characters of an id, for the log.
-fn truncate(id: &str) -> String {
-    id.chars().take(64).collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::config::Config;
 
     fn paper_case_a() -> GraspCandidate {
-        let line = include_str!("../../examples/paper_cases.jsonl")
-            .lines()
-            .next()
-            .expect("case a");
-        serde_json::from_str(line).expect("a candidate")
+        crate::msg::paper_cases().remove(0)
     }
 
     fn answerer(config: Config, echo: bool) -> Answerer {

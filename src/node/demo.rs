@@ -80,8 +80,8 @@ async fn exchange(
     answers: &str,
 ) -> anyhow::Result<Vec<GripRecommendation>> {
     let qos = qos(100);
-    let topic_in = create_topic(node, candidates, "grasp_orient", "GraspCandidate", &qos)?;
-    let topic_out = create_topic(node, answers, "grasp_orient", "GripRecommendation", &qos)?;
+    let topic_in = create_topic::<GraspCandidate>(node, candidates, &qos)?;
+    let topic_out = create_topic::<GripRecommendation>(node, answers, &qos)?;
     let publisher = node.create_publisher::<GraspCandidate>(&topic_in, None)?;
     let replies = node.create_subscription::<GripRecommendation>(&topic_out, None)?;
     let cases: Vec<GraspCandidate> = PAPER_CASES

@@ -177,11 +177,7 @@ mod tests {
 
     #[test]
     fn markers_are_in_the_candidate_frame_and_finite() {
-        let line = include_str!("../../examples/paper_cases.jsonl")
-            .lines()
-            .next()
-            .expect("a case");
-        let c: GraspCandidate = serde_json::from_str(line).expect("valid json");
+        let c = crate::msg::paper_cases().remove(0);
         let a = crate::msg::answer(&c, &Settings::default());
         let m = build(&c, &a);
         assert_eq!(m.markers.len(), NAMESPACES.len());

@@ -79,27 +79,9 @@ impl Endpoints {
         };
         let markers_name = topics.markers.clone().unwrap_or_default();
         let node = session.node_mut();
-        let candidates = create_topic(
-            node,
-            &topics.candidates,
-            "grasp_orient",
-            "GraspCandidate",
-            &qos,
-        )?;
-        let answers = create_topic(
-            node,
-            &topics.recommendations,
-            "grasp_orient",
-            "GripRecommendation",
-            &qos,
-        )?;
-        let markers = create_topic(
-            node,
-            &markers_name,
-            "visualization_msgs",
-            "MarkerArray",
-            &qos,
-        )?;
+        let candidates = create_topic::<GraspCandidate>(node, &topics.candidates, &qos)?;
+        let answers = create_topic::<GripRecommendation>(node, &topics.recommendations, &qos)?;
+        let markers = create_topic::<MarkerArray>(node, &markers_name, &qos)?;
         Ok(Self {
             candidates: node
                 .create_subscription(&candidates, None)

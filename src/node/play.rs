@@ -30,13 +30,7 @@ pub fn publish(
     pace: Pace,
 ) -> anyhow::Result<(usize, String)> {
     let topic_name = session.topic_name("grasp_candidates");
-    let topic = create_topic(
-        session.node(),
-        &topic_name,
-        "grasp_orient",
-        "GraspCandidate",
-        &qos(pace.depth),
-    )?;
+    let topic = create_topic::<GraspCandidate>(session.node(), &topic_name, &qos(pace.depth))?;
     let publisher = session
         .node_mut()
         .create_publisher::<GraspCandidate>(&topic, None)?;

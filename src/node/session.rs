@@ -11,15 +11,14 @@
 //! ```
 
 use super::ros_args::RosArgs;
+use crate::msg::{message_type_name, RosMessage};
 use anyhow::{bail, Context as _};
 use async_signal::{Signal, Signals};
 use futures::StreamExt;
 use ros2_client::dds::rustdds::DomainParticipantBuilder;
 use ros2_client::qos::History;
 use ros2_client::ros2::LogLevel;
-use ros2_client::{
-    rosout, Context, MessageTypeName, Name, Node, NodeName, NodeOptions, QosProfile,
-};
+use ros2_client::{rosout, Context, Name, Node, NodeName, NodeOptions, QosProfile};
 
 /// How this process takes part in the DDS graph.
 #[derive(Debug, Clone, Copy)]
@@ -240,16 +239,14 @@ impl Session {
     }
 }
 
-/// Creates the topic `full_name` (absolute) of type `package/msg/kind`.
-pub fn create_topic(
+/// Creates the topic `full_name` (absolute) carrying messages of type `M`.
+pub fn create_topic<M: RosMessage>(
     node: &Node,
     full_name: &str,
-    package: &str,
-    kind: &str,
     qos: &QosProfile,
 ) -> anyhow::Result<ros2_client::dds::rustdds::Topic> {
     let parsed = Name::parse(full_name).map_err(|e| anyhow::anyhow!("topic {full_name}: {e:?}"))?;
-    node.create_topic(&parsed, MessageTypeName::new(package, kind), qos)
+    node.create_topic(&parsed, message_type_name::<M>(), qos)
         .with_context(|| format!("cannot create topic {full_name}"))
 }
 

@@ -1,19 +1,16 @@
 //! Reading recordings back: ours, or any rosbag2-style MCAP with a `GraspCandidate` topic, and
 //! recovering what a killed recording holds.
 
-use crate::msg::{cdr, GraspCandidate, GripRecommendation};
+use crate::msg::definitions::split_type_name;
+use crate::msg::{cdr, GraspCandidate, GripRecommendation, RosMessage};
 use std::collections::{BTreeMap, HashMap};
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
-/// Schema name of candidates.
-pub const CANDIDATE_TYPE: &str = "grasp_orient/msg/GraspCandidate";
-/// Schema name of recommendations.
-pub const RECOMMENDATION_TYPE: &str = "grasp_orient/msg/GripRecommendation";
-
 /// What goes wrong reading or recovering a bag.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum BagError {
     /// The file could not be read or written.
     #[error("{path}: {source}")]
@@ -31,6 +28,17 @@ pub enum BagError {
         /// The cause.
         source: mcap::McapError,
     },
+}
+
+/// How many examples of one kind of trouble a report keeps.
+pub const EXAMPLES_KEPT: usize = 10;
+
+/// Adds an example to `examples` unless it holds [`EXAMPLES_KEPT`] already; `example` is only
+/// made when there is room.
+pub fn keep_example(examples: &mut Vec<String>, example: impl FnOnce() -> String) {
+    if examples.len() < EXAMPLES_KEPT {
+        examples.push(example());
+    }
 }
 
 /// A message with the times it was recorded at, ns since the epoch.
@@ -73,19 +81,15 @@ fn mcap_err(path: &Path) -> impl Fn(mcap::McapError) -> BagError + '_ {
     }
 }
 
-/// Whether a channel carries `type_name` (`pkg/msg/Name`) as CDR; schema names are accepted
-/// with or without the `/msg/`. Called for every message, so it compares without allocating.
-fn carries(channel: &mcap::Channel<'_>, type_name: &str) -> bool {
+/// Whether a channel carries `M` as CDR. Channels are picked by schema name alone (with or
+/// without the `/msg/`), never by the schema text, so recordings written with any form of the
+/// definitions read alike. Called for every message, so it compares without allocating.
+fn carries<M: RosMessage>(channel: &mcap::Channel<'_>) -> bool {
     let Some(schema) = &channel.schema else {
         return false;
     };
-    channel.message_encoding == "cdr" && short_name(&schema.name) == short_name(type_name)
-}
-
-/// `(pkg, Name)` of `pkg/msg/Name` or `pkg/Name`.
-fn short_name(name: &str) -> Option<(&str, &str)> {
-    name.split_once('/')
-        .map(|(pkg, rest)| (pkg, rest.strip_prefix("msg/").unwrap_or(rest)))
+    channel.message_encoding == "cdr"
+        && split_type_name(&schema.name) == Some((M::PACKAGE, M::NAME))
 }
 
 /// Decodes one message of ours into the bag's lists, or notes why it did not decode.
@@ -93,14 +97,11 @@ fn take(out: &mut Bag, message: &mcap::Message<'_>) {
     let (log_time, publish_time) = (message.log_time, message.publish_time);
     let failed = |out: &mut Bag, e: cdr::CdrError| {
         out.undecodable_count += 1;
-        if out.undecodable.len() < 10 {
-            out.undecodable.push(format!(
-                "{} #{}: {e}",
-                message.channel.topic, message.sequence
-            ));
-        }
+        keep_example(&mut out.undecodable, || {
+            format!("{} #{}: {e}", message.channel.topic, message.sequence)
+        });
     };
-    if carries(&message.channel, CANDIDATE_TYPE) {
+    if carries::<GraspCandidate>(&message.channel) {
         match cdr::decode::<GraspCandidate>(&message.data) {
             Ok(m) => out.candidates.push(Recorded {
                 message: m,
@@ -109,7 +110,7 @@ fn take(out: &mut Bag, message: &mcap::Message<'_>) {
             }),
             Err(e) => failed(out, e),
         }
-    } else if carries(&message.channel, RECOMMENDATION_TYPE) {
+    } else if carries::<GripRecommendation>(&message.channel) {
         match cdr::decode::<GripRecommendation>(&message.data) {
             Ok(m) => out.recommendations.push(Recorded {
                 message: m,
@@ -130,9 +131,9 @@ impl Bag {
         self.recommendations.extend(next.recommendations);
         self.other += next.other;
         self.undecodable_count += next.undecodable_count;
-        let room = 10usize.saturating_sub(self.undecodable.len());
-        self.undecodable
-            .extend(next.undecodable.into_iter().take(room));
+        for example in next.undecodable {
+            keep_example(&mut self.undecodable, || example);
+        }
     }
 }
 
@@ -293,16 +294,13 @@ mod tests {
     }
 
     fn cases() -> Vec<GraspCandidate> {
-        include_str!("../../examples/paper_cases.jsonl")
-            .lines()
-            .map(|l| serde_json::from_str(l).expect("json"))
-            .collect()
+        crate::msg::paper_cases()
     }
 
     #[test]
     fn write_then_read_gives_the_same_messages() {
-        let dir = std::env::temp_dir().join(format!("grasp_orient_bag_{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("dir");
+        let dir = tempfile::tempdir().expect("a temporary folder");
+        let dir = dir.path();
         let path = dir.join("round_trip.mcap");
         let mut w = BagWriter::create(&path, &topics(), 100).expect("create");
         let settings = crate::solver::Settings::default();

@@ -1,7 +1,7 @@
 //! MCAP recordings in rosbag2's conventions, and reading them back.
 //!
 //! A recording is one file per run: profile `ros2`; one schema per type, encoding `ros2msg`, with
-//! the complete definition ([`crate::msg::definitions`]); message encoding `cdr` with the 4-byte
+//! the complete definition exactly as rosbag2 writes it ([`crate::msg::definitions`]); message encoding `cdr` with the 4-byte
 //! encapsulation header; channel metadata `offered_qos_profiles`; `log_time` the receive time,
 //! `publish_time` the send time. Chunks are lz4-compressed and closed at least once a second, so a
 //! killed process loses at most the last second ([`bag::recover`] reads the rest).
@@ -13,7 +13,7 @@
 pub mod bag;
 pub mod lifecycle;
 
-use crate::msg::{cdr, definitions, GraspCandidate, GripRecommendation, MarkerArray};
+use crate::msg::{cdr, definitions, GraspCandidate, GripRecommendation, MarkerArray, RosMessage};
 use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::BufWriter;
@@ -31,6 +31,7 @@ const CHUNK_SIZE: u64 = 1 << 20;
 
 /// What goes wrong with a recording.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum RecordError {
     /// The folder or file could not be made.
     #[error("cannot create the recording {path}: {source}")]
@@ -54,6 +55,9 @@ pub enum RecordError {
     /// The writer thread stopped.
     #[error("the recording thread panicked")]
     Thread,
+    /// A type has no complete definition in [`definitions::DEFINITIONS`].
+    #[error("no message definition for {0}")]
+    UnknownType(&'static str),
 }
 
 /// One message for the recording.
@@ -185,8 +189,9 @@ impl BagWriter {
             .create(BufWriter::new(file))
             .map_err(mcap_error)?;
         let metadata = BTreeMap::from([("offered_qos_profiles".to_string(), qos_yaml(qos_depth))]);
-        let mut channel = |topic: &str, type_name: &str| -> Result<u16, RecordError> {
-            let text = definitions::full_text(type_name).unwrap_or_default();
+        let mut channel = |topic: &str, type_name: &'static str| -> Result<u16, RecordError> {
+            let text =
+                definitions::full_text(type_name).ok_or(RecordError::UnknownType(type_name))?;
             let schema = writer
                 .add_schema(type_name, "ros2msg", text.as_bytes())
                 .map_err(mcap_error)?;
@@ -195,16 +200,13 @@ impl BagWriter {
                 .map_err(mcap_error)
         };
         let channels = [
-            Some(channel(
-                &topics.candidates,
-                "grasp_orient/msg/GraspCandidate",
-            )?),
+            Some(channel(&topics.candidates, GraspCandidate::TYPE_NAME)?),
             Some(channel(
                 &topics.recommendations,
-                "grasp_orient/msg/GripRecommendation",
+                GripRecommendation::TYPE_NAME,
             )?),
             match &topics.markers {
-                Some(t) => Some(channel(t, "visualization_msgs/msg/MarkerArray")?),
+                Some(t) => Some(channel(t, MarkerArray::TYPE_NAME)?),
                 None => None,
             },
         ];

@@ -153,7 +153,7 @@ pub struct Analysis {
 
 impl Analysis {
     /// Checks force closure and builds the objective over the graspable range.
-    pub fn new(frame: &GraspFrame, objective: Objective) -> Result<Self, NoForceClosure> {
+    pub(crate) fn new(frame: &GraspFrame, objective: Objective) -> Result<Self, NoForceClosure> {
         let misses = paper::closure_misses(frame);
         if misses.iter().any(Option::is_some) {
             return Err(NoForceClosure {
@@ -187,14 +187,16 @@ impl Analysis {
         Ok(analysis)
     }
 
-    /// The grasp in the paper frame.
-    pub fn frame(&self) -> &GraspFrame {
-        &self.frame
+    /// The six bounds `α_1 .. α_6` at gravity angle `theta` (normalised units: lengths over the
+    /// contact distance).
+    pub fn alphas_at(&self, theta: f64) -> [f64; 6] {
+        let at = Angle::new(theta);
+        self.alphas.map(|a| a.value(&at))
     }
 
-    /// The six bounds `α_1 .. α_6` (normalised units: lengths over the contact distance).
-    pub fn alphas(&self) -> &[Sinusoid; 6] {
-        &self.alphas
+    /// The paper's candidate angles (Table 2) from its closed forms, in the paper's labelling.
+    pub fn candidate_angles(&self) -> paper::CandidateAngles {
+        paper::candidate_angles(&self.frame)
     }
 
     /// The graspable range `(θ_min, θ_max)`, rad.
@@ -211,10 +213,11 @@ impl Analysis {
     /// never asks for a negative squeeze.
     fn envelope_functions(&self) -> ([Sinusoid; 5], usize) {
         let [_, _, a3, a4, a5, a6] = self.alphas;
-        match self.objective {
-            Objective::Norm1 => ([a3, a4, a5, a6, Sinusoid::ZERO], 4),
-            Objective::Norm2 | Objective::InternalForce => ([a3, a4, a5, a6, Sinusoid::ZERO], 5),
-        }
+        let n = match self.objective {
+            Objective::Norm1 => 4,
+            Objective::Norm2 | Objective::InternalForce => 5,
+        };
+        ([a3, a4, a5, a6, Sinusoid::ZERO], n)
     }
 
     /// Walks the upper envelope over the graspable range and turns each piece into segments of
@@ -667,23 +670,9 @@ fn top_at(funcs: &[Sinusoid], t: f64, tol: f64) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::solver::table_1::{paper_grasp, table_1};
     use crate::solver::{Candidate, Settings};
-    use nalgebra::Vector2;
-    use std::f64::consts::PI;
-
-    fn table_case(p1: (f64, f64), p2x: f64, phi: (f64, f64), mu: (f64, f64)) -> Candidate {
-        Candidate {
-            contact_1: Vector2::new(p1.0, p1.1),
-            contact_2: Vector2::new(p2x, p1.1),
-            normal_1: Vector2::new(-phi.0.sin(), -phi.0.cos()),
-            normal_2: Vector2::new(phi.1.sin(), -phi.1.cos()),
-            friction_1: mu.0,
-            friction_2: mu.1,
-            center_of_mass: Vector2::zeros(),
-            mass: 1.0,
-            gravity: Vector2::new(0.0, -1.0),
-        }
-    }
+    use approx::abs_diff_eq;
 
     fn analysis(c: &Candidate, objective: Objective) -> Analysis {
         let f = GraspFrame::new(c, 1.0).expect("valid");
@@ -693,7 +682,7 @@ mod tests {
     /// The segments tile the graspable range and each one's shape matches the point-wise value.
     #[test]
     fn segments_tile_the_range_and_agree_with_pointwise_values() {
-        let c = table_case((5.0, 4.0), -3.0, (0.785, 0.785), (1.5, 2.5));
+        let c = paper_grasp((5.0, 4.0), -3.0, (0.785, 0.785), (1.5, 2.5));
         for objective in [Objective::Norm2, Objective::Norm1, Objective::InternalForce] {
             let a = analysis(&c, objective);
             let (lo, hi) = a.graspable_range();
@@ -708,7 +697,7 @@ mod tests {
                     let shape = a.power_from_raw(&seg.shape, seg.shape.raw(&Angle::new(t)));
                     let point = a.evaluate(t).power;
                     assert!(
-                        (shape - point).abs() < 1e-12 * point.abs().max(1.0),
+                        abs_diff_eq!(shape, point, epsilon = 1e-12 * point.abs().max(1.0)),
                         "{objective:?} at {t}: {shape} vs {point}"
                     );
                 }
@@ -718,12 +707,7 @@ mod tests {
 
     #[test]
     fn recommendation_is_no_worse_than_a_fine_scan() {
-        let c = table_case(
-            (1.0, 1.0),
-            -1.0,
-            (PI / 2.0, PI / 2.0),
-            (3f64.sqrt(), 1.0 / 3f64.sqrt()),
-        );
+        let c = table_1('c');
         for objective in [Objective::Norm2, Objective::Norm1, Objective::InternalForce] {
             let a = analysis(&c, objective);
             let r = a

@@ -21,39 +21,39 @@ const COINCIDENT_FRACTION: f64 = 1e-9;
 /// Lengths are divided by the contact distance, so `x1 + x2 = 1`; forces computed from it are
 /// in units of the weight `m |g|`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct GraspFrame {
+pub(crate) struct GraspFrame {
     /// Contact 1 is at `(x1, y)`.
-    pub x1: f64,
+    pub(crate) x1: f64,
     /// Contact 2 is at `(-x2, y)`.
-    pub x2: f64,
+    pub(crate) x2: f64,
     /// Height of the contact line above the centre of mass, `>= 0`.
-    pub y: f64,
+    pub(crate) y: f64,
     /// `sin φ1`, where the inward normal at contact 1 is `(-sin φ1, -cos φ1)`.
-    pub s1: f64,
+    pub(crate) s1: f64,
     /// `cos φ1`.
-    pub c1: f64,
+    pub(crate) c1: f64,
     /// `sin φ2`, where the inward normal at contact 2 is `(sin φ2, -cos φ2)`.
-    pub s2: f64,
+    pub(crate) s2: f64,
     /// `cos φ2`.
-    pub c2: f64,
+    pub(crate) c2: f64,
     /// Friction coefficient at contact 1 after the safety factor.
-    pub mu1: f64,
+    pub(crate) mu1: f64,
     /// Friction coefficient at contact 2 after the safety factor.
-    pub mu2: f64,
+    pub(crate) mu2: f64,
     /// The safety factor that divided the friction coefficients.
-    pub friction_safety_factor: f64,
+    pub(crate) friction_safety_factor: f64,
     /// Gravity angle of the current pose, rad in (-π, π].
-    pub current_theta: f64,
+    pub(crate) current_theta: f64,
     /// `m |g|` with the in-plane part of `g`, N.
-    pub weight: f64,
+    pub(crate) weight: f64,
     /// Distance between the contacts, m.
-    pub contact_distance: f64,
+    pub(crate) contact_distance: f64,
     /// Whether the paper's contact 1 is the candidate's `contact_2`.
-    pub swapped: bool,
+    pub(crate) swapped: bool,
     /// Paper x axis in the candidate frame.
-    pub e_x: Vector2<f64>,
+    pub(crate) e_x: Vector2<f64>,
     /// Paper y axis in the candidate frame.
-    pub e_y: Vector2<f64>,
+    pub(crate) e_y: Vector2<f64>,
 }
 
 fn finite(field: &'static str, v: f64) -> Result<f64, InvalidInput> {
@@ -260,22 +260,12 @@ impl GraspFrame {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use approx::assert_abs_diff_eq;
     use std::f64::consts::FRAC_PI_3;
 
+    /// Table 1 (a): a circle of radius 10, contacts at ±60° from the top, gravity along -y.
     fn circle_case_a() -> Candidate {
-        // Table 1 (a): a circle of radius 10, contacts at ±60° from the top, gravity along -y.
-        let r3 = 3f64.sqrt();
-        Candidate {
-            contact_1: Vector2::new(5.0 * r3, 5.0),
-            contact_2: Vector2::new(-5.0 * r3, 5.0),
-            normal_1: Vector2::new(-r3 / 2.0, -0.5),
-            normal_2: Vector2::new(r3 / 2.0, -0.5),
-            friction_1: 1.5,
-            friction_2: 1.0,
-            center_of_mass: Vector2::zeros(),
-            mass: 1.0,
-            gravity: Vector2::new(0.0, -1.0),
-        }
+        crate::solver::table_1::table_1('a')
     }
 
     #[test]
@@ -283,10 +273,12 @@ mod tests {
         let f = GraspFrame::new(&circle_case_a(), 1.0).expect("valid");
         let d = 10.0 * 3f64.sqrt();
         assert!(!f.swapped);
-        assert!((f.x1 - 5.0 * 3f64.sqrt() / d).abs() < 1e-15);
-        assert!((f.y - 5.0 / d).abs() < 1e-15);
-        assert!((f.s1 - FRAC_PI_3.sin()).abs() < 1e-15 && (f.c1 - FRAC_PI_3.cos()).abs() < 1e-15);
-        assert!((f.s2 - FRAC_PI_3.sin()).abs() < 1e-15 && (f.c2 - FRAC_PI_3.cos()).abs() < 1e-15);
+        assert_abs_diff_eq!(f.x1, 5.0 * 3f64.sqrt() / d, epsilon = 1e-15);
+        assert_abs_diff_eq!(f.y, 5.0 / d, epsilon = 1e-15);
+        assert_abs_diff_eq!(f.s1, FRAC_PI_3.sin(), epsilon = 1e-15);
+        assert_abs_diff_eq!(f.c1, FRAC_PI_3.cos(), epsilon = 1e-15);
+        assert_abs_diff_eq!(f.s2, FRAC_PI_3.sin(), epsilon = 1e-15);
+        assert_abs_diff_eq!(f.c2, FRAC_PI_3.cos(), epsilon = 1e-15);
         assert_eq!(f.current_theta, 0.0);
     }
 
@@ -297,7 +289,8 @@ mod tests {
         std::mem::swap(&mut c.normal_1, &mut c.normal_2);
         let f = GraspFrame::new(&c, 1.0).expect("valid");
         assert!(f.swapped);
-        assert!((f.mu1 - 1.0).abs() < 1e-15 && (f.mu2 - 1.5).abs() < 1e-15);
+        assert_abs_diff_eq!(f.mu1, 1.0, epsilon = 1e-15);
+        assert_abs_diff_eq!(f.mu2, 1.5, epsilon = 1e-15);
         assert!(f.y > 0.0);
     }
 

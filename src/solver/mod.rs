@@ -31,11 +31,20 @@
 
 mod analysis;
 mod frame;
-pub mod paper;
-pub mod sinusoid;
+mod paper;
+mod sinusoid;
 
-pub use analysis::Analysis;
-pub use frame::GraspFrame;
+pub use analysis::{Analysis, PointValue};
+pub use paper::CandidateAngles;
+
+use frame::GraspFrame;
+
+#[cfg(test)]
+pub(crate) mod table_1 {
+    //! The paper's Table 1, the same fixture the integration tests use.
+    use super::Candidate;
+    include!("../../tests/common/table_1.rs");
+}
 
 use nalgebra::Vector2;
 use std::fmt;
@@ -165,6 +174,7 @@ impl fmt::Display for Contact {
 
 /// Input the solver refuses, naming the field at fault.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum InvalidInput {
     /// A field is NaN or infinite.
     #[error("{field} is not a finite number")]
@@ -461,11 +471,24 @@ pub fn solve_orientation(
     candidate: &Candidate,
     settings: &Settings,
 ) -> Result<Verdict, InvalidInput> {
-    let frame = GraspFrame::new(candidate, settings.friction_safety_factor)?;
-    match Analysis::new(&frame, settings.objective) {
+    match analyse(candidate, settings)? {
         Ok(analysis) => Ok(Verdict::Recommended(Box::new(
             analysis.recommend(&settings.range)?,
         ))),
         Err(miss) => Ok(Verdict::NoForceClosure(miss)),
     }
+}
+
+/// The gripping power of one grasp over its whole graspable range, for plots and studies: what
+/// [`solve_orientation`] minimises, with the paper's bounds and candidate angles. Uses the
+/// objective and friction safety factor of `settings` (the range only matters to
+/// [`Analysis::recommend`]).
+///
+/// Bad input is an `Err`; a valid grasp without force closure is `Ok(Err(NoForceClosure))`.
+pub fn analyse(
+    candidate: &Candidate,
+    settings: &Settings,
+) -> Result<Result<Analysis, NoForceClosure>, InvalidInput> {
+    let frame = GraspFrame::new(candidate, settings.friction_safety_factor)?;
+    Ok(Analysis::new(&frame, settings.objective))
 }

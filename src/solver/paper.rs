@@ -173,25 +173,13 @@ pub fn closure_misses(f: &GraspFrame) -> [Option<(f64, f64)>; 2] {
 mod tests {
     use super::*;
     use crate::solver::sinusoid::Angle;
-    use crate::solver::Candidate;
+    use crate::solver::table_1::paper_grasp;
+    use approx::assert_abs_diff_eq;
     use nalgebra::Vector2;
 
     /// A frame straight from the paper's parameters (Table 1 style).
-    pub(crate) fn frame(p1: (f64, f64), p2x: f64, phi: (f64, f64), mu: (f64, f64)) -> GraspFrame {
-        let (x1, y) = p1;
-        let x2 = -p2x;
-        let c = Candidate {
-            contact_1: Vector2::new(x1, y),
-            contact_2: Vector2::new(-x2, y),
-            normal_1: Vector2::new(-phi.0.sin(), -phi.0.cos()),
-            normal_2: Vector2::new(phi.1.sin(), -phi.1.cos()),
-            friction_1: mu.0,
-            friction_2: mu.1,
-            center_of_mass: Vector2::zeros(),
-            mass: 1.0,
-            gravity: Vector2::new(0.0, -1.0),
-        };
-        GraspFrame::new(&c, 1.0).expect("valid")
+    fn frame(p1: (f64, f64), p2x: f64, phi: (f64, f64), mu: (f64, f64)) -> GraspFrame {
+        GraspFrame::new(&paper_grasp(p1, p2x, phi, mu), 1.0).expect("valid")
     }
 
     #[test]
@@ -199,8 +187,8 @@ mod tests {
         for &(phi, mu) in &[(1.0f64, 0.8f64), (1.4, 0.3), (2.0, 1.5)] {
             let (s, c) = phi.sin_cos();
             let xi = mu.atan();
-            assert!((upper_ratio(s, c, mu) + (phi + xi).tan()).abs() < 1e-12);
-            assert!((lower_ratio(s, c, mu) + (phi - xi).tan()).abs() < 1e-12);
+            assert_abs_diff_eq!(upper_ratio(s, c, mu), -(phi + xi).tan(), epsilon = 1e-12);
+            assert_abs_diff_eq!(lower_ratio(s, c, mu), -(phi - xi).tan(), epsilon = 1e-12);
         }
     }
 
@@ -217,11 +205,11 @@ mod tests {
             let f1 = Vector2::new(-f.s1 * v[0] - f.c1 * v[1], -f.c1 * v[0] + f.s1 * v[1]);
             let f2 = Vector2::new(f.s2 * v[2] + f.c2 * v[3], -f.c2 * v[2] + f.s2 * v[3]);
             let sum = f1 + f2;
-            assert!((sum.x + at.sin).abs() < 1e-12 && (sum.y - at.cos).abs() < 1e-12);
+            assert_abs_diff_eq!(sum, Vector2::new(-at.sin, at.cos), epsilon = 1e-12);
             let moment = x1 * f1.y - y * f1.x + (-x2) * f2.y - y * f2.x;
-            assert!(moment.abs() < 1e-12);
+            assert_abs_diff_eq!(moment, 0.0, epsilon = 1e-12);
             let dot: f64 = v.iter().zip(w.iter()).map(|(a, b)| a * b).sum();
-            assert!(dot.abs() < 1e-12);
+            assert_abs_diff_eq!(dot, 0.0, epsilon = 1e-12);
         }
     }
 

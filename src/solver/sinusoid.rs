@@ -55,11 +55,6 @@ impl Sinusoid {
         self.a * at.cos - self.b * at.sin
     }
 
-    /// Amplitude `sqrt(a² + b²)`.
-    pub fn amplitude(&self) -> f64 {
-        self.a.hypot(self.b)
-    }
-
     /// `self - other`.
     pub fn minus(&self, other: &Sinusoid) -> Sinusoid {
         Sinusoid::new(self.a - other.a, self.b - other.b)
@@ -88,11 +83,6 @@ impl Sinusoid {
         } else {
             Some(-self.b.atan2(self.a))
         }
-    }
-
-    /// The first rising zero strictly after `after`, or `None` for the zero function.
-    pub fn next_rise(&self, after: f64) -> Option<f64> {
-        self.rising_zero().map(|t0| next_periodic(t0, TAU, after))
     }
 
     /// Every zero (rising or falling) strictly inside `(lo, hi)`, in increasing order, appended to
@@ -205,6 +195,7 @@ pub fn wrap_angle(x: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use approx::{abs_diff_eq, assert_abs_diff_eq};
 
     #[test]
     fn rising_zero_is_a_rising_zero() {
@@ -218,7 +209,7 @@ mod tests {
             let f = Sinusoid::new(a, b);
             let t = f.rising_zero().expect("non-zero");
             let at = Angle::new(t);
-            assert!(f.value(&at).abs() < 1e-12, "value {}", f.value(&at));
+            assert_abs_diff_eq!(f.value(&at), 0.0, epsilon = 1e-12);
             assert!(f.slope(&at) > 0.0);
         }
     }
@@ -238,7 +229,7 @@ mod tests {
         let mut z = Vec::new();
         f.zeros_between(-0.5, 2.0 * PI - 0.5, &mut z);
         assert_eq!(z.len(), 2);
-        assert!(z[0].abs() < 1e-15 && (z[1] - PI).abs() < 1e-15);
+        assert_abs_diff_eq!(z[..], [0.0, PI][..], epsilon = 1e-15);
     }
 
     #[test]
@@ -258,9 +249,9 @@ mod tests {
                     .total_cmp(&q.value(&Angle::new(*y)))
             })
             .expect("non-empty");
-        assert!(m.iter().any(|t| (t - best).abs() < 1e-4));
+        assert!(m.iter().any(|t| abs_diff_eq!(*t, best, epsilon = 1e-4)));
         for t in m {
-            assert!(q.slope(&Angle::new(t)).abs() < 1e-12);
+            assert_abs_diff_eq!(q.slope(&Angle::new(t)), 0.0, epsilon = 1e-12);
         }
     }
 
@@ -271,7 +262,7 @@ mod tests {
         for i in 0..50 {
             let at = Angle::new(-3.0 + 0.13 * i as f64);
             let direct: f64 = terms.iter().map(|t| t.value(&at).powi(2)).sum();
-            assert!((q.value(&at) - direct).abs() < 1e-12);
+            assert_abs_diff_eq!(q.value(&at), direct, epsilon = 1e-12);
         }
     }
 
@@ -279,7 +270,7 @@ mod tests {
     fn wrap_angle_lands_in_half_open_interval() {
         assert_eq!(wrap_angle(PI), PI);
         assert_eq!(wrap_angle(-PI), PI);
-        assert!((wrap_angle(3.0 * PI / 2.0) + PI / 2.0).abs() < 1e-15);
-        assert!((wrap_angle(0.25) - 0.25).abs() < 1e-15);
+        assert_abs_diff_eq!(wrap_angle(3.0 * PI / 2.0), -PI / 2.0, epsilon = 1e-15);
+        assert_abs_diff_eq!(wrap_angle(0.25), 0.25, epsilon = 1e-15);
     }
 }

@@ -1,4 +1,5 @@
-//! Test support: an independent numerical reference and a generator of random grasps.
+//! Test support: an independent numerical reference, a generator of random grasps, the paper's
+//! Table 1 ([`table_1`]), and the binary under test with temporary folders ([`run`]).
 //!
 //! The reference shares no code with the solver's closed forms. It works in the candidate's own
 //! frame: it builds the 3×4 grasp matrix from the normals and tangents, takes its pseudo-inverse
@@ -6,6 +7,14 @@
 //! from the six contact inequalities, and scans the object's rotation densely with the power and
 //! its derivative (from the active constraint), bisecting every sign change of the derivative.
 #![allow(dead_code)]
+
+pub mod run;
+
+/// The paper's Table 1, the same fixture the unit tests use.
+pub mod table_1 {
+    use grasp_orient::solver::Candidate;
+    include!("table_1.rs");
+}
 
 use grasp_orient::solver::Candidate;
 use nalgebra::{Matrix3x4, Matrix4x3, Vector2, Vector3, Vector4};

@@ -106,10 +106,9 @@ def rosbag2_full_text(type_name: str) -> str:
         text = msg_file(name).read_text()
         out = text
         for dep in _dependencies(text, name.split("/")[0]):
-            key = _normal(dep)
-            if key in seen:
+            if dep in seen:  # rosbag2 keys the seen set by the name as the field writes it
                 continue
-            seen.add(key)
+            seen.add(dep)
             out += "\n" + SEPARATOR + f"MSG: {dep}\n" + rec(dep, depth - 1)
         return out
 
