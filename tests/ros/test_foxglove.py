@@ -119,18 +119,42 @@ def assert_decodes_everything(d: Decoded, what: str):
     assert not f, f"Foxglove's decoders fail on {what}:\n  " + "\n  ".join(f[:20]) + f"\n\ndecode.mjs said:\n{d.stderr[-3000:]}"
 
 
+def _content_key(msg) -> str:
+    """A sort key for decoded messages that does not tell 1 from 1.0 (Foxglove's JSON writes a float64 2.0 as 2)."""
+    def floats(v):
+        if isinstance(v, dict):
+            return {k: floats(x) for k, x in v.items()}
+        if isinstance(v, list):
+            return [floats(x) for x in v]
+        return float(v) if type(v) is int else v
+
+    return mu.canonical(mu.jsonish(floats(msg)))
+
+
+def compare_decodings(a: list[mu.Rec], b: list[mu.Rec], publish_time: bool = True) -> list[str]:
+    """Differences between two decodings of one file: same messages (topic, log_time, publish_time unless told
+    not to, schema, every field; NaN equals NaN, 2 equals 2.0), paired after sorting."""
+    if len(a) != len(b):
+        return [f"message count {len(a)} vs {len(b)}"]
+    key = lambda r: (r.topic, r.log_time, _content_key(r.msg))  # noqa: E731
+    out = []
+    for x, y in zip(sorted(a, key=key), sorted(b, key=key)):
+        where = f"{x.topic}@{x.log_time}"
+        if (x.topic, x.log_time) != (y.topic, y.log_time):
+            out.append(f"{where} vs {y.topic}@{y.log_time}")
+            continue
+        if publish_time and x.publish_time != y.publish_time:
+            out.append(f"{where}: publish_time {x.publish_time} vs {y.publish_time}")
+        if x.msgtype and y.msgtype and mu._normal(x.msgtype) != mu._normal(y.msgtype):
+            out.append(f"{where}: type {x.msgtype} vs {y.msgtype}")
+        out += [f"{where}: {d}" for d in mu.differences(x.msg, y.msg)[:5]]
+    return out
+
+
 def same_as_python_readers(fox: list[mu.Rec], path: Path) -> list[str]:
     """Differences between Foxglove's decoding of `path` and mcap_ros2's (with publish_time) and rosbags'."""
-    problems = []
-    py = mu.read_mcap(path)
-    problems += [f"vs mcap_ros2: {p}" for p in mu.compare_readers(fox, py)]
-    if not problems:  # same order after sorting: the publish times must agree too
-        a = sorted(fox, key=mu.sort_key)
-        b = sorted(py, key=mu.sort_key)
-        problems += [f"vs mcap_ros2: {x.topic}@{x.log_time}: publish_time {x.publish_time} vs {y.publish_time}"
-                     for x, y in zip(a, b) if x.publish_time != y.publish_time]
-    problems += [f"vs rosbags: {p}" for p in mu.compare_readers(fox, mu.read_rosbags(path))]
-    return problems
+    return ([f"vs mcap_ros2: {p}" for p in compare_decodings(fox, mu.read_mcap(path))]
+            + [f"vs rosbags: {p}" for p in compare_decodings(fox, mu.read_rosbags(path), publish_time=False)])
 
 
 # ---------------------------------------------------------------------------------------------------
@@ -155,7 +179,7 @@ def test_golden_bag_decodes_with_foxglove(foxglove_dir, tmp_path, name):
     # the player's fallback for files without an index reads the same messages, in file order
     stream = foxglove_decode(foxglove_dir, tmp_path, path, reader="stream")
     assert_decodes_everything(stream, f"{name} (stream reader)")
-    d = mu.compare_readers(stream.recs(), fox)
+    d = compare_decodings(stream.recs(), fox)
     assert not d, f"{name}: the stream reader decodes differently from the indexed one:\n  " + "\n  ".join(d[:20])
 
 
@@ -260,16 +284,20 @@ def test_live_recording_with_markers_decodes_with_foxglove(foxglove_dir, rclpy_c
         if a is not None:
             problems += [f"answer to {a.candidate_id}: {x}" for x in mu.differences(r.msg, mu.plain(a))[:4]]
 
-    # marker arrays: as the peer received them
+    # marker arrays: as the peer received them (paired by content, compared field by field)
     rm = by_topic.get(f"{LIVE_NS}/grip_markers", [])
-    got = sorted(mu.canonical(mu.jsonish(mu.plain(m))) for m in markers)
-    rec = sorted(mu.canonical(mu.jsonish(r.msg)) for r in rm)
+    got = sorted((mu.plain(m) for m in markers), key=_content_key)
+    rec = sorted((r.msg for r in rm), key=_content_key)
     if len(rec) != len(got):
         problems.append(f"{len(rec)} marker arrays recorded, {len(got)} received over DDS")
-    elif rec != got:
-        problems.append("the recorded marker arrays, as Foxglove decodes them, differ from those received over DDS")
+    for k, (a, b) in enumerate(zip(rec, got)):
+        problems += [f"marker array {k}: {x}" for x in mu.differences(a, b)[:4]]
     assert not problems, f"{path}: {len(problems)} problems:\n  " + "\n  ".join(problems[:30])
 
-    # and the Python readers read the same
+    # and the Python readers read the same, and so does the player's stream reader (its fallback)
     diff = same_as_python_readers(fox, path)
     assert not diff, f"{path}: Foxglove's decoders and the Python readers disagree:\n  " + "\n  ".join(diff[:20])
+    stream = foxglove_decode(foxglove_dir, tmp_path, path, reader="stream")
+    assert_decodes_everything(stream, f"{path.name} (stream reader)")
+    diff = compare_decodings(stream.recs(), fox)
+    assert not diff, f"{path}: the stream reader decodes differently from the indexed one:\n  " + "\n  ".join(diff[:20])
