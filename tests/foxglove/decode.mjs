@@ -298,7 +298,7 @@ class FileCheck {
 }
 
 function describe(r) {
-  const lines = [`${r.file}: ${r.ok ? "ok" : "FAILED"} (${r.reader ?? "not read"} reader)`];
+  const lines = [`${r.file}: ${r.ok ? "ok" : "FAILED"} (${r.reader == null ? "not read" : `${r.reader} reader`})`];
   for (const p of r.problems) lines.push(`  problem: ${p}`);
   for (const c of r.channels) {
     const err = c.error == null ? "" : ` — ${c.error.stage} error on ${c.error.failures} messages: ${c.error.message}`;

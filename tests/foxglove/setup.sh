@@ -13,6 +13,8 @@
 # (<cache>/foxglove-<hash>), installed once with `npm ci` into a temporary directory and renamed into place
 # only when complete and checked. Needs: Node.js >= 18 and npm (Debian 12: apt-get install nodejs npm, done
 # here when missing), network access to the npm registry (and to the Debian mirror when packages are missing).
+# @foxglove/rosmsg2-serialization 3.1.0 declares node >= 20, so Debian 12's npm 9.2.0 warns EBADENGINE on
+# Node.js 18.20.4; it installs and decode.mjs prints the same messages there as on Node.js 20 (checked).
 set -euo pipefail
 
 log() { printf '[foxglove-setup] %s\n' "$*" >&2; }
@@ -95,7 +97,8 @@ if [ -f "$STAMP" ] && check "$DIR" >"$LOGS/check.log" 2>&1; then
 else
     log "installing Foxglove's decoders with npm ci into $DIR (node $(node --version), npm $(npm --version))"
     TMP="$DIR.tmp.$$"
-    rm -rf "$TMP"
+    rm -rf "$DIR".tmp.*   # left by an interrupted run (we hold the lock)
+    trap 'rm -rf "$TMP"' EXIT
     mkdir -p "$TMP"
     cp "$SCRIPT_DIR/package.json" "$SCRIPT_DIR/package-lock.json" "$TMP/"
     # no install scripts: the pinned packages are JavaScript and WebAssembly, nothing to build

@@ -19,6 +19,7 @@ import json
 import math
 import os
 import random
+import re
 import signal
 import subprocess
 import time
@@ -181,6 +182,45 @@ def test_golden_bag_decodes_with_foxglove(foxglove_dir, tmp_path, name):
     assert_decodes_everything(stream, f"{name} (stream reader)")
     d = compare_decodings(stream.recs(), fox)
     assert not d, f"{name}: the stream reader decodes differently from the indexed one:\n  " + "\n  ".join(d[:20])
+
+
+def _with_dependency_headers_as_pkg_msg_name(src: Path, dst: Path):
+    """A copy of `src` whose schema texts name each dependency `pkg/msg/Name` ("MSG: std_msgs/msg/Header")
+    where the fields say `pkg/Name`: the form the node wrote before issue 8. Messages untouched."""
+    from mcap.reader import make_reader
+    from mcap.writer import CompressionType, Writer
+
+    with open(src, "rb") as f, open(dst, "wb") as out:
+        r = make_reader(f)
+        summary = r.get_summary()
+        w = Writer(out, compression=CompressionType.ZSTD)
+        w.start(profile=r.get_header().profile, library="test_foxglove.py")
+        sids = {s.id: w.register_schema(s.name, s.encoding,
+                                        re.sub(r"^MSG: (\w+)/(\w+)$", r"MSG: \1/msg/\2", s.data.decode(), flags=re.M).encode())
+                for s in summary.schemas.values()}
+        cids = {c.id: w.register_channel(c.topic, c.message_encoding, sids[c.schema_id], dict(c.metadata))
+                for c in summary.channels.values()}
+        for _, channel, m in r.iter_messages():
+            w.add_message(cids[channel.id], m.log_time, m.data, m.publish_time, m.sequence)
+        w.finish()
+
+
+def test_foxglove_check_fails_on_the_schema_text_of_issue_8(foxglove_dir, tmp_path):
+    """The check can fail: with dependencies named `pkg/msg/Name`, Foxglove's parser finds no definition for the
+    `pkg/Name` of the fields and no channel decodes, while the Python readers accept the file."""
+    bad = tmp_path / "pkg_msg_name_headers.mcap"
+    _with_dependency_headers_as_pkg_msg_name(mu.BAGS_DIR / "paper_cases.mcap", bad)
+    assert "MSG: std_msgs/msg/Header" in bad.read_bytes().decode("latin-1")
+    d = foxglove_decode(foxglove_dir, tmp_path, bad)
+    assert d.returncode == 1, f"decode.mjs exited {d.returncode} on {bad.name}:\n{d.stderr}"
+    (s,) = d.summaries
+    assert not s["ok"] and len(s["channels"]) == 2 and d.messages == []
+    for c in s["channels"]:
+        e = c["error"]
+        assert e is not None and e["stage"] == "parse" and e["failures"] == c["messages"] == 4, c
+        # the error of issue 8, verbatim (the root's first field is `std_msgs/Header header`)
+        assert e["message"] == "Expected 1 top level type definition for 'std_msgs/Header' but found 0", e
+    assert len(mu.read_mcap(bad)) == 8, "mcap_ros2 should still read the file: it accepts both forms"
 
 
 # ---------------------------------------------------------------------------------------------------
