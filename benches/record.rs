@@ -22,6 +22,7 @@ fn topics() -> Topics {
         candidates: "/grasp_candidates".into(),
         recommendations: "/grip_recommendations".into(),
         markers: None,
+        sets: None,
     }
 }
 
@@ -144,7 +145,12 @@ fn main() {
     let recorded = bag::read(&path).expect("read");
     let read_s = t.elapsed().as_secs_f64();
     let t2 = Instant::now();
-    let summary = replay(&recorded, &settings, |_| {});
+    let summary = replay(
+        &recorded,
+        &settings,
+        &grasp_orient::sets::Rules::default(),
+        |_| {},
+    );
     let solve_s = t2.elapsed().as_secs_f64();
     let total = t.elapsed().as_secs_f64();
     assert_eq!(summary.compared, n as u64);

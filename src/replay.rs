@@ -1,8 +1,14 @@
 //! Replaying recordings: every recorded candidate is solved again and compared, field by field,
-//! with the recommendation recorded for it.
+//! with the recommendation recorded for it; every recorded set likewise ([`sets`]). Only the
+//! fields the recording has are compared: a recording made before a message grew decodes with
+//! the new trailing fields at their defaults, which say nothing.
 
-use crate::msg::{answer, clip, short_id, GraspCandidate, GripRecommendation};
+mod sets;
+
+use crate::msg::{clip, short_id, GraspCandidate, GripRecommendation};
 use crate::record::bag::{keep_example, Bag, Recorded};
+use crate::record::channels::RecordedFields;
+use crate::sets::{answer_one, Rules};
 use crate::solver::{Objective, Settings};
 use std::collections::{BTreeMap, HashMap, VecDeque};
 
@@ -24,6 +30,14 @@ pub struct Summary {
     pub examples: Vec<String>,
     /// Recorded recommendations no candidate matched.
     pub unmatched_recommendations: u64,
+    /// Candidate sets solved again (their candidates count in `candidates` too).
+    pub sets: u64,
+    /// Of them, with a recorded answer to compare with.
+    pub sets_compared: u64,
+    /// Of those, differing in any recommendation, the ranking or a field of the set.
+    pub sets_differing: u64,
+    /// Recorded set answers no set matched.
+    pub unmatched_set_answers: u64,
 }
 
 impl Summary {
@@ -33,6 +47,10 @@ impl Summary {
         self.compared += other.compared;
         self.differing += other.differing;
         self.unmatched_recommendations += other.unmatched_recommendations;
+        self.sets += other.sets;
+        self.sets_compared += other.sets_compared;
+        self.sets_differing += other.sets_differing;
+        self.unmatched_set_answers += other.unmatched_set_answers;
         for (field, gap) in other.largest {
             self.note_gap(field, gap);
         }
@@ -73,7 +91,7 @@ type ExactField = (
 );
 
 /// Every number compared, in report order.
-const NUMBERS: [NumberField; 14] = [
+const NUMBERS: [NumberField; 16] = [
     ("wrist_rotation", |r| r.wrist_rotation),
     ("rotation.z", |r| r.rotation.z),
     ("rotation.w", |r| r.rotation.w),
@@ -88,6 +106,8 @@ const NUMBERS: [NumberField; 14] = [
     ("contact_forces", |r| r.contact_forces[3]),
     ("gripping_power_current", |r| r.gripping_power_current),
     ("internal_force_current", |r| r.internal_force_current),
+    ("finger_force", |r| r.finger_force),
+    ("finger_force_current", |r| r.finger_force_current),
 ];
 
 /// Every list of numbers compared: a different length is a gap of 1.
@@ -116,6 +136,17 @@ pub fn differences(
     ours: &GripRecommendation,
     recorded: &GripRecommendation,
 ) -> Vec<(&'static str, f64)> {
+    differences_in(ours, recorded, &RecordedFields::default())
+}
+
+/// [`differences`] on the fields the recording has (`fields`); the others are not compared.
+pub fn differences_in(
+    ours: &GripRecommendation,
+    recorded: &GripRecommendation,
+    fields: &RecordedFields,
+) -> Vec<(&'static str, f64)> {
+    // "rotation.z" is a part of "rotation".
+    let has = |name: &str| fields.has::<GripRecommendation>(name.split('.').next().unwrap_or(name));
     let numbers = NUMBERS
         .iter()
         .map(|(field, get)| (*field, number_gap(get(ours), get(recorded))));
@@ -137,7 +168,7 @@ pub fn differences(
     numbers
         .chain(lists)
         .chain(exact)
-        .filter(|(_, gap)| *gap > 0.0)
+        .filter(|(field, gap)| *gap > 0.0 && has(field))
         .collect()
 }
 
@@ -185,20 +216,46 @@ fn pair(bag: &Bag) -> (Vec<Option<usize>>, u64) {
     (pairs, unmatched)
 }
 
-/// Solves every candidate of `bag` again with `settings` (and, for each, the objective its
-/// recorded answer names) and compares. The work is shared among the machine's cores; `progress`
-/// hears of every 4096 candidates done.
-pub fn replay(bag: &Bag, settings: &Settings, progress: impl Fn(u64) + Sync) -> Summary {
-    replay_on_cores(bag, settings, false, &progress).0
+/// Solves every candidate and every set of `bag` again with `settings` and `rules` (and, for
+/// each, the objective its recorded answer names) and compares. The work is shared among the
+/// machine's cores; `progress` hears of every 4096 candidates done.
+pub fn replay(
+    bag: &Bag,
+    settings: &Settings,
+    rules: &Rules,
+    progress: impl Fn(u64) + Sync,
+) -> Summary {
+    let mut summary = replay_on_cores(bag, settings, rules, false, &progress).0;
+    summary.merge(sets::replay_sets(bag, settings, rules, false).0);
+    summary
 }
 
-/// [`replay`], also returning the new answers, each with its candidate's times.
+/// The new answers of a replay, each with its candidate's (or set's) times.
+#[derive(Debug, Default)]
+pub struct Answers {
+    /// One per recorded candidate, in order.
+    pub recommendations: Vec<Recorded<GripRecommendation>>,
+    /// One per recorded set, in order.
+    pub sets: Vec<Recorded<crate::msg::GripRecommendationSet>>,
+}
+
+/// [`replay`], also returning the new answers.
 pub fn replay_with_answers(
     bag: &Bag,
     settings: &Settings,
+    rules: &Rules,
     progress: impl Fn(u64) + Sync,
-) -> (Summary, Vec<Recorded<GripRecommendation>>) {
-    replay_on_cores(bag, settings, true, &progress)
+) -> (Summary, Answers) {
+    let (mut summary, recommendations) = replay_on_cores(bag, settings, rules, true, &progress);
+    let (of_sets, sets) = sets::replay_sets(bag, settings, rules, true);
+    summary.merge(of_sets);
+    (
+        summary,
+        Answers {
+            recommendations,
+            sets,
+        },
+    )
 }
 
 /// One share of the candidates per core; the answers are kept only when asked for, since a
@@ -206,6 +263,7 @@ pub fn replay_with_answers(
 fn replay_on_cores(
     bag: &Bag,
     settings: &Settings,
+    rules: &Rules,
     keep: bool,
     progress: &(impl Fn(u64) + Sync),
 ) -> (Summary, Vec<Recorded<GripRecommendation>>) {
@@ -223,7 +281,8 @@ fn replay_on_cores(
                     let mut answers = Vec::with_capacity(if keep { cands.len() } else { 0 });
                     for (k, (c, p)) in cands.iter().zip(pairs).enumerate() {
                         let theirs = p.map(|i| &bag.recommendations[i].message);
-                        let ours = check(&c.message, settings, theirs, &mut part);
+                        let ours =
+                            check(&c.message, settings, rules, theirs, &bag.fields, &mut part);
                         if keep {
                             answers.push(Recorded {
                                 message: ours,
@@ -257,57 +316,78 @@ fn replay_on_cores(
 fn check(
     candidate: &GraspCandidate,
     settings: &Settings,
+    rules: &Rules,
     theirs: Option<&GripRecommendation>,
+    fields: &RecordedFields,
     summary: &mut Summary,
 ) -> GripRecommendation {
     summary.candidates += 1;
-    let ours = solve_like(candidate, settings, theirs);
+    let ours = solve_like(candidate, settings, rules, theirs);
     if let Some(theirs) = theirs {
-        summary.compared += 1;
-        let diffs = differences(&ours, theirs);
-        for (field, gap) in &diffs {
-            summary.note_gap(field, *gap);
-        }
-        let beyond: Vec<_> = diffs.iter().filter(|(_, g)| *g > TOLERANCE).collect();
-        if !beyond.is_empty() {
-            summary.differing += 1;
-            keep_example(&mut summary.examples, || {
-                format!(
-                    "candidate {:?}: {}",
-                    short_id(&candidate.id),
-                    beyond
-                        .iter()
-                        .map(|(f, g)| format!("{f} (gap {g:.3e})"))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )
-            });
-        }
+        let label = || format!("candidate {:?}", short_id(&candidate.id));
+        compare_one(label, &ours, theirs, fields, summary);
     }
     ours
+}
+
+/// Compares one new answer with its recorded one on the recorded fields; true when it differs.
+/// `label` names the candidate in the report.
+fn compare_one(
+    label: impl FnOnce() -> String,
+    ours: &GripRecommendation,
+    theirs: &GripRecommendation,
+    fields: &RecordedFields,
+    summary: &mut Summary,
+) -> bool {
+    summary.compared += 1;
+    let diffs = differences_in(ours, theirs, fields);
+    for (field, gap) in &diffs {
+        summary.note_gap(field, *gap);
+    }
+    let beyond: Vec<_> = diffs.iter().filter(|(_, g)| *g > TOLERANCE).collect();
+    if beyond.is_empty() {
+        return false;
+    }
+    summary.differing += 1;
+    keep_example(&mut summary.examples, || {
+        format!(
+            "{}: {}",
+            label(),
+            beyond
+                .iter()
+                .map(|(f, g)| format!("{f} (gap {g:.3e})"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    });
+    true
 }
 
 /// Solves as the recording did: with the objective the recorded answer names, if any.
 fn solve_like(
     candidate: &GraspCandidate,
     settings: &Settings,
+    rules: &Rules,
     recorded: Option<&GripRecommendation>,
 ) -> GripRecommendation {
+    answer_one(candidate, &objective_like(settings, recorded), rules)
+}
+
+/// `settings` with the objective `recorded` names, if any.
+fn objective_like(settings: &Settings, recorded: Option<&GripRecommendation>) -> Settings {
     let objective = recorded
         .and_then(|r| Objective::from_name(&r.objective))
         .unwrap_or(settings.objective);
-    answer(
-        candidate,
-        &Settings {
-            objective,
-            ..*settings
-        },
-    )
+    Settings {
+        objective,
+        ..*settings
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::msg::answer;
 
     #[test]
     fn equal_answers_have_no_differences_and_changed_ones_are_named() {

@@ -9,6 +9,7 @@ pub mod solve;
 
 use anyhow::{bail, Context};
 use grasp_orient::config::{bounds, Config, RangeKind};
+use grasp_orient::sets::{GripperDrive, Rules};
 use grasp_orient::solver::{AllowedRange, Objective, Settings};
 use std::path::PathBuf;
 
@@ -29,11 +30,25 @@ pub struct SolveOptions {
     /// Divides both friction coefficients (>= 1; 1 reproduces the paper).
     #[arg(long, value_name = "S")]
     pub friction_safety_factor: Option<f64>,
+    /// The most grip force the gripper gives, N (>= 0; 0: no limit). A grasp that needs more
+    /// gets status 3.
+    #[arg(long, value_name = "N")]
+    pub max_grip_force: Option<f64>,
+    /// How the fingers are driven, which picks the grip force: coupled (internal_force) or
+    /// independent (finger_force).
+    #[arg(long, value_name = "DRIVE")]
+    pub gripper_drive: Option<String>,
 }
 
 impl SolveOptions {
     /// The config file with these overrides applied, checked.
     pub fn settings(&self) -> anyhow::Result<Settings> {
+        Ok(self.configured()?.1)
+    }
+
+    /// The config file with these overrides applied, checked: the config, the solver settings
+    /// and the gripper rules.
+    pub fn configured(&self) -> anyhow::Result<(Config, Settings, Rules)> {
         let mut config = Config::load(self.config.as_deref(), "grasp_orient")?;
         if let Some(o) = &self.objective {
             config.objective = o
@@ -43,11 +58,22 @@ impl SolveOptions {
         if let Some(s) = self.friction_safety_factor {
             config.friction_safety_factor = s;
         }
-        let mut settings = config.solver_settings()?;
+        if let Some(f) = self.max_grip_force {
+            config.max_grip_force = f;
+        }
+        if let Some(d) = &self.gripper_drive {
+            config.gripper_drive = d
+                .parse::<GripperDrive>()
+                .map_err(|e| anyhow::anyhow!("--gripper-drive {e}"))?;
+        }
+        let mut settings = config
+            .solver_settings()
+            .map_err(|e| anyhow::anyhow!("{e} (from --config or the options)"))?;
         if let Some(r) = &self.range {
             settings.range = parse_range(r)?;
         }
-        Ok(settings)
+        let rules = config.rules();
+        Ok((config, settings, rules))
     }
 }
 

@@ -3,10 +3,11 @@
 
 use super::SolveOptions;
 use anyhow::{bail, Context};
-use grasp_orient::msg::{GraspCandidate, RosMessage};
+use grasp_orient::msg::{GraspCandidate, GraspCandidateSet, GripRecommendation, RosMessage};
 use grasp_orient::record::bag;
-use grasp_orient::record::{BagWriter, Entry, Payload, Topics};
+use grasp_orient::record::{BagWriter, Entry, Payload, SetTopics, Topics};
 use grasp_orient::replay::{replay, replay_with_answers, Summary, TOLERANCE};
+use grasp_orient::sets::Rules;
 use grasp_orient::solver::Settings;
 use std::path::{Path, PathBuf};
 
@@ -25,19 +26,21 @@ pub struct Args {
 
 /// Replays every bag and prints a summary.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let settings = args.options.settings()?;
+    let (_, settings, rules) = args.options.configured()?;
     let started = std::time::Instant::now();
     let mut summary = Summary::default();
     let mut writer = args.write.as_deref().map(create_writer).transpose()?;
     for path in &args.bags {
-        summary.merge(replay_file(path, &settings, writer.as_mut())?);
+        summary.merge(replay_file(path, &settings, &rules, writer.as_mut())?);
     }
     if let (Some(w), Some(path)) = (writer, &args.write) {
         let written = w.finish()?;
         println!(
-            "wrote {} candidates and {} recommendations to {}",
+            "wrote {} candidates, {} recommendations, {} candidate sets and {} set answers to {}",
             written.candidates,
             written.recommendations,
+            written.candidate_sets,
+            written.recommendation_sets,
             path.display()
         );
     }
@@ -50,6 +53,7 @@ fn create_writer(path: &Path) -> anyhow::Result<BagWriter> {
         candidates: "/grasp_candidates".into(),
         recommendations: "/grip_recommendations".into(),
         markers: None,
+        sets: Some(SetTopics::default_names()),
     };
     BagWriter::create(path, &topics, 100)
         .with_context(|| format!("cannot write {}", path.display()))
@@ -59,14 +63,25 @@ fn create_writer(path: &Path) -> anyhow::Result<BagWriter> {
 fn replay_file(
     path: &Path,
     settings: &Settings,
+    rules: &Rules,
     writer: Option<&mut BagWriter>,
 ) -> anyhow::Result<Summary> {
     let bag = bag::read(path)?;
-    if bag.candidates.is_empty() {
+    if bag.candidates.is_empty() && bag.candidate_sets.is_empty() {
         bail!(
-            "{}: no {} messages (cdr) in it",
+            "{}: no {} or {} messages (cdr) in it",
             path.display(),
-            GraspCandidate::TYPE_NAME
+            GraspCandidate::TYPE_NAME,
+            GraspCandidateSet::TYPE_NAME
+        );
+    }
+    let missing = bag.fields.missing::<GripRecommendation>();
+    if !missing.is_empty() {
+        println!(
+            "{}: recorded before {} were added to {}: not compared",
+            path.display(),
+            missing.join(", "),
+            GripRecommendation::TYPE_NAME
         );
     }
     if bag.undecodable_count > 0 {
@@ -84,8 +99,20 @@ fn replay_file(
     let progress = |n| bar.inc(n);
     let summary = match writer {
         Some(w) => {
-            let (summary, answers) = replay_with_answers(&bag, settings, progress);
-            for (c, a) in bag.candidates.iter().zip(answers) {
+            let (summary, answers) = replay_with_answers(&bag, settings, rules, progress);
+            for (s, a) in bag.candidate_sets.iter().zip(answers.sets) {
+                w.write(&Entry {
+                    payload: Payload::CandidateSet(Box::new(s.message.clone())),
+                    log_time: s.log_time,
+                    publish_time: s.publish_time,
+                })?;
+                w.write(&Entry {
+                    payload: Payload::RecommendationSet(Box::new(a.message)),
+                    log_time: a.log_time,
+                    publish_time: a.publish_time,
+                })?;
+            }
+            for (c, a) in bag.candidates.iter().zip(answers.recommendations) {
                 w.write(&Entry {
                     payload: Payload::Candidate(Box::new(c.message.clone())),
                     log_time: c.log_time,
@@ -99,7 +126,7 @@ fn replay_file(
             }
             summary
         }
-        None => replay(&bag, settings, progress),
+        None => replay(&bag, settings, rules, progress),
     };
     bar.finish_and_clear();
     println!(
@@ -108,6 +135,14 @@ fn replay_file(
         bag.candidates.len(),
         bag.recommendations.len()
     );
+    if !bag.candidate_sets.is_empty() || !bag.recommendation_sets.is_empty() {
+        println!(
+            "{}: {} candidate sets, {} recorded set answers",
+            path.display(),
+            bag.candidate_sets.len(),
+            bag.recommendation_sets.len()
+        );
+    }
     Ok(summary)
 }
 
@@ -122,6 +157,16 @@ fn report(summary: &Summary, secs: f64) -> anyhow::Result<()> {
         summary.differing,
         summary.unmatched_recommendations
     );
+    if summary.sets > 0 || summary.unmatched_set_answers > 0 {
+        println!(
+            "replayed {} sets (their candidates counted above): {} compared with a recorded \
+             answer, {} differ, {} recorded set answers unmatched",
+            summary.sets,
+            summary.sets_compared,
+            summary.sets_differing,
+            summary.unmatched_set_answers
+        );
+    }
     if !summary.largest.is_empty() {
         println!("largest difference per field:");
         for (field, gap) in &summary.largest {
@@ -142,6 +187,19 @@ fn report(summary: &Summary, secs: f64) -> anyhow::Result<()> {
         bail!(
             "{} recorded recommendations answer no recorded candidate",
             summary.unmatched_recommendations
+        );
+    }
+    if summary.sets_differing > 0 {
+        bail!(
+            "{} of {} compared set answers differ",
+            summary.sets_differing,
+            summary.sets_compared
+        );
+    }
+    if summary.unmatched_set_answers > 0 {
+        bail!(
+            "{} recorded set answers answer no recorded set",
+            summary.unmatched_set_answers
         );
     }
     Ok(())

@@ -10,6 +10,7 @@ pub mod cdr;
 mod contract;
 mod convert;
 pub mod definitions;
+pub mod schema;
 
 pub use contract::{message_type_name, RosMessage, RosType};
 pub use convert::{answer, clip, invalid, short_id, MessageLimits, MAX_TEXT_BYTES, SHORT_ID_CHARS};

@@ -1,8 +1,10 @@
 //! Reading recordings back: ours, or any rosbag2-style MCAP with a `GraspCandidate` topic, and
 //! recovering what a killed recording holds.
 
-use crate::msg::definitions::split_type_name;
-use crate::msg::{cdr, GraspCandidate, GripRecommendation, RosMessage};
+use super::channels::{Carried, Channels, RecordedFields};
+use crate::msg::{
+    cdr, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
+};
 use std::collections::{BTreeMap, HashMap};
 use std::fs::File;
 use std::io::BufWriter;
@@ -27,6 +29,14 @@ pub enum BagError {
         path: PathBuf,
         /// The cause.
         source: mcap::McapError,
+    },
+    /// A channel carries one of our types in a version that is not a prefix of ours.
+    #[error("{path}: {why}")]
+    Incompatible {
+        /// The file.
+        path: PathBuf,
+        /// The channel, and the first field that differs.
+        why: String,
     },
 }
 
@@ -59,6 +69,17 @@ pub struct Bag {
     pub candidates: Vec<Recorded<GraspCandidate>>,
     /// Every recommendation.
     pub recommendations: Vec<Recorded<GripRecommendation>>,
+    /// Every candidate set.
+    pub candidate_sets: Vec<Recorded<GraspCandidateSet>>,
+    /// Every answer to a set.
+    pub recommendation_sets: Vec<Recorded<GripRecommendationSet>>,
+    /// Which fields of our types the recording has (recordings made before a type grew lack its
+    /// trailing fields, which decode at their defaults).
+    pub fields: RecordedFields,
+    /// Channels of our types in a version that is not a prefix of ours, with why.
+    pub incompatible: Vec<String>,
+    /// How each channel seen decodes.
+    channels: Channels,
     /// Messages on other topics, left alone.
     pub other: u64,
     /// Messages of our types that did not decode, with why (first few).
@@ -81,18 +102,10 @@ fn mcap_err(path: &Path) -> impl Fn(mcap::McapError) -> BagError + '_ {
     }
 }
 
-/// Whether a channel carries `M` as CDR. Channels are picked by schema name alone (with or
-/// without the `/msg/`), never by the schema text, so recordings written with any form of the
-/// definitions read alike. Called for every message, so it compares without allocating.
-fn carries<M: RosMessage>(channel: &mcap::Channel<'_>) -> bool {
-    let Some(schema) = &channel.schema else {
-        return false;
-    };
-    channel.message_encoding == "cdr"
-        && split_type_name(&schema.name) == Some((M::PACKAGE, M::NAME))
-}
-
-/// Decodes one message of ours into the bag's lists, or notes why it did not decode.
+/// Decodes one message of ours into the bag's lists, or notes why it did not decode. Channels are
+/// picked by schema name alone (with or without the `/msg/`), never by the schema text, so
+/// recordings written with any form of the definitions read alike; the schema text only says
+/// which fields the recorded version of the type has.
 fn take(out: &mut Bag, message: &mcap::Message<'_>) {
     let (log_time, publish_time) = (message.log_time, message.publish_time);
     let failed = |out: &mut Bag, e: cdr::CdrError| {
@@ -101,26 +114,35 @@ fn take(out: &mut Bag, message: &mcap::Message<'_>) {
             format!("{} #{}: {e}", message.channel.topic, message.sequence)
         });
     };
-    if carries::<GraspCandidate>(&message.channel) {
-        match cdr::decode::<GraspCandidate>(&message.data) {
-            Ok(m) => out.candidates.push(Recorded {
-                message: m,
-                log_time,
-                publish_time,
-            }),
-            Err(e) => failed(out, e),
+    let reader = match out.channels.reader(&message.channel, &mut out.fields) {
+        Ok(reader) => reader.clone(),
+        Err(why) => {
+            let why = why.clone();
+            if !out.incompatible.contains(&why) {
+                out.incompatible.push(why);
+            }
+            out.undecodable_count += 1;
+            return;
         }
-    } else if carries::<GripRecommendation>(&message.channel) {
-        match cdr::decode::<GripRecommendation>(&message.data) {
-            Ok(m) => out.recommendations.push(Recorded {
-                message: m,
-                log_time,
-                publish_time,
-            }),
-            Err(e) => failed(out, e),
-        }
-    } else {
-        out.other += 1;
+    };
+    macro_rules! push {
+        ($list:ident) => {
+            match reader.decode(&message.data) {
+                Ok(m) => out.$list.push(Recorded {
+                    message: m,
+                    log_time,
+                    publish_time,
+                }),
+                Err(e) => failed(out, e),
+            }
+        };
+    }
+    match reader.carried {
+        Carried::Candidate => push!(candidates),
+        Carried::Recommendation => push!(recommendations),
+        Carried::CandidateSet => push!(candidate_sets),
+        Carried::RecommendationSet => push!(recommendation_sets),
+        Carried::Other => out.other += 1,
     }
 }
 
@@ -129,6 +151,14 @@ impl Bag {
     fn append(&mut self, next: Bag) {
         self.candidates.extend(next.candidates);
         self.recommendations.extend(next.recommendations);
+        self.candidate_sets.extend(next.candidate_sets);
+        self.recommendation_sets.extend(next.recommendation_sets);
+        self.fields.merge(&next.fields);
+        for why in next.incompatible {
+            if !self.incompatible.contains(&why) {
+                self.incompatible.push(why);
+            }
+        }
         self.other += next.other;
         self.undecodable_count += next.undecodable_count;
         for example in next.undecodable {
@@ -141,14 +171,28 @@ impl Bag {
 /// message into chunks, the chunks are decompressed and decoded on all cores.
 pub fn read(path: &Path) -> Result<Bag, BagError> {
     let bytes = std::fs::read(path).map_err(io(path))?;
-    if let Some(bag) = read_chunks_in_parallel(&bytes).map_err(mcap_err(path))? {
-        return Ok(bag);
+    let bag = match read_chunks_in_parallel(&bytes).map_err(mcap_err(path))? {
+        Some(bag) => bag,
+        None => {
+            let mut bag = Bag::default();
+            for message in mcap::MessageStream::new(&bytes).map_err(mcap_err(path))? {
+                take(&mut bag, &message.map_err(mcap_err(path))?);
+            }
+            bag
+        }
+    };
+    compatible(bag, path)
+}
+
+/// The bag, or the error naming its first incompatible channel.
+fn compatible(bag: Bag, path: &Path) -> Result<Bag, BagError> {
+    match bag.incompatible.first() {
+        Some(why) => Err(BagError::Incompatible {
+            path: path.to_path_buf(),
+            why: why.clone(),
+        }),
+        None => Ok(bag),
     }
-    let mut bag = Bag::default();
-    for message in mcap::MessageStream::new(&bytes).map_err(mcap_err(path))? {
-        take(&mut bag, &message.map_err(mcap_err(path))?);
-    }
-    Ok(bag)
 }
 
 /// `None` when the file has no summary or not all messages are in indexed chunks.
@@ -196,6 +240,8 @@ fn read_chunks_in_parallel(bytes: &[u8]) -> Result<Option<Bag>, mcap::McapError>
     }
     let seen = bag.candidates.len() as u64
         + bag.recommendations.len() as u64
+        + bag.candidate_sets.len() as u64
+        + bag.recommendation_sets.len() as u64
         + bag.other
         + bag.undecodable_count;
     // Messages outside chunks would be missed: then read the file front to back instead.
@@ -290,6 +336,7 @@ mod tests {
             candidates: "/grasp_candidates".into(),
             recommendations: "/grip_recommendations".into(),
             markers: None,
+            sets: Some(crate::record::SetTopics::default_names()),
         }
     }
 

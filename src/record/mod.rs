@@ -11,9 +11,13 @@
 //! its `record` parameter says.
 
 pub mod bag;
+pub mod channels;
 pub mod lifecycle;
 
-use crate::msg::{cdr, definitions, GraspCandidate, GripRecommendation, MarkerArray, RosMessage};
+use crate::msg::{
+    cdr, definitions, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
+    MarkerArray, RosMessage,
+};
 use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::BufWriter;
@@ -69,6 +73,10 @@ pub enum Payload {
     Recommendation(Box<GripRecommendation>),
     /// On the markers topic.
     Markers(Box<MarkerArray>),
+    /// On the candidate sets topic.
+    CandidateSet(Box<GraspCandidateSet>),
+    /// On the set answers topic.
+    RecommendationSet(Box<GripRecommendationSet>),
 }
 
 /// A message with its times, ns since the Unix epoch.
@@ -82,7 +90,7 @@ pub struct Entry {
     pub publish_time: u64,
 }
 
-/// Topic names of the three channels.
+/// Topic names of the channels.
 #[derive(Debug, Clone)]
 pub struct Topics {
     /// Candidates, e.g. `/grasp_candidates`.
@@ -91,6 +99,27 @@ pub struct Topics {
     pub recommendations: String,
     /// Markers; `None` leaves them out.
     pub markers: Option<String>,
+    /// Candidate sets and their answers; `None` leaves them out.
+    pub sets: Option<SetTopics>,
+}
+
+/// Topic names of the two set channels.
+#[derive(Debug, Clone)]
+pub struct SetTopics {
+    /// Candidate sets, e.g. `/grasp_candidate_sets`.
+    pub candidates: String,
+    /// Their answers, e.g. `/grip_recommendation_sets`.
+    pub recommendations: String,
+}
+
+impl SetTopics {
+    /// The node's default names, `/grasp_candidate_sets` and `/grip_recommendation_sets`.
+    pub fn default_names() -> Self {
+        Self {
+            candidates: "/grasp_candidate_sets".into(),
+            recommendations: "/grip_recommendation_sets".into(),
+        }
+    }
 }
 
 /// Messages written per channel.
@@ -102,6 +131,10 @@ pub struct Written {
     pub recommendations: u64,
     /// Marker arrays.
     pub markers: u64,
+    /// Candidate sets.
+    pub candidate_sets: u64,
+    /// Answers to sets.
+    pub recommendation_sets: u64,
 }
 
 /// A recording being written by its own thread.
@@ -151,12 +184,15 @@ pub fn qos_yaml(depth: i64) -> String {
     )
 }
 
-/// An MCAP writer with the three channels of a grasp_orient recording.
+/// Channels of a recording: candidates, recommendations, markers, candidate sets, set answers.
+const CHANNELS: usize = 5;
+
+/// An MCAP writer with the channels of a grasp_orient recording.
 pub struct BagWriter {
     path: PathBuf,
     writer: mcap::Writer<BufWriter<File>>,
-    channels: [Option<u16>; 3],
-    sequence: [u32; 3],
+    channels: [Option<u16>; CHANNELS],
+    sequence: [u32; CHANNELS],
     written: Written,
 }
 
@@ -209,12 +245,23 @@ impl BagWriter {
                 Some(t) => Some(channel(t, MarkerArray::TYPE_NAME)?),
                 None => None,
             },
+            match &topics.sets {
+                Some(t) => Some(channel(&t.candidates, GraspCandidateSet::TYPE_NAME)?),
+                None => None,
+            },
+            match &topics.sets {
+                Some(t) => Some(channel(
+                    &t.recommendations,
+                    GripRecommendationSet::TYPE_NAME,
+                )?),
+                None => None,
+            },
         ];
         Ok(Self {
             path: path.to_path_buf(),
             writer,
             channels,
-            sequence: [0; 3],
+            sequence: [0; CHANNELS],
             written: Written::default(),
         })
     }
@@ -226,12 +273,15 @@ impl BagWriter {
         }
     }
 
-    /// Writes one message (markers are dropped when the recording has no markers channel).
+    /// Writes one message (markers and sets are dropped when the recording has no channel for
+    /// them).
     pub fn write(&mut self, entry: &Entry) -> Result<(), RecordError> {
         let (index, bytes) = match &entry.payload {
             Payload::Candidate(m) => (0, cdr::encode(m.as_ref())?),
             Payload::Recommendation(m) => (1, cdr::encode(m.as_ref())?),
             Payload::Markers(m) => (2, cdr::encode(m.as_ref())?),
+            Payload::CandidateSet(m) => (3, cdr::encode(m.as_ref())?),
+            Payload::RecommendationSet(m) => (4, cdr::encode(m.as_ref())?),
         };
         let Some(channel_id) = self.channels[index] else {
             return Ok(());
@@ -249,7 +299,9 @@ impl BagWriter {
         match index {
             0 => self.written.candidates += 1,
             1 => self.written.recommendations += 1,
-            _ => self.written.markers += 1,
+            2 => self.written.markers += 1,
+            3 => self.written.candidate_sets += 1,
+            _ => self.written.recommendation_sets += 1,
         }
         Ok(())
     }
