@@ -9,6 +9,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+echo "== vendor/rustdds-0.15.1 is crates.io's RustDDS 0.15.1 with patches/rustdds-0.15.1 applied"
+bash patches/vendor-rustdds.sh --check
 echo "== cargo fmt --check"
 cargo fmt --check
 echo "== cargo clippy --all-targets -- -D warnings"
