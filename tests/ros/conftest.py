@@ -205,10 +205,12 @@ def run_solve(lines: Iterable[dict], *flags: str, timeout: float = 120.0) -> lis
 # The node as a subprocess
 # ---------------------------------------------------------------------------------------------------
 class NodeProcess:
-    """`grasp_orient node ARGS` with its stderr collected; ready when a line contains "waiting for"."""
+    """`grasp_orient node ARGS` with its stderr collected; ready when a line contains "waiting for".
+    `binary` defaults to the one under test (GRASP_ORIENT_BIN)."""
 
-    def __init__(self, args: list[str], env: dict, cwd: Path, name: str = "grasp_orient node"):
-        self.args = [str(binary_path()), "node", *args]
+    def __init__(self, args: list[str], env: dict, cwd: Path, name: str = "grasp_orient node",
+                 binary: Path | None = None):
+        self.args = [str(binary or binary_path()), "node", *args]
         self.name = name
         self.lines: list[str] = []
         self._ready = threading.Event()
