@@ -3,6 +3,7 @@
 pub mod node;
 pub mod play;
 pub mod plot;
+pub mod rank;
 pub mod recover;
 pub mod replay;
 pub mod solve;
