@@ -56,7 +56,6 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             // As `solve` answers a line that is no candidate.
             *r = invalid(&super::solve::partial(&line), &reason);
             r.message = format!("line {number}: {}", r.message);
-            r.objective = settings.objective.name().to_string();
         }
     }
     let stdout = std::io::stdout();
