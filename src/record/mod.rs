@@ -190,6 +190,10 @@ const CHANNELS: usize = 5;
 /// An MCAP writer with the channels of a grasp_orient recording.
 pub struct BagWriter {
     path: PathBuf,
+    /// The set channels' topics, until their channels are made.
+    sets: Option<SetTopics>,
+    /// Channel metadata (`offered_qos_profiles`).
+    metadata: BTreeMap<String, String>,
     writer: mcap::Writer<BufWriter<File>>,
     channels: [Option<u16>; CHANNELS],
     sequence: [u32; CHANNELS],
@@ -245,20 +249,15 @@ impl BagWriter {
                 Some(t) => Some(channel(t, MarkerArray::TYPE_NAME)?),
                 None => None,
             },
-            match &topics.sets {
-                Some(t) => Some(channel(&t.candidates, GraspCandidateSet::TYPE_NAME)?),
-                None => None,
-            },
-            match &topics.sets {
-                Some(t) => Some(channel(
-                    &t.recommendations,
-                    GripRecommendationSet::TYPE_NAME,
-                )?),
-                None => None,
-            },
+            // The set channels are made by their first message, as rosbag2 adds a topic when it
+            // first sees a publisher: a run without sets records no set channels.
+            None,
+            None,
         ];
         Ok(Self {
             path: path.to_path_buf(),
+            sets: topics.sets.clone(),
+            metadata,
             writer,
             channels,
             sequence: [0; CHANNELS],
@@ -283,6 +282,9 @@ impl BagWriter {
             Payload::CandidateSet(m) => (3, cdr::encode(m.as_ref())?),
             Payload::RecommendationSet(m) => (4, cdr::encode(m.as_ref())?),
         };
+        if index >= 3 && self.channels[index].is_none() {
+            self.add_set_channel(index)?;
+        }
         let Some(channel_id) = self.channels[index] else {
             return Ok(());
         };
@@ -303,6 +305,32 @@ impl BagWriter {
             3 => self.written.candidate_sets += 1,
             _ => self.written.recommendation_sets += 1,
         }
+        Ok(())
+    }
+
+    /// Makes set channel `index` (3: candidate sets, 4: their answers), if the recording has sets.
+    fn add_set_channel(&mut self, index: usize) -> Result<(), RecordError> {
+        let Some(topics) = &self.sets else {
+            return Ok(());
+        };
+        let (topic, type_name) = if index == 3 {
+            (topics.candidates.clone(), GraspCandidateSet::TYPE_NAME)
+        } else {
+            (
+                topics.recommendations.clone(),
+                GripRecommendationSet::TYPE_NAME,
+            )
+        };
+        let text = definitions::full_text(type_name).ok_or(RecordError::UnknownType(type_name))?;
+        let schema = self
+            .writer
+            .add_schema(type_name, "ros2msg", text.as_bytes())
+            .map_err(|e| self.mcap_error(e))?;
+        let id = self
+            .writer
+            .add_channel(schema, &topic, "cdr", &self.metadata)
+            .map_err(|e| self.mcap_error(e))?;
+        self.channels[index] = Some(id);
         Ok(())
     }
 
