@@ -234,6 +234,22 @@ pub fn answer_set(
     settings: &Settings,
     rules: &Rules,
 ) -> GripRecommendationSet {
+    answer_set_on(set, settings, rules, 1)
+}
+
+/// Sets smaller than this are answered in the calling thread whatever the threads offered:
+/// starting a thread costs about what solving a few dozen candidates does.
+pub const PARALLEL_FROM: usize = 128;
+
+/// [`answer_set`] with the candidates shared among up to `threads` threads (the calling one
+/// included): the same answer, sooner on a machine with idle cores. The node uses it; the
+/// library's [`answer_set`] stays on one thread.
+pub fn answer_set_on(
+    set: &GraspCandidateSet,
+    settings: &Settings,
+    rules: &Rules,
+    threads: usize,
+) -> GripRecommendationSet {
     let mut out = empty_answer(set, rules);
     if let Some((status, message)) = refusal(set, rules) {
         out.status = status;
@@ -248,13 +264,45 @@ pub fn answer_set(
         },
         ..*rules
     };
-    out.recommendations = set
-        .candidates
-        .iter()
-        .map(|c| answer_one(c, settings, &rules))
-        .collect();
+    out.recommendations = answer_all(&set.candidates, settings, &rules, threads);
     out.ranking = rank(&out.recommendations, &rules);
     out
+}
+
+/// Every candidate answered in order, on up to `threads` threads.
+fn answer_all(
+    candidates: &[GraspCandidate],
+    settings: &Settings,
+    rules: &Rules,
+    threads: usize,
+) -> Vec<GripRecommendation> {
+    let solve = |part: &[GraspCandidate]| -> Vec<GripRecommendation> {
+        part.iter()
+            .map(|c| answer_one(c, settings, rules))
+            .collect()
+    };
+    if threads <= 1 || candidates.len() < PARALLEL_FROM {
+        return solve(candidates);
+    }
+    let per = candidates.len().div_ceil(threads);
+    let mut parts = candidates.chunks(per);
+    let Some(first) = parts.next() else {
+        return Vec::new();
+    };
+    std::thread::scope(|scope| {
+        let others: Vec<_> = parts.map(|part| scope.spawn(move || solve(part))).collect();
+        let mut out = Vec::with_capacity(candidates.len());
+        out.extend(solve(first));
+        for handle in others {
+            // The solver does not panic; if it ever did, the panic goes on as in one thread.
+            out.extend(
+                handle
+                    .join()
+                    .unwrap_or_else(|e| std::panic::resume_unwind(e)),
+            );
+        }
+        out
+    })
 }
 
 /// The benchmark floor's answer to a set: as many empty recommendations as candidates (each with
@@ -484,6 +532,25 @@ mod tests {
         let mut ranked = out.ranking.clone();
         ranked.sort_unstable();
         assert_eq!(ranked, [0, 3]);
+    }
+
+    #[test]
+    fn threads_give_the_same_answer() {
+        let mut cases = paper_cases();
+        cases[1].mass = f64::NAN;
+        let many: Vec<GraspCandidate> = (0..3 * PARALLEL_FROM + 7)
+            .map(|i| {
+                let mut c = cases[i % 4].clone();
+                c.id = format!("c{i}");
+                c
+            })
+            .collect();
+        let set = set_of(many);
+        let one = answer_set(&set, &Settings::default(), &Rules::default());
+        for threads in [2, 3, 8] {
+            let on = answer_set_on(&set, &Settings::default(), &Rules::default(), threads);
+            assert_eq!(format!("{on:?}"), format!("{one:?}"), "{threads} threads");
+        }
     }
 
     #[test]

@@ -6,7 +6,7 @@ use anyhow::{bail, Context};
 use grasp_orient::msg::{GraspCandidate, GraspCandidateSet, GripRecommendation, RosMessage};
 use grasp_orient::record::bag;
 use grasp_orient::record::{BagWriter, Entry, Payload, SetTopics, Topics};
-use grasp_orient::replay::{replay, replay_with_answers, Summary, TOLERANCE};
+use grasp_orient::replay::{replay, replay_with_answers, Answers, Summary, TOLERANCE};
 use grasp_orient::sets::Rules;
 use grasp_orient::solver::Settings;
 use std::path::{Path, PathBuf};
@@ -100,30 +100,7 @@ fn replay_file(
     let summary = match writer {
         Some(w) => {
             let (summary, answers) = replay_with_answers(&bag, settings, rules, progress);
-            for (s, a) in bag.candidate_sets.iter().zip(answers.sets) {
-                w.write(&Entry {
-                    payload: Payload::CandidateSet(Box::new(s.message.clone())),
-                    log_time: s.log_time,
-                    publish_time: s.publish_time,
-                })?;
-                w.write(&Entry {
-                    payload: Payload::RecommendationSet(Box::new(a.message)),
-                    log_time: a.log_time,
-                    publish_time: a.publish_time,
-                })?;
-            }
-            for (c, a) in bag.candidates.iter().zip(answers.recommendations) {
-                w.write(&Entry {
-                    payload: Payload::Candidate(Box::new(c.message.clone())),
-                    log_time: c.log_time,
-                    publish_time: c.publish_time,
-                })?;
-                w.write(&Entry {
-                    payload: Payload::Recommendation(Box::new(a.message)),
-                    log_time: a.log_time,
-                    publish_time: a.publish_time,
-                })?;
-            }
+            write_answers(w, &bag, answers)?;
             summary
         }
         None => replay(&bag, settings, rules, progress),
@@ -144,6 +121,28 @@ fn replay_file(
         );
     }
     Ok(summary)
+}
+
+/// Writes the bag's sets and candidates with the new answers.
+fn write_answers(w: &mut BagWriter, bag: &bag::Bag, answers: Answers) -> anyhow::Result<()> {
+    let entry = |payload, log_time, publish_time| Entry {
+        payload,
+        log_time,
+        publish_time,
+    };
+    for (s, a) in bag.candidate_sets.iter().zip(answers.sets) {
+        let set = Payload::CandidateSet(Box::new(s.message.clone()));
+        w.write(&entry(set, s.log_time, s.publish_time))?;
+        let answer = Payload::RecommendationSet(Box::new(a.message));
+        w.write(&entry(answer, a.log_time, a.publish_time))?;
+    }
+    for (c, a) in bag.candidates.iter().zip(answers.recommendations) {
+        let candidate = Payload::Candidate(Box::new(c.message.clone()));
+        w.write(&entry(candidate, c.log_time, c.publish_time))?;
+        let answer = Payload::Recommendation(Box::new(a.message));
+        w.write(&entry(answer, a.log_time, a.publish_time))?;
+    }
+    Ok(())
 }
 
 /// Prints the summary; an error when any answer differs or is unmatched.

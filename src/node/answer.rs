@@ -11,7 +11,7 @@ use crate::msg::{
 };
 use crate::record::lifecycle::{Recording, Wanted};
 use crate::record::{Payload, RecordError, Topics};
-use crate::sets::{answer_one, answer_set, echo_set};
+use crate::sets::{answer_one, answer_set_on, echo_set};
 use log::Level;
 use std::path::Path;
 
@@ -252,7 +252,9 @@ impl Answerer {
         let reply = if self.echo {
             echo_set(&set)
         } else {
-            answer_set(&set, &settings, &rules)
+            // A large set is shared among the cores: the DDS threads are idle while it is solved.
+            let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+            answer_set_on(&set, &settings, &rules, threads)
         };
         self.count_set(&reply, &mut notes);
         let best = reply.ranking.first().map(|&i| i as usize);

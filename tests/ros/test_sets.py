@@ -129,6 +129,23 @@ def check_ranking(ans: dict, key: str):
 # ---------------------------------------------------------------------------------------------------
 # Answers
 # ---------------------------------------------------------------------------------------------------
+def test_set_topics_and_service_in_the_ros_graph(peer, sets):
+    want = {"/grasp_candidate_sets": SET_TYPE, "/grip_recommendation_sets": SET_ANSWER_TYPE}
+
+    def seen():
+        topics = dict(peer.node.get_topic_names_and_types())
+        services = dict(peer.node.get_service_names_and_types_by_node("grasp_orient", "/"))
+        return (all(t in topics.get(n, []) for n, t in want.items())
+                and "grasp_orient/srv/Recommend" in services.get("/grasp_orient/recommend", []))
+
+    ok = peer.spin_until(seen, 10.0)
+    assert ok, (f"topics {dict(peer.node.get_topic_names_and_types())}, services "
+                f"{dict(peer.node.get_service_names_and_types_by_node('grasp_orient', '/'))}")
+    subs = {(i.node_name, i.node_namespace) for i in peer.node.get_subscriptions_info_by_topic("/grasp_candidate_sets")}
+    pubs = {(i.node_name, i.node_namespace) for i in peer.node.get_publishers_info_by_topic("/grip_recommendation_sets")}
+    assert ("grasp_orient", "/") in subs and ("grasp_orient", "/") in pubs, (subs, pubs)
+
+
 def test_every_answer_in_a_set_equals_the_single_answer(client, sets):
     cands = load_paper_cases() + batch(300, SEED, "eq") + bad_ones("eq")
     for c in cands[:4]:
