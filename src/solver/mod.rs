@@ -32,10 +32,15 @@
 mod analysis;
 mod frame;
 pub mod paper;
+mod robust;
 pub mod sinusoid;
 
 pub use analysis::Analysis;
 pub use frame::GraspFrame;
+pub use robust::{
+    solve_robust, BoxPoint, BoxPointKind, NoCommonOrientation, RobustRecommendation, RobustVerdict,
+    Uncertainty,
+};
 
 use nalgebra::Vector2;
 use std::fmt;
@@ -238,6 +243,18 @@ pub enum InvalidInput {
         graspable_lo: f64,
         /// Graspable range end, rad.
         graspable_hi: f64,
+    },
+    /// A tolerance (centre of mass, mass) is negative or too large.
+    #[error("{field} must be at least 0 and less than {limit:e}{unit}, got {value:e}")]
+    Tolerance {
+        /// The field.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+        /// The least value refused.
+        limit: f64,
+        /// Unit of the limit, with its leading space.
+        unit: &'static str,
     },
 }
 
