@@ -29,7 +29,7 @@ use grasp_orient::solver::{
 };
 use nalgebra::Vector2;
 use proptest::prelude::*;
-use rand::SeedableRng;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 /// Agreement asked: 1e-9 relative (to the value, or to 1e-3 of the weight where it is near 0).
@@ -72,6 +72,7 @@ struct Tally {
     worst_angle: f64,
     scan_bound: f64,
     norm1_boundary_gap: f64,
+    internal_on_edge: usize,
     vertex_counts: [usize; 7],
 }
 
@@ -298,6 +299,9 @@ fn check_recommended(
         let eobjs = objects(c, &edge, &[m_max], s);
         let (_, bmax, _, _) = worst_at(c, &eobjs, omega);
         assert!(bmax <= r.internal_force + TOL * fscale);
+        if r.internal_force_at.kind == BoxPointKind::Edge {
+            tally.internal_on_edge += 1;
+        }
         tally.norm1_boundary_gap = tally
             .norm1_boundary_gap
             .max((r.internal_force - bmax.max(internal)) / fscale);
@@ -409,7 +413,8 @@ fn run(seed: u64, wanted: usize, s: Settings, density: Density) -> Tally {
          objects; {} without force closure; worst relative errors: power {:.1e}, internal force {:.1e}, finger force \
          {:.1e}, nominal {:.1e}, least worst case vs scan {:.1e}; {} ties of equal worst case, \
          else angle within {:.1e} rad; scan resolution bound {:.1e}; norm1 internal force above \
-         the boundary samples by at most {:.1e} of the weight",
+         the boundary samples by at most {:.1e} of the weight, largest inside an edge {} \
+         times",
         s.objective,
         s.range,
         tally.recommended,
@@ -428,6 +433,7 @@ fn run(seed: u64, wanted: usize, s: Settings, density: Density) -> Tally {
         tally.worst_angle,
         tally.scan_bound,
         tally.norm1_boundary_gap,
+        tally.internal_on_edge,
     );
     tally
 }
@@ -468,6 +474,113 @@ fn internal_force_with_a_safety_factor_matches_reference() {
         t.no_closure > 0,
         "a safety factor must lose some marginal grasps"
     );
+}
+
+/// Module docs of `robust.rs`, section 5: the 1-norm's squeeze is not convex in the centre of
+/// mass, and its worst case can lie inside an edge of the region. Only grasps whose normals lean
+/// far enough from the contact line (`|n1 ⟂| + |n2 ⟂| > |n1 ∥| + |n2 ∥|`, where the 1-norm can
+/// prefer a vanishing friction force) can show it; for those, at eight random poses each, the
+/// reported worst squeeze (at the current pose) is checked against the reference on the region's
+/// lattice, corners and boundary (every 1e-3 of the contact distance), the best boundary sample
+/// refined by golden-section search along its edge.
+#[test]
+fn norm1_internal_force_worst_case_over_the_region() {
+    let s = Settings {
+        objective: Objective::Norm1,
+        range: AllowedRange::Graspable,
+        ..Settings::default()
+    };
+    let mut rng = ChaCha8Rng::seed_from_u64(18);
+    let (mut poses, mut inside_edge, mut worst_gap, mut worst_over) = (0, 0, 0.0f64, 0.0f64);
+    while poses < 2400 {
+        let c = random_grasp(&mut rng);
+        let line = (c.contact_1 - c.contact_2).normalize();
+        let lean = |n: Vector2<f64>| {
+            let n = n.normalize();
+            (n.dot(&line).abs(), (n.x * line.y - n.y * line.x).abs())
+        };
+        let ((a1, p1), (a2, p2)) = (lean(c.normal_1), lean(c.normal_2));
+        if p1 + p2 <= a1 + a2 {
+            continue;
+        }
+        let (half, tm) = random_tolerances(&mut rng, &c);
+        let d = (c.contact_1 - c.contact_2).norm();
+        let region = RefRegion::new(&c, half, 8, 1e-3 * d);
+        let m_max = c.mass + tm;
+        for _ in 0..8 {
+            let turn = rng.gen_range(-std::f64::consts::PI..std::f64::consts::PI);
+            let g = nalgebra::Rotation2::new(turn) * c.gravity;
+            let posed = Candidate { gravity: g, ..c };
+            let u = Uncertainty {
+                center_of_mass_tolerance: half,
+                mass_tolerance: tm,
+            };
+            let Ok(RobustVerdict::Recommended(r)) = solve_robust(&posed, &u, &s) else {
+                break;
+            };
+            let fscale = r.internal_force_current.abs().max(m_max * g.norm());
+            let squeeze = |q: Vector2<f64>| {
+                RefObject::new(&posed, q, m_max, 1.0, RefObjective::Norm1)
+                    .reference
+                    .at(0.0)
+                    .expect("force closure")
+                    .internal_force
+            };
+            let best_of = |points: &[Vector2<f64>]| {
+                points
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &q)| (squeeze(q), i))
+                    .fold((f64::NEG_INFINITY, 0), |a, b| if b.0 > a.0 { b } else { a })
+            };
+            let corners = best_of(&region.extreme).0;
+            let lattice = best_of(&region.grid).0;
+            let (mut edge, i) = best_of(&region.boundary);
+            // Golden-section search between the best boundary sample's neighbours, where the
+            // three lie on one straight stretch of the boundary.
+            let b = &region.boundary;
+            if i > 0 && i + 1 < b.len() {
+                let (lo, hi) = (b[i - 1], b[i + 1]);
+                let v = hi - lo;
+                if (v.x * (b[i] - lo).y - v.y * (b[i] - lo).x).abs() <= 1e-9 * v.norm_squared() {
+                    let (mut x0, mut x1) = (0.0f64, 1.0f64);
+                    let phi = 0.5 * (5f64.sqrt() - 1.0);
+                    for _ in 0..80 {
+                        let (m0, m1) = (x1 - phi * (x1 - x0), x0 + phi * (x1 - x0));
+                        if squeeze(lo + v * m0) < squeeze(lo + v * m1) {
+                            x0 = m0;
+                        } else {
+                            x1 = m1;
+                        }
+                    }
+                    edge = edge.max(squeeze(lo + v * (0.5 * (x0 + x1))));
+                }
+            }
+            let all = edge.max(lattice).max(corners);
+            let gap = (r.internal_force_current - all) / fscale;
+            assert!(
+                gap >= -TOL,
+                "a sampled object needs squeeze {all} > the reported {}; {posed:?} ± {half:?}, {tm}",
+                r.internal_force_current
+            );
+            worst_gap = worst_gap.max(gap);
+            if r.internal_force_current > corners + 1e-6 * fscale {
+                inside_edge += 1;
+                worst_over = worst_over.max((r.internal_force_current - corners) / fscale);
+            }
+            poses += 1;
+        }
+    }
+    println!(
+        "norm1 squeeze at {poses} poses: worst inside an edge at {inside_edge} (up to {worst_over:.1e} \
+         of the force scale above every vertex); reported above the reference's best by at most \
+         {worst_gap:.1e}"
+    );
+    assert!(
+        worst_gap <= TOL,
+        "reported worst squeeze not attained: {worst_gap:e}"
+    );
+    assert!(inside_edge >= 10, "too few poses exercised the edge points");
 }
 
 /// `cargo test --release --test robust -- --ignored`: 20,000 grasps, denser grids and scans.

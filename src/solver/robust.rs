@@ -93,11 +93,16 @@
 //! # 5. The internal force under `norm1`
 //! On the feasible ray `α >= α_min`, `||F_T + α F_N||_1` has slope `s1 + s2 + |c1| σ1 + |c2| σ2`,
 //! where `σ_i = ±1` says whether α is past `β_i`, the zero of friction force `i`
-//! (`β_i = -T_Fi / c_i`; the normal forces' zeros are `α_1, α_2 <= α_min`). The slopes do not
-//! depend on `c` or θ, so the 1-norm's squeeze is `max(α_min, h)` with `h` one of `-∞`, `β_1`,
-//! `β_2` or `min(β_1, β_2)`: a concave function of `c` (each `β_i` is affine in `c`). The worst
-//! case `max(max α_min, max h)` over the region is therefore at a vertex or where the line
-//! `β_1 = β_2` crosses the region's edge (at most two points), and those are the points evaluated.
+//! (`β_i = -T_Fi / c_i`; the normal forces' zeros are `α_1, α_2 <= α_min`). These slopes depend
+//! on neither `c` nor θ. Past one zero the slope is positive (`s_i + |c_i| >= 1 >= |c_j|` and
+//! `s_j > 0`), so the 1-norm's squeeze is `max(α_min, h)` with `h = -∞` when
+//! `s1 + s2 >= |c1| + |c2|` and `h = min(β_1, β_2)` otherwise: concave in `c`, each `β_i` being
+//! affine in `c` (test `norm1_squeeze_is_alpha_min_or_a_friction_zero`). So
+//! `max over the region of max(α_min, h) = max(max α_min, max h)` is attained at a vertex or
+//! where the line `β_1 = β_2` crosses the region's edge (at most two points, the pieces of `h`
+//! being affine on either side), and those points are evaluated. On random grasps whose normals
+//! lean far from the contact line the worst squeeze lies inside an edge, up to a fifth above
+//! every vertex (`tests/robust.rs`, `norm1_internal_force_worst_case_over_the_region`).
 //!
 //! # 6. The exact minimisation
 //! The worst-case objective `R(θ) = max_v P_v(θ)` is the upper envelope of the vertices' curves.
@@ -1371,6 +1376,115 @@ mod tests {
         let (glo, ghi) = r.graspable;
         assert!(glo + (PI - glo).rem_euclid(TAU) > ghi);
         assert!(glo <= -FRAC_PI_2 && ghi >= FRAC_PI_2);
+    }
+
+    #[test]
+    fn bounds_meet_the_region_graspable_range() {
+        let c = square_case_c();
+        let u = tolerance(0.5, 0.0, 0.0);
+        let graspable = Settings {
+            range: AllowedRange::Graspable,
+            ..Settings::default()
+        };
+        let r = recommended(&c, &u, &graspable);
+        // The corners at x = ±0.5 narrow [-3π/4, 3π/4] to ±(π - atan2(0.75, 0.5)).
+        let end = PI - 0.75f64.atan2(0.5);
+        assert!((r.graspable.0 + end).abs() < 1e-12 && (r.graspable.1 - end).abs() < 1e-12);
+        // Bounds that cover it, shifted by a turn, give the same answer.
+        let bounds = Settings {
+            range: AllowedRange::Bounds {
+                lo: -3.0 + TAU,
+                hi: 3.0 + TAU,
+            },
+            ..Settings::default()
+        };
+        let b = recommended(&c, &u, &bounds);
+        assert_eq!(b.allowed, vec![r.graspable]);
+        assert_eq!(b.gravity_angle, r.gravity_angle);
+        // Bounds the nominal object accepts but some corner does not.
+        let narrow = Settings {
+            range: AllowedRange::Bounds { lo: 2.3, hi: 2.35 },
+            ..Settings::default()
+        };
+        match solve_robust(&c, &u, &narrow) {
+            Ok(RobustVerdict::NoCommonOrientation {
+                reason: reason @ NoCommonOrientation::BoundsMissed { .. },
+                ..
+            }) => {
+                let text = reason.to_string();
+                assert!(
+                    text.contains("corner (+x)") && text.contains("corner (-x)"),
+                    "{text}"
+                );
+            }
+            other => panic!("{other:?}"),
+        }
+        // Bounds that miss the nominal object's range are bad input, as today.
+        let outside = Settings {
+            range: AllowedRange::Bounds { lo: 2.5, hi: 2.6 },
+            ..Settings::default()
+        };
+        assert!(matches!(
+            solve_robust(&c, &u, &outside),
+            Err(InvalidInput::RangeOutsideGraspable { .. })
+        ));
+    }
+
+    /// Module docs, section 5: the 1-norm's squeeze is `max(α_min, h)` with `h` set by the
+    /// friction zeros and the slopes `s1 + s2 ± |c1| ± |c2|`, which depend on neither `c` nor θ.
+    #[test]
+    fn norm1_squeeze_is_alpha_min_or_a_friction_zero() {
+        let mut checked = [0usize; 2];
+        for k in 0..400 {
+            let u = f64::from(k);
+            let phi1 = 0.2 + 1.2 * (0.5 + 0.5 * (u * 0.37).sin());
+            let phi2 = 0.2 + 1.2 * (0.5 + 0.5 * (u * 0.73).cos());
+            let c = Candidate {
+                contact_1: Vector2::new(0.5, 0.3 + 0.2 * (u * 0.11).sin()),
+                contact_2: Vector2::new(-0.5, 0.3 + 0.2 * (u * 0.11).sin()),
+                normal_1: Vector2::new(-phi1.sin(), -phi1.cos()),
+                normal_2: Vector2::new(phi2.sin(), -phi2.cos()),
+                friction_1: 1.5 + (u * 0.29).sin(),
+                friction_2: 1.5 + (u * 0.53).cos(),
+                center_of_mass: Vector2::new(0.3 * (u * 0.91).sin(), 0.0),
+                mass: 1.0,
+                gravity: Vector2::new(0.0, -1.0),
+            };
+            let Ok(f) = GraspFrame::new(&c, 1.0) else {
+                continue;
+            };
+            let Ok(a) = Analysis::new(&f, Objective::Norm1) else {
+                continue;
+            };
+            let w = paper::balance_internal(&f);
+            let t = paper::balance_particular(&f);
+            let (s, c1, c2) = (w[0] + w[2], w[1].abs(), w[3].abs());
+            let (d0, d1, d2) = (s - c1 - c2, s + c1 - c2, s - c1 + c2);
+            for i in 0..50 {
+                let theta = -3.0 + 0.12 * f64::from(i);
+                let at = Angle::new(theta);
+                let (b1, b2) = (-t[1].value(&at) / w[1], -t[3].value(&at) / w[3]);
+                // s_i + |c_i| >= 1 >= |c_j| and s_j > 0: passing one zero always suffices.
+                assert!(d1 > 0.0 && d2 > 0.0);
+                let (h, case) = if d0 >= 0.0 {
+                    (f64::NEG_INFINITY, 0)
+                } else {
+                    (b1.min(b2), 1)
+                };
+                let v = a.evaluate(theta);
+                let want = v.alpha_min.max(h);
+                assert!(
+                    (v.alpha - want).abs() <= 1e-12 * want.abs().max(1.0),
+                    "θ {theta}: solver's α {} vs max(α_min, h) {want}",
+                    v.alpha
+                );
+                checked[case] += 1;
+            }
+        }
+        assert!(
+            checked.iter().all(|&n| n > 0),
+            "every case met: {checked:?}"
+        );
     }
 
     /// The envelope tiles the region's graspable range and is the largest vertex curve there.
