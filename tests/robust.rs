@@ -14,7 +14,7 @@
 //! scan's bound.
 //!
 //! `cargo test --test robust` runs 2,000 grasps for `norm2` from above and 500 for each other
-//! setting; `cargo test --release --test robust -- --ignored` runs 20,000 with denser grids.
+//! setting; `cargo test --test robust -- --ignored` runs 20,000 with denser grids.
 
 mod common;
 
@@ -270,7 +270,15 @@ fn check_recommended(
     let there = at(r.gripping_power_at.position, m_max, omega);
     assert!((there.power - r.gripping_power).abs() <= TOL * scale);
     // Internal and finger force: no sampled object needs more; the reported place needs that.
-    let there = at(r.internal_force_at.position, m_max, omega);
+    // Forces proportional to the mass are largest at the largest mass when positive, at the
+    // smallest when negative (the 1-norm's squeeze can be).
+    let m_min = c.mass - tm;
+    let mass_for = |v: f64| if v < 0.0 { m_min } else { m_max };
+    let there = at(
+        r.internal_force_at.position,
+        mass_for(r.internal_force),
+        omega,
+    );
     let fscale = r.internal_force.abs().max(r.finger_force.abs()).max(w_max);
     let err_i = (there.internal_force - r.internal_force).abs() / fscale;
     assert!(
@@ -284,6 +292,11 @@ fn check_recommended(
         "a sampled object needs internal force {internal} > {}; {c:?} ± {half:?}, {tm}",
         r.internal_force
     );
+    let there = at(
+        r.internal_force_at.position,
+        mass_for(r.finger_force),
+        omega,
+    );
     let [a1, a2] = finger_pushes(c, &there);
     let err_f = (a1.max(a2) - r.finger_force).abs() / fscale;
     assert!(
@@ -296,7 +309,7 @@ fn check_recommended(
     if s.objective == Objective::Norm1 {
         // Not convex in the centre of mass: the reference walks the region's boundary.
         let edge: Vec<_> = region.boundary.clone();
-        let eobjs = objects(c, &edge, &[m_max], s);
+        let eobjs = objects(c, &edge, &[m_min, m_max], s);
         let (_, bmax, _, _) = worst_at(c, &eobjs, omega);
         assert!(bmax <= r.internal_force + TOL * fscale);
         if r.internal_force_at.kind == BoxPointKind::Edge {
@@ -476,6 +489,34 @@ fn internal_force_with_a_safety_factor_matches_reference() {
     );
 }
 
+/// Golden-section search for the largest `f` between the neighbours of boundary sample `i`,
+/// where the three lie on one straight stretch of the boundary (`-∞` otherwise).
+fn refine_along_boundary(
+    boundary: &[Vector2<f64>],
+    i: usize,
+    f: &dyn Fn(Vector2<f64>) -> f64,
+) -> f64 {
+    if i == 0 || i + 1 >= boundary.len() {
+        return f64::NEG_INFINITY;
+    }
+    let (lo, hi, mid) = (boundary[i - 1], boundary[i + 1], boundary[i]);
+    let v = hi - lo;
+    if (v.x * (mid - lo).y - v.y * (mid - lo).x).abs() > 1e-9 * v.norm_squared() {
+        return f64::NEG_INFINITY;
+    }
+    let (mut x0, mut x1) = (0.0f64, 1.0f64);
+    let phi = 0.5 * (5f64.sqrt() - 1.0);
+    for _ in 0..80 {
+        let (m0, m1) = (x1 - phi * (x1 - x0), x0 + phi * (x1 - x0));
+        if f(lo + v * m0) < f(lo + v * m1) {
+            x0 = m0;
+        } else {
+            x1 = m1;
+        }
+    }
+    f(lo + v * (0.5 * (x0 + x1)))
+}
+
 /// Module docs of `robust.rs`, section 5: the 1-norm's squeeze is not convex in the centre of
 /// mass, and its worst case can lie inside an edge of the region. Only grasps whose normals lean
 /// far enough from the contact line (`|n1 ⟂| + |n2 ⟂| > |n1 ∥| + |n2 ∥|`, where the 1-norm can
@@ -519,12 +560,19 @@ fn norm1_internal_force_worst_case_over_the_region() {
                 break;
             };
             let fscale = r.internal_force_current.abs().max(m_max * g.norm());
+            // The largest over the mass interval's ends (a negative squeeze is largest at the
+            // smallest mass).
             let squeeze = |q: Vector2<f64>| {
-                RefObject::new(&posed, q, m_max, 1.0, RefObjective::Norm1)
-                    .reference
-                    .at(0.0)
-                    .expect("force closure")
-                    .internal_force
+                [c.mass - tm, m_max]
+                    .iter()
+                    .map(|&m| {
+                        RefObject::new(&posed, q, m, 1.0, RefObjective::Norm1)
+                            .reference
+                            .at(0.0)
+                            .expect("force closure")
+                            .internal_force
+                    })
+                    .fold(f64::NEG_INFINITY, f64::max)
             };
             let best_of = |points: &[Vector2<f64>]| {
                 points
@@ -535,27 +583,8 @@ fn norm1_internal_force_worst_case_over_the_region() {
             };
             let corners = best_of(&region.extreme).0;
             let lattice = best_of(&region.grid).0;
-            let (mut edge, i) = best_of(&region.boundary);
-            // Golden-section search between the best boundary sample's neighbours, where the
-            // three lie on one straight stretch of the boundary.
-            let b = &region.boundary;
-            if i > 0 && i + 1 < b.len() {
-                let (lo, hi) = (b[i - 1], b[i + 1]);
-                let v = hi - lo;
-                if (v.x * (b[i] - lo).y - v.y * (b[i] - lo).x).abs() <= 1e-9 * v.norm_squared() {
-                    let (mut x0, mut x1) = (0.0f64, 1.0f64);
-                    let phi = 0.5 * (5f64.sqrt() - 1.0);
-                    for _ in 0..80 {
-                        let (m0, m1) = (x1 - phi * (x1 - x0), x0 + phi * (x1 - x0));
-                        if squeeze(lo + v * m0) < squeeze(lo + v * m1) {
-                            x0 = m0;
-                        } else {
-                            x1 = m1;
-                        }
-                    }
-                    edge = edge.max(squeeze(lo + v * (0.5 * (x0 + x1))));
-                }
-            }
+            let (edge, i) = best_of(&region.boundary);
+            let edge = edge.max(refine_along_boundary(&region.boundary, i, &squeeze));
             let all = edge.max(lattice).max(corners);
             let gap = (r.internal_force_current - all) / fscale;
             assert!(
@@ -583,7 +612,7 @@ fn norm1_internal_force_worst_case_over_the_region() {
     assert!(inside_edge >= 10, "too few poses exercised the edge points");
 }
 
-/// `cargo test --release --test robust -- --ignored`: 20,000 grasps, denser grids and scans.
+/// `cargo test --test robust -- --ignored`: 20,000 grasps, denser grids and scans.
 #[test]
 #[ignore]
 fn long_run_against_reference() {
@@ -607,6 +636,40 @@ fn long_run_against_reference() {
         };
         run(seed, 2000, s, dense);
     }
+}
+
+/// The 1-norm's squeeze can be negative (its forces then pull along the contact line on
+/// balance); the largest over the mass interval is then at the smallest mass. Found by the long
+/// run, where the reference's lightest object needed more than the solver's heaviest.
+#[test]
+fn negative_norm1_squeeze_is_largest_at_the_least_mass() {
+    let c = Candidate {
+        contact_1: Vector2::new(0.524519217518473, -1.2946019678042147),
+        contact_2: Vector2::new(0.5034751771110666, -1.286043698226989),
+        normal_1: Vector2::new(-4.836829231740999, -1.058332107389381),
+        normal_2: Vector2::new(0.7719478391063793, -0.8080822244667053),
+        friction_1: 1.991912770547726,
+        friction_2: 1.9117769997828928,
+        center_of_mass: Vector2::new(0.5175442468604086, -1.2789311720585832),
+        mass: 0.9118452000617769,
+        gravity: Vector2::new(3.747097312895736, -14.15091732849002),
+    };
+    let (half, tm) = (Vector2::new(0.0, 0.0013522446887984138), 0.8013654589371767);
+    let s = Settings {
+        objective: Objective::Norm1,
+        ..Settings::default()
+    };
+    let mut tally = Tally::default();
+    check_case(&c, half, tm, &s, DEFAULT, &mut tally);
+    assert_eq!(tally.recommended, 1);
+    let u = Uncertainty {
+        center_of_mass_tolerance: half,
+        mass_tolerance: tm,
+    };
+    let Ok(RobustVerdict::Recommended(r)) = solve_robust(&c, &u, &s) else {
+        panic!("recommended above");
+    };
+    assert!(r.internal_force < 0.0);
 }
 
 /// Zero tolerance takes today's path: the verdict is `solve_orientation`'s, bit for bit.
@@ -695,6 +758,115 @@ fn bad_tolerances_name_the_field() {
         .expect_err("refused")
         .to_string()
         .contains("mass"));
+}
+
+/// The README's worked example (`examples/robust_bottle.rs`): the numbers it quotes.
+#[test]
+fn readme_bottle_example() {
+    let bottle = Candidate {
+        contact_1: Vector2::new(0.04, 0.16),
+        contact_2: Vector2::new(-0.04, 0.16),
+        normal_1: Vector2::new(-1.0, 0.0),
+        normal_2: Vector2::new(1.0, 0.0),
+        friction_1: 0.8,
+        friction_2: 0.5,
+        center_of_mass: Vector2::new(0.0, 0.10),
+        mass: 1.05,
+        gravity: Vector2::new(0.0, -9.81),
+    };
+    let s = Settings::default();
+    let u = Uncertainty {
+        center_of_mass_tolerance: Vector2::new(0.02, 0.02),
+        mass_tolerance: 0.0,
+    };
+    let Ok(RobustVerdict::Recommended(r)) = solve_robust(&bottle, &u, &s) else {
+        panic!("the bottle can be held");
+    };
+    let n = &r.nominal;
+    let posed = Candidate {
+        gravity: nalgebra::Rotation2::new(-n.wrist_rotation) * bottle.gravity,
+        ..bottle
+    };
+    let Ok(RobustVerdict::Recommended(p)) = solve_robust(&posed, &u, &s) else {
+        panic!("the bottle can be held");
+    };
+    let round = |x: f64, k: f64| (x * k).round() / k;
+    let deg = |x: f64| round(x.to_degrees(), 10.0);
+    assert_eq!(
+        (deg(n.wrist_rotation), round(n.gripping_power, 10.0)),
+        (6.2, 13.5)
+    );
+    assert_eq!(round(n.internal_force, 10.0), 8.0);
+    assert_eq!(
+        (
+            round(p.gripping_power_current, 10.0),
+            round(p.internal_force_current, 10.0)
+        ),
+        (20.9, 13.7)
+    );
+    assert_eq!(
+        (deg(r.wrist_rotation), round(r.gripping_power, 10.0)),
+        (8.9, 19.8)
+    );
+    assert_eq!(
+        (round(r.internal_force, 10.0), round(r.finger_force, 10.0)),
+        (12.9, 13.7)
+    );
+    assert_eq!(round(r.gripping_power_nominal, 10.0), 14.3);
+    assert_eq!(
+        r.gripping_power_at.kind,
+        BoxPointKind::Corner { x: 1, y: -1 }
+    );
+    assert_eq!(
+        (
+            round(r.gripping_power_current, 10.0),
+            round(r.internal_force_current, 10.0)
+        ),
+        (23.3, 15.5)
+    );
+}
+
+/// Tolerances at the ends of their domain answer without panicking, with finite numbers.
+#[test]
+fn extreme_tolerances_answer() {
+    let mut rng = ChaCha8Rng::seed_from_u64(19);
+    for k in 0..300 {
+        let c = random_grasp(&mut rng);
+        let d = (c.contact_1 - c.contact_2).norm();
+        let (half, tm) = match k % 3 {
+            0 => (Vector2::new(9e5, 9e5), c.mass * (1.0 - 1e-12)),
+            1 => (Vector2::new(1e-300, 0.0), 1e-300),
+            _ => (Vector2::new(1e3 * d, 0.0), 0.0),
+        };
+        let u = Uncertainty {
+            center_of_mass_tolerance: half,
+            mass_tolerance: tm,
+        };
+        for range in [AllowedRange::FromAbove, AllowedRange::Graspable] {
+            let s = Settings {
+                range,
+                ..Settings::default()
+            };
+            match solve_robust(&c, &u, &s) {
+                Ok(RobustVerdict::Recommended(r)) => {
+                    for v in [
+                        r.gravity_angle,
+                        r.gripping_power,
+                        r.internal_force,
+                        r.finger_force,
+                        r.gripping_power_current,
+                        r.gripping_power_nominal,
+                    ] {
+                        assert!(v.is_finite(), "{r:?}");
+                    }
+                }
+                Ok(RobustVerdict::NoCommonOrientation { reason, .. }) => {
+                    assert!(!reason.to_string().is_empty());
+                }
+                other => panic!("{other:?}"),
+            }
+        }
+    }
 }
 
 // ---------------------------------------------------------------------------------------------

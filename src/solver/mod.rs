@@ -28,6 +28,10 @@
 //! objective (gripping power) is `P(θ) = min ||F_T + α F_N||` over feasible α. The recommendation
 //! is the exact minimiser of `P` over the allowed range, found from the envelope's breakpoints and
 //! the closed-form stationary points of each piece.
+//!
+//! When the centre of mass and the mass are known only to within tolerances, [`solve_robust`]
+//! minimises the worst case of `P` over them instead (issue 13; the mathematics is in
+//! `src/solver/robust.rs`).
 
 mod analysis;
 mod frame;

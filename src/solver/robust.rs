@@ -31,13 +31,16 @@
 //!   functional `⟨F, F_N⟩ / |F_N|²`, and `α_min(c)` is the value of a linear program with the same
 //!   feasible set: convex by the same argument, with `|·|` replaced by a linear function.
 //!   Directly: at fixed θ each bound `α_k` (eqs. 30–33) is affine in `(x1, x2, y)`, hence in `c`,
-//!   and `α_min = max_k α_k` is a maximum of affine functions. `max(α_min, 0)` is convex too.
+//!   and `α_min = max_k α_k` is a maximum of affine functions. `max(α_min, 0)` is convex too;
+//!   it is also the internal force reported with `norm2`.
 //! - **The internal force reported under `norm1`** is the squeeze of the 1-norm's optimal forces:
 //!   an argmin, not a minimum value, and it is *not* convex in `c` (section 5).
 //! - A convex function on a convex polygon is largest at a vertex. The region of centres of mass
 //!   is a convex polygon (section 3), so the worst `P` at each orientation is the largest of the
 //!   vertices' `P`. Every force is proportional to `m` at fixed `c` and `u` (`b` is linear in `m`
-//!   and the conditions are a cone), so the worst mass is the largest, `m + Δm`. A smaller
+//!   and the conditions are a cone), so the worst mass is the largest, `m + Δm`, for every
+//!   quantity that is positive; the 1-norm's squeeze can be negative, and is then largest at the
+//!   smallest mass. A smaller
 //!   friction coefficient shrinks the cone, so the worst friction is `μ / s`.
 //!
 //! Test: `tests/robust.rs` evaluates a dense grid of centres of mass over the region and masses
@@ -84,11 +87,14 @@
 //! - **Bounds**: the bounds, shifted by multiples of 2π, met with the region's graspable range.
 //! - **Across the contact line**: a region with vertices on both sides of the contact line meets
 //!   the segment (it lies within both tangent half-planes, whose intersection with the line is the
-//!   segment). Then no orientation suits every object: for gravity with a component across the
-//!   line, the objects near the segment on one side rest on the fingers, and they hang below it on
-//!   neither side at once. The answer is [`RobustVerdict::NoCommonOrientation`], naming the vertex
-//!   across the line; likewise when the vertices' ranges do not meet (naming the two that bound
-//!   it) or the bounds miss the region's range. The nominal answer is given with it.
+//!   segment). Then no orientation suits every object: objects on both sides hang below the
+//!   fingers at no orientation, and for gravity with any component across the line the objects
+//!   just beside the segment on one side rest on the fingers. Only gravity exactly along the line
+//!   is left, one direction no wrist can hold to, so this is refused rather than handled: the
+//!   answer is [`RobustVerdict::NoCommonOrientation`], naming the vertex across the line;
+//!   likewise when the vertices' ranges do not meet (naming the two that bound it) or the bounds
+//!   miss the region's range. The nominal answer is given with it. (A vertex within 1e-12 of the
+//!   contact distance across the line counts as on it.)
 //!
 //! # 5. The internal force under `norm1`
 //! On the feasible ray `α >= α_min`, `||F_T + α F_N||_1` has slope `s1 + s2 + |c1| σ1 + |c2| σ2`,
@@ -125,12 +131,22 @@
 //! piece boundary, a stationary minimum of a piece, or an end of the range; all are evaluated,
 //! with the nominal solver's tie rule (the smaller wrist rotation wins). No grid, no iteration.
 //!
+//! At each step the vertex on top is the highest; curves level to within the rounding of their
+//! values (relative to their coefficients, not to the values) go to the steeper one. A crossing
+//! computed in closed form leaves a steep curve below a flat one by that rounding, and the walk
+//! must still switch there (test `envelope_takes_a_steep_crossing`). Each crossing is computed
+//! once and kept while neither of its two pieces changes.
+//!
 //! # 7. What is reported
 //! At the recommended pose and at the current pose: the worst objective, the worst internal
-//! force and the worst finger force over the region and the mass interval, and where in the
-//! region they are attained; the nominal object's objective, internal force and contact forces
-//! at the recommended pose; the region's allowed range; the local minima of the worst case over
-//! the region's graspable range; and the nominal object's own answer.
+//! force and the worst finger force over the region and the mass interval (and, at the
+//! recommended pose, where in the region the first two are attained); the nominal object's
+//! objective, internal force and contact forces at the recommended pose; the region's vertices,
+//! its allowed and graspable ranges; the local minima of the worst case over the region's
+//! graspable range; and the nominal object's own answer. With only the mass uncertain the region
+//! is the nominal centre of mass and the answer is the nominal one with every force scaled by
+//! `(m + Δm) / m`. [`RobustRecommendation::to_recommendation`] proposes how the answer fills
+//! today's message fields.
 //!
 //! The finger force is the push of the harder-pushing finger along the contact line
 //! (`shared/problem.md`): with `a_i` the push of contact `i`, `(a_1 + a_2)/2` is the internal
@@ -361,7 +377,8 @@ pub struct RobustRecommendation {
     pub gripping_power_at: BoxPoint,
     /// Worst squeeze force at the recommended pose, N.
     pub internal_force: f64,
-    /// Where in the region `internal_force` is attained (at the largest mass).
+    /// Where in the region `internal_force` is attained (at the largest mass; at the smallest
+    /// where the squeeze is negative, which only the 1-norm's can be).
     pub internal_force_at: BoxPoint,
     /// Worst push of the harder-pushing finger along the contact line there, N:
     /// `internal_force + m_max |g| |sin θ| / 2` (module docs, section 7).
@@ -498,7 +515,8 @@ pub fn solve_robust(
     let nominal = nominal_analysis.recommend(&settings.range)?;
     let mass_worst = candidate.mass + uncertainty.mass_tolerance;
     let region = region(candidate, uncertainty, frame.contact_distance);
-    let worst = match Worst::new(&frame, candidate, &region, mass_worst, settings) {
+    let masses = (candidate.mass - uncertainty.mass_tolerance, mass_worst);
+    let worst = match Worst::new(&frame, candidate, &region, masses, settings) {
         Ok(w) => w,
         Err(Refusal::NoCommon(reason)) => {
             return Ok(RobustVerdict::NoCommonOrientation {
@@ -633,6 +651,9 @@ struct Worst {
     envelope: Vec<TopPiece>,
     /// `m_max |g|`, N.
     weight: f64,
+    /// `m_min / m_max`: a negative squeeze (the 1-norm's, module docs section 5) is largest at
+    /// the smallest mass.
+    mass_ratio: f64,
 }
 
 impl Worst {
@@ -642,7 +663,7 @@ impl Worst {
         frame: &GraspFrame,
         candidate: &Candidate,
         region: &[BoxPoint],
-        mass_worst: f64,
+        (mass_least, mass_worst): (f64, f64),
         settings: &Settings,
     ) -> Result<Self, Refusal> {
         let weight = mass_worst * candidate.gravity.norm();
@@ -712,6 +733,7 @@ impl Worst {
             allowed,
             envelope,
             weight,
+            mass_ratio: mass_least / mass_worst,
         })
     }
 
@@ -807,7 +829,18 @@ impl Worst {
         found
     }
 
-    /// The worst objective and internal force at `theta`, and where they are attained.
+    /// A force proportional to the mass at `m_max`, made the largest over the mass interval: at
+    /// `m_max` if it is positive, at `m_min` if it is negative.
+    fn over_masses(&self, force: f64) -> f64 {
+        if force < 0.0 {
+            force * self.mass_ratio
+        } else {
+            force
+        }
+    }
+
+    /// The worst objective and internal force at `theta` (the internal force at `m_max`; see
+    /// [`Worst::over_masses`]), and where they are attained.
     fn worst_at(&self, theta: f64) -> ((f64, BoxPoint), (f64, BoxPoint)) {
         let mut power = (f64::NEG_INFINITY, self.region[0]);
         let mut internal = (f64::NEG_INFINITY, self.region[0]);
@@ -892,7 +925,11 @@ impl Worst {
         let lo = self.graspable.0;
         let current = lo + (f.current_theta - lo).rem_euclid(TAU);
         let theta = self.minimiser(current);
-        let finger = |internal: f64, t: f64| internal + 0.5 * self.weight * t.sin().abs();
+        // Internal and finger force are proportional to the mass at one centre of mass, and
+        // the centre of mass of the largest internal force gives the largest finger force
+        // (`W_line` does not depend on it); each is then made the largest over the masses.
+        let finger =
+            |internal: f64, t: f64| self.over_masses(internal + 0.5 * self.weight * t.sin().abs());
         let ((power, power_at), (internal, internal_at)) = self.worst_at(theta);
         let ((power_now, _), (internal_now, _)) = self.worst_at(current);
         let at_nominal = nominal_analysis.evaluate(theta);
@@ -903,11 +940,11 @@ impl Worst {
             gravity_direction: f.gravity_direction(theta),
             gripping_power: power,
             gripping_power_at: power_at,
-            internal_force: internal,
+            internal_force: self.over_masses(internal),
             internal_force_at: internal_at,
             finger_force: finger(internal, theta),
             gripping_power_current: power_now,
-            internal_force_current: internal_now,
+            internal_force_current: self.over_masses(internal_now),
             finger_force_current: finger(internal_now, current),
             current_gravity_angle: current,
             gripping_power_nominal: at_nominal.power,
@@ -1496,7 +1533,8 @@ mod tests {
         };
         let frame = GraspFrame::new(c, 1.0).expect("valid");
         let region = region(c, u, frame.contact_distance);
-        let w = match Worst::new(&frame, c, &region, c.mass + u.mass_tolerance, &settings) {
+        let masses = (c.mass - u.mass_tolerance, c.mass + u.mass_tolerance);
+        let w = match Worst::new(&frame, c, &region, masses, &settings) {
             Ok(w) => w,
             Err(_) => panic!("the box is on one side of the contact line"),
         };

@@ -41,6 +41,8 @@ fn inside_box(center: Vector2<f64>, half: Vector2<f64>, q: Vector2<f64>) -> bool
     d.x.abs() <= half.x + slack && d.y.abs() <= half.y + slack
 }
 
+type Tangent = (Vector2<f64>, Vector2<f64>);
+
 impl RefRegion {
     pub fn new(c: &Candidate, half: Vector2<f64>, n: usize, spacing: f64) -> Self {
         let o = c.center_of_mass;
@@ -61,94 +63,37 @@ impl RefRegion {
             .collect();
         let mut boundary = Vec::new();
         for k in 0..4 {
-            let (a, b) = (corners[k], corners[(k + 1) % 4]);
-            // The part of this edge inside the object: [s_lo, s_hi] of a + s (b - a).
-            let (mut s_lo, mut s_hi) = (0.0f64, 1.0f64);
-            for (p, nrm) in tangents {
-                let (da, db) = (nrm.dot(&(a - p)), nrm.dot(&(b - p)));
-                if da != db {
-                    let s = da / (da - db);
-                    if (0.0..=1.0).contains(&s) {
-                        let q = a + (b - a) * s;
-                        if inside_object(c, q) {
-                            extreme.push(q);
-                        }
-                    }
-                    if da < db {
-                        s_lo = s_lo.max(s);
-                    } else {
-                        s_hi = s_hi.min(s);
-                    }
-                } else if da < 0.0 {
-                    s_hi = -1.0;
-                }
-            }
-            let len = (b - a).norm();
-            if s_hi > s_lo && len > 0.0 {
-                let steps = ((s_hi - s_lo) * len / spacing).ceil().max(1.0) as usize;
-                for i in 0..=steps {
-                    boundary.push(a + (b - a) * (s_lo + (s_hi - s_lo) * i as f64 / steps as f64));
-                }
-            }
+            box_edge(
+                c,
+                (corners[k], corners[(k + 1) % 4]),
+                &tangents,
+                spacing,
+                &mut extreme,
+                &mut boundary,
+            );
         }
-        // Along each tangent line, the part inside the box and the other half-plane: sample it.
-        for (i, (p, nrm)) in tangents.iter().enumerate() {
-            let dir = Vector2::new(-nrm.y, nrm.x);
-            // Points p + t dir; keep those in the box and behind the other tangent.
-            let reach = (p - o).norm() + half.norm();
-            let steps = ((2.0 * reach / spacing).ceil() as usize).min(200_000);
-            for k in 0..=steps {
-                let t = -reach + 2.0 * reach * k as f64 / steps as f64;
-                let q = p + dir * t;
-                let (p2, n2) = tangents[1 - i];
-                if inside_box(o, half, q) && n2.dot(&(q - p2)) >= 0.0 {
-                    boundary.push(q);
-                }
-            }
+        for i in 0..2 {
+            tangent_line(
+                o,
+                half,
+                tangents[i],
+                tangents[1 - i],
+                spacing,
+                &mut boundary,
+            );
         }
         // The tangents' meeting point.
-        let m = Matrix2::new(
-            tangents[0].1.x,
-            tangents[0].1.y,
-            tangents[1].1.x,
-            tangents[1].1.y,
-        );
+        let (t1, t2) = (tangents[0], tangents[1]);
+        let m = Matrix2::new(t1.1.x, t1.1.y, t2.1.x, t2.1.y);
         if let Some(inv) = m.try_inverse() {
-            let q = inv
-                * Vector2::new(
-                    tangents[0].1.dot(&tangents[0].0),
-                    tangents[1].1.dot(&tangents[1].0),
-                );
+            let q = inv * Vector2::new(t1.1.dot(&t1.0), t2.1.dot(&t2.0));
             if inside_box(o, half, q) {
                 extreme.push(q);
             }
         }
-        let (nx, ny) = (
-            if half.x > 0.0 { n } else { 0 },
-            if half.y > 0.0 { n } else { 0 },
-        );
-        let mut grid = Vec::with_capacity((nx + 1) * (ny + 1));
-        for i in 0..=nx {
-            for j in 0..=ny {
-                let fx = if nx == 0 {
-                    0.0
-                } else {
-                    2.0 * i as f64 / nx as f64 - 1.0
-                };
-                let fy = if ny == 0 {
-                    0.0
-                } else {
-                    2.0 * j as f64 / ny as f64 - 1.0
-                };
-                let q = o + Vector2::new(fx * half.x, fy * half.y);
-                if inside_object(c, q) {
-                    grid.push(q);
-                }
-            }
-        }
         Self {
             extreme,
-            grid,
+            grid: lattice(c, half, n),
             boundary,
         }
     }
@@ -157,6 +102,90 @@ impl RefRegion {
     pub fn contains(c: &Candidate, half: Vector2<f64>, q: Vector2<f64>) -> bool {
         inside_object(c, q) && inside_box(c.center_of_mass, half, q)
     }
+}
+
+/// One edge `(a, b)` of the box: where the tangents cut it (into `extreme`, if the cut point is
+/// inside the object) and the part of it inside the object, every `spacing` (into `boundary`).
+fn box_edge(
+    c: &Candidate,
+    (a, b): (Vector2<f64>, Vector2<f64>),
+    tangents: &[Tangent; 2],
+    spacing: f64,
+    extreme: &mut Vec<Vector2<f64>>,
+    boundary: &mut Vec<Vector2<f64>>,
+) {
+    // The part of this edge inside the object: [s_lo, s_hi] of a + s (b - a).
+    let (mut s_lo, mut s_hi) = (0.0f64, 1.0f64);
+    for &(p, nrm) in tangents {
+        let (da, db) = (nrm.dot(&(a - p)), nrm.dot(&(b - p)));
+        if da != db {
+            let s = da / (da - db);
+            if (0.0..=1.0).contains(&s) {
+                let q = a + (b - a) * s;
+                if inside_object(c, q) {
+                    extreme.push(q);
+                }
+            }
+            if da < db {
+                s_lo = s_lo.max(s);
+            } else {
+                s_hi = s_hi.min(s);
+            }
+        } else if da < 0.0 {
+            s_hi = -1.0;
+        }
+    }
+    let len = (b - a).norm();
+    if s_hi > s_lo && len > 0.0 {
+        let steps = ((s_hi - s_lo) * len / spacing).ceil().max(1.0) as usize;
+        for i in 0..=steps {
+            boundary.push(a + (b - a) * (s_lo + (s_hi - s_lo) * i as f64 / steps as f64));
+        }
+    }
+}
+
+/// The tangent line `(p, n)` where it bounds the region (inside the box, on the inner side of
+/// the other tangent), every `spacing`, into `boundary`.
+fn tangent_line(
+    o: Vector2<f64>,
+    half: Vector2<f64>,
+    (p, nrm): Tangent,
+    (p2, n2): Tangent,
+    spacing: f64,
+    boundary: &mut Vec<Vector2<f64>>,
+) {
+    let dir = Vector2::new(-nrm.y, nrm.x);
+    let reach = (p - o).norm() + half.norm();
+    let steps = ((2.0 * reach / spacing).ceil() as usize).min(200_000);
+    for k in 0..=steps {
+        let q = p + dir * (-reach + 2.0 * reach * k as f64 / steps.max(1) as f64);
+        if inside_box(o, half, q) && n2.dot(&(q - p2)) >= 0.0 {
+            boundary.push(q);
+        }
+    }
+}
+
+/// `(n + 1)²` points over the box (one along an axis of zero width), those inside the object.
+fn lattice(c: &Candidate, half: Vector2<f64>, n: usize) -> Vec<Vector2<f64>> {
+    let steps = |w: f64| if w > 0.0 { n } else { 0 };
+    let (nx, ny) = (steps(half.x), steps(half.y));
+    let at = |i: usize, n: usize| {
+        if n == 0 {
+            0.0
+        } else {
+            2.0 * i as f64 / n as f64 - 1.0
+        }
+    };
+    let mut grid = Vec::with_capacity((nx + 1) * (ny + 1));
+    for i in 0..=nx {
+        for j in 0..=ny {
+            let q = c.center_of_mass + Vector2::new(at(i, nx) * half.x, at(j, ny) * half.y);
+            if inside_object(c, q) {
+                grid.push(q);
+            }
+        }
+    }
+    grid
 }
 
 /// Points of the region within `offset` of the contact line, on both sides of it: the part of
