@@ -634,6 +634,17 @@ struct TopPiece {
     hi: f64,
     vertex: usize,
     curve: Curve,
+    /// The curve's stationary minima strictly inside `(lo, hi)` (at most two in a piece shorter
+    /// than 2π), set once the piece is complete.
+    minima: [f64; 2],
+    /// How many of `minima` are set.
+    n_minima: usize,
+}
+
+impl TopPiece {
+    fn minima(&self) -> &[f64] {
+        &self.minima[..self.n_minima]
+    }
 }
 
 /// The region's vertices analysed at the largest mass, and their upper envelope.
@@ -680,9 +691,14 @@ impl Worst {
                 ..f
             });
         }
-        let ranges: Vec<_> = frames.iter().map(paper::ranges).collect();
-        let graspable = Common::of(ranges.iter().map(|r| r.0));
-        let from_above = Common::of(ranges.iter().map(|r| r.1));
+        let analyses = frames
+            .iter()
+            .map(|f| Analysis::new(f, settings.objective))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(Refusal::NoClosure)?;
+        // `paper::ranges` of each vertex's frame.
+        let graspable = Common::of(analyses.iter().map(Analysis::graspable_range));
+        let from_above = Common::of(analyses.iter().map(Analysis::from_above_range));
         let allowed = match settings.range {
             AllowedRange::FromAbove | AllowedRange::Graspable => {
                 let c = if settings.range == AllowedRange::FromAbove {
@@ -714,11 +730,6 @@ impl Worst {
                 out
             }
         };
-        let analyses = frames
-            .iter()
-            .map(|f| Analysis::new(f, settings.objective))
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(Refusal::NoClosure)?;
         let tracks: Vec<Vec<(f64, f64, Curve)>> =
             analyses.iter().map(|a| a.pieces().collect()).collect();
         let envelope = envelope(&tracks, graspable.lo, graspable.hi);
@@ -773,7 +784,7 @@ impl Worst {
                 }
                 points.clear();
                 points.extend([lo, hi]);
-                piece.curve.minima_between(lo, hi, &mut points);
+                points.extend(piece.minima().iter().filter(|&&t| t > lo && t < hi));
                 if piece.curve.is_constant() {
                     points.push(current.clamp(lo, hi));
                 }
@@ -803,7 +814,6 @@ impl Worst {
             }
         };
         let env = &self.envelope;
-        let mut inside = Vec::with_capacity(2);
         for (i, piece) in env.iter().enumerate() {
             let start = Angle::new(piece.lo);
             let right = piece.curve.slope(&start);
@@ -815,9 +825,7 @@ impl Worst {
             if left <= 0.0 && right >= 0.0 {
                 push(piece.lo, &piece.curve);
             }
-            inside.clear();
-            piece.curve.minima_between(piece.lo, piece.hi, &mut inside);
-            for &t in &inside {
+            for &t in piece.minima() {
                 push(t, &piece.curve);
             }
         }
@@ -1171,6 +1179,8 @@ fn envelope(tracks: &[Vec<(f64, f64, Curve)>], lo: f64, hi: f64) -> Vec<TopPiece
                 hi: next,
                 vertex: top,
                 curve: top_curve,
+                minima: [0.0; 2],
+                n_minima: 0,
             }),
         }
         if next >= hi {
@@ -1190,6 +1200,13 @@ fn envelope(tracks: &[Vec<(f64, f64, Curve)>], lo: f64, hi: f64) -> Vec<TopPiece
             overtake.fill(f64::NAN);
         }
         top = new_top;
+    }
+    let mut found = Vec::with_capacity(2);
+    for piece in &mut out {
+        found.clear();
+        piece.curve.minima_between(piece.lo, piece.hi, &mut found);
+        piece.n_minima = found.len().min(2);
+        piece.minima[..piece.n_minima].copy_from_slice(&found[..piece.n_minima]);
     }
     out
 }
