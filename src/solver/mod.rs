@@ -28,14 +28,23 @@
 //! objective (gripping power) is `P(θ) = min ||F_T + α F_N||` over feasible α. The recommendation
 //! is the exact minimiser of `P` over the allowed range, found from the envelope's breakpoints and
 //! the closed-form stationary points of each piece.
+//!
+//! When the centre of mass and the mass are known only to within tolerances, [`solve_robust`]
+//! minimises the worst case of `P` over them instead (issue 13; the mathematics is in
+//! `src/solver/robust.rs`).
 
 mod analysis;
 mod frame;
 mod paper;
+mod robust;
 mod sinusoid;
 
 pub use analysis::{Analysis, PointValue};
 pub use paper::CandidateAngles;
+pub use robust::{
+    solve_robust, BoxPoint, BoxPointKind, NoCommonOrientation, RobustRecommendation, RobustVerdict,
+    Uncertainty,
+};
 
 use frame::GraspFrame;
 
@@ -248,6 +257,18 @@ pub enum InvalidInput {
         graspable_lo: f64,
         /// Graspable range end, rad.
         graspable_hi: f64,
+    },
+    /// A tolerance (centre of mass, mass) is negative or too large.
+    #[error("{field} must be at least 0 and less than {limit:e}{unit}, got {value:e}")]
+    Tolerance {
+        /// The field.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+        /// The least value refused.
+        limit: f64,
+        /// Unit of the limit, with its leading space.
+        unit: &'static str,
     },
 }
 
