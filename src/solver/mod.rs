@@ -33,9 +33,14 @@ mod analysis;
 mod frame;
 pub mod paper;
 pub mod sinusoid;
+pub mod spatial;
 
 pub use analysis::Analysis;
 pub use frame::GraspFrame;
+pub use spatial::{
+    solve_spatial, AxisRelation, CurrentPose, SpatialCandidate, SpatialMiss, SpatialNoForceClosure,
+    SpatialRecommendation, SpatialVerdict,
+};
 
 use nalgebra::Vector2;
 use std::fmt;
@@ -238,6 +243,27 @@ pub enum InvalidInput {
         graspable_lo: f64,
         /// Graspable range end, rad.
         graspable_hi: f64,
+    },
+    /// A vector that must have a direction is zero (spatial candidates).
+    #[error("{field} is the zero vector")]
+    ZeroVector {
+        /// The field.
+        field: &'static str,
+    },
+    /// A normal is perpendicular to the grasp plane through both contacts and the centre of mass,
+    /// so its projection into that plane, the planar normal, has no direction (spatial candidates).
+    #[error(
+        "{field} is perpendicular to the grasp plane through both contacts and the centre of mass"
+    )]
+    NormalPerpendicularToGraspPlane {
+        /// The field.
+        field: &'static str,
+    },
+    /// The centre of mass is at a contact point (spatial candidates).
+    #[error("center_of_mass coincides with {contact}")]
+    CenterOfMassAtContact {
+        /// The contact.
+        contact: Contact,
     },
 }
 
