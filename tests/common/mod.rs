@@ -7,6 +7,8 @@
 //! its derivative (from the active constraint), bisecting every sign change of the derivative.
 #![allow(dead_code)]
 
+pub mod spatial;
+
 use grasp_orient::solver::Candidate;
 use nalgebra::{Matrix3x4, Matrix4x3, Vector2, Vector3, Vector4};
 use rand::Rng;
