@@ -102,6 +102,8 @@ pub const ARC_GRID: usize = 48;
 pub const NORM1_GRID: usize = 96;
 /// Powers closer than this, relative to themselves and the weight, tie.
 const TIE: f64 = 1e-12;
+/// Rotations closer than this (rad) are equal in tie-breaks.
+const SAME_ROTATION: f64 = 1e-12;
 /// Opposite azimuths within this many radians of π give two Pareto arcs.
 const OPPOSITE: f64 = 1e-12;
 
@@ -530,12 +532,13 @@ fn search(g: &Geometry, grasp: &AxisGrasp, settings: &Settings) -> Result<Spatia
     Ok(SpatialVerdict::Recommended(Box::new(out)))
 }
 
-/// Whether `s` beats `b`: lower power, or a tie (1e-12 relative, unit weight) with a smaller
-/// rotation.
+/// Whether `s` beats `b`: lower power, or a tie (1e-12 relative, unit weight) with a rotation
+/// smaller by more than [`SAME_ROTATION`] (so that equal answers keep the earlier plane, the
+/// current one first).
 fn better(s: &Solved, b: &Solved) -> bool {
     let (p, q) = (s.answer.gripping_power, b.answer.gripping_power);
     if (p - q).abs() <= TIE * p.abs().max(q.abs()).max(1.0) {
-        s.rotation < b.rotation
+        s.rotation < b.rotation - SAME_ROTATION
     } else {
         p < q
     }
