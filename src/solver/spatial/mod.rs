@@ -115,8 +115,8 @@ pub mod on_axis;
 mod plane;
 
 use super::{
-    solve_orientation, Candidate, ConeMiss, Contact, InvalidInput, NoForceClosure, Recommendation,
-    Settings, Verdict,
+    Analysis, Candidate, ConeMiss, Contact, GraspFrame, InvalidInput, NoForceClosure,
+    Recommendation, Settings,
 };
 use nalgebra::{Vector2, Vector3};
 use plane::{Basis, Geometry, PlaneSolve};
@@ -256,8 +256,8 @@ pub struct SpatialRecommendation {
     pub friction_directions: [Vector3<f64>; 2],
     /// `μ'_i`: the friction coefficients of the cones sliced by Π, after the safety factor.
     pub sliced_friction: [f64; 2],
-    /// `β_i`: tilt of each normal out of Π, rad in `[0, π/2)`.
-    pub normal_tilt: [f64; 2],
+    /// `tan β_i` of the tilt of each normal out of Π ([`SpatialRecommendation::normal_tilt`]).
+    tilt_tangent: [f64; 2],
     /// Whether the current pose can be held.
     pub current_pose: CurrentPose,
     /// Where the centre of mass lies with respect to the contact axis.
@@ -267,6 +267,11 @@ pub struct SpatialRecommendation {
 }
 
 impl SpatialRecommendation {
+    /// `β_i`: the tilt of each normal out of Π, rad in `[0, π/2)`.
+    pub fn normal_tilt(&self) -> [f64; 2] {
+        self.tilt_tangent.map(f64::atan)
+    }
+
     /// The rotation as a unit quaternion `[x, y, z, w]`.
     pub fn quaternion(&self) -> [f64; 4] {
         let (s, c) = (0.5 * self.rotation_angle).sin_cos();
@@ -405,11 +410,9 @@ pub fn solve_spatial(
         Ok(r) => r,
         Err(miss) => return Ok(SpatialVerdict::NoForceClosure(miss)),
     };
-    let out_of_plane = geometry.out_of_plane(&basis);
-    let current_pose = if out_of_plane > geometry.in_plane_tolerance() {
-        CurrentPose::Swings { out_of_plane }
-    } else {
-        CurrentPose::Held
+    let current_pose = match geometry.out_of_plane(&basis, geometry.in_plane_tolerance()) {
+        Some(out_of_plane) => CurrentPose::Swings { out_of_plane },
+        None => CurrentPose::Held,
     };
     Ok(SpatialVerdict::Recommended(Box::new(plane.assemble(
         planar,
@@ -422,20 +425,18 @@ pub fn solve_spatial(
 /// spatial terms.
 type PlanarOutcome = Result<Recommendation, SpatialNoForceClosure>;
 
-/// Runs the planar solver on a planar candidate and maps "no force closure" into spatial terms.
+/// Runs the planar solver on a planar candidate built by the reduction and maps "no force
+/// closure" into spatial terms. The 3D input has been validated, so the planar checks are not run
+/// again; the friction coefficients are already divided by the safety factor `safety`.
 fn planar_outcome(
     candidate: &Candidate,
     settings: &Settings,
     safety: f64,
 ) -> Result<PlanarOutcome, InvalidInput> {
-    // The safety factor has divided the coefficients before slicing: the planar solver gets 1.
-    let planar_settings = Settings {
-        friction_safety_factor: 1.0,
-        ..*settings
-    };
-    Ok(match solve_orientation(candidate, &planar_settings)? {
-        Verdict::Recommended(r) => Ok(*r),
-        Verdict::NoForceClosure(NoForceClosure { misses, .. }) => Err(SpatialNoForceClosure {
+    let frame = GraspFrame::from_valid(candidate, 1.0);
+    Ok(match Analysis::new(&frame, settings.objective) {
+        Ok(analysis) => Ok(analysis.recommend(&settings.range)?),
+        Err(NoForceClosure { misses, .. }) => Err(SpatialNoForceClosure {
             misses: misses.into_iter().map(SpatialMiss::Cone).collect(),
             friction_safety_factor: safety,
         }),

@@ -436,19 +436,19 @@ enum Stop {
 }
 
 /// One solved plane.
-struct Solved {
-    plane: PlaneSolve,
+struct Solved<'a> {
+    plane: PlaneSolve<'a>,
     answer: Recommendation,
     rotation: f64,
 }
 
 /// Solves the plane `psi` exactly with the planar solver (unit weight).
-fn solve_plane(
-    g: &Geometry,
+fn solve_plane<'a>(
+    g: &'a Geometry,
     grasp: &AxisGrasp,
     settings: &Settings,
     psi: f64,
-) -> Result<Solved, Stop> {
+) -> Result<Solved<'a>, Stop> {
     let points = [
         Vector2::new(grasp.x[0], 0.0),
         Vector2::new(-grasp.x[1], 0.0),

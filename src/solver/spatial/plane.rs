@@ -87,10 +87,26 @@ fn vector(
 fn direction(field: &'static str, v: &Vector3<f64>) -> Result<Vector3<f64>, InvalidInput> {
     let n = v.norm();
     if n > 0.0 {
-        Ok(v / n)
+        Ok(v * (1.0 / n))
     } else {
         Err(InvalidInput::ZeroVector { field })
     }
+}
+
+/// Whether every field is within its limits (NaN and infinities are not): the common case, in
+/// one pass; [`validate`] names the field otherwise.
+fn within_limits(c: &SpatialCandidate) -> bool {
+    let all = |v: &Vector3<f64>, limit: f64| v.iter().all(|x| x.abs() <= limit);
+    let positive = |x: f64, limit: f64| x > 0.0 && x <= limit;
+    all(&c.contact_1, MAX_COORDINATE)
+        && all(&c.contact_2, MAX_COORDINATE)
+        && all(&c.center_of_mass, MAX_COORDINATE)
+        && all(&c.normal_1, MAX_NORMAL_COMPONENT)
+        && all(&c.normal_2, MAX_NORMAL_COMPONENT)
+        && all(&c.gravity, MAX_GRAVITY)
+        && positive(c.friction_1, MAX_FRICTION)
+        && positive(c.friction_2, MAX_FRICTION)
+        && positive(c.mass, MAX_MASS)
 }
 
 /// Checks every field of a spatial candidate, naming the first one at fault, in the planar
@@ -175,7 +191,9 @@ impl Geometry {
         if !(safety.is_finite() && safety >= 1.0) {
             return Err(InvalidInput::SafetyFactor { value: safety });
         }
-        validate(c)?;
+        if !within_limits(c) {
+            validate(c)?;
+        }
         let n = [
             direction("normal_1", &c.normal_1)?,
             direction("normal_2", &c.normal_2)?,
@@ -184,7 +202,9 @@ impl Geometry {
         let p = [c.contact_1, c.contact_2];
         let com = c.center_of_mass;
         let d = (p[0] - p[1]).norm();
-        let reach = (p[0] - com).norm().max((p[1] - com).norm());
+        let to_com = [com - p[0], com - p[1]];
+        let dist = [to_com[0].norm(), to_com[1].norm()];
+        let reach = dist[0].max(dist[1]);
         if d == 0.0 || d <= COINCIDENT_FRACTION * reach {
             return Err(InvalidInput::CoincidentContacts);
         }
@@ -195,23 +215,22 @@ impl Geometry {
             if ni.dot(&(qi - pi)) < 0.0 {
                 return Err(InvalidInput::NormalOutward { contact });
             }
-            let to_com = com - pi;
-            if ni.dot(&to_com) < -1e-12 * to_com.norm() {
+            if ni.dot(&to_com[i]) < -1e-12 * dist[i] {
                 return Err(InvalidInput::CenterOfMassOutside { contact });
             }
-            if to_com.norm() <= COINCIDENT_FRACTION * d {
+            if dist[i] <= COINCIDENT_FRACTION * d {
                 return Err(InvalidInput::CenterOfMassAtContact { contact });
             }
         }
-        let a = (p[0] - p[1]) / d;
+        let inv_d = 1.0 / d;
+        let a = (p[0] - p[1]) * inv_d;
         // Offset of the centre of mass from the axis, measured from the nearer contact.
-        let from = if (com - p[0]).norm() < (com - p[1]).norm() {
-            p[0]
+        let r = if dist[0] < dist[1] {
+            to_com[0]
         } else {
-            p[1]
+            to_com[1]
         };
-        let r = com - from;
-        let offset = (r - a * r.dot(&a)).norm() / d;
+        let offset = (r - a * r.dot(&a)).norm() * inv_d;
         let magnitude = [p[0], p[1], com]
             .iter()
             .map(|v| v.amax())
@@ -256,10 +275,20 @@ impl Geometry {
         super::IN_PLANE_TOLERANCE + 64.0 * f64::EPSILON * self.magnitude / (self.offset * self.d)
     }
 
-    /// Angle between the current gravity and the plane of `basis`, rad in `[0, π/2]`.
-    pub fn out_of_plane(&self, basis: &Basis) -> f64 {
-        let g = basis.in_plane(&self.g0);
-        self.g0.dot(&basis.normal).abs().atan2(g.norm())
+    /// The angle between the current gravity and the plane of `basis` (rad in `[0, π/2]`) when
+    /// it exceeds `tolerance`, else `None`.
+    pub fn out_of_plane(&self, basis: &Basis, tolerance: f64) -> Option<f64> {
+        // `g0` is a unit vector: its component across the plane is the sine of the angle. Compare
+        // sines (`t − t³/6` is sin t to 1e-22 for the small tolerances that occur), and take the
+        // angle only when it is reported.
+        let across = self.g0.dot(&basis.normal).abs();
+        let t = tolerance.min(std::f64::consts::FRAC_PI_2);
+        let sin_t = if t < 1e-4 {
+            t - t * t * t / 6.0
+        } else {
+            t.sin()
+        };
+        (across > sin_t).then(|| across.atan2(basis.in_plane(&self.g0).norm()))
     }
 }
 
@@ -282,6 +311,7 @@ impl Basis {
     /// (about `z × ν`) takes `+x` to `(1 − k ν_x², −k ν_x ν_y, −ν_x)` and `+y` to
     /// `(−k ν_x ν_y, 1 − k ν_y², −ν_y)`.
     pub fn through_center_of_mass(g: &Geometry) -> Self {
+        // Divided, not multiplied by the inverse: a grasp in the x-y plane gets ν = +z exactly.
         let mut nu = (g.p[0] - g.c).cross(&(g.p[1] - g.c)).normalize();
         let flip = nu.z < 0.0 || (nu.z == 0.0 && (nu.y < 0.0 || (nu.y == 0.0 && nu.x < 0.0)));
         if flip {
@@ -309,29 +339,30 @@ impl Basis {
 /// The planar problem in one plane: the planar candidate (unit weight) and what maps its answer
 /// back to 3D.
 #[derive(Debug, Clone)]
-pub(super) struct PlaneSolve {
+pub(super) struct PlaneSolve<'a> {
     pub basis: Basis,
     pub candidate: Candidate,
     /// Unit projected inward normals `û_i`, 3D.
     pub normals: [Vector3<f64>; 2],
-    /// Tilts `β_i`, rad.
-    pub tilt: [f64; 2],
+    /// `tan β_i` of the tilts.
+    pub tilt_tangent: [f64; 2],
     /// Sliced coefficients `μ'_i`.
     pub sliced: [f64; 2],
-    pub geometry: Geometry,
+    pub geometry: &'a Geometry,
 }
 
-impl PlaneSolve {
+impl<'a> PlaneSolve<'a> {
     /// The planar candidate in the plane of `basis` with contacts and centre of mass at `points`
     /// (`[p1, p2, c]` in its coordinates). `Err(Ok(_))` is no force closure (a normal tilted
     /// beyond its friction angle); `Err(Err(_))` is a normal perpendicular to the plane.
     pub fn new(
-        g: &Geometry,
+        g: &'a Geometry,
         basis: &Basis,
         points: [Vector2<f64>; 3],
     ) -> Result<Self, Result<SpatialNoForceClosure, InvalidInput>> {
         let mut normals2 = [Vector2::zeros(); 2];
-        let mut tilt = [0.0; 2];
+        let mut normals = [Vector3::zeros(); 2];
+        let mut tilt_tangent = [0.0; 2];
         let mut sliced = [0.0; 2];
         let mut misses = Vec::new();
         for i in 0..2 {
@@ -339,7 +370,8 @@ impl PlaneSolve {
             let along = basis.in_plane(raw);
             let across = raw.dot(&basis.normal).abs();
             let in_plane = along.norm();
-            if in_plane <= PERPENDICULAR_FRACTION * raw.norm() {
+            // The unit normal's part in the plane, against PERPENDICULAR_FRACTION.
+            if in_plane <= PERPENDICULAR_FRACTION * (in_plane + across) {
                 return Err(Err(InvalidInput::NormalPerpendicularToGraspPlane {
                     field: ["normal_1", "normal_2"][i],
                 }));
@@ -351,12 +383,14 @@ impl PlaneSolve {
             } else {
                 along / in_plane
             };
-            tilt[i] = across.atan2(in_plane);
-            match sliced_friction(g.mu[i], across / in_plane) {
+            let inv = 1.0 / in_plane;
+            normals[i] = basis.lift(&(along * inv));
+            tilt_tangent[i] = across * inv;
+            match sliced_friction(g.mu[i], tilt_tangent[i]) {
                 Some(mu) => sliced[i] = mu,
                 None => misses.push(SpatialMiss::Tilted {
                     contact: [Contact::First, Contact::Second][i],
-                    tilt: tilt[i],
+                    tilt: across.atan2(in_plane),
                     half_angle: g.mu[i].atan(),
                 }),
             }
@@ -385,14 +419,14 @@ impl PlaneSolve {
             }));
         }
         let g2 = basis.in_plane(&g.g0);
-        let gravity = if g2.norm() > 0.0 {
-            g2 / g2.norm()
+        let g2_norm = g2.norm();
+        let gravity = if g2_norm > 0.0 {
+            g2 * (1.0 / g2_norm)
         } else {
             // Gravity is perpendicular to the plane: every direction in it is a quarter turn
             // away, so any will do for the planar tie-break.
             v2(0.0, -1.0)
         };
-        let normals = normals2.map(|u| basis.lift(&(u / u.norm())));
         Ok(Self {
             basis: *basis,
             candidate: Candidate {
@@ -407,9 +441,9 @@ impl PlaneSolve {
                 gravity,
             },
             normals,
-            tilt,
+            tilt_tangent,
             sliced,
-            geometry: *g,
+            geometry: g,
         })
     }
 
@@ -425,11 +459,16 @@ impl PlaneSolve {
         let d = planar.gravity_direction;
         let g = b.in_plane(&self.geometry.g0);
         let g_normal = self.geometry.g0.dot(&b.normal);
-        let g_par = g.norm();
-        let (sin_w, cos_w) = planar.wrist_rotation.sin_cos();
-        let cross = Vector3::new(d.y * g_normal, -d.x * g_normal, g_par * sin_w);
+        // `g_∥ sin ω` and `g_∥ cos ω`: the planar rotation ω turns the unit `u = g / g_∥` (the
+        // planar candidate's gravity) into `d`, so `d × u = sin ω` and `d · u = cos ω`.
+        let (par_sin, par_cos) = if g.x == 0.0 && g.y == 0.0 {
+            (0.0, 0.0)
+        } else {
+            (d.x * g.y - d.y * g.x, d.dot(&g))
+        };
+        let cross = Vector3::new(d.y * g_normal, -d.x * g_normal, par_sin);
         let norm = cross.norm();
-        let angle = norm.atan2(g_par * cos_w);
+        let angle = norm.atan2(par_cos);
         let axis = if norm > 0.0 {
             (b.x * cross.x + b.y * cross.y + b.normal * cross.z) / norm
         } else {
@@ -483,7 +522,7 @@ impl PlaneSolve {
             normal_directions: self.normals,
             friction_directions,
             sliced_friction: self.sliced,
-            normal_tilt: self.tilt,
+            tilt_tangent: self.tilt_tangent,
             current_pose,
             axis,
             center_of_mass_offset: self.geometry.offset,
