@@ -649,9 +649,16 @@ fn refusals_name_the_field_and_the_contact() {
         solve_spatial(&base(), &s),
         Err(InvalidInput::SafetyFactor { value: 0.5 })
     );
-    // A normal tilted out of Π beyond the friction angle: no force closure, naming the contact.
+}
+
+/// A normal tilted out of Π beyond its friction angle, or an on-axis cone that misses the other
+/// contact: no force closure, naming the contact and the reason.
+#[test]
+fn no_force_closure_names_the_contact_and_the_reason() {
     let mut c = base();
-    let nu = nu.normalize();
+    let nu = (c.contact_1 - c.center_of_mass)
+        .cross(&(c.contact_2 - c.center_of_mass))
+        .normalize();
     c.normal_2 = Vector3::new(0.0, 1.0, 0.0) * 0.5f64.cos() + nu * 0.5f64.sin();
     c.friction_2 = 0.5f64.tan() * 0.99;
     match solve_spatial(&c, &Settings::default()) {

@@ -498,95 +498,125 @@ fn rot2(v: (f64, f64), a: f64) -> (f64, f64) {
     (c * v.0 - s * v.1, s * v.0 + c * v.1)
 }
 
+/// A grasp in a local frame where the grasp plane (off the axis) is z = 0.
+struct Local {
+    p: [Vector3<f64>; 2],
+    com: Vector3<f64>,
+    n: [Vector3<f64>; 2],
+}
+
+fn on_axis(kind: Kind) -> bool {
+    matches!(
+        kind,
+        Kind::OnAxis | Kind::OnAxisSymmetric | Kind::OnAxisCoplanar
+    )
+}
+
+/// Contacts on the x axis either side of the centre of mass at the origin, each normal within
+/// 0.95 of its friction angle of the axis (along it for `OnAxisSymmetric`, tilted in one plane
+/// for `OnAxisCoplanar`).
+fn on_axis_local(rng: &mut impl Rng, kind: Kind, mu: [f64; 2]) -> Local {
+    let x1 = rng.gen_range(0.1..1.0);
+    let x2 = rng.gen_range(0.1..1.0);
+    let shared = rng.gen_range(-PI..PI);
+    let mut normal = |toward: f64, xi: f64| {
+        let delta = match kind {
+            Kind::OnAxisSymmetric => 0.0,
+            _ => rng.gen_range(0.0..0.95) * xi,
+        };
+        let eta = match kind {
+            Kind::OnAxisCoplanar => shared + if rng.gen_bool(0.5) { 0.0 } else { PI },
+            _ => rng.gen_range(-PI..PI),
+        };
+        Vector3::new(
+            toward * delta.cos(),
+            delta.sin() * eta.cos(),
+            delta.sin() * eta.sin(),
+        )
+    };
+    let n1 = normal(-1.0, mu[0].atan());
+    let n2 = normal(1.0, mu[1].atan());
+    Local {
+        p: [Vector3::new(x1, 0.0, 0.0), Vector3::new(-x2, 0.0, 0.0)],
+        com: Vector3::zeros(),
+        n: [n1, n2],
+    }
+}
+
+/// Contacts in the plane z = 0, normals tilted out of it by β (none for `InPlane`, within 1e-3 to
+/// 1e-7 of the friction angle for `NearLimitTilt`, else up to 0.95 of it) and pointing within
+/// 0.95 of the sliced half-angle ξ' (`cos ξ' = cos ξ / cos β`) of the other contact; the centre of
+/// mass in the plane on the inner side of both normals, near the axis for `NearAxis`. `None`
+/// when the draw does not make such a grasp.
+fn off_axis_local(rng: &mut impl Rng, kind: Kind, mu: [f64; 2]) -> Option<Local> {
+    let q1: (f64, f64) = (rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));
+    let q2: (f64, f64) = (rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));
+    let dist = (q1.0 - q2.0).hypot(q1.1 - q2.1);
+    if dist < 0.05 {
+        return None;
+    }
+    let along = ((q2.0 - q1.0) / dist, (q2.1 - q1.1) / dist);
+    let mut tilted = |mu: f64| {
+        let xi = mu.atan();
+        let beta = match kind {
+            Kind::InPlane => 0.0,
+            Kind::NearLimitTilt => xi * (1.0 - 10f64.powf(-rng.gen_range(3.0..7.0))),
+            _ => rng.gen_range(0.0..0.95) * xi,
+        } * if rng.gen_bool(0.5) { 1.0 } else { -1.0 };
+        let xi_s = (xi.cos() / beta.cos()).min(1.0).acos();
+        (beta, xi_s)
+    };
+    let (b1, xs1) = tilted(mu[0]);
+    let (b2, xs2) = tilted(mu[1]);
+    let u1 = rot2(along, rng.gen_range(-0.95..0.95) * xs1);
+    let u2 = rot2((-along.0, -along.1), rng.gen_range(-0.95..0.95) * xs2);
+    let n1 = Vector3::new(u1.0 * b1.cos(), u1.1 * b1.cos(), b1.sin());
+    let n2 = Vector3::new(u2.0 * b2.cos(), u2.1 * b2.cos(), b2.sin());
+    let p1 = Vector3::new(q1.0, q1.1, 0.0);
+    let p2 = Vector3::new(q2.0, q2.1, 0.0);
+    let com = if kind == Kind::NearAxis {
+        let t = rng.gen_range(0.2..0.8);
+        let offset = dist * 10f64.powf(-rng.gen_range(2.5..7.0));
+        let side = if rng.gen_bool(0.5) { 1.0 } else { -1.0 };
+        p1 + (p2 - p1) * t + Vector3::new(-along.1, along.0, 0.0) * (offset * side)
+    } else {
+        let mid = (p1 + p2) / 2.0;
+        mid + Vector3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), 0.0)
+    };
+    let r = com - p1;
+    let a = (p2 - p1) / dist;
+    let offset = (r - a * r.dot(&a)).norm() / dist;
+    if kind != Kind::NearAxis && offset < 0.02 {
+        return None;
+    }
+    // Inside both half-spaces (with a margin, except near the axis where it cannot be had).
+    let margin = if kind == Kind::NearAxis {
+        0.0
+    } else {
+        1e-3 * dist
+    };
+    if n1.dot(&(com - p1)) <= margin || n2.dot(&(com - p2)) <= margin {
+        return None;
+    }
+    Some(Local {
+        p: [p1, p2],
+        com,
+        n: [n1, n2],
+    })
+}
+
 /// A random spatial grasp with force closure of the given kind, in a random 3D frame, with
 /// random units and normal lengths. Gravity is random in 3D, and in the grasp plane for about a
 /// fifth of the off-axis grasps (so that the current pose can be held).
 pub fn random_spatial_grasp(rng: &mut impl Rng, kind: Kind) -> SpatialCandidate {
-    // Built in a local frame where the grasp plane (off the axis) is z = 0.
-    let (p1, p2, com, n1, n2, mu1, mu2) = loop {
-        let mu1: f64 = rng.gen_range(0.1..2.0);
-        let mu2: f64 = rng.gen_range(0.1..2.0);
-        if matches!(
-            kind,
-            Kind::OnAxis | Kind::OnAxisSymmetric | Kind::OnAxisCoplanar
-        ) {
-            let x1 = rng.gen_range(0.1..1.0);
-            let x2 = rng.gen_range(0.1..1.0);
-            let p1 = Vector3::new(x1, 0.0, 0.0);
-            let p2 = Vector3::new(-x2, 0.0, 0.0);
-            let shared = rng.gen_range(-PI..PI);
-            let normal = |toward: f64, xi: f64, rng: &mut dyn rand::RngCore| {
-                let delta = match kind {
-                    Kind::OnAxisSymmetric => 0.0,
-                    _ => rng.gen_range(0.0..0.95) * xi,
-                };
-                let eta = match kind {
-                    Kind::OnAxisCoplanar => shared + if rng.gen_bool(0.5) { 0.0 } else { PI },
-                    _ => rng.gen_range(-PI..PI),
-                };
-                Vector3::new(
-                    toward * delta.cos(),
-                    delta.sin() * eta.cos(),
-                    delta.sin() * eta.sin(),
-                )
-            };
-            let n1 = normal(-1.0, mu1.atan(), rng);
-            let n2 = normal(1.0, mu2.atan(), rng);
-            break (p1, p2, Vector3::zeros(), n1, n2, mu1, mu2);
+    let (local, mu) = loop {
+        let mu = [rng.gen_range(0.1..2.0), rng.gen_range(0.1..2.0)];
+        if on_axis(kind) {
+            break (on_axis_local(rng, kind, mu), mu);
         }
-        let q1: (f64, f64) = (rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));
-        let q2: (f64, f64) = (rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));
-        let dist = (q1.0 - q2.0).hypot(q1.1 - q2.1);
-        if dist < 0.05 {
-            continue;
+        if let Some(local) = off_axis_local(rng, kind, mu) {
+            break (local, mu);
         }
-        let along = ((q2.0 - q1.0) / dist, (q2.1 - q1.1) / dist);
-        // Tilt β out of the plane and the sliced half-angle ξ' (cos ξ' = cos ξ / cos β).
-        let tilted = |mu: f64, rng: &mut dyn rand::RngCore| {
-            let xi = mu.atan();
-            let beta = match kind {
-                Kind::InPlane => 0.0,
-                Kind::NearLimitTilt => xi * (1.0 - 10f64.powf(-rng.gen_range(3.0..7.0))),
-                _ => rng.gen_range(0.0..0.95) * xi,
-            } * if rng.gen_bool(0.5) { 1.0 } else { -1.0 };
-            let xi_s = (xi.cos() / beta.cos()).min(1.0).acos();
-            (beta, xi_s)
-        };
-        let (b1, xs1) = tilted(mu1, rng);
-        let (b2, xs2) = tilted(mu2, rng);
-        // In-plane direction of each normal within its sliced cone around the other contact.
-        let u1 = rot2(along, rng.gen_range(-0.95..0.95) * xs1);
-        let u2 = rot2((-along.0, -along.1), rng.gen_range(-0.95..0.95) * xs2);
-        let n1 = Vector3::new(u1.0 * b1.cos(), u1.1 * b1.cos(), b1.sin());
-        let n2 = Vector3::new(u2.0 * b2.cos(), u2.1 * b2.cos(), b2.sin());
-        let p1 = Vector3::new(q1.0, q1.1, 0.0);
-        let p2 = Vector3::new(q2.0, q2.1, 0.0);
-        let com = if kind == Kind::NearAxis {
-            let t = rng.gen_range(0.2..0.8);
-            let offset = dist * 10f64.powf(-rng.gen_range(2.5..7.0));
-            let side = if rng.gen_bool(0.5) { 1.0 } else { -1.0 };
-            p1 + (p2 - p1) * t + Vector3::new(-along.1, along.0, 0.0) * (offset * side)
-        } else {
-            let mid = (p1 + p2) / 2.0;
-            mid + Vector3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), 0.0)
-        };
-        let offset = {
-            let r = com - p1;
-            let a = (p2 - p1) / dist;
-            (r - a * r.dot(&a)).norm() / dist
-        };
-        if kind != Kind::NearAxis && offset < 0.02 {
-            continue;
-        }
-        if n1.dot(&(com - p1)) <= 1e-3 * dist || n2.dot(&(com - p2)) <= 1e-3 * dist {
-            if kind != Kind::NearAxis {
-                continue;
-            }
-            if n1.dot(&(com - p1)) <= 0.0 || n2.dot(&(com - p2)) <= 0.0 {
-                continue;
-            }
-        }
-        break (p1, p2, com, n1, n2, mu1, mu2);
     };
     // A random rigid motion and unit scale of the whole scene.
     let axis = Unit::new_normalize(unit_random(rng));
@@ -598,24 +628,20 @@ pub fn random_spatial_grasp(rng: &mut impl Rng, kind: Kind) -> SpatialCandidate 
     );
     let scale = 10f64.powf(rng.gen_range(-2.0..1.0));
     let place = |p: Vector3<f64>| rot * p * scale + shift;
-    let on_axis = matches!(
-        kind,
-        Kind::OnAxis | Kind::OnAxisSymmetric | Kind::OnAxisCoplanar
-    );
-    let g_local = if !on_axis && rng.gen_bool(0.2) {
+    let g_local = if !on_axis(kind) && rng.gen_bool(0.2) {
         let phi = rng.gen_range(-PI..PI);
         Vector3::new(phi.cos(), phi.sin(), 0.0)
     } else {
         unit_random(rng)
     };
     SpatialCandidate {
-        contact_1: place(p1),
-        contact_2: place(p2),
-        normal_1: rot * n1 * rng.gen_range(0.1..10.0),
-        normal_2: rot * n2 * rng.gen_range(0.1..10.0),
-        friction_1: mu1,
-        friction_2: mu2,
-        center_of_mass: place(com),
+        contact_1: place(local.p[0]),
+        contact_2: place(local.p[1]),
+        normal_1: rot * local.n[0] * rng.gen_range(0.1..10.0),
+        normal_2: rot * local.n[1] * rng.gen_range(0.1..10.0),
+        friction_1: mu[0],
+        friction_2: mu[1],
+        center_of_mass: place(local.com),
         mass: 10f64.powf(rng.gen_range(-2.0..2.0)),
         gravity: rot * g_local * (9.81 * rng.gen_range(0.5..1.5)),
     }

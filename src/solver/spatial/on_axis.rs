@@ -64,7 +64,9 @@
 //! These are closed forms with closed-form derivatives; the minima over the arc are found by
 //! evaluating the derivative on a grid of [`ARC_GRID`] intervals and bisecting every sign change
 //! from − to + on the derivative's sign until the bracket stops shrinking (about 1e-16 rad; the
-//! root is then limited by rounding in the derivative, ~1e-13 rad for a well-curved minimum),
+//! root is then limited by rounding in the derivative, ~1e-13 rad for a well-curved minimum;
+//! `tests/spatial.rs` measures the plane of 300 random on-axis answers within 3e-11 rad of the
+//! minimum of the best power over planes, which is that measurement's own resolution),
 //! and the best grid point is kept as well. Each plane so found is then solved exactly by the
 //! planar solver, and the least answer wins (ties within 1e-12 relative go to the smaller
 //! rotation). When `δ_i = 0` (the normal along the axis) `A_i` is the same in every plane and the

@@ -336,6 +336,34 @@ impl Basis {
     }
 }
 
+/// When a normal is tilted beyond its friction angle, the other contact's sliced cone (if any,
+/// `sliced > 0`) is checked in the plane too, so that the answer names every contact at fault:
+/// it misses when the angle between its normal and the direction to the other contact reaches
+/// its half-angle (eq. 3).
+fn cones_missing(
+    points: &[Vector2<f64>; 3],
+    normals: &[Vector2<f64>; 2],
+    sliced: &[f64; 2],
+) -> Vec<SpatialMiss> {
+    (0..2)
+        .filter(|&i| sliced[i] > 0.0)
+        .filter_map(|i| {
+            let to_other = points[1 - i] - points[i];
+            let u = normals[i];
+            let angle = (u.x * to_other.y - u.y * to_other.x)
+                .abs()
+                .atan2(u.dot(&to_other));
+            (angle >= sliced[i].atan()).then(|| {
+                SpatialMiss::Cone(ConeMiss {
+                    contact: [Contact::First, Contact::Second][i],
+                    half_angle: sliced[i].atan(),
+                    angle_to_other: angle,
+                })
+            })
+        })
+        .collect()
+}
+
 /// The planar problem in one plane: the planar candidate (unit weight) and what maps its answer
 /// back to 3D.
 #[derive(Debug, Clone)]
@@ -396,23 +424,7 @@ impl<'a> PlaneSolve<'a> {
             }
         }
         if !misses.is_empty() {
-            // Name the other contact too when its sliced cone misses in the plane.
-            for i in 0..2 {
-                if sliced[i] > 0.0 {
-                    let to_other = points[1 - i] - points[i];
-                    let u = normals2[i];
-                    let angle = (u.x * to_other.y - u.y * to_other.x)
-                        .abs()
-                        .atan2(u.dot(&to_other));
-                    if angle >= sliced[i].atan() {
-                        misses.push(SpatialMiss::Cone(ConeMiss {
-                            contact: [Contact::First, Contact::Second][i],
-                            half_angle: sliced[i].atan(),
-                            angle_to_other: angle,
-                        }));
-                    }
-                }
-            }
+            misses.extend(cones_missing(&points, &normals2, &sliced));
             return Err(Ok(SpatialNoForceClosure {
                 misses,
                 friction_safety_factor: g.safety,
