@@ -479,9 +479,18 @@ fn planar_gap(p: &Recommendation, s: &SpatialRecommendation, weight: f64) -> f64
 #[test]
 fn on_axis_search_beats_a_dense_scan_of_planes() {
     let mut rng = ChaCha8Rng::seed_from_u64(51);
-    for objective in [Objective::Norm2, Objective::InternalForce, Objective::Norm1] {
+    let bounded = |lo, hi| AllowedRange::Bounds { lo, hi };
+    for (objective, range) in [
+        (Objective::Norm2, AllowedRange::FromAbove),
+        (Objective::InternalForce, AllowedRange::FromAbove),
+        (Objective::Norm1, AllowedRange::FromAbove),
+        (Objective::Norm2, bounded(0.2, 0.6)),
+        (Objective::Norm2, bounded(-1.2, -0.1)),
+        (Objective::InternalForce, bounded(-0.3, 0.9)),
+    ] {
         let settings = Settings {
             objective,
+            range,
             ..Settings::default()
         };
         let mut worst: f64 = f64::NEG_INFINITY;
@@ -512,7 +521,8 @@ fn on_axis_search_beats_a_dense_scan_of_planes() {
             worst = worst.max(above);
         }
         println!(
-            "{objective:?}: solver minus the best of 3,600 planes, at most {worst:.1e} (relative)"
+            "{objective:?} {range:?}: solver minus the best of 3,600 planes, at most {worst:.1e} \
+             (relative)"
         );
     }
 }
