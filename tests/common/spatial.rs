@@ -435,17 +435,18 @@ impl SpatialReference {
         let (dla, dlo) = (PI / lat as f64, TAU / lon as f64);
         for &(mut la, mut lo, mut v) in grid.iter().take(refine) {
             let (mut wla, mut wlo) = (dla, dlo);
-            for _ in 0..6 {
+            // To 1e-7 rad: the power is flat to ~1e-14 of itself there.
+            for _ in 0..4 {
                 let (l, vl) = Self::golden(
                     &|x| f(x, lo),
                     (la - wla).max(-FRAC_PI_2),
                     (la + wla).min(FRAC_PI_2),
-                    1e-9,
+                    1e-7,
                 );
                 if vl <= v {
                     (la, v) = (l, vl);
                 }
-                let (m, vm) = Self::golden(&|x| f(la, x), lo - wlo, lo + wlo, 1e-9);
+                let (m, vm) = Self::golden(&|x| f(la, x), lo - wlo, lo + wlo, 1e-7);
                 if vm <= v {
                     (lo, v) = (m, vm);
                 }
