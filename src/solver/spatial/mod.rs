@@ -119,10 +119,9 @@
 pub mod on_axis;
 mod plane;
 
-use super::{
-    Analysis, Candidate, ConeMiss, Contact, GraspFrame, InvalidInput, NoForceClosure,
-    Recommendation, Settings,
-};
+use super::analysis::Analysis;
+use super::frame::GraspFrame;
+use super::{Candidate, ConeMiss, Contact, InvalidInput, NoForceClosure, Recommendation, Settings};
 use nalgebra::{Vector2, Vector3};
 use plane::{Basis, Geometry, PlaneSolve};
 use std::fmt;
