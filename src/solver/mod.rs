@@ -38,12 +38,18 @@ mod frame;
 mod paper;
 mod robust;
 mod sinusoid;
+mod spatial;
 
 pub use analysis::{Analysis, PointValue};
 pub use paper::CandidateAngles;
 pub use robust::{
     solve_robust, BoxPoint, BoxPointKind, NoCommonOrientation, RobustRecommendation, RobustVerdict,
     Uncertainty,
+};
+pub use spatial::{
+    sliced_friction, solve_spatial, AxisRelation, CurrentPose, SpatialCandidate, SpatialMiss,
+    SpatialNoForceClosure, SpatialRecommendation, SpatialVerdict, IN_PLANE_TOLERANCE, NEAR_AXIS,
+    ON_AXIS,
 };
 
 use frame::GraspFrame;
@@ -269,6 +275,27 @@ pub enum InvalidInput {
         limit: f64,
         /// Unit of the limit, with its leading space.
         unit: &'static str,
+    },
+    /// A vector that must have a direction is zero (spatial candidates).
+    #[error("{field} is the zero vector")]
+    ZeroVector {
+        /// The field.
+        field: &'static str,
+    },
+    /// A normal is perpendicular to the grasp plane through both contacts and the centre of mass,
+    /// so its projection into that plane, the planar normal, has no direction (spatial candidates).
+    #[error(
+        "{field} is perpendicular to the grasp plane through both contacts and the centre of mass"
+    )]
+    NormalPerpendicularToGraspPlane {
+        /// The field.
+        field: &'static str,
+    },
+    /// The centre of mass is at a contact point (spatial candidates).
+    #[error("center_of_mass coincides with {contact}")]
+    CenterOfMassAtContact {
+        /// The contact.
+        contact: Contact,
     },
 }
 

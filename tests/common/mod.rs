@@ -16,6 +16,7 @@ pub mod table_1 {
     include!("table_1.rs");
 }
 pub mod robust;
+pub mod spatial;
 
 use grasp_orient::solver::Candidate;
 use nalgebra::{Matrix3x4, Matrix4x3, Vector2, Vector3, Vector4};
