@@ -461,4 +461,79 @@ mod tests {
             "NaN equals NaN here"
         );
     }
+
+    #[test]
+    fn a_failing_worker_fails_the_replay() {
+        let cases = crate::msg::paper_cases();
+        let bag = Bag {
+            candidates: (0..8192)
+                .map(|i| Recorded {
+                    message: cases[i % 4].clone(),
+                    log_time: i as u64,
+                    publish_time: i as u64,
+                })
+                .collect(),
+            ..Bag::default()
+        };
+        let plan = Plan::fixed(Settings::default());
+        let calls = std::sync::atomic::AtomicU64::new(0);
+        let result = replay_with_answers(&bag, &plan, |_| {
+            if calls.fetch_add(1, std::sync::atomic::Ordering::SeqCst) == 0 {
+                panic!("a worker fails");
+            }
+        });
+        match result {
+            Err(ReplayError::Worker(why)) => assert_eq!(why, "a worker fails"),
+            Err(e) => panic!("expected a worker failure, got {e}"),
+            Ok((summary, answers)) => panic!(
+                "a failed worker went unnoticed: {} candidates, {} answers",
+                summary.candidates,
+                answers.len()
+            ),
+        }
+        let (summary, answers) = replay_with_answers(&bag, &plan, |_| {}).expect("replays");
+        assert_eq!((summary.candidates, answers.len()), (8192, 8192));
+    }
+
+    #[test]
+    fn each_candidate_gets_the_settings_in_force_at_its_time() {
+        use crate::config::Config;
+        use crate::record::settings::SettingsRecord;
+        let record = |since, fsf| {
+            let config = Config {
+                friction_safety_factor: fsf,
+                ..Config::default()
+            };
+            let entries = SettingsRecord {
+                since,
+                node: "/grasp_orient".into(),
+                reason: "test".into(),
+                config,
+            }
+            .to_metadata();
+            (METADATA_NAME.to_string(), entries)
+        };
+        let bag = Bag {
+            // In file order the later record comes first: time decides, not position.
+            metadata: vec![record(100, 2.0), record(0, 1.5)],
+            ..Bag::default()
+        };
+        let plan = Plan::for_bag(&bag, &Config::default(), &[]).expect("a plan");
+        assert!(plan.from_recording());
+        assert_eq!(plan.settings_at(0).friction_safety_factor, 1.5);
+        assert_eq!(plan.settings_at(99).friction_safety_factor, 1.5);
+        assert_eq!(plan.settings_at(100).friction_safety_factor, 2.0);
+        assert_eq!(plan.settings_at(u64::MAX).friction_safety_factor, 2.0);
+        let overrides = [(
+            "friction_safety_factor".to_string(),
+            Value::Number(1.25.into()),
+        )];
+        let plan = Plan::for_bag(&bag, &Config::default(), &overrides).expect("a plan");
+        assert_eq!(plan.settings_at(0).friction_safety_factor, 1.25);
+        assert_eq!(plan.settings_at(200).friction_safety_factor, 1.25);
+        assert_eq!(plan.overridden, ["friction_safety_factor"]);
+        let plan = Plan::for_bag(&Bag::default(), &Config::default(), &[]).expect("a plan");
+        assert!(!plan.from_recording());
+        assert_eq!(*plan.settings_at(5), Settings::default());
+    }
 }

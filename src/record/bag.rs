@@ -162,7 +162,7 @@ pub fn read(path: &Path) -> Result<Bag, BagError> {
 /// [`read`] of a file's bytes.
 pub fn read_bytes(bytes: &[u8]) -> Result<Bag, Damage> {
     let scan = scan::scan(bytes)?;
-    if let Some(d) = scan.first_damage() {
+    if let Some(d) = scan.record_damage() {
         return Err(d.clone());
     }
     let mut table = Table::default();
@@ -187,6 +187,11 @@ pub fn read_bytes(bytes: &[u8]) -> Result<Bag, Damage> {
             }
         },
     };
+    // Chunks check themselves while they are decoded, and name the damaged one; a CRC of the
+    // whole data section or summary that still fails names damage outside the chunks.
+    if let Some(d) = scan.section_damage() {
+        return Err(d.clone());
+    }
     if let Some((count, _)) = &scan.statistics {
         if *count != bag.messages() {
             return Err(Damage {

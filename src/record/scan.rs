@@ -636,15 +636,15 @@ pub struct Scan<'a> {
 }
 
 impl Scan<'_> {
-    /// The first damage of any kind: where the walk stopped, or else the first damaged record.
-    pub fn first_damage(&self) -> Option<&Damage> {
+    /// The first damage the walk met in a record, or where it stopped.
+    pub fn record_damage(&self) -> Option<&Damage> {
         let in_items = self.items.iter().filter_map(|i| i.parsed.as_ref().err());
-        self.damage
-            .iter()
-            .chain(&self.summary_damage)
-            .chain(in_items)
-            .chain(self.stopped.iter())
-            .min_by_key(|d| d.offset)
+        in_items.chain(self.stopped.iter()).min_by_key(|d| d.offset)
+    }
+
+    /// The first damage of the data section or the summary as a whole (their CRCs).
+    pub fn section_damage(&self) -> Option<&Damage> {
+        self.damage.iter().chain(&self.summary_damage).next()
     }
 }
 
