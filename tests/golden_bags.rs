@@ -1,5 +1,6 @@
 //! Every golden recording in `bags/` replays without a difference: a change in any answer the
-//! solver gives fails here. (`bags/make_bags.py` regenerates them; see `bags/README.md`.)
+//! solver gives fails here. (`bags/make_bags.py` and `bags/record_node_bag.py` regenerate them;
+//! see `bags/README.md`.)
 
 mod common;
 
@@ -45,6 +46,25 @@ fn random_grasps_with_refused_ones_replay_unchanged() {
     );
     assert!(
         text.contains("0 recorded recommendations unmatched"),
+        "{text}"
+    );
+}
+
+#[test]
+fn the_bag_the_node_recorded_replays_with_its_settings() {
+    let (ok, text) = replay("node_recorded.mcap");
+    assert!(ok, "{text}");
+    assert!(
+        text.contains("solved with the settings it recorded (2 settings records)")
+            && text.contains("38 compared with a recorded recommendation, 0 differ")
+            && text.contains("0 recorded recommendations unmatched"),
+        "{text}"
+    );
+    // It was recorded with range:=graspable: solved as from above, its answers differ.
+    let (code, text) = replay_with("node_recorded.mcap", &["--range", "from_above"]);
+    assert_eq!(code, Some(1), "{text}");
+    assert!(
+        text.contains("overridden from the command line: range"),
         "{text}"
     );
 }

@@ -9,7 +9,7 @@ use super::params::Version;
 use crate::msg::{answer, short_id, GraspCandidate, GripRecommendation, MarkerArray};
 use crate::record::lifecycle::{Change, Recording, Wanted};
 use crate::record::settings::SettingsRecord;
-use crate::record::{OnStop, Payload, RecordError, Topics};
+use crate::record::{Entry, OnStop, Payload, RecordError, Topics};
 use log::Level;
 use std::path::Path;
 
@@ -96,7 +96,14 @@ impl Answerer {
     }
 
     /// Starts recording if `record` says so (never in echo mode); a failure here is an error.
+    /// What the parameters were set to before (ros2-client sets every declared parameter once
+    /// when the node is made) is taken as the start.
     pub fn start(&mut self) -> Result<Vec<Note>, RecordError> {
+        {
+            let live = self.shared.lock();
+            self.seen_recording_sets = live.recording_sets();
+            self.seen_version = live.last_seq();
+        }
         if self.echo {
             return Ok(vec![(
                 Level::Warn,
@@ -246,16 +253,30 @@ impl Answerer {
             reply,
             markers,
         } = recorded;
+        let entry = |payload, log_time, publish_time| Entry {
+            payload,
+            log_time,
+            publish_time,
+        };
+        let mut entries = Vec::with_capacity(3);
         if let Some(array) = markers {
-            self.recording
-                .record(Payload::Markers(Box::new(array)), answered, answered);
+            entries.push(entry(Payload::Markers(Box::new(array)), answered, answered));
         }
-        self.recording
-            .record(Payload::Candidate(Box::new(candidate)), received, sent);
+        entries.push(entry(
+            Payload::Candidate(Box::new(candidate)),
+            received,
+            sent,
+        ));
         if let Some(r) = reply {
-            self.recording
-                .record(Payload::Recommendation(Box::new(r)), answered, answered);
+            entries.push(entry(
+                Payload::Recommendation(Box::new(r)),
+                answered,
+                answered,
+            ));
         }
+        // Together: a flush (and so a file cut short by a kill or a full disk) never holds a
+        // candidate without its answer.
+        self.recording.record_all(entries);
         self.recording.check().iter().map(note).collect()
     }
 

@@ -159,12 +159,17 @@ impl Recording {
     /// Hands one message to the file, if one is being written. A writer that has stopped takes
     /// nothing; [`Recording::check`] reports it.
     pub fn record(&self, payload: Payload, log_time: u64, publish_time: u64) {
+        self.record_all(vec![Entry {
+            payload,
+            log_time,
+            publish_time,
+        }]);
+    }
+
+    /// Hands messages to the file to be written together, if one is being written.
+    pub fn record_all(&self, entries: Vec<Entry>) {
         if let Some(a) = &self.active {
-            a.recorder.record(Entry {
-                payload,
-                log_time,
-                publish_time,
-            });
+            a.recorder.record_all(entries);
         }
     }
 

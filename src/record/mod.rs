@@ -431,7 +431,8 @@ impl BagWriter {
 #[derive(Debug)]
 pub struct Recorder {
     path: PathBuf,
-    tx: Option<mpsc::Sender<Entry>>,
+    /// Entries go over in batches that are written together: a flush never falls inside one.
+    tx: Option<mpsc::Sender<Vec<Entry>>>,
     thread: Option<JoinHandle<Result<Written, RecordError>>>,
     stopped: Arc<AtomicBool>,
 }
@@ -461,7 +462,7 @@ impl Recorder {
 
     fn spawn(mut bag: BagWriter, on_stop: OnStop) -> Result<Self, RecordError> {
         let path = bag.path().to_path_buf();
-        let (tx, rx) = mpsc::channel::<Entry>();
+        let (tx, rx) = mpsc::channel::<Vec<Entry>>();
         let stopped = Arc::new(AtomicBool::new(false));
         let flag = stopped.clone();
         let thread = std::thread::Builder::new()
@@ -499,7 +500,13 @@ impl Recorder {
     /// Hands a message to the writer; never blocks. Returns false once the writer has stopped
     /// (its error comes out of [`Recorder::finish`]).
     pub fn record(&self, entry: Entry) -> bool {
-        self.tx.as_ref().is_some_and(|tx| tx.send(entry).is_ok())
+        self.record_all(vec![entry])
+    }
+
+    /// Hands messages to the writer to be written together (no flush falls between them, so a
+    /// candidate and its answer are both in the file or neither is); never blocks.
+    pub fn record_all(&self, entries: Vec<Entry>) -> bool {
+        self.tx.as_ref().is_some_and(|tx| tx.send(entries).is_ok())
     }
 
     /// Writes everything handed over, closes the file, and says how much it holds.
@@ -527,15 +534,17 @@ impl Drop for Recorder {
 /// The writer thread's loop: wakes every [`BATCH_EVERY`] and writes what has come, rather than
 /// once per message (on a small machine the answering path and DDS keep the cores); flushes at
 /// least every [`FLUSH_EVERY`]. Ends when the sender is gone, or at the first failure.
-fn pump(bag: &mut BagWriter, rx: &mpsc::Receiver<Entry>) -> Result<(), RecordError> {
+fn pump(bag: &mut BagWriter, rx: &mpsc::Receiver<Vec<Entry>>) -> Result<(), RecordError> {
     let mut last_flush = Instant::now();
     let mut dirty = false;
     loop {
         std::thread::sleep(BATCH_EVERY);
         loop {
             match rx.try_recv() {
-                Ok(entry) => {
-                    bag.write(&entry)?;
+                Ok(batch) => {
+                    for entry in &batch {
+                        bag.write(entry)?;
+                    }
                     dirty = true;
                 }
                 Err(mpsc::TryRecvError::Empty) => break,
