@@ -231,6 +231,8 @@ pub struct BagWriter {
     written: Written,
     /// Where the last complete flush ended, and what the file held then.
     committed: (u64, Written),
+    /// The schemas and channels written, for the summary of a file closed after a failure.
+    definitions: sink::Definitions,
 }
 
 impl std::fmt::Debug for BagWriter {
@@ -289,15 +291,30 @@ impl BagWriter {
             .create(BufWriter::new(sink))
             .map_err(mcap_error)?;
         let metadata = BTreeMap::from([("offered_qos_profiles".to_string(), qos_yaml(qos_depth))]);
+        let mut defs = sink::Definitions::default();
         let mut channel = |topic: &str, type_name: &'static str| -> Result<u16, RecordError> {
             let text =
                 definitions::full_text(type_name).ok_or(RecordError::UnknownType(type_name))?;
             let schema = writer
                 .add_schema(type_name, "ros2msg", text.as_bytes())
                 .map_err(mcap_error)?;
-            writer
+            let id = writer
                 .add_channel(schema, topic, "cdr", &metadata)
-                .map_err(mcap_error)
+                .map_err(mcap_error)?;
+            defs.schemas.push(sink::SchemaDef {
+                id: schema,
+                name: type_name.to_string(),
+                encoding: "ros2msg".to_string(),
+                data: text.into_bytes(),
+            });
+            defs.channels.push(sink::ChannelDef {
+                id,
+                schema_id: schema,
+                topic: topic.to_string(),
+                encoding: "cdr".to_string(),
+                metadata: metadata.clone(),
+            });
+            Ok(id)
         };
         let channels = [
             Some(channel(&topics.candidates, GraspCandidate::TYPE_NAME)?),
@@ -320,6 +337,7 @@ impl BagWriter {
             channels,
             sequence: [0; 3],
             written: Written::default(),
+            definitions: defs,
         })
     }
 
@@ -338,7 +356,8 @@ impl BagWriter {
         self.sink.refuse_writes();
         drop(self.writer.take());
         let (length, kept) = self.committed;
-        let closed = sink::close_at(&self.path, length).map_err(|e| e.to_string());
+        let closed =
+            sink::close_at(&self.path, length, &self.definitions).map_err(|e| e.to_string());
         RecordError::Stopped {
             path: self.path.clone(),
             cause: Box::new(cause),
@@ -700,6 +719,17 @@ mod tests {
         );
         let back = bag::read(&path).expect("the closed file reads as it is");
         assert_eq!(back.candidates.len() as u64, kept.candidates);
+        // Closed as the MCAP writer would have: both CRCs, and a summary that counts it all.
+        let bytes = std::fs::read(&path).expect("read");
+        let closed = scan::scan(&bytes).expect("an MCAP file");
+        assert!(
+            closed.data_verified && closed.summary_verified,
+            "{closed:?}"
+        );
+        assert_eq!(closed.summary_channels.len(), 2);
+        let (count, per_channel) = closed.statistics.expect("statistics");
+        assert_eq!(count, kept.candidates);
+        assert_eq!(per_channel.values().sum::<u64>(), kept.candidates);
         assert!(bag.write(&candidate(0)).is_err(), "nothing more is written");
         drop(bag);
         assert_eq!(

@@ -38,12 +38,18 @@ pub mod op {
     pub const CHUNK: u8 = 0x06;
     /// Message index.
     pub const MESSAGE_INDEX: u8 = 0x07;
+    /// Chunk index.
+    pub const CHUNK_INDEX: u8 = 0x08;
     /// Attachment.
     pub const ATTACHMENT: u8 = 0x09;
     /// Statistics.
     pub const STATISTICS: u8 = 0x0B;
     /// Metadata.
     pub const METADATA: u8 = 0x0C;
+    /// Metadata index.
+    pub const METADATA_INDEX: u8 = 0x0D;
+    /// Summary offset.
+    pub const SUMMARY_OFFSET: u8 = 0x0E;
     /// Data end.
     pub const DATA_END: u8 = 0x0F;
 }

@@ -220,6 +220,10 @@ def test_a_full_disk_is_reported_once_and_recording_comes_back(start_node, rclpy
     r = run("replay", first)
     assert r.returncode == 0, f"the closed file does not replay:\n{(r.stdout + r.stderr)[-2000:]}"
     assert f"replayed {kept} candidates" in r.stdout, r.stdout
+    # Closed with a summary, so that readers that need an index (rosbags) open it too, and agree.
+    a, b = mu.read_mcap(first), mu.read_rosbags(first)
+    assert not mu.compare_readers(b, a), mu.compare_readers(b, a)[:5]
+    assert len(candidate_ids(first, f"{ns}/grasp_candidates")) == kept
     ids = candidate_ids(second, f"{ns}/grasp_candidates")
     assert sorted(ids) == sorted(c["id"] for c in after), f"the new file holds {ids}"
     r = run("replay", second)
