@@ -16,7 +16,7 @@ pub mod session;
 
 use crate::config::Config;
 use crate::msg::{GraspCandidate, GripRecommendation, MarkerArray};
-use crate::record::{now_ns, Topics};
+use crate::record::{now_ns, OnStop, Topics};
 use answer::{Answerer, Note};
 use anyhow::{bail, Context as _};
 use demo::Demo;
@@ -127,18 +127,7 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
             topics.markers.as_deref().unwrap_or_default(),
         ),
     );
-    // Parameter sets and a recording writer that stops both wake the answering loop, so that
-    // each takes effect at once rather than at the next candidate.
-    let (wake, mut woken) = futures::channel::mpsc::unbounded::<()>();
-    let on_stop = {
-        let wake = wake.clone();
-        std::sync::Arc::new(move || {
-            wake.unbounded_send(()).ok();
-        })
-    };
-    shared.wake_on_change(move || {
-        wake.unbounded_send(()).ok();
-    });
+    let (on_stop, mut woken) = wake_on_change(&shared);
     let mut answerer = Answerer::new(
         shared,
         options.echo,
@@ -185,6 +174,23 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
     }
     session.close();
     outcome
+}
+
+/// Parameter sets and a recording writer that stops both wake the answering loop, so that each
+/// takes effect at once rather than at the next candidate: the callback for the writer, and what
+/// the loop waits on.
+fn wake_on_change(shared: &Shared) -> (OnStop, futures::channel::mpsc::UnboundedReceiver<()>) {
+    let (wake, woken) = futures::channel::mpsc::unbounded::<()>();
+    let on_stop = {
+        let wake = wake.clone();
+        std::sync::Arc::new(move || {
+            wake.unbounded_send(()).ok();
+        })
+    };
+    shared.wake_on_change(move || {
+        wake.unbounded_send(()).ok();
+    });
+    (on_stop, woken)
 }
 
 /// Answers every candidate until a signal, or until the demo is done; acts on parameter sets

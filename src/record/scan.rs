@@ -771,9 +771,24 @@ fn finish<'a>(
             return;
         }
     };
+    check_data_section(bytes, footer.offset, data_end, out);
+    if summary_start != 0 {
+        check_summary(
+            bytes,
+            footer.offset,
+            summary_start,
+            summary_crc,
+            summary,
+            out,
+        );
+    }
+}
+
+/// Checks the data section's CRC (the bytes before the data end record at `data_end`).
+fn check_data_section(bytes: &[u8], footer: u64, data_end: Option<(u64, u32)>, out: &mut Scan<'_>) {
     match data_end {
         None => out.damage.push(Damage::at(
-            footer.offset,
+            footer,
             "the footer comes without a data end record before it",
         )),
         Some((_, 0)) => {}
@@ -792,16 +807,23 @@ fn finish<'a>(
             }
         }
     }
-    if summary_start == 0 {
-        return;
-    }
+}
+
+/// Checks the summary that starts at `summary_start` against the footer at `footer`, and keeps
+/// its schemas, channels and statistics.
+fn check_summary<'a>(
+    bytes: &'a [u8],
+    footer: u64,
+    summary_start: u64,
+    summary_crc: u32,
+    summary: &[Item<'a>],
+    out: &mut Scan<'a>,
+) {
     // The summary CRC covers the summary section and the footer up to its summary_crc field.
-    let covered_end = footer.offset as usize + 9 + 16;
-    if summary_start as usize > footer.offset as usize
-        || summary.first().map(|i| i.offset) != Some(summary_start)
-    {
+    let covered_end = footer as usize + 9 + 16;
+    if summary_start > footer || summary.first().map(|i| i.offset) != Some(summary_start) {
         out.summary_damage.push(Damage::at(
-            footer.offset,
+            footer,
             format!("the footer's summary offset {summary_start} does not start a summary record"),
         ));
         return;
