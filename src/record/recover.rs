@@ -404,7 +404,17 @@ fn judge_the_end(
             _ => {
                 got.uncounted += 1;
                 got.damaged(|| {
-                    format!("{d}: everything from there on is lost, and how many messages is not recorded")
+                    if d.cut_short {
+                        format!(
+                            "{d}: the file is cut short inside this record; the messages in it \
+                             are lost, and how many is not recorded"
+                        )
+                    } else {
+                        format!(
+                            "{d}: everything from there on is lost, and how many messages is not \
+                             recorded"
+                        )
+                    }
                 });
             }
         }
