@@ -418,14 +418,20 @@ fn no_command_writes_over_its_own_input() {
     assert_eq!(std::fs::read_to_string(&json).expect("read"), case);
 }
 
-/// A recording big enough that writing its replay or its recovery takes a while.
+/// A recording big enough that writing its replay or its recovery takes a while; made once in
+/// the target's temporary folder (written under another name and renamed, so that a run
+/// killed while writing it leaves no half bag for the next one).
 fn big_bag() -> &'static Path {
     static BAG: OnceLock<PathBuf> = OnceLock::new();
     BAG.get_or_init(|| {
-        let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
-            .join(format!("grasp_orient_big_{}.mcap", std::process::id()));
-        std::fs::remove_file(&path).ok();
-        write_bag(&path, 150_000, &Config::default(), true);
+        let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+        let path = dir.join("grasp_orient_big_150000.mcap");
+        if !path.exists() {
+            let part = dir.join(format!("grasp_orient_big_{}.part", std::process::id()));
+            std::fs::remove_file(&part).ok();
+            write_bag(&part, 150_000, &Config::default(), true);
+            std::fs::rename(&part, &path).expect("renamed into place");
+        }
         path
     })
 }
