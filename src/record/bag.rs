@@ -317,7 +317,7 @@ fn decode_chunk(
 
 /// The records of a decompressed chunk at `offset`: schemas, channels and messages, each with
 /// the chunk's offset (damage inside a chunk is reported at the chunk, naming the inner byte).
-pub fn chunk_records<'a>(
+pub(crate) fn chunk_records<'a>(
     records: &'a [u8],
     offset: u64,
 ) -> impl Iterator<Item = Result<(u64, Parsed<'a>), Damage>> + 'a {
@@ -346,7 +346,7 @@ pub fn chunk_records<'a>(
 
 /// What a channel carries, as far as grasp_orient reads it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Carries {
+pub(crate) enum Carries {
     /// `grasp_orient/msg/GraspCandidate` as CDR.
     Candidates,
     /// `grasp_orient/msg/GripRecommendation` as CDR.
@@ -358,7 +358,7 @@ pub enum Carries {
 /// What the channel `channel_id` carries; `None` when no record defines it. Channels are picked
 /// by schema name alone (with or without the `/msg/`), never by the schema text, so recordings
 /// written with any form of the definitions read alike.
-pub fn carries(table: &Table, channel_id: u16) -> Option<Carries> {
+pub(crate) fn carries(table: &Table, channel_id: u16) -> Option<Carries> {
     let channel = table.channels.get(&channel_id)?;
     let Some(schema) = table.schema_of(channel) else {
         return Some(Carries::Other);

@@ -75,6 +75,12 @@ pub enum RecordError {
     /// A type has no complete definition in [`definitions::DEFINITIONS`].
     #[error("no message definition for {0}")]
     UnknownType(&'static str),
+    /// The file was closed after a failure, and takes nothing more.
+    #[error("recording {path} was stopped by an earlier failure")]
+    AlreadyStopped {
+        /// The file.
+        path: PathBuf,
+    },
     /// Writing failed part way (a full disk): the file was cut back to its last complete flush
     /// and closed there, if that could be done.
     #[error("recording {path} stopped: {cause}; {}", closed_words(kept, closed))]
@@ -376,12 +382,9 @@ impl BagWriter {
 
     fn writer(&mut self) -> Result<&mut mcap::Writer<BufWriter<sink::Sink>>, RecordError> {
         let path = self.path.clone();
-        self.writer.as_mut().ok_or_else(|| RecordError::Stopped {
-            path,
-            cause: Box::new(RecordError::Thread),
-            kept: Written::default(),
-            closed: Err("it was stopped before".into()),
-        })
+        self.writer
+            .as_mut()
+            .ok_or(RecordError::AlreadyStopped { path })
     }
 
     /// Writes one message (markers are dropped when the recording has no markers channel), or

@@ -241,7 +241,8 @@ impl Index {
             };
             match head[0] {
                 op::CHUNK => {
-                    let b = body(file, 64 * 1024)?;
+                    // The header fields; the compression name is a few bytes.
+                    let b = body(file, 1024)?;
                     if let Some(chunk) = chunk_entry(&b, at, 9 + size) {
                         out.chunks.push(chunk);
                     }
