@@ -1,9 +1,13 @@
-//! Replaying recordings: every recorded candidate is solved again and compared, field by field,
-//! with the recommendation recorded for it.
+//! Replaying recordings: every recorded candidate is solved again, with the settings in force
+//! when it was recorded ([`Plan`]), and compared, field by field, with the recommendation
+//! recorded for it.
 
+use crate::config::{Config, ConfigError};
 use crate::msg::{answer, clip, short_id, GraspCandidate, GripRecommendation};
 use crate::record::bag::{keep_example, Bag, Recorded};
+use crate::record::settings::{SettingsError, SettingsRecord, METADATA_NAME};
 use crate::solver::{Objective, Settings};
+use serde_yaml_ng::Value;
 use std::collections::{BTreeMap, HashMap, VecDeque};
 
 /// Two numbers closer than this, relative to `max(1, |a|, |b|)`, are the same.
@@ -185,34 +189,146 @@ fn pair(bag: &Bag) -> (Vec<Option<usize>>, u64) {
     (pairs, unmatched)
 }
 
-/// Solves every candidate of `bag` again with `settings` (and, for each, the objective its
-/// recorded answer names) and compares. The work is shared among the machine's cores; `progress`
-/// hears of every 4096 candidates done.
-pub fn replay(bag: &Bag, settings: &Settings, progress: impl Fn(u64) + Sync) -> Summary {
-    replay_on_cores(bag, settings, false, &progress).0
+/// Why a recording cannot be replayed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ReplayError {
+    /// A settings record of the bag does not read.
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
+    /// The settings with the command line's overrides are refused.
+    #[error("the recorded settings with the command line's overrides: {0}")]
+    Overrides(ConfigError),
+    /// A thread solving a share of the candidates failed.
+    #[error("a replay worker failed: {0}")]
+    Worker(String),
 }
 
-/// [`replay`], also returning the new answers, each with its candidate's times.
+/// A parameter set on the command line: its name and value.
+pub type Override = (String, Value);
+
+/// The settings each candidate of a recording is solved with.
+///
+/// A recording that carries settings records ([`crate::record::settings`]) is replayed with the
+/// settings in force at each candidate's `log_time`; one without (made before they existed, or
+/// by another writer) with the built-in config and the objective each recorded answer names.
+/// Command-line overrides apply over both.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    /// From which `log_time` on each applies, in time order.
+    timeline: Vec<(u64, Settings)>,
+    /// For a recording without settings records.
+    fallback: Settings,
+    /// Whether each candidate is solved with the objective its recorded answer names.
+    objective_from_answer: bool,
+    /// The bag's settings records, overrides applied.
+    pub recorded: Vec<SettingsRecord>,
+    /// The parameters the command line set.
+    pub overridden: Vec<String>,
+}
+
+impl Plan {
+    /// The settings for the candidates of `bag`: its recorded settings, or else `base`; with
+    /// `overrides` applied over either.
+    pub fn for_bag(bag: &Bag, base: &Config, overrides: &[Override]) -> Result<Self, ReplayError> {
+        let apply = |config: &Config| -> Result<(Config, Settings), ReplayError> {
+            let mut config = config.clone();
+            for (name, value) in overrides {
+                config
+                    .set_value(name, value.clone())
+                    .map_err(ReplayError::Overrides)?;
+            }
+            let settings = config.solver_settings().map_err(ReplayError::Overrides)?;
+            Ok((config, settings))
+        };
+        let mut recorded = Vec::new();
+        for (name, entries) in &bag.metadata {
+            if name == METADATA_NAME {
+                recorded.push(SettingsRecord::from_metadata(entries)?);
+            }
+        }
+        // In time order; records of one time keep their file order, the last one winning.
+        recorded.sort_by_key(|r| r.since);
+        let mut timeline = Vec::with_capacity(recorded.len());
+        for record in &mut recorded {
+            let (config, settings) = apply(&record.config)?;
+            record.config = config;
+            timeline.push((record.since, settings));
+        }
+        let overridden: Vec<String> = overrides.iter().map(|(n, _)| n.clone()).collect();
+        Ok(Self {
+            objective_from_answer: timeline.is_empty()
+                && !overridden.iter().any(|n| n == "objective"),
+            fallback: apply(base)?.1,
+            timeline,
+            recorded,
+            overridden,
+        })
+    }
+
+    /// The same settings for every candidate, whatever the bag holds (for tests and benches).
+    pub fn fixed(settings: Settings) -> Self {
+        Self {
+            timeline: Vec::new(),
+            fallback: settings,
+            objective_from_answer: true,
+            recorded: Vec::new(),
+            overridden: Vec::new(),
+        }
+    }
+
+    /// Whether the bag carried its settings.
+    pub fn from_recording(&self) -> bool {
+        !self.timeline.is_empty()
+    }
+
+    /// The settings for a candidate received at `log_time`: the last record from before it (the
+    /// first record for earlier candidates).
+    pub fn settings_at(&self, log_time: u64) -> &Settings {
+        let after = self
+            .timeline
+            .partition_point(|(since, _)| *since <= log_time);
+        match after.checked_sub(1).or(self.timeline.first().map(|_| 0)) {
+            Some(i) => &self.timeline[i].1,
+            None => &self.fallback,
+        }
+    }
+}
+
+/// Solves every candidate of `bag` again as `plan` says and compares. The work is shared among
+/// the machine's cores; `progress` hears of every 4096 candidates done.
+pub fn replay(
+    bag: &Bag,
+    plan: &Plan,
+    progress: impl Fn(u64) + Sync,
+) -> Result<Summary, ReplayError> {
+    replay_on_cores(bag, plan, false, &progress).map(|(summary, _)| summary)
+}
+
+/// [`replay`], also returning the new answers, each with its candidate's times, in the
+/// candidates' order.
 pub fn replay_with_answers(
     bag: &Bag,
-    settings: &Settings,
+    plan: &Plan,
     progress: impl Fn(u64) + Sync,
-) -> (Summary, Vec<Recorded<GripRecommendation>>) {
-    replay_on_cores(bag, settings, true, &progress)
+) -> Result<(Summary, Vec<Recorded<GripRecommendation>>), ReplayError> {
+    replay_on_cores(bag, plan, true, &progress)
 }
 
 /// One share of the candidates per core; the answers are kept only when asked for, since a
-/// replay of millions of candidates need not hold them all.
+/// replay of millions of candidates need not hold them all. A share that fails fails the
+/// replay: its counts and answers must not silently go missing.
 fn replay_on_cores(
     bag: &Bag,
-    settings: &Settings,
+    plan: &Plan,
     keep: bool,
     progress: &(impl Fn(u64) + Sync),
-) -> (Summary, Vec<Recorded<GripRecommendation>>) {
+) -> Result<(Summary, Vec<Recorded<GripRecommendation>>), ReplayError> {
     let (pairs, unmatched) = pair(bag);
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let chunk = bag.candidates.len().div_ceil(threads).max(1);
-    let parts: Vec<(Vec<Recorded<GripRecommendation>>, Summary)> = std::thread::scope(|scope| {
+    type Part = (Vec<Recorded<GripRecommendation>>, Summary);
+    let parts: Result<Vec<Part>, String> = std::thread::scope(|scope| {
         let handles: Vec<_> = bag
             .candidates
             .chunks(chunk)
@@ -223,7 +339,9 @@ fn replay_on_cores(
                     let mut answers = Vec::with_capacity(if keep { cands.len() } else { 0 });
                     for (k, (c, p)) in cands.iter().zip(pairs).enumerate() {
                         let theirs = p.map(|i| &bag.recommendations[i].message);
-                        let ours = check(&c.message, settings, theirs, &mut part);
+                        let settings = plan.settings_at(c.log_time);
+                        let from_answer = plan.objective_from_answer;
+                        let ours = check(&c.message, settings, from_answer, theirs, &mut part);
                         if keep {
                             answers.push(Recorded {
                                 message: ours,
@@ -239,8 +357,12 @@ fn replay_on_cores(
                 })
             })
             .collect();
-        handles.into_iter().filter_map(|h| h.join().ok()).collect()
+        handles
+            .into_iter()
+            .map(|h| h.join().map_err(|e| panic_words(e.as_ref())))
+            .collect::<Result<Vec<_>, String>>()
     });
+    let parts = parts.map_err(ReplayError::Worker)?;
     let mut summary = Summary {
         unmatched_recommendations: unmatched,
         ..Summary::default()
@@ -250,18 +372,29 @@ fn replay_on_cores(
         answers.extend(a);
         summary.merge(part);
     }
-    (summary, answers)
+    Ok((summary, answers))
+}
+
+/// What a panicking thread said.
+fn panic_words(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "it panicked".to_string())
 }
 
 /// Solves one candidate again and compares it with its recorded answer, if any.
 fn check(
     candidate: &GraspCandidate,
     settings: &Settings,
+    objective_from_answer: bool,
     theirs: Option<&GripRecommendation>,
     summary: &mut Summary,
 ) -> GripRecommendation {
     summary.candidates += 1;
-    let ours = solve_like(candidate, settings, theirs);
+    let recorded = theirs.filter(|_| objective_from_answer);
+    let ours = solve_like(candidate, settings, recorded);
     if let Some(theirs) = theirs {
         summary.compared += 1;
         let diffs = differences(&ours, theirs);
@@ -287,7 +420,7 @@ fn check(
     ours
 }
 
-/// Solves as the recording did: with the objective the recorded answer names, if any.
+/// Solves with `settings`, and with the objective `recorded` names, if given.
 fn solve_like(
     candidate: &GraspCandidate,
     settings: &Settings,
@@ -327,5 +460,80 @@ mod tests {
             differences(&nan, &nan.clone()).is_empty(),
             "NaN equals NaN here"
         );
+    }
+
+    #[test]
+    fn a_failing_worker_fails_the_replay() {
+        let cases = crate::msg::paper_cases();
+        let bag = Bag {
+            candidates: (0..8192)
+                .map(|i| Recorded {
+                    message: cases[i % 4].clone(),
+                    log_time: i as u64,
+                    publish_time: i as u64,
+                })
+                .collect(),
+            ..Bag::default()
+        };
+        let plan = Plan::fixed(Settings::default());
+        let calls = std::sync::atomic::AtomicU64::new(0);
+        let result = replay_with_answers(&bag, &plan, |_| {
+            if calls.fetch_add(1, std::sync::atomic::Ordering::SeqCst) == 0 {
+                panic!("a worker fails");
+            }
+        });
+        match result {
+            Err(ReplayError::Worker(why)) => assert_eq!(why, "a worker fails"),
+            Err(e) => panic!("expected a worker failure, got {e}"),
+            Ok((summary, answers)) => panic!(
+                "a failed worker went unnoticed: {} candidates, {} answers",
+                summary.candidates,
+                answers.len()
+            ),
+        }
+        let (summary, answers) = replay_with_answers(&bag, &plan, |_| {}).expect("replays");
+        assert_eq!((summary.candidates, answers.len()), (8192, 8192));
+    }
+
+    #[test]
+    fn each_candidate_gets_the_settings_in_force_at_its_time() {
+        use crate::config::Config;
+        use crate::record::settings::SettingsRecord;
+        let record = |since, fsf| {
+            let config = Config {
+                friction_safety_factor: fsf,
+                ..Config::default()
+            };
+            let entries = SettingsRecord {
+                since,
+                node: "/grasp_orient".into(),
+                reason: "test".into(),
+                config,
+            }
+            .to_metadata();
+            (METADATA_NAME.to_string(), entries)
+        };
+        let bag = Bag {
+            // In file order the later record comes first: time decides, not position.
+            metadata: vec![record(100, 2.0), record(0, 1.5)],
+            ..Bag::default()
+        };
+        let plan = Plan::for_bag(&bag, &Config::default(), &[]).expect("a plan");
+        assert!(plan.from_recording());
+        assert_eq!(plan.settings_at(0).friction_safety_factor, 1.5);
+        assert_eq!(plan.settings_at(99).friction_safety_factor, 1.5);
+        assert_eq!(plan.settings_at(100).friction_safety_factor, 2.0);
+        assert_eq!(plan.settings_at(u64::MAX).friction_safety_factor, 2.0);
+        let overrides = [(
+            "friction_safety_factor".to_string(),
+            Value::Number(1.25.into()),
+        )];
+        let plan = Plan::for_bag(&bag, &Config::default(), &overrides).expect("a plan");
+        assert_eq!(plan.settings_at(0).friction_safety_factor, 1.25);
+        assert_eq!(plan.settings_at(200).friction_safety_factor, 1.25);
+        assert_eq!(plan.overridden, ["friction_safety_factor"]);
+        let plan = Plan::for_bag(&Bag::default(), &Config::default(), &[]).expect("a plan");
+        assert!(!plan.from_recording());
+        assert_eq!(*plan.settings_at(5), Settings::default());
     }
 }

@@ -6,6 +6,7 @@ use grasp_orient::node::play::{publish, Pace};
 use grasp_orient::node::session::Start;
 use grasp_orient::record::bag;
 use ros2_client::NodeOptions;
+use std::io::Write;
 use std::path::PathBuf;
 
 /// Arguments of `play`.
@@ -47,9 +48,10 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
     let played = publish(&mut session, &args.bag, &recorded.candidates, pace);
     session.close();
     let (sent, topic) = played?;
-    println!(
+    writeln!(
+        std::io::stdout(),
         "published {sent} of {} candidates on {topic}",
         recorded.candidates.len()
-    );
+    )?;
     Ok(())
 }
