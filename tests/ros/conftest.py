@@ -305,7 +305,7 @@ def start_node(grasp_bin, node_workdir):
 
     def start(*args: str, name: str = "grasp_orient node", ready: bool = True,
               preexec_fn: Callable[[], None] | None = None) -> NodeProcess:
-        n = NodeProcess(list(args), ros_env(DOMAIN_ID), node_workdir, name, preexec_fn)
+        n = NodeProcess(list(args), ros_env(DOMAIN_ID), node_workdir, name, preexec_fn=preexec_fn)
         started.append(n)
         _ALL_NODES.append(n)
         if ready:
