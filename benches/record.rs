@@ -10,7 +10,7 @@ mod common;
 
 use grasp_orient::msg::{answer, GraspCandidate, Header, Point, Time, Vector3};
 use grasp_orient::record::{bag, BagWriter, Entry, Payload, Recorder, Topics};
-use grasp_orient::replay::replay;
+use grasp_orient::replay::{replay, Plan};
 use grasp_orient::solver::Settings;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -80,7 +80,14 @@ fn main() {
             black_box(answer(&pool[i % pool.len()], &settings));
         }
         off = off.min(t.elapsed().as_secs_f64());
-        let recorder = Recorder::start(dir, topics(), 100).expect("recorder");
+        let recorder = Recorder::start(
+            dir,
+            "/grasp_orient_bench",
+            topics(),
+            100,
+            std::sync::Arc::new(|| {}),
+        )
+        .expect("recorder");
         let t = Instant::now();
         for i in 0..rounds {
             let c = &pool[i % pool.len()];
@@ -112,6 +119,7 @@ fn main() {
 
     // 2. A bag of n candidates with their answers, then replay it.
     let path = dir.join("big.mcap");
+    std::fs::remove_file(&path).ok();
     let t = Instant::now();
     let mut writer = BagWriter::create(&path, &topics(), 100).expect("create");
     for i in 0..n {
@@ -145,12 +153,7 @@ fn main() {
     let recorded = bag::read(&path).expect("read");
     let read_s = t.elapsed().as_secs_f64();
     let t2 = Instant::now();
-    let summary = replay(
-        &recorded,
-        &settings,
-        &grasp_orient::sets::Rules::default(),
-        |_| {},
-    );
+    let summary = replay(&recorded, &Plan::fixed(settings), |_| {}).expect("replays");
     let solve_s = t2.elapsed().as_secs_f64();
     let total = t.elapsed().as_secs_f64();
     assert_eq!(summary.compared, n as u64);

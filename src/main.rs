@@ -8,7 +8,7 @@ use std::process::ExitCode;
 
 /// The object orientation that minimises gripping power in a two-finger planar grasp.
 #[derive(Debug, Parser)]
-#[command(name = "grasp_orient", version, about)]
+#[command(name = "grasp_orient", version, about, after_help = cli::EXIT_CODES)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -26,9 +26,13 @@ enum Command {
     /// Run the ROS 2 node (ROS arguments follow --ros-args, as from ros2 run or launch).
     #[command(after_help = cli::node::parameters_help())]
     Node(cli::node::Args),
-    /// Re-solve every candidate of MCAP recordings and compare with the recorded answers.
+    /// Re-solve every candidate of MCAP recordings, with the settings they recorded, and
+    /// compare with the recorded answers.
+    #[command(after_help = cli::EXIT_CODES)]
     Replay(cli::replay::Args),
-    /// Recover what a killed recording holds into a finished MCAP file.
+    /// Recover what a killed or damaged recording holds into a finished MCAP file: only what
+    /// verifies, with what was dropped counted per topic.
+    #[command(after_help = cli::EXIT_CODES)]
     Recover(cli::recover::Args),
     /// Republish the candidates of a recording to the live ROS graph, like ros2 bag play.
     Play(cli::play::Args),
@@ -58,11 +62,33 @@ fn main() -> ExitCode {
         Command::Recover(args) => cli::recover::run(args),
         Command::Play(args) => cli::play::run(args, &argv[split..]),
     };
+    exit_code(result)
+}
+
+/// The one place where outcomes become exit codes, as `diff` and `cmp` use them: 0 success;
+/// 1 the answer is no (`replay` found differences, `recover` lost messages); 2 trouble. clap
+/// exits 2 on bad arguments before this. A reader that closed our standard output
+/// (`grasp_orient solve | head`) is success.
+fn exit_code(result: anyhow::Result<()>) -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if closed_pipe(&e) => ExitCode::SUCCESS,
+        Err(e) if e.downcast_ref::<cli::Negative>().is_some() => {
+            eprintln!("grasp_orient: {e:#}");
+            ExitCode::from(1)
+        }
         Err(e) => {
             eprintln!("grasp_orient: error: {e:#}");
-            ExitCode::FAILURE
+            ExitCode::from(2)
         }
     }
+}
+
+/// Whether the error is a write to a pipe whose reader has gone.
+fn closed_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|cause| {
+        cause
+            .downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
 }

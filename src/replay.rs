@@ -1,15 +1,19 @@
-//! Replaying recordings: every recorded candidate is solved again and compared, field by field,
-//! with the recommendation recorded for it; every recorded set likewise ([`sets`]). Only the
-//! fields the recording has are compared: a recording made before a message grew decodes with
-//! the new trailing fields at their defaults, which say nothing.
+//! Replaying recordings: every recorded candidate is solved again, with the settings in force
+//! when it was recorded ([`Plan`]), and compared, field by field, with the recommendation
+//! recorded for it; every recorded set likewise ([`sets`]). Only the fields the recording has are
+//! compared: a recording made before a message grew decodes with the new trailing fields at their
+//! defaults, which say nothing.
 
 mod sets;
 
-use crate::msg::{clip, short_id, GraspCandidate, GripRecommendation};
+use crate::config::{Config, ConfigError};
+use crate::msg::{clip, short_id, GraspCandidate, GripRecommendation, GripRecommendationSet};
 use crate::record::bag::{keep_example, Bag, Recorded};
 use crate::record::channels::RecordedFields;
+use crate::record::settings::{SettingsError, SettingsRecord, METADATA_NAME};
 use crate::sets::{answer_one, Rules};
 use crate::solver::{Objective, Settings};
+use serde_yaml_ng::Value;
 use std::collections::{BTreeMap, HashMap, VecDeque};
 
 /// Two numbers closer than this, relative to `max(1, |a|, |b|)`, are the same.
@@ -216,61 +220,186 @@ fn pair(bag: &Bag) -> (Vec<Option<usize>>, u64) {
     (pairs, unmatched)
 }
 
-/// Solves every candidate and every set of `bag` again with `settings` and `rules` (and, for
-/// each, the objective its recorded answer names) and compares. The work is shared among the
-/// machine's cores; `progress` hears of every 4096 candidates done.
+/// Why a recording cannot be replayed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ReplayError {
+    /// A settings record of the bag does not read.
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
+    /// The settings with the command line's overrides are refused.
+    #[error("the recorded settings with the command line's overrides: {0}")]
+    Overrides(ConfigError),
+    /// A thread solving a share of the candidates failed.
+    #[error("a replay worker failed: {0}")]
+    Worker(String),
+}
+
+/// A parameter set on the command line: its name and value.
+pub type Override = (String, Value);
+
+/// The settings each candidate of a recording is solved with.
+///
+/// A recording that carries settings records ([`crate::record::settings`]) is replayed with the
+/// settings in force at each candidate's `log_time`; one without (made before they existed, or
+/// by another writer) with the built-in config and the objective each recorded answer names.
+/// Command-line overrides apply over both.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    /// From which `log_time` on each applies, in time order, with the gripper rules.
+    timeline: Vec<(u64, Settings, Rules)>,
+    /// For a recording without settings records.
+    fallback: (Settings, Rules),
+    /// Whether each candidate is solved with the objective its recorded answer names.
+    objective_from_answer: bool,
+    /// The bag's settings records, overrides applied.
+    pub recorded: Vec<SettingsRecord>,
+    /// The parameters the command line set.
+    pub overridden: Vec<String>,
+}
+
+impl Plan {
+    /// The settings for the candidates of `bag`: its recorded settings, or else `base`; with
+    /// `overrides` applied over either.
+    pub fn for_bag(bag: &Bag, base: &Config, overrides: &[Override]) -> Result<Self, ReplayError> {
+        let apply = |config: &Config| -> Result<(Config, Settings), ReplayError> {
+            let mut config = config.clone();
+            for (name, value) in overrides {
+                config
+                    .set_value(name, value.clone())
+                    .map_err(ReplayError::Overrides)?;
+            }
+            let settings = config.solver_settings().map_err(ReplayError::Overrides)?;
+            Ok((config, settings))
+        };
+        let (base, base_settings) = apply(base)?;
+        let mut recorded = Vec::new();
+        for (name, entries) in &bag.metadata {
+            if name == METADATA_NAME {
+                recorded.push(SettingsRecord::from_metadata(entries)?);
+            }
+        }
+        // In time order; records of one time keep their file order, the last one winning.
+        recorded.sort_by_key(|r| r.since);
+        let mut timeline = Vec::with_capacity(recorded.len());
+        for record in &mut recorded {
+            let (config, settings) = apply(&record.config)?;
+            let rules = config.rules();
+            record.config = config;
+            timeline.push((record.since, settings, rules));
+        }
+        let overridden: Vec<String> = overrides.iter().map(|(n, _)| n.clone()).collect();
+        Ok(Self {
+            objective_from_answer: timeline.is_empty()
+                && !overridden.iter().any(|n| n == "objective"),
+            fallback: (base_settings, base.rules()),
+            timeline,
+            recorded,
+            overridden,
+        })
+    }
+
+    /// The same settings for every candidate, whatever the bag holds (for tests and benches).
+    pub fn fixed(settings: Settings) -> Self {
+        Self::fixed_with(settings, Rules::default())
+    }
+
+    /// [`Plan::fixed`] with gripper rules too.
+    pub fn fixed_with(settings: Settings, rules: Rules) -> Self {
+        Self {
+            timeline: Vec::new(),
+            fallback: (settings, rules),
+            objective_from_answer: true,
+            recorded: Vec::new(),
+            overridden: Vec::new(),
+        }
+    }
+
+    /// Whether the bag carried its settings.
+    pub fn from_recording(&self) -> bool {
+        !self.timeline.is_empty()
+    }
+
+    /// The settings for a candidate received at `log_time`: the last record from before it (the
+    /// first record for earlier candidates).
+    pub fn settings_at(&self, log_time: u64) -> &Settings {
+        match self.index_at(log_time) {
+            Some(i) => &self.timeline[i].1,
+            None => &self.fallback.0,
+        }
+    }
+
+    /// The gripper rules for a candidate (or set) received at `log_time`, as [`Plan::settings_at`].
+    pub fn rules_at(&self, log_time: u64) -> &Rules {
+        match self.index_at(log_time) {
+            Some(i) => &self.timeline[i].2,
+            None => &self.fallback.1,
+        }
+    }
+
+    /// The timeline entry in force at `log_time`: the last from before it, the first for earlier
+    /// times; `None` without a timeline.
+    fn index_at(&self, log_time: u64) -> Option<usize> {
+        let after = self
+            .timeline
+            .partition_point(|(since, _, _)| *since <= log_time);
+        after.checked_sub(1).or(self.timeline.first().map(|_| 0))
+    }
+}
+
+/// Solves every candidate and every set of `bag` again as `plan` says and compares. The work is
+/// shared among the machine's cores; `progress` hears of every 4096 candidates done.
 pub fn replay(
     bag: &Bag,
-    settings: &Settings,
-    rules: &Rules,
+    plan: &Plan,
     progress: impl Fn(u64) + Sync,
-) -> Summary {
-    let mut summary = replay_on_cores(bag, settings, rules, false, &progress).0;
-    summary.merge(sets::replay_sets(bag, settings, rules, false).0);
-    summary
+) -> Result<Summary, ReplayError> {
+    let (mut summary, _) = replay_on_cores(bag, plan, false, &progress)?;
+    summary.merge(sets::replay_sets(bag, plan, false).0);
+    Ok(summary)
 }
 
 /// The new answers of a replay, each with its candidate's (or set's) times.
 #[derive(Debug, Default)]
 pub struct Answers {
-    /// One per recorded candidate, in order.
+    /// One per recorded candidate, in the candidates' order.
     pub recommendations: Vec<Recorded<GripRecommendation>>,
-    /// One per recorded set, in order.
-    pub sets: Vec<Recorded<crate::msg::GripRecommendationSet>>,
+    /// One per recorded set, in the sets' order.
+    pub sets: Vec<Recorded<GripRecommendationSet>>,
 }
 
 /// [`replay`], also returning the new answers.
 pub fn replay_with_answers(
     bag: &Bag,
-    settings: &Settings,
-    rules: &Rules,
+    plan: &Plan,
     progress: impl Fn(u64) + Sync,
-) -> (Summary, Answers) {
-    let (mut summary, recommendations) = replay_on_cores(bag, settings, rules, true, &progress);
-    let (of_sets, sets) = sets::replay_sets(bag, settings, rules, true);
+) -> Result<(Summary, Answers), ReplayError> {
+    let (mut summary, recommendations) = replay_on_cores(bag, plan, true, &progress)?;
+    let (of_sets, sets) = sets::replay_sets(bag, plan, true);
     summary.merge(of_sets);
-    (
+    Ok((
         summary,
         Answers {
             recommendations,
             sets,
         },
-    )
+    ))
 }
 
 /// One share of the candidates per core; the answers are kept only when asked for, since a
-/// replay of millions of candidates need not hold them all.
+/// replay of millions of candidates need not hold them all. A share that fails fails the
+/// replay: its counts and answers must not silently go missing.
 fn replay_on_cores(
     bag: &Bag,
-    settings: &Settings,
-    rules: &Rules,
+    plan: &Plan,
     keep: bool,
     progress: &(impl Fn(u64) + Sync),
-) -> (Summary, Vec<Recorded<GripRecommendation>>) {
+) -> Result<(Summary, Vec<Recorded<GripRecommendation>>), ReplayError> {
     let (pairs, unmatched) = pair(bag);
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let chunk = bag.candidates.len().div_ceil(threads).max(1);
-    let parts: Vec<(Vec<Recorded<GripRecommendation>>, Summary)> = std::thread::scope(|scope| {
+    type Part = (Vec<Recorded<GripRecommendation>>, Summary);
+    let parts: Result<Vec<Part>, String> = std::thread::scope(|scope| {
         let handles: Vec<_> = bag
             .candidates
             .chunks(chunk)
@@ -281,8 +410,18 @@ fn replay_on_cores(
                     let mut answers = Vec::with_capacity(if keep { cands.len() } else { 0 });
                     for (k, (c, p)) in cands.iter().zip(pairs).enumerate() {
                         let theirs = p.map(|i| &bag.recommendations[i].message);
-                        let ours =
-                            check(&c.message, settings, rules, theirs, &bag.fields, &mut part);
+                        let settings = plan.settings_at(c.log_time);
+                        let rules = plan.rules_at(c.log_time);
+                        let from_answer = plan.objective_from_answer;
+                        let ours = check(
+                            &c.message,
+                            settings,
+                            rules,
+                            from_answer,
+                            theirs,
+                            &bag.fields,
+                            &mut part,
+                        );
                         if keep {
                             answers.push(Recorded {
                                 message: ours,
@@ -298,8 +437,12 @@ fn replay_on_cores(
                 })
             })
             .collect();
-        handles.into_iter().filter_map(|h| h.join().ok()).collect()
+        handles
+            .into_iter()
+            .map(|h| h.join().map_err(|e| panic_words(e.as_ref())))
+            .collect::<Result<Vec<_>, String>>()
     });
+    let parts = parts.map_err(ReplayError::Worker)?;
     let mut summary = Summary {
         unmatched_recommendations: unmatched,
         ..Summary::default()
@@ -309,7 +452,16 @@ fn replay_on_cores(
         answers.extend(a);
         summary.merge(part);
     }
-    (summary, answers)
+    Ok((summary, answers))
+}
+
+/// What a panicking thread said.
+fn panic_words(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "it panicked".to_string())
 }
 
 /// Solves one candidate again and compares it with its recorded answer, if any.
@@ -317,12 +469,14 @@ fn check(
     candidate: &GraspCandidate,
     settings: &Settings,
     rules: &Rules,
+    objective_from_answer: bool,
     theirs: Option<&GripRecommendation>,
     fields: &RecordedFields,
     summary: &mut Summary,
 ) -> GripRecommendation {
     summary.candidates += 1;
-    let ours = solve_like(candidate, settings, rules, theirs);
+    let recorded = theirs.filter(|_| objective_from_answer);
+    let ours = solve_like(candidate, settings, rules, recorded);
     if let Some(theirs) = theirs {
         let label = || format!("candidate {:?}", short_id(&candidate.id));
         compare_one(label, &ours, theirs, fields, summary);
@@ -363,7 +517,7 @@ fn compare_one(
     true
 }
 
-/// Solves as the recording did: with the objective the recorded answer names, if any.
+/// Solves with `settings` and `rules`, and with the objective `recorded` names, if given.
 fn solve_like(
     candidate: &GraspCandidate,
     settings: &Settings,
@@ -407,5 +561,83 @@ mod tests {
             differences(&nan, &nan.clone()).is_empty(),
             "NaN equals NaN here"
         );
+    }
+
+    #[test]
+    fn a_failing_worker_fails_the_replay() {
+        let cases = crate::msg::paper_cases();
+        let bag = Bag {
+            candidates: (0..8192)
+                .map(|i| Recorded {
+                    message: cases[i % 4].clone(),
+                    log_time: i as u64,
+                    publish_time: i as u64,
+                })
+                .collect(),
+            ..Bag::default()
+        };
+        let plan = Plan::fixed(Settings::default());
+        let calls = std::sync::atomic::AtomicU64::new(0);
+        let result = replay_with_answers(&bag, &plan, |_| {
+            if calls.fetch_add(1, std::sync::atomic::Ordering::SeqCst) == 0 {
+                panic!("a worker fails");
+            }
+        });
+        match result {
+            Err(ReplayError::Worker(why)) => assert_eq!(why, "a worker fails"),
+            Err(e) => panic!("expected a worker failure, got {e}"),
+            Ok((summary, answers)) => panic!(
+                "a failed worker went unnoticed: {} candidates, {} answers",
+                summary.candidates,
+                answers.recommendations.len()
+            ),
+        }
+        let (summary, answers) = replay_with_answers(&bag, &plan, |_| {}).expect("replays");
+        assert_eq!(
+            (summary.candidates, answers.recommendations.len()),
+            (8192, 8192)
+        );
+    }
+
+    #[test]
+    fn each_candidate_gets_the_settings_in_force_at_its_time() {
+        use crate::config::Config;
+        use crate::record::settings::SettingsRecord;
+        let record = |since, fsf| {
+            let config = Config {
+                friction_safety_factor: fsf,
+                ..Config::default()
+            };
+            let entries = SettingsRecord {
+                since,
+                node: "/grasp_orient".into(),
+                reason: "test".into(),
+                config,
+            }
+            .to_metadata();
+            (METADATA_NAME.to_string(), entries)
+        };
+        let bag = Bag {
+            // In file order the later record comes first: time decides, not position.
+            metadata: vec![record(100, 2.0), record(0, 1.5)],
+            ..Bag::default()
+        };
+        let plan = Plan::for_bag(&bag, &Config::default(), &[]).expect("a plan");
+        assert!(plan.from_recording());
+        assert_eq!(plan.settings_at(0).friction_safety_factor, 1.5);
+        assert_eq!(plan.settings_at(99).friction_safety_factor, 1.5);
+        assert_eq!(plan.settings_at(100).friction_safety_factor, 2.0);
+        assert_eq!(plan.settings_at(u64::MAX).friction_safety_factor, 2.0);
+        let overrides = [(
+            "friction_safety_factor".to_string(),
+            Value::Number(1.25.into()),
+        )];
+        let plan = Plan::for_bag(&bag, &Config::default(), &overrides).expect("a plan");
+        assert_eq!(plan.settings_at(0).friction_safety_factor, 1.25);
+        assert_eq!(plan.settings_at(200).friction_safety_factor, 1.25);
+        assert_eq!(plan.overridden, ["friction_safety_factor"]);
+        let plan = Plan::for_bag(&Bag::default(), &Config::default(), &[]).expect("a plan");
+        assert!(!plan.from_recording());
+        assert_eq!(*plan.settings_at(5), Settings::default());
     }
 }

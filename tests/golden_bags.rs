@@ -1,15 +1,27 @@
 //! Every golden recording in `bags/` replays without a difference: a change in any answer the
-//! solver gives fails here. (`bags/make_bags.py` regenerates them; see `bags/README.md`.)
+//! solver gives fails here. (`bags/make_bags.py` and `bags/record_node_bag.py` regenerate them;
+//! see `bags/README.md`.)
 
 mod common;
 
 use common::run::{bin, temp_dir};
 
 fn replay(bag: &str) -> (bool, String) {
+    let (code, text) = replay_with(bag, &[]);
+    (code == Some(0), text)
+}
+
+/// `replay BAG ARGS`: the exit code and what it printed.
+fn replay_with(bag: &str, args: &[&str]) -> (Option<i32>, String) {
     let path = format!("{}/bags/{bag}", env!("CARGO_MANIFEST_DIR"));
-    let out = bin().args(["replay", &path]).output().expect("binary runs");
+    let out = bin()
+        .arg("replay")
+        .arg(&path)
+        .args(args)
+        .output()
+        .expect("binary runs");
     (
-        out.status.success(),
+        out.status.code(),
         String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr),
     )
 }
@@ -31,7 +43,11 @@ fn paper_cases_replay_unchanged() {
 fn bags_recorded_before_the_grip_force_fields_decode_and_replay() {
     use grasp_orient::msg::GripRecommendation;
     use grasp_orient::record::bag;
-    for name in ["paper_cases.mcap", "random_grasps.mcap"] {
+    for name in [
+        "paper_cases.mcap",
+        "random_grasps.mcap",
+        "node_recorded.mcap",
+    ] {
         let path = format!("{}/bags/{name}", env!("CARGO_MANIFEST_DIR"));
         let recorded = bag::read(std::path::Path::new(&path)).expect("golden bag reads");
         assert_eq!(
@@ -68,9 +84,36 @@ fn random_grasps_with_refused_ones_replay_unchanged() {
 }
 
 #[test]
-fn a_bag_written_by_rosbags_is_read() {
-    let (ok, text) = replay("rosbags_written.mcap");
+fn the_bag_the_node_recorded_replays_with_its_settings() {
+    let (ok, text) = replay("node_recorded.mcap");
     assert!(ok, "{text}");
+    assert!(
+        text.contains("solved with the settings it recorded (2 settings records)")
+            && text.contains("38 compared with a recorded recommendation, 0 differ")
+            && text.contains("0 recorded recommendations unmatched"),
+        "{text}"
+    );
+    // It was recorded with range:=graspable: solved as from above, its answers differ.
+    let (code, text) = replay_with("node_recorded.mcap", &["--range", "from_above"]);
+    assert_eq!(code, Some(1), "{text}");
+    assert!(
+        text.contains("overridden from the command line: range"),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_bag_written_by_rosbags_is_read() {
+    // It holds candidates only: solved, but nothing to compare with, which is not a pass...
+    let (code, text) = replay_with("rosbags_written.mcap", &[]);
+    assert_eq!(code, Some(1), "{text}");
+    assert!(
+        text.contains("24 of 24 candidates have no recorded recommendation"),
+        "{text}"
+    );
+    // ...unless asked for.
+    let (code, text) = replay_with("rosbags_written.mcap", &["--no-compare"]);
+    assert_eq!(code, Some(0), "{text}");
     assert!(text.contains("replayed 24 candidates"), "{text}");
 }
 

@@ -9,10 +9,23 @@ pub mod replay;
 pub mod solve;
 
 use anyhow::{bail, Context};
-use grasp_orient::config::{bounds, Config, RangeKind};
+use grasp_orient::config::{bounds, params_in_yaml, Config, Parameter, RangeKind};
+use grasp_orient::replay::Override;
 use grasp_orient::sets::{GripperDrive, Rules};
 use grasp_orient::solver::{AllowedRange, Objective, Settings};
+use serde_yaml_ng::Value;
 use std::path::PathBuf;
+
+/// The answer is "no": `replay` found differences, `recover` lost messages. `main` exits 1 for
+/// it, and 2 for every other error, as `diff` and `cmp` do.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct Negative(pub String);
+
+/// The exit codes, for the `--help` of the commands that answer yes or no.
+pub const EXIT_CODES: &str = "Exit codes (as diff and cmp): 0 same / nothing lost; 1 differences \
+found (replay) or messages lost (recover); 2 trouble: bad arguments, an unreadable, damaged or \
+cut-short input, an output that cannot be written.";
 
 /// Options shared by the commands that solve: the config file and overrides of its settings.
 #[derive(Debug, Clone, Default, clap::Args)]
@@ -42,37 +55,71 @@ pub struct SolveOptions {
 }
 
 impl SolveOptions {
-    /// The config file with these overrides applied, checked.
-    pub fn settings(&self) -> anyhow::Result<Settings> {
-        Ok(self.configured()?.1)
-    }
-
-    /// The config file with these overrides applied, checked: the config, the solver settings
-    /// and the gripper rules.
-    pub fn configured(&self) -> anyhow::Result<(Config, Settings, Rules)> {
-        let mut config = Config::load(self.config.as_deref(), "grasp_orient")?;
+    /// The parameters these options set, in the order they apply: the `--config` file's, then
+    /// each flag's. Each name is one of the parameter table's.
+    pub fn overrides(&self) -> anyhow::Result<Vec<Override>> {
+        let mut out: Vec<Override> = Vec::new();
+        if let Some(path) = &self.config {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read --config {}", path.display()))?;
+            for (name, value) in params_in_yaml(&text, &path.display().to_string(), "grasp_orient")?
+            {
+                if Parameter::find(&name).is_none() {
+                    bail!("{}: grasp_orient has no parameter {name}", path.display());
+                }
+                out.push((name, value));
+            }
+        }
         if let Some(o) = &self.objective {
-            config.objective = o
-                .parse::<Objective>()
+            o.parse::<Objective>()
                 .map_err(|e| anyhow::anyhow!("--objective {e}"))?;
+            out.push(("objective".into(), Value::String(o.clone())));
         }
         if let Some(s) = self.friction_safety_factor {
-            config.friction_safety_factor = s;
+            out.push(("friction_safety_factor".into(), Value::Number(s.into())));
         }
         if let Some(f) = self.max_grip_force {
-            config.max_grip_force = f;
+            out.push(("max_grip_force".into(), Value::Number(f.into())));
         }
         if let Some(d) = &self.gripper_drive {
-            config.gripper_drive = d
-                .parse::<GripperDrive>()
+            d.parse::<GripperDrive>()
                 .map_err(|e| anyhow::anyhow!("--gripper-drive {e}"))?;
+            out.push(("gripper_drive".into(), Value::String(d.clone())));
         }
-        let mut settings = config
-            .solver_settings()
-            .map_err(|e| anyhow::anyhow!("{e} (from --config or the options)"))?;
         if let Some(r) = &self.range {
-            settings.range = parse_range(r)?;
+            let text = |s: &str| Value::String(s.to_string());
+            match parse_range(r)? {
+                AllowedRange::FromAbove => out.push(("range".into(), text("from_above"))),
+                AllowedRange::Graspable => out.push(("range".into(), text("graspable"))),
+                AllowedRange::Bounds { lo, hi } => {
+                    out.push(("range".into(), text("bounds")));
+                    out.push(("range_min".into(), Value::Number(lo.into())));
+                    out.push(("range_max".into(), Value::Number(hi.into())));
+                }
+            }
         }
+        Ok(out)
+    }
+
+    /// The built-in config with [`SolveOptions::overrides`] applied, checked.
+    pub fn config(&self) -> anyhow::Result<Config> {
+        let mut config = Config::load(None, "grasp_orient")?;
+        for (name, value) in self.overrides()? {
+            config.set_value(&name, value)?;
+        }
+        config.solver_settings()?;
+        Ok(config)
+    }
+
+    /// The solver settings of [`SolveOptions::config`].
+    pub fn settings(&self) -> anyhow::Result<Settings> {
+        Ok(self.config()?.solver_settings()?)
+    }
+
+    /// [`SolveOptions::config`], its solver settings and its gripper rules.
+    pub fn configured(&self) -> anyhow::Result<(Config, Settings, Rules)> {
+        let config = self.config()?;
+        let settings = config.solver_settings()?;
         let rules = config.rules();
         Ok((config, settings, rules))
     }

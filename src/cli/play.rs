@@ -6,6 +6,7 @@ use grasp_orient::node::play::{publish, Pace};
 use grasp_orient::node::session::Start;
 use grasp_orient::record::bag;
 use ros2_client::NodeOptions;
+use std::io::Write;
 use std::path::PathBuf;
 
 /// Arguments of `play`.
@@ -54,19 +55,21 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
     );
     session.close();
     let played = played?;
-    println!(
+    writeln!(
+        std::io::stdout(),
         "published {} of {} candidates on {}",
         played.candidates,
         recorded.candidates.len(),
         played.candidates_topic
-    );
+    )?;
     if !recorded.candidate_sets.is_empty() {
-        println!(
+        writeln!(
+            std::io::stdout(),
             "published {} of {} candidate sets on {}",
             played.sets,
             recorded.candidate_sets.len(),
             played.sets_topic
-        );
+        )?;
     }
     Ok(())
 }

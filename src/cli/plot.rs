@@ -5,8 +5,10 @@
 use super::SolveOptions;
 use anyhow::{anyhow, Context};
 use grasp_orient::msg::GraspCandidate;
+use grasp_orient::record::output::Replacement;
 use grasp_orient::solver::{analyse, Analysis, Candidate, Recommendation};
 use plotters::prelude::*;
+use std::io::Write;
 use std::path::PathBuf;
 
 /// Arguments of `plot`.
@@ -48,14 +50,15 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .recommend(&settings.range)
         .map_err(|e| anyhow!("invalid input: {e}"))?;
     draw(&analysis, &best, args)?;
-    println!(
+    writeln!(
+        std::io::stdout(),
         "wrote {}: recommended gravity angle {:.6} rad, wrist rotation {:.6} rad, {} {:.6} N",
         args.output.display(),
         best.gravity_angle,
         best.wrist_rotation,
         best.objective.name(),
         best.gripping_power
-    );
+    )?;
     Ok(())
 }
 
@@ -118,15 +121,24 @@ fn drawing_failed(e: impl std::fmt::Debug) -> anyhow::Error {
 
 type Area<'a> = DrawingArea<SVGBackend<'a>, plotters::coord::Shift>;
 
+/// Draws into memory, then writes the SVG beside `args.output` and renames it into place.
 fn draw(analysis: &Analysis, best: &Recommendation, args: &Args) -> anyhow::Result<()> {
     let curves = Curves::sample(analysis, args.samples.max(10));
-    let root = SVGBackend::new(&args.output, (1400, 560)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
-    let (left, right) = root.split_horizontally(700);
-    draw_bounds(&left, &curves)?;
-    draw_power(&right, analysis, best, &curves)?;
-    root.present()
-        .map_err(|e| anyhow!("cannot write {}: {e}", args.output.display()))?;
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (1400, 560)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
+        let (left, right) = root.split_horizontally(700);
+        draw_bounds(&left, &curves)?;
+        draw_power(&right, analysis, best, &curves)?;
+        root.present().map_err(drawing_failed)?;
+    }
+    let cannot = || format!("cannot write {}", args.output.display());
+    let (mut file, pending) =
+        Replacement::create(&args.output, &[args.candidate.as_path()])?.into_parts();
+    file.write_all(svg.as_bytes()).with_context(cannot)?;
+    drop(file);
+    pending.commit().with_context(cannot)?;
     Ok(())
 }
 

@@ -1,72 +1,130 @@
-//! `grasp_orient replay BAG...`: re-solve every recorded candidate and compare with the
-//! recorded recommendations; non-zero exit on any difference beyond tolerance.
+//! `grasp_orient replay BAG...`: re-solve every recorded candidate with the settings it was
+//! recorded with, and compare with the recorded recommendations.
+//!
+//! The outcome, for `main` to turn into an exit code: `Ok` when every candidate was compared
+//! and none differs; [`Negative`] when an answer differs, is missing or answers no candidate;
+//! any other error (a damaged bag, messages that do not decode, bad options) is trouble.
 
-use super::SolveOptions;
+use super::{Negative, SolveOptions};
 use anyhow::{bail, Context};
+use grasp_orient::config::Config;
 use grasp_orient::msg::{GraspCandidate, GraspCandidateSet, GripRecommendation, RosMessage};
-use grasp_orient::record::bag;
+use grasp_orient::record::bag::{self, Bag};
+use grasp_orient::record::output::{Pending, Replacement};
 use grasp_orient::record::{BagWriter, Entry, Payload, SetTopics, Topics};
-use grasp_orient::replay::{replay, replay_with_answers, Answers, Summary, TOLERANCE};
-use grasp_orient::sets::Rules;
-use grasp_orient::solver::Settings;
+use grasp_orient::replay::{
+    replay, replay_with_answers, Answers, Override, Plan, Summary, TOLERANCE,
+};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `replay`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
-    /// MCAP files (ours, or any rosbag2 MCAP with a grasp_orient/msg/GraspCandidate topic).
+    /// MCAP files (ours, or any rosbag2 MCAP with a grasp_orient/msg/GraspCandidate or
+    /// GraspCandidateSet topic).
     #[arg(required = true)]
     pub bags: Vec<PathBuf>,
-    /// Also write a fresh recording of the replay: the candidates and the new recommendations.
+    /// Also write a fresh recording of the replay: the candidates, the new recommendations and
+    /// the settings used. Written beside OUT.mcap and renamed into place when complete; never
+    /// one of the BAGs.
     #[arg(long, value_name = "OUT.mcap")]
     pub write: Option<PathBuf>,
+    /// Solve the candidates without comparing, for bags that hold no recorded answers (with
+    /// --write, to make them). Without it, a candidate with no recorded answer fails the replay.
+    #[arg(long)]
+    pub no_compare: bool,
+    /// Each candidate is solved with the settings the bag recorded for its time; these options
+    /// override them (and the built-in config, for bags that recorded none).
     #[command(flatten)]
     pub options: SolveOptions,
 }
 
 /// Replays every bag and prints a summary.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let (_, settings, rules) = args.options.configured()?;
+    let base = Config::load(None, "grasp_orient")?;
+    let overrides = args.options.overrides()?;
+    // Bad options are refused before any bag is read.
+    args.options.config()?;
     let started = std::time::Instant::now();
     let mut summary = Summary::default();
-    let mut writer = args.write.as_deref().map(create_writer).transpose()?;
+    let mut trouble = Vec::new();
+    let mut output = args
+        .write
+        .as_deref()
+        .map(|path| Output::create(path, &args.bags))
+        .transpose()?;
     for path in &args.bags {
-        summary.merge(replay_file(path, &settings, &rules, writer.as_mut())?);
+        let part = replay_file(path, &base, &overrides, args, output.as_mut(), &mut trouble)?;
+        summary.merge(part);
     }
-    if let (Some(w), Some(path)) = (writer, &args.write) {
-        let written = w.finish()?;
-        println!(
+    if let Some(output) = output {
+        output.finish()?;
+    }
+    report(&summary, started.elapsed().as_secs_f64(), args.no_compare)?;
+    if !trouble.is_empty() {
+        bail!("{}", trouble.join("; "));
+    }
+    verdict(&summary, args.no_compare)
+}
+
+/// The recording `--write` makes, under a temporary name until it is complete.
+struct Output {
+    path: PathBuf,
+    writer: BagWriter,
+    pending: Pending,
+}
+
+impl Output {
+    fn create(path: &Path, inputs: &[PathBuf]) -> anyhow::Result<Self> {
+        let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+        let replacement = Replacement::create(path, &inputs)?;
+        let temp = replacement.temporary_path().to_path_buf();
+        let (file, pending) = replacement.into_parts();
+        let topics = Topics {
+            candidates: "/grasp_candidates".into(),
+            recommendations: "/grip_recommendations".into(),
+            markers: None,
+            sets: Some(SetTopics::default_names()),
+        };
+        let writer = BagWriter::on_file(file, &temp, &topics, 100)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            writer,
+            pending,
+        })
+    }
+
+    fn finish(self) -> anyhow::Result<()> {
+        let written = self.writer.finish()?;
+        self.pending
+            .commit()
+            .with_context(|| format!("cannot write {}", self.path.display()))?;
+        writeln!(
+            std::io::stdout(),
             "wrote {} candidates, {} recommendations, {} candidate sets and {} set answers to {}",
             written.candidates,
             written.recommendations,
             written.candidate_sets,
             written.recommendation_sets,
-            path.display()
-        );
+            self.path.display()
+        )?;
+        Ok(())
     }
-    report(&summary, started.elapsed().as_secs_f64())
 }
 
-/// The recording `--write` makes.
-fn create_writer(path: &Path) -> anyhow::Result<BagWriter> {
-    let topics = Topics {
-        candidates: "/grasp_candidates".into(),
-        recommendations: "/grip_recommendations".into(),
-        markers: None,
-        sets: Some(SetTopics::default_names()),
-    };
-    BagWriter::create(path, &topics, 100)
-        .with_context(|| format!("cannot write {}", path.display()))
-}
-
-/// Replays one bag, writing its candidates and the new answers to `writer` if given.
+/// Replays one bag, writing its candidates, the new answers and the settings used to `output`
+/// if given. Undecodable messages are noted in `trouble`.
 fn replay_file(
     path: &Path,
-    settings: &Settings,
-    rules: &Rules,
-    writer: Option<&mut BagWriter>,
+    base: &Config,
+    overrides: &[Override],
+    args: &Args,
+    output: Option<&mut Output>,
+    trouble: &mut Vec<String>,
 ) -> anyhow::Result<Summary> {
-    let bag = bag::read(path)?;
+    let mut bag = bag::read(path)?;
     if bag.candidates.is_empty() && bag.candidate_sets.is_empty() {
         bail!(
             "{}: no {} or {} messages (cdr) in it",
@@ -77,129 +135,203 @@ fn replay_file(
     }
     let missing = bag.fields.missing::<GripRecommendation>();
     if !missing.is_empty() {
-        println!(
+        writeln!(
+            std::io::stdout(),
             "{}: recorded before {} were added to {}: not compared",
             path.display(),
             missing.join(", "),
             GripRecommendation::TYPE_NAME
-        );
+        )?;
     }
     if bag.undecodable_count > 0 {
-        log::warn!(
-            "{}: {} messages did not decode, e.g. {}",
+        trouble.push(format!(
+            "{}: {} messages of grasp_orient's types do not decode, e.g. {}",
             path.display(),
             bag.undecodable_count,
             bag.undecodable.first().map_or("", String::as_str)
-        );
+        ));
+    }
+    let plan = Plan::for_bag(&bag, base, overrides)
+        .with_context(|| format!("{}: cannot replay", path.display()))?;
+    let recorded = bag.recommendations.len();
+    let recorded_sets = bag.recommendation_sets.len();
+    if args.no_compare {
+        bag = Bag {
+            candidates: std::mem::take(&mut bag.candidates),
+            candidate_sets: std::mem::take(&mut bag.candidate_sets),
+            ..Bag::default()
+        };
     }
     let bar = indicatif::ProgressBar::new(bag.candidates.len() as u64);
     if bag.candidates.len() < 100_000 {
         bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
     let progress = |n| bar.inc(n);
-    let summary = match writer {
-        Some(w) => {
-            let (summary, answers) = replay_with_answers(&bag, settings, rules, progress);
-            write_answers(w, &bag, answers)?;
+    let summary = match output {
+        Some(out) => {
+            let (summary, answers) = replay_with_answers(&bag, &plan, progress)?;
+            write_replay(&mut out.writer, &bag, &plan, answers)?;
             summary
         }
-        None => replay(&bag, settings, rules, progress),
+        None => replay(&bag, &plan, progress)?,
     };
     bar.finish_and_clear();
-    println!(
-        "{}: {} candidates, {} recorded recommendations",
+    writeln!(
+        std::io::stdout(),
+        "{}: {} candidates, {recorded} recorded recommendations; {}",
         path.display(),
         bag.candidates.len(),
-        bag.recommendations.len()
-    );
-    if !bag.candidate_sets.is_empty() || !bag.recommendation_sets.is_empty() {
-        println!(
-            "{}: {} candidate sets, {} recorded set answers",
+        settings_words(&plan)
+    )?;
+    if !bag.candidate_sets.is_empty() || recorded_sets > 0 {
+        writeln!(
+            std::io::stdout(),
+            "{}: {} candidate sets, {recorded_sets} recorded set answers",
             path.display(),
             bag.candidate_sets.len(),
-            bag.recommendation_sets.len()
-        );
+        )?;
     }
     Ok(summary)
 }
 
-/// Writes the bag's sets and candidates with the new answers.
-fn write_answers(w: &mut BagWriter, bag: &bag::Bag, answers: Answers) -> anyhow::Result<()> {
-    let entry = |payload, log_time, publish_time| Entry {
-        payload,
-        log_time,
-        publish_time,
+/// Where the settings came from, for the summary.
+fn settings_words(plan: &Plan) -> String {
+    let source = if plan.from_recording() {
+        let n = plan.recorded.len();
+        format!(
+            "solved with the settings it recorded ({n} settings record{})",
+            if n == 1 { "" } else { "s" }
+        )
+    } else {
+        "it recorded no settings: solved with the built-in config and the objective each \
+         recorded answer names"
+            .to_string()
     };
+    if plan.overridden.is_empty() {
+        source
+    } else {
+        format!(
+            "{source}, overridden from the command line: {}",
+            plan.overridden.join(", ")
+        )
+    }
+}
+
+/// Writes the settings used, every set and its new answer, every candidate and its new answer.
+fn write_replay(w: &mut BagWriter, bag: &Bag, plan: &Plan, answers: Answers) -> anyhow::Result<()> {
+    for record in &plan.recorded {
+        w.write(&Entry {
+            payload: Payload::Settings(Box::new(record.clone())),
+            log_time: record.since,
+            publish_time: record.since,
+        })?;
+    }
     for (s, a) in bag.candidate_sets.iter().zip(answers.sets) {
-        let set = Payload::CandidateSet(Box::new(s.message.clone()));
-        w.write(&entry(set, s.log_time, s.publish_time))?;
-        let answer = Payload::RecommendationSet(Box::new(a.message));
-        w.write(&entry(answer, a.log_time, a.publish_time))?;
+        w.write(&Entry {
+            payload: Payload::CandidateSet(Box::new(s.message.clone())),
+            log_time: s.log_time,
+            publish_time: s.publish_time,
+        })?;
+        w.write(&Entry {
+            payload: Payload::RecommendationSet(Box::new(a.message)),
+            log_time: a.log_time,
+            publish_time: a.publish_time,
+        })?;
     }
     for (c, a) in bag.candidates.iter().zip(answers.recommendations) {
-        let candidate = Payload::Candidate(Box::new(c.message.clone()));
-        w.write(&entry(candidate, c.log_time, c.publish_time))?;
-        let answer = Payload::Recommendation(Box::new(a.message));
-        w.write(&entry(answer, a.log_time, a.publish_time))?;
+        w.write(&Entry {
+            payload: Payload::Candidate(Box::new(c.message.clone())),
+            log_time: c.log_time,
+            publish_time: c.publish_time,
+        })?;
+        w.write(&Entry {
+            payload: Payload::Recommendation(Box::new(a.message)),
+            log_time: a.log_time,
+            publish_time: a.publish_time,
+        })?;
     }
     Ok(())
 }
 
-/// Prints the summary; an error when any answer differs or is unmatched.
-fn report(summary: &Summary, secs: f64) -> anyhow::Result<()> {
-    println!(
+/// Prints the summary.
+fn report(summary: &Summary, secs: f64, no_compare: bool) -> anyhow::Result<()> {
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
         "replayed {} candidates in {secs:.2} s ({:.0} per second): {} compared with a recorded \
-         recommendation, {} differ beyond {TOLERANCE:e}, {} recorded recommendations unmatched",
+         recommendation, {} differ beyond {TOLERANCE:e}, {} recorded recommendations unmatched{}",
         summary.candidates,
         summary.candidates as f64 / secs.max(1e-9),
         summary.compared,
         summary.differing,
-        summary.unmatched_recommendations
-    );
+        summary.unmatched_recommendations,
+        if no_compare {
+            " (--no-compare: nothing was compared)"
+        } else {
+            ""
+        }
+    )?;
     if summary.sets > 0 || summary.unmatched_set_answers > 0 {
-        println!(
+        writeln!(
+            out,
             "replayed {} sets (their candidates counted above): {} compared with a recorded \
              answer, {} differ, {} recorded set answers unmatched",
             summary.sets,
             summary.sets_compared,
             summary.sets_differing,
             summary.unmatched_set_answers
-        );
+        )?;
     }
     if !summary.largest.is_empty() {
-        println!("largest difference per field:");
+        writeln!(out, "largest difference per field:")?;
         for (field, gap) in &summary.largest {
-            println!("  {field:<24} {gap:.3e}");
+            writeln!(out, "  {field:<24} {gap:.3e}")?;
         }
     }
     for example in &summary.examples {
-        println!("  differs: {example}");
-    }
-    if summary.differing > 0 {
-        bail!(
-            "{} of {} compared recommendations differ",
-            summary.differing,
-            summary.compared
-        );
-    }
-    if summary.unmatched_recommendations > 0 {
-        bail!(
-            "{} recorded recommendations answer no recorded candidate",
-            summary.unmatched_recommendations
-        );
-    }
-    if summary.sets_differing > 0 {
-        bail!(
-            "{} of {} compared set answers differ",
-            summary.sets_differing,
-            summary.sets_compared
-        );
-    }
-    if summary.unmatched_set_answers > 0 {
-        bail!(
-            "{} recorded set answers answer no recorded set",
-            summary.unmatched_set_answers
-        );
+        writeln!(out, "  differs: {example}")?;
     }
     Ok(())
+}
+
+/// `Ok` when every candidate was compared and nothing differs; [`Negative`] otherwise.
+fn verdict(summary: &Summary, no_compare: bool) -> anyhow::Result<()> {
+    let mut no = Vec::new();
+    if summary.differing > 0 {
+        no.push(format!(
+            "{} of {} compared recommendations differ",
+            summary.differing, summary.compared
+        ));
+    }
+    if summary.unmatched_recommendations > 0 {
+        no.push(format!(
+            "{} recorded recommendations answer no recorded candidate",
+            summary.unmatched_recommendations
+        ));
+    }
+    if summary.sets_differing > 0 {
+        no.push(format!(
+            "{} of {} compared set answers differ",
+            summary.sets_differing, summary.sets_compared
+        ));
+    }
+    if summary.unmatched_set_answers > 0 {
+        no.push(format!(
+            "{} recorded set answers answer no recorded set",
+            summary.unmatched_set_answers
+        ));
+    }
+    let uncompared = summary.candidates - summary.compared;
+    if !no_compare && uncompared > 0 {
+        no.push(format!(
+            "{uncompared} of {} candidates have no recorded recommendation to compare with \
+             (--no-compare solves bags of candidates alone)",
+            summary.candidates
+        ));
+    }
+    if no.is_empty() {
+        Ok(())
+    } else {
+        Err(Negative(no.join("; ")).into())
+    }
 }

@@ -62,6 +62,37 @@ pub enum ConfigError {
     },
 }
 
+/// The parameters a params file sets for `node` (under `/**`, `**`, `node` or `/node`), in
+/// file order, as names and YAML values (not checked against the table).
+pub fn params_in_yaml(
+    text: &str,
+    origin: &str,
+    node: &str,
+) -> Result<Vec<(String, serde_yaml_ng::Value)>, ConfigError> {
+    let doc: serde_yaml_ng::Value =
+        serde_yaml_ng::from_str(text).map_err(|source| ConfigError::Yaml {
+            origin: origin.to_string(),
+            source,
+        })?;
+    let Some(map) = doc.as_mapping() else {
+        return Ok(Vec::new());
+    };
+    let mut out = Vec::new();
+    for key in ["/**", "**", node, &format!("/{node}")] {
+        if let Some(params) = map
+            .get(key)
+            .and_then(|v| v.get("ros__parameters"))
+            .and_then(|v| v.as_mapping())
+        {
+            for (name, value) in params {
+                let name = name.as_str().unwrap_or_default().to_string();
+                out.push((name, value.clone()));
+            }
+        }
+    }
+    Ok(out)
+}
+
 impl Parameter {
     /// The declaration of `name`.
     pub fn find(name: &str) -> Option<&'static Parameter> {
@@ -72,30 +103,12 @@ impl Parameter {
 impl Config {
     /// Reads a params file: the `ros__parameters` of `node` (or of `/**`) are applied over `self`.
     pub fn merge_yaml(&mut self, text: &str, origin: &str, node: &str) -> Result<(), ConfigError> {
-        let doc: serde_yaml_ng::Value =
-            serde_yaml_ng::from_str(text).map_err(|source| ConfigError::Yaml {
-                origin: origin.to_string(),
-                source,
-            })?;
-        let Some(map) = doc.as_mapping() else {
-            return Ok(());
-        };
-        let keys = ["/**", "**", node, &format!("/{node}")];
-        for key in keys {
-            if let Some(params) = map
-                .get(key)
-                .and_then(|v| v.get("ros__parameters"))
-                .and_then(|v| v.as_mapping())
-            {
-                for (name, value) in params {
-                    let name = name.as_str().unwrap_or_default();
-                    self.set_value(name, value.clone())
-                        .map_err(|e| ConfigError::InFile {
-                            origin: origin.to_string(),
-                            source: Box::new(e),
-                        })?;
-                }
-            }
+        for (name, value) in params_in_yaml(text, origin, node)? {
+            self.set_value(&name, value)
+                .map_err(|e| ConfigError::InFile {
+                    origin: origin.to_string(),
+                    source: Box::new(e),
+                })?;
         }
         Ok(())
     }

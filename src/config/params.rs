@@ -33,12 +33,15 @@ parameters! {
     qos_depth (fixed): i64 = 100, "messages", in Domain::Integer { min: 1, max: 100_000 };
     /// Publish visualization_msgs/MarkerArray on grip_markers.
     publish_markers: bool = true, "";
-    /// Record candidates and answers to one MCAP file (rosbag2 conventions) named by its start
-    /// time; switching it on while the node runs starts a new file.
+    /// Record candidates, answers and the settings in force to a new MCAP file (rosbag2
+    /// conventions) named after the node and its start time. Takes effect when set: false
+    /// closes the file, true starts a new one (or retries one that failed).
     record: bool = true, "";
-    /// Folder for the recordings, relative to the working directory.
+    /// Folder for the recordings, relative to the working directory; set while recording, the
+    /// file is closed and a new one started there.
     record_dir: String = "runs".into(), "";
-    /// Record the markers as well.
+    /// Record the markers as well; set while recording, the file is closed and a new one
+    /// started.
     record_markers: bool = false, "";
     /// How the gripper's fingers are driven, which picks the grip force: coupled (one motor, the
     /// grip force is internal_force) or independent (each finger its own, the grip force is

@@ -5,12 +5,14 @@
 
 use super::markers;
 use super::params::Shared;
+use super::params::Version;
 use crate::msg::{
     short_id, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
     MarkerArray,
 };
-use crate::record::lifecycle::{Recording, Wanted};
-use crate::record::{Payload, RecordError, Topics};
+use crate::record::lifecycle::{Change, Recording, Wanted};
+use crate::record::settings::SettingsRecord;
+use crate::record::{Entry, OnStop, Payload, RecordError, Topics};
 use crate::sets::{answer_one, answer_set_on, echo_set};
 use log::Level;
 use std::path::Path;
@@ -84,24 +86,41 @@ pub struct RecordedSet {
     markers: Option<MarkerArray>,
 }
 
-/// Answers candidates with the live settings; counts; records.
+/// Answers candidates with the settings in force when each was received; counts; records.
 #[derive(Debug)]
 pub struct Answerer {
     shared: Shared,
     echo: bool,
+    node: String,
     counts: Counts,
     recording: Recording,
+    /// The newest settings version the recording has heard of.
+    seen_version: u64,
+    /// Sets of the recording parameters acted on.
+    seen_recording_sets: u64,
 }
 
 impl Answerer {
     /// Answers with `shared`'s settings (or, with `echo`, an empty answer carrying the header
-    /// and id), recording on `topics` with QoS depth `qos_depth` in the recording's metadata.
-    pub fn new(shared: Shared, echo: bool, topics: Topics, qos_depth: i64) -> Self {
+    /// and id) as node `node` (its full name), recording on `topics` with QoS depth
+    /// `qos_depth` in the recording's metadata. `on_stop` hears from the recording's writer
+    /// thread when it stops on a failure (then [`Answerer::refresh`] reports it).
+    pub fn new(
+        shared: Shared,
+        echo: bool,
+        node: &str,
+        topics: Topics,
+        qos_depth: i64,
+        on_stop: OnStop,
+    ) -> Self {
         Self {
             shared,
             echo,
+            node: node.to_string(),
             counts: Counts::default(),
-            recording: Recording::new(topics, qos_depth),
+            recording: Recording::new(node, topics, qos_depth, on_stop),
+            seen_version: 0,
+            seen_recording_sets: 0,
         }
     }
 
@@ -111,7 +130,14 @@ impl Answerer {
     }
 
     /// Starts recording if `record` says so (never in echo mode); a failure here is an error.
+    /// What the parameters were set to before (ros2-client sets every declared parameter once
+    /// when the node is made) is taken as the start.
     pub fn start(&mut self) -> Result<Vec<Note>, RecordError> {
+        {
+            let live = self.shared.lock();
+            self.seen_recording_sets = live.recording_sets();
+            self.seen_version = live.last_seq();
+        }
         if self.echo {
             return Ok(vec![(
                 Level::Warn,
@@ -119,47 +145,95 @@ impl Answerer {
             )]);
         }
         let mut notes = Vec::new();
-        self.follow_record(&mut notes)?;
+        for change in self.follow_record() {
+            if let Change::StartFailed(e) = change {
+                return Err(e);
+            }
+            notes.push(note(&change));
+        }
         Ok(notes)
     }
 
-    fn follow_record(&mut self, notes: &mut Vec<Note>) -> Result<(), RecordError> {
+    /// Acts on what changed since the last call: writes the new settings into the recording,
+    /// follows the `record` parameters when one was set (a start that failed is retried), and
+    /// reports a recording whose writer stopped on a failure. Called when a parameter is set
+    /// and when the writer stops, so that each takes effect at once.
+    pub fn refresh(&mut self) -> Vec<Note> {
+        let mut notes = Vec::new();
+        if let Some(change) = self.recording.check() {
+            notes.push(note(&change));
+        }
+        if self.echo {
+            return notes;
+        }
+        let (new_versions, sets) = {
+            let live = self.shared.lock();
+            let new: Vec<Version> = live.versions_after(self.seen_version).cloned().collect();
+            (new, live.recording_sets())
+        };
+        for v in &new_versions {
+            self.record_settings(v);
+            self.seen_version = v.seq;
+        }
+        if sets != self.seen_recording_sets {
+            self.seen_recording_sets = sets;
+            notes.extend(self.follow_record().iter().map(note));
+        }
+        notes
+    }
+
+    /// Starts, stops or restarts the recording as the current parameters say; a new file
+    /// gets every settings version kept (a candidate received before a change may still be
+    /// answered after it).
+    fn follow_record(&mut self) -> Vec<Change> {
         let config = self.shared.lock().config.clone();
-        let wanted = Wanted {
+        let changes = self.recording.follow(Wanted {
             record: config.record,
             dir: Path::new(&config.record_dir),
             markers: config.record_markers,
-        };
-        if let Some(change) = self.recording.follow(wanted)? {
-            let level = if change.is_failure() {
-                Level::Error
-            } else {
-                Level::Info
-            };
-            notes.push((level, change.to_string()));
+        });
+        if changes.iter().any(|c| matches!(c, Change::Started(_))) {
+            let versions: Vec<Version> = self.shared.lock().versions().cloned().collect();
+            for v in &versions {
+                self.record_settings(v);
+                self.seen_version = self.seen_version.max(v.seq);
+            }
         }
-        Ok(())
+        changes
+    }
+
+    /// Writes a settings version into the recording, if one is being written.
+    fn record_settings(&self, version: &Version) {
+        let reason = match &version.changed {
+            Some(name) => format!("parameter {name} set"),
+            None => "start".to_string(),
+        };
+        let record = SettingsRecord {
+            since: version.since,
+            node: self.node.clone(),
+            reason,
+            config: version.config.clone(),
+        };
+        self.recording.record(
+            Payload::Settings(Box::new(record)),
+            version.since,
+            version.since,
+        );
     }
 
     /// The answer to one candidate, received at `received` and sent at `sent` (ns since the
-    /// epoch). The `record` parameter takes effect here, before the answer.
+    /// epoch), with the settings in force when it was received.
     pub fn handle(&mut self, candidate: GraspCandidate, received: u64, sent: u64) -> Outcome {
         let mut notes = Vec::new();
-        let (settings, markers_on, record, rules) = {
+        let (settings, markers_on, rules) = {
             let live = self.shared.lock();
+            let version = live.version_at(received);
             (
-                live.settings,
-                live.config.publish_markers,
-                live.config.record,
-                live.config.rules(),
+                version.settings,
+                version.config.publish_markers,
+                version.config.rules(),
             )
         };
-        if !self.echo && self.recording.must_follow(record) {
-            if let Err(e) = self.follow_record(&mut notes) {
-                let e = anyhow::Error::new(e).context("recording is off");
-                notes.push((Level::Error, format!("{e:#}")));
-            }
-        }
         let reply = if self.echo {
             GripRecommendation {
                 header: candidate.header.clone(),
@@ -208,8 +282,9 @@ impl Answerer {
     }
 
     /// Records an answer that went out at `answered` (ns since the epoch): its markers, the
-    /// candidate with its own times, and the recommendation.
-    pub fn record(&mut self, recorded: Recorded, answered: u64) {
+    /// candidate with its own times, and the recommendation. Says so if the recording's writer
+    /// has stopped on a failure.
+    pub fn record(&mut self, recorded: Recorded, answered: u64) -> Vec<Note> {
         let Recorded {
             candidate,
             received,
@@ -217,42 +292,51 @@ impl Answerer {
             reply,
             markers,
         } = recorded;
+        let entry = |payload, log_time, publish_time| Entry {
+            payload,
+            log_time,
+            publish_time,
+        };
+        let mut entries = Vec::with_capacity(3);
         if let Some(array) = markers {
-            self.recording
-                .record(Payload::Markers(Box::new(array)), answered, answered);
+            entries.push(entry(Payload::Markers(Box::new(array)), answered, answered));
         }
-        self.recording
-            .record(Payload::Candidate(Box::new(candidate)), received, sent);
+        entries.push(entry(
+            Payload::Candidate(Box::new(candidate)),
+            received,
+            sent,
+        ));
         if let Some(r) = reply {
-            self.recording
-                .record(Payload::Recommendation(Box::new(r)), answered, answered);
+            entries.push(entry(
+                Payload::Recommendation(Box::new(r)),
+                answered,
+                answered,
+            ));
         }
+        // Together: a flush (and so a file cut short by a kill or a full disk) never holds a
+        // candidate without its answer.
+        self.recording.record_all(entries);
+        self.recording.check().iter().map(note).collect()
     }
 
     /// The answer to one set, received at `received` and sent at `sent` (ns since the epoch), by
-    /// the same rules as [`Answerer::handle`]: markers for the best candidate, one log line for
-    /// the set when some of its candidates or the set itself are refused.
+    /// the same rules as [`Answerer::handle`]: the settings in force when it was received,
+    /// markers for the best candidate, one log line for the set when some of its candidates or
+    /// the set itself are refused. A large set is shared among the cores.
     pub fn handle_set(&mut self, set: GraspCandidateSet, received: u64, sent: u64) -> SetOutcome {
         let mut notes = Vec::new();
-        let (settings, markers_on, record, rules) = {
+        let (settings, markers_on, rules) = {
             let live = self.shared.lock();
+            let version = live.version_at(received);
             (
-                live.settings,
-                live.config.publish_markers,
-                live.config.record,
-                live.config.rules(),
+                version.settings,
+                version.config.publish_markers,
+                version.config.rules(),
             )
         };
-        if !self.echo && self.recording.must_follow(record) {
-            if let Err(e) = self.follow_record(&mut notes) {
-                let e = anyhow::Error::new(e).context("recording is off");
-                notes.push((Level::Error, format!("{e:#}")));
-            }
-        }
         let reply = if self.echo {
             echo_set(&set)
         } else {
-            // A large set is shared among the cores: the DDS threads are idle while it is solved.
             let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
             answer_set_on(&set, &settings, &rules, threads)
         };
@@ -326,8 +410,9 @@ impl Answerer {
     }
 
     /// Records a set's answer that went out at `answered` (ns since the epoch): its markers, the
-    /// set with its own times, and the answer.
-    pub fn record_set(&mut self, recorded: RecordedSet, answered: u64) {
+    /// set with its own times, and the answer, together. Says so if the recording's writer has
+    /// stopped on a failure.
+    pub fn record_set(&mut self, recorded: RecordedSet, answered: u64) -> Vec<Note> {
         let RecordedSet {
             set,
             received,
@@ -335,16 +420,25 @@ impl Answerer {
             reply,
             markers,
         } = recorded;
+        let entry = |payload, log_time, publish_time| Entry {
+            payload,
+            log_time,
+            publish_time,
+        };
+        let mut entries = Vec::with_capacity(3);
         if let Some(array) = markers {
-            self.recording
-                .record(Payload::Markers(Box::new(array)), answered, answered);
+            entries.push(entry(Payload::Markers(Box::new(array)), answered, answered));
         }
-        self.recording
-            .record(Payload::CandidateSet(Box::new(set)), received, sent);
+        entries.push(entry(Payload::CandidateSet(Box::new(set)), received, sent));
         if let Some(r) = reply {
-            self.recording
-                .record(Payload::RecommendationSet(Box::new(r)), answered, answered);
+            entries.push(entry(
+                Payload::RecommendationSet(Box::new(r)),
+                answered,
+                answered,
+            ));
         }
+        self.recording.record_all(entries);
+        self.recording.check().iter().map(note).collect()
     }
 
     /// Counts a message on `topic` that did not decode; the line to log.
@@ -380,16 +474,19 @@ impl Answerer {
                 ),
             ));
         }
-        if let Some(change) = self.recording.stop() {
-            let level = if change.is_failure() {
-                Level::Error
-            } else {
-                Level::Info
-            };
-            notes.push((level, change.to_string()));
-        }
+        notes.extend(self.recording.stop().iter().map(note));
         notes
     }
+}
+
+/// The log line of a change of the recording: an error for a failure.
+fn note(change: &Change) -> Note {
+    let level = if change.is_failure() {
+        Level::Error
+    } else {
+        Level::Info
+    };
+    (level, change.to_string())
 }
 
 #[cfg(test)]
@@ -409,7 +506,14 @@ mod tests {
             markers: Some("/grip_markers".into()),
             sets: Some(crate::record::SetTopics::default_names()),
         };
-        Answerer::new(Shared::new(config, settings), echo, topics, 100)
+        Answerer::new(
+            Shared::new(config, settings),
+            echo,
+            "/grasp_orient",
+            topics,
+            100,
+            std::sync::Arc::new(|| {}),
+        )
     }
 
     fn no_recording() -> Config {
@@ -468,10 +572,10 @@ mod tests {
     }
 
     #[test]
-    fn settings_changes_apply_to_the_next_candidate() {
-        let a_config = no_recording();
-        let mut a = answerer(a_config, false);
+    fn settings_changes_apply_to_candidates_received_after_them() {
+        let mut a = answerer(no_recording(), false);
         let shared = a.shared.clone();
+        let before = crate::record::now_ns();
         let set = shared.set_action();
         set(
             "objective",
@@ -483,9 +587,14 @@ mod tests {
             &ros2_client::ParameterValue::Boolean(false),
         )
         .expect("valid");
-        let out = a.handle(paper_case_a(), 0, 0);
+        let after = crate::record::now_ns();
+        let out = a.handle(paper_case_a(), after, after);
         assert_eq!(out.reply.objective, "norm1");
         assert!(out.markers.is_none());
+        // Received before the set, answered after it: the settings of its time.
+        let out = a.handle(paper_case_a(), before, before);
+        assert_eq!(out.reply.objective, "norm2");
+        assert!(out.markers.is_some());
     }
 
     #[test]
@@ -502,10 +611,10 @@ mod tests {
     }
 
     #[test]
-    fn records_what_was_answered_while_record_is_on() {
-        let dir = std::env::temp_dir().join(format!("grasp_orient_answer_{}", std::process::id()));
+    fn record_switches_and_settings_take_effect_when_set() {
+        let dir = tempfile::tempdir().expect("a temporary folder");
         let config = Config {
-            record_dir: dir.display().to_string(),
+            record_dir: dir.path().display().to_string(),
             record_markers: true,
             ..Config::default()
         };
@@ -514,17 +623,58 @@ mod tests {
         assert!(started[0].1.starts_with("recording to "), "{started:?}");
         let out = a.handle(paper_case_a(), 3, 2);
         assert!(out.recorded.reply.is_some() && out.recorded.markers.is_some());
-        a.record(out.recorded, 4);
-        let shared = a.shared.clone();
-        (shared.set_action())("record", &ros2_client::ParameterValue::Boolean(false))
-            .expect("valid");
-        let out = a.handle(paper_case_a(), 5, 4);
-        let closed = &out.notes[0].1;
+        assert!(a.record(out.recorded, 4).is_empty());
+        let set = a.shared.set_action();
+        set(
+            "friction_safety_factor",
+            &ros2_client::ParameterValue::Double(1.5),
+        )
+        .expect("valid");
         assert!(
-            closed.ends_with("closed: 1 candidates, 1 recommendations, 1 marker arrays"),
-            "{closed}"
+            a.refresh().is_empty(),
+            "a settings change is written, not logged"
         );
-        assert!(out.recorded.reply.is_none());
-        std::fs::remove_dir_all(&dir).ok();
+        // Off and on again with no candidate in between: closed and a new file at once.
+        set("record", &ros2_client::ParameterValue::Boolean(false)).expect("valid");
+        let notes = a.refresh();
+        assert!(
+            notes[0]
+                .1
+                .ends_with("closed: 1 candidates, 1 recommendations, 1 marker arrays"),
+            "{notes:?}"
+        );
+        set("record", &ros2_client::ParameterValue::Boolean(true)).expect("valid");
+        let notes = a.refresh();
+        assert!(notes[0].1.starts_with("recording to "), "{notes:?}");
+        a.finish();
+
+        let mut files: Vec<_> = std::fs::read_dir(dir.path())
+            .expect("the folder")
+            .map(|e| e.expect("an entry").path())
+            .collect();
+        files.sort();
+        assert_eq!(files.len(), 2, "{files:?}");
+        let first = crate::record::bag::read(&files[0]).expect("whole");
+        let settings: Vec<SettingsRecord> = first
+            .metadata
+            .iter()
+            .map(|(name, entries)| {
+                assert_eq!(name, crate::record::settings::METADATA_NAME);
+                SettingsRecord::from_metadata(entries).expect("reads")
+            })
+            .collect();
+        assert_eq!(settings.len(), 3, "at start and at each change");
+        assert_eq!(
+            (settings[0].since, settings[0].reason.as_str()),
+            (0, "start")
+        );
+        assert_eq!(settings[1].reason, "parameter friction_safety_factor set");
+        assert_eq!(settings[2].reason, "parameter record set");
+        assert!(!settings[2].config.record && settings[2].since >= settings[1].since);
+        assert_eq!(settings[1].config.friction_safety_factor, 1.5);
+        assert!(settings[1].since > 0 && settings.iter().all(|s| s.node == "/grasp_orient"));
+        // The new file carries every version, each from its own time.
+        let second = crate::record::bag::read(&files[1]).expect("whole");
+        assert!(second.metadata.len() >= 2, "{:?}", second.metadata.len());
     }
 }

@@ -19,7 +19,7 @@ pub mod sets;
 
 use crate::config::Config;
 use crate::msg::{GraspCandidate, GripRecommendation, MarkerArray};
-use crate::record::{now_ns, Topics};
+use crate::record::{now_ns, OnStop, Topics};
 use answer::{Answerer, Note};
 use anyhow::{bail, Context as _};
 use demo::Demo;
@@ -143,7 +143,15 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
             sets::SERVICE,
         ),
     );
-    let mut answerer = Answerer::new(shared, options.echo, topics.clone(), config.qos_depth);
+    let (on_stop, mut woken) = wake_on_change(&shared);
+    let mut answerer = Answerer::new(
+        shared,
+        options.echo,
+        &session.node().fully_qualified_name(),
+        topics.clone(),
+        config.qos_depth,
+        on_stop,
+    );
     let started = answerer
         .start()
         .map_err(|e| anyhow::Error::new(e).context("recording is off"))?;
@@ -166,6 +174,7 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
                 shutdown,
                 &endpoints,
                 &mut answerer,
+                &mut woken,
                 demo.as_ref(),
             ))
             .await;
@@ -183,12 +192,31 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
     outcome
 }
 
-/// Answers every candidate until a signal, or until the demo is done.
+/// Parameter sets and a recording writer that stops both wake the answering loop, so that each
+/// takes effect at once rather than at the next candidate: the callback for the writer, and what
+/// the loop waits on.
+fn wake_on_change(shared: &Shared) -> (OnStop, futures::channel::mpsc::UnboundedReceiver<()>) {
+    let (wake, woken) = futures::channel::mpsc::unbounded::<()>();
+    let on_stop = {
+        let wake = wake.clone();
+        std::sync::Arc::new(move || {
+            wake.unbounded_send(()).ok();
+        })
+    };
+    shared.wake_on_change(move || {
+        wake.unbounded_send(()).ok();
+    });
+    (on_stop, woken)
+}
+
+/// Answers every candidate until a signal, or until the demo is done; acts on parameter sets
+/// and on a recording that stopped as soon as `woken` says so.
 async fn serve(
     node: &Node,
     shutdown: &mut Shutdown,
     endpoints: &Endpoints,
     answerer: &mut Answerer,
+    woken: &mut futures::channel::mpsc::UnboundedReceiver<()>,
     demo: Option<&Demo>,
 ) -> anyhow::Result<()> {
     let mut stream = pin!(endpoints.candidates.async_stream());
@@ -208,6 +236,7 @@ async fn serve(
                 return Ok(());
             }
             result = demo_done => return result,
+            () = woken.select_next_some() => tell(node, answerer.refresh()),
             received = stream.select_next_some() => match received {
                 Ok((candidate, info)) => {
                     answer_one(node, endpoints, answerer, candidate, &info).await;
@@ -271,7 +300,8 @@ async fn answer_one(
             log::warn!("cannot publish markers: {e:?}");
         }
     }
-    answerer.record(outcome.recorded, answered);
+    let notes = answerer.record(outcome.recorded, answered);
+    tell(node, notes);
 }
 
 /// Logs each note to stderr and `/rosout`.

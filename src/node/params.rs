@@ -7,33 +7,137 @@ use crate::solver::Settings;
 use ros2_client::parameters::{raw, NumericRange, ParameterDescriptor, ParameterType};
 use ros2_client::{NodeOptions, ParameterValue};
 use serde_yaml_ng::Value;
-use std::sync::{Arc, Mutex, MutexGuard};
+use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
 
 /// A parameter hook as ros2-client takes it: `Err(reason)` refuses the value.
 pub type ParameterHook = Box<dyn Fn(&str, &ParameterValue) -> Result<(), String> + Send + Sync>;
 
-/// The settings the answering loop reads, kept in step with the parameters.
-#[derive(Debug)]
-pub struct Live {
+/// The parameters as they were from one time on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Version {
+    /// Counts the versions, from 0 for the start.
+    pub seq: u64,
+    /// From which receive time (ns since the epoch) on they apply; 0 for the start.
+    pub since: u64,
+    /// The parameter whose set made this version; `None` for the start.
+    pub changed: Option<String>,
     /// Every parameter.
     pub config: Config,
     /// The solver settings they imply.
     pub settings: Settings,
 }
 
-/// [`Live`] shared between parameter services and the answering loop.
-#[derive(Debug, Clone)]
-pub struct Shared(Arc<Mutex<Live>>);
+/// How many versions are kept for candidates received before a change and answered after it.
+const VERSIONS_KEPT: usize = 32;
+
+/// The parameters that say what is recorded where: a set of one of them, even to its current
+/// value, makes the recording follow them at once (setting `record` to true again retries).
+pub const RECORDING_PARAMETERS: [&str; 3] = ["record", "record_dir", "record_markers"];
+
+/// The settings the answering loop reads, kept in step with the parameters.
+#[derive(Debug)]
+pub struct Live {
+    /// Every parameter, as now.
+    pub config: Config,
+    /// The solver settings they imply.
+    pub settings: Settings,
+    /// The recent versions, oldest first; the last is `config` and `settings`.
+    versions: std::collections::VecDeque<Version>,
+    /// Sets of a [`RECORDING_PARAMETERS`] so far.
+    recording_sets: u64,
+}
+
+impl Live {
+    /// The version in force for a candidate received at `received` (ns since the epoch): the
+    /// last one from before it (the oldest kept, for older candidates).
+    pub fn version_at(&self, received: u64) -> &Version {
+        let newer = self.versions.partition_point(|v| v.since <= received);
+        let index = newer
+            .saturating_sub(1)
+            .min(self.versions.len().saturating_sub(1));
+        &self.versions[index]
+    }
+
+    /// The versions after `seq`, oldest first.
+    pub fn versions_after(&self, seq: u64) -> impl Iterator<Item = &Version> {
+        self.versions.iter().filter(move |v| v.seq > seq)
+    }
+
+    /// Every version kept, oldest first.
+    pub fn versions(&self) -> impl Iterator<Item = &Version> {
+        self.versions.iter()
+    }
+
+    /// The newest version's number.
+    pub fn last_seq(&self) -> u64 {
+        self.versions.back().map_or(0, |v| v.seq)
+    }
+
+    /// How many times one of the [`RECORDING_PARAMETERS`] was set.
+    pub fn recording_sets(&self) -> u64 {
+        self.recording_sets
+    }
+
+    /// A new version from now on.
+    fn push(&mut self, changed: &str, config: Config, settings: Settings) {
+        let since = crate::record::now_ns().max(self.versions.back().map_or(0, |v| v.since));
+        self.versions.push_back(Version {
+            seq: self.last_seq() + 1,
+            since,
+            changed: Some(changed.to_string()),
+            config: config.clone(),
+            settings,
+        });
+        while self.versions.len() > VERSIONS_KEPT {
+            self.versions.pop_front();
+        }
+        self.config = config;
+        self.settings = settings;
+    }
+}
+
+/// Called when a parameter was set.
+type Wake = Box<dyn Fn() + Send + Sync>;
+
+/// [`Live`] shared between parameter services and the answering loop, and what wakes the loop.
+#[derive(Clone)]
+pub struct Shared(Arc<(Mutex<Live>, OnceLock<Wake>)>);
+
+impl std::fmt::Debug for Shared {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_tuple("Shared").field(&self.0 .0).finish()
+    }
+}
 
 impl Shared {
     /// Shares a validated config.
     pub fn new(config: Config, settings: Settings) -> Self {
-        Self(Arc::new(Mutex::new(Live { config, settings })))
+        let start = Version {
+            seq: 0,
+            since: 0,
+            changed: None,
+            config: config.clone(),
+            settings,
+        };
+        Self(Arc::new((
+            Mutex::new(Live {
+                config,
+                settings,
+                versions: [start].into(),
+                recording_sets: 0,
+            }),
+            OnceLock::new(),
+        )))
+    }
+
+    /// Calls `wake` after every accepted set (the first call sets it; later ones are ignored).
+    pub fn wake_on_change(&self, wake: impl Fn() + Send + Sync + 'static) {
+        self.0 .1.set(Box::new(wake)).ok();
     }
 
     /// The current settings (a poisoned lock still holds valid settings: sets are atomic).
     pub fn lock(&self) -> MutexGuard<'_, Live> {
-        self.0.lock().unwrap_or_else(|e| e.into_inner())
+        self.0 .0.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     /// Whether `name := value` would be accepted, and the config it would give.
@@ -81,17 +185,25 @@ impl Shared {
         Box::new(move |name, value| shared.check(name, value).map(|_| ()))
     }
 
-    /// The set action handed to ros2-client: the next candidate uses the new value.
+    /// The set action handed to ros2-client: a change makes a new [`Version`], in force for
+    /// candidates received from now on, and the answering loop is woken to act on it at once.
     pub fn set_action(&self) -> ParameterHook {
         let shared = self.clone();
         Box::new(move |name, value| {
             let (config, settings) = shared.check(name, value)?;
-            let mut live = shared.lock();
-            if live.config != config {
-                log::info!("parameter {name} set to {value:?}");
+            {
+                let mut live = shared.lock();
+                if live.config != config {
+                    log::info!("parameter {name} set to {value:?}");
+                    live.push(name, config, settings);
+                }
+                if RECORDING_PARAMETERS.contains(&name) {
+                    live.recording_sets += 1;
+                }
             }
-            live.config = config;
-            live.settings = settings;
+            if let Some(wake) = shared.0 .1.get() {
+                wake();
+            }
             Ok(())
         })
     }

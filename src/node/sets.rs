@@ -104,7 +104,7 @@ pub async fn answer_topic(
     }
     let answered = now_ns();
     publish_markers(markers, array).await;
-    answerer.record_set(recorded, answered);
+    super::tell(node, answerer.record_set(recorded, answered));
 }
 
 /// Answers one call of `~/recommend`: the response goes back first; markers and the recording
@@ -132,7 +132,7 @@ pub async fn answer_call(
     }
     let answered = now_ns();
     publish_markers(markers, outcome.markers).await;
-    answerer.record_set(outcome.recorded, answered);
+    super::tell(node, answerer.record_set(outcome.recorded, answered));
 }
 
 async fn publish_markers(markers: &Publisher<MarkerArray>, array: Option<MarkerArray>) {

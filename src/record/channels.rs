@@ -4,12 +4,14 @@
 //! with the missing trailing fields at their defaults, and [`RecordedFields`] remembers which
 //! fields were recorded, so that `replay` compares only those.
 
+use super::scan::{Channel, KnownSchema, Table};
 use crate::msg::definitions::split_type_name;
 use crate::msg::schema::RecordedType;
 use crate::msg::{
     cdr, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet, RosMessage,
 };
 use serde::de::DeserializeOwned;
+use std::collections::hash_map::Entry;
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
@@ -29,8 +31,8 @@ pub(crate) enum Carried {
 }
 
 impl Carried {
-    fn of(channel: &mcap::Channel<'_>) -> (Self, &'static str) {
-        let Some(schema) = &channel.schema else {
+    fn of(channel: &Channel, schema: Option<&KnownSchema>) -> (Self, &'static str) {
+        let Some(schema) = schema else {
             return (Carried::Other, "");
         };
         if channel.message_encoding != "cdr" {
@@ -81,45 +83,54 @@ pub(crate) struct Channels {
 }
 
 impl Channels {
-    /// The reader of `channel`, made on its first message; `fields` hears which fields it has.
+    /// The reader of channel `id` as `table` defines it, made on its first message; `fields`
+    /// hears which fields it has. `None` when no record defines the channel.
     pub(crate) fn reader(
         &mut self,
-        channel: &mcap::Channel<'_>,
+        table: &Table,
+        id: u16,
         fields: &mut RecordedFields,
-    ) -> &Result<ChannelReader, String> {
-        self.by_id.entry(channel.id).or_insert_with(|| {
-            let (carried, type_name) = Carried::of(channel);
-            let Some(schema) = channel
-                .schema
-                .as_ref()
-                .filter(|_| carried != Carried::Other)
-            else {
-                return Ok(ChannelReader {
-                    carried,
-                    recorded: None,
-                });
-            };
-            if schema.encoding != "ros2msg" || schema.data.is_empty() {
-                return Ok(ChannelReader {
-                    carried,
-                    recorded: None,
-                });
+    ) -> Option<&Result<ChannelReader, String>> {
+        match self.by_id.entry(id) {
+            Entry::Occupied(known) => Some(known.into_mut()),
+            Entry::Vacant(new) => {
+                let channel = table.channels.get(&id)?;
+                Some(new.insert(make(channel, table.schema_of(channel), fields)))
             }
-            let text = String::from_utf8_lossy(&schema.data);
-            match RecordedType::new(&text, type_name) {
-                Ok(t) => {
-                    fields.note(&t);
-                    Ok(ChannelReader {
-                        carried,
-                        recorded: (!t.is_ours()).then(|| Arc::new(t)),
-                    })
-                }
-                Err(e) => Err(format!(
-                    "channel {} ({}) cannot be read as ours: {e}",
-                    channel.topic, schema.name
-                )),
-            }
-        })
+        }
+    }
+}
+
+/// How `channel` (with its schema, if any) decodes; `fields` hears which fields it has.
+fn make(
+    channel: &Channel,
+    schema: Option<&KnownSchema>,
+    fields: &mut RecordedFields,
+) -> Result<ChannelReader, String> {
+    let (carried, type_name) = Carried::of(channel, schema);
+    let as_it_is = Ok(ChannelReader {
+        carried,
+        recorded: None,
+    });
+    let Some(schema) = schema.filter(|_| carried != Carried::Other) else {
+        return as_it_is;
+    };
+    if schema.encoding != "ros2msg" || schema.data.is_empty() {
+        return as_it_is;
+    }
+    let text = String::from_utf8_lossy(&schema.data);
+    match RecordedType::new(&text, type_name) {
+        Ok(t) => {
+            fields.note(&t);
+            Ok(ChannelReader {
+                carried,
+                recorded: (!t.is_ours()).then(|| Arc::new(t)),
+            })
+        }
+        Err(e) => Err(format!(
+            "channel {} ({}) cannot be read as ours: {e}",
+            channel.topic, schema.name
+        )),
     }
 }
 

@@ -1,28 +1,45 @@
 //! MCAP recordings in rosbag2's conventions, and reading them back.
 //!
 //! A recording is one file per run: profile `ros2`; one schema per type, encoding `ros2msg`, with
-//! the complete definition exactly as rosbag2 writes it ([`crate::msg::definitions`]); message encoding `cdr` with the 4-byte
-//! encapsulation header; channel metadata `offered_qos_profiles`; `log_time` the receive time,
-//! `publish_time` the send time. Chunks are lz4-compressed and closed at least once a second, so a
-//! killed process loses at most the last second ([`bag::recover`] reads the rest).
+//! the complete definition exactly as rosbag2 writes it ([`crate::msg::definitions`]); message
+//! encoding `cdr` with the 4-byte encapsulation header; channel metadata `offered_qos_profiles`;
+//! `log_time` the receive time, `publish_time` the send time; the settings in force as metadata
+//! ([`settings`]). Chunks are lz4-compressed and closed at least once a second, so a killed
+//! process loses at most the last second ([`recover`] reads the rest).
+//!
+//! Files are never truncated or shared: a recording is created new (`O_EXCL`) under a name
+//! carrying the node's name and the start time, with a numeric suffix on a clash
+//! ([`Recorder::start`]); commands write their outputs beside the destination and rename them
+//! into place when complete ([`output`]).
 //!
 //! Writing happens on its own thread: the answering loop only hands over messages, so a slow disk
-//! delays the file, never the answers. [`lifecycle`] starts and stops the files of a node run as
-//! its `record` parameter says.
+//! delays the file, never the answers. When a write fails (a full disk), the file is cut back to
+//! its last complete flush and closed there, so what it holds stays readable, and the thread
+//! stops with the cause ([`RecordError::Stopped`]). [`lifecycle`] starts and stops the files of
+//! a node run as its `record` parameters say.
 
 pub mod bag;
 pub mod channels;
 pub mod lifecycle;
+pub mod output;
+pub mod recover;
+pub mod scan;
+pub mod settings;
+mod sink;
 
 use crate::msg::{
     cdr, definitions, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
     MarkerArray, RosMessage,
 };
+use settings::{SettingsRecord, METADATA_NAME};
 use std::collections::BTreeMap;
-use std::fs::File;
+use std::fs::{File, OpenOptions};
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
-use std::sync::mpsc;
+#[cfg(test)]
+use std::sync::atomic::AtomicU64;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Arc};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
@@ -46,7 +63,7 @@ pub enum RecordError {
         source: std::io::Error,
     },
     /// The MCAP writer failed.
-    #[error("MCAP error in {path}: {source}")]
+    #[error("MCAP error in {path}: {}", with_causes(source))]
     Mcap {
         /// The path.
         path: PathBuf,
@@ -62,6 +79,53 @@ pub enum RecordError {
     /// A type has no complete definition in [`definitions::DEFINITIONS`].
     #[error("no message definition for {0}")]
     UnknownType(&'static str),
+    /// The file was closed after a failure, and takes nothing more.
+    #[error("recording {path} was stopped by an earlier failure")]
+    AlreadyStopped {
+        /// The file.
+        path: PathBuf,
+    },
+    /// Writing failed part way (a full disk): the file was cut back to its last complete flush
+    /// and closed there, if that could be done.
+    #[error("recording {path} stopped: {cause}; {}", closed_words(kept, closed))]
+    Stopped {
+        /// The file.
+        path: PathBuf,
+        /// Why writing failed.
+        cause: Box<RecordError>,
+        /// What the file holds now.
+        kept: Written,
+        /// Whether the file could be closed at its last flush (`Err` says why not).
+        closed: Result<(), String>,
+    },
+}
+
+/// An error and its causes, `: `-separated (the MCAP writer's I/O errors hide the OS's words
+/// one level down).
+fn with_causes(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        let words = c.to_string();
+        if !text.contains(&words) {
+            text = format!("{text}: {words}");
+        }
+        cause = c.source();
+    }
+    text
+}
+
+fn closed_words(kept: &Written, closed: &Result<(), String>) -> String {
+    match closed {
+        Ok(()) => format!(
+            "the file was closed at its last complete flush and holds {} candidates, {} \
+             recommendations, {} marker arrays",
+            kept.candidates, kept.recommendations, kept.markers
+        ),
+        Err(why) => format!(
+            "the file could not be closed ({why}); `grasp_orient recover` saves what it holds"
+        ),
+    }
 }
 
 /// One message for the recording.
@@ -77,6 +141,9 @@ pub enum Payload {
     CandidateSet(Box<GraspCandidateSet>),
     /// On the set answers topic.
     RecommendationSet(Box<GripRecommendationSet>),
+    /// The settings in force from a time on, written as a metadata record (the entry's times
+    /// are not used).
+    Settings(Box<SettingsRecord>),
 }
 
 /// A message with its times, ns since the Unix epoch.
@@ -122,7 +189,7 @@ impl SetTopics {
     }
 }
 
-/// Messages written per channel.
+/// Messages written per channel, and settings records.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Written {
     /// Candidates.
@@ -135,14 +202,8 @@ pub struct Written {
     pub candidate_sets: u64,
     /// Answers to sets.
     pub recommendation_sets: u64,
-}
-
-/// A recording being written by its own thread.
-#[derive(Debug)]
-pub struct Recorder {
-    path: PathBuf,
-    tx: Option<mpsc::Sender<Entry>>,
-    thread: Option<JoinHandle<Result<Written, RecordError>>>,
+    /// Settings metadata records.
+    pub settings: u64,
 }
 
 /// Nanoseconds since the Unix epoch, now.
@@ -174,6 +235,18 @@ pub fn stamp_name(ns: u64) -> String {
     )
 }
 
+/// The part of a recording's name that names its node: the full name without its leading
+/// slash, namespaces joined by `__` (which no ROS name contains, so two nodes never share it),
+/// e.g. `/arm/grasp_orient` gives `arm__grasp_orient`.
+pub fn node_stem(node: &str) -> String {
+    let stem = node.trim_start_matches('/').replace('/', "__");
+    if stem.is_empty() {
+        "grasp_orient".to_string()
+    } else {
+        stem
+    }
+}
+
 /// rosbag2's `offered_qos_profiles` YAML (Jazzy form) for a reliable, volatile, keep-last
 /// publisher with no deadline, lifespan or lease (rosbag2 writes "infinite" as the largest
 /// `rmw_time_t` it can store).
@@ -187,17 +260,25 @@ pub fn qos_yaml(depth: i64) -> String {
 /// Channels of a recording: candidates, recommendations, markers, candidate sets, set answers.
 const CHANNELS: usize = 5;
 
-/// An MCAP writer with the channels of a grasp_orient recording.
+/// An MCAP writer with the channels of a grasp_orient recording. It never truncates a file:
+/// [`BagWriter::create`] makes a new one, [`BagWriter::on_file`] takes an open one (a temporary
+/// file beside the destination). When a write fails, the file is cut back to its last complete
+/// flush and closed there ([`RecordError::Stopped`]).
 pub struct BagWriter {
     path: PathBuf,
+    writer: Option<mcap::Writer<BufWriter<sink::Sink>>>,
+    sink: Arc<sink::State>,
     /// The set channels' topics, until their channels are made.
     sets: Option<SetTopics>,
     /// Channel metadata (`offered_qos_profiles`).
     metadata: BTreeMap<String, String>,
-    writer: mcap::Writer<BufWriter<File>>,
     channels: [Option<u16>; CHANNELS],
     sequence: [u32; CHANNELS],
     written: Written,
+    /// Where the last complete flush ended, and what the file held then.
+    committed: (u64, Written),
+    /// The schemas and channels written, for the summary of a file closed after a failure.
+    definitions: sink::Definitions,
 }
 
 impl std::fmt::Debug for BagWriter {
@@ -210,34 +291,76 @@ impl std::fmt::Debug for BagWriter {
 }
 
 impl BagWriter {
-    /// Creates `path` with the channels of `topics`.
+    /// Creates `path`, which must not exist yet, with the channels of `topics`.
     pub fn create(path: &Path, topics: &Topics, qos_depth: i64) -> Result<Self, RecordError> {
+        let file = OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(path)
+            .map_err(|source| RecordError::Create {
+                path: path.to_path_buf(),
+                source,
+            })?;
+        Self::on_file(file, path, topics, qos_depth)
+    }
+
+    /// Writes into `file` (empty, opened for writing), known to the user as `path`.
+    pub fn on_file(
+        file: File,
+        path: &Path,
+        topics: &Topics,
+        qos_depth: i64,
+    ) -> Result<Self, RecordError> {
+        Self::on_sink(sink::Sink::new(file), path, topics, qos_depth)
+    }
+
+    fn on_sink(
+        sink: sink::Sink,
+        path: &Path,
+        topics: &Topics,
+        qos_depth: i64,
+    ) -> Result<Self, RecordError> {
         let mcap_error = |source| RecordError::Mcap {
             path: path.to_path_buf(),
             source,
         };
-        let file = File::create(path).map_err(|source| RecordError::Create {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let state = sink.state();
         let mut writer = mcap::WriteOptions::new()
             .profile("ros2")
             .library(concat!("grasp_orient ", env!("CARGO_PKG_VERSION")))
             // lz4: a fraction of zstd's CPU, which on a small machine is shared with DDS.
             .compression(Some(mcap::Compression::Lz4))
             .chunk_size(Some(CHUNK_SIZE))
-            .create(BufWriter::new(file))
+            // Chunks are built in memory and written whole: the file never holds half of one
+            // with a provisional header.
+            .disable_seeking(true)
+            .create(BufWriter::new(sink))
             .map_err(mcap_error)?;
         let metadata = BTreeMap::from([("offered_qos_profiles".to_string(), qos_yaml(qos_depth))]);
+        let mut defs = sink::Definitions::default();
         let mut channel = |topic: &str, type_name: &'static str| -> Result<u16, RecordError> {
             let text =
                 definitions::full_text(type_name).ok_or(RecordError::UnknownType(type_name))?;
             let schema = writer
                 .add_schema(type_name, "ros2msg", text.as_bytes())
                 .map_err(mcap_error)?;
-            writer
+            let id = writer
                 .add_channel(schema, topic, "cdr", &metadata)
-                .map_err(mcap_error)
+                .map_err(mcap_error)?;
+            defs.schemas.push(sink::SchemaDef {
+                id: schema,
+                name: type_name.to_string(),
+                encoding: "ros2msg".to_string(),
+                data: text.into_bytes(),
+            });
+            defs.channels.push(sink::ChannelDef {
+                id,
+                schema_id: schema,
+                topic: topic.to_string(),
+                encoding: "cdr".to_string(),
+                metadata: metadata.clone(),
+            });
+            Ok(id)
         };
         let channels = [
             Some(channel(&topics.candidates, GraspCandidate::TYPE_NAME)?),
@@ -254,26 +377,64 @@ impl BagWriter {
             None,
             None,
         ];
+        // The file on disk is at once a readable start of a recording.
+        writer.flush().map_err(mcap_error)?;
         Ok(Self {
             path: path.to_path_buf(),
+            committed: (state.position(), Written::default()),
+            writer: Some(writer),
+            sink: state,
             sets: topics.sets.clone(),
             metadata,
-            writer,
             channels,
             sequence: [0; CHANNELS],
             written: Written::default(),
+            definitions: defs,
         })
     }
 
-    fn mcap_error(&self, source: mcap::McapError) -> RecordError {
-        RecordError::Mcap {
+    /// The file being written.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Cuts the file back to its last complete flush, closes it there, and says so with
+    /// `cause`. Nothing more is written.
+    fn stop(&mut self, cause: RecordError) -> RecordError {
+        if matches!(cause, RecordError::Stopped { .. }) {
+            return cause;
+        }
+        // The MCAP writer's own clean-up must not write after the failure.
+        self.sink.refuse_writes();
+        drop(self.writer.take());
+        let (length, kept) = self.committed;
+        let closed =
+            sink::close_at(&self.path, length, &self.definitions).map_err(|e| e.to_string());
+        RecordError::Stopped {
             path: self.path.clone(),
-            source,
+            cause: Box::new(cause),
+            kept,
+            closed,
         }
     }
 
+    fn mcap_failed(&mut self, source: mcap::McapError) -> RecordError {
+        let cause = RecordError::Mcap {
+            path: self.path.clone(),
+            source,
+        };
+        self.stop(cause)
+    }
+
+    fn writer(&mut self) -> Result<&mut mcap::Writer<BufWriter<sink::Sink>>, RecordError> {
+        let path = self.path.clone();
+        self.writer
+            .as_mut()
+            .ok_or(RecordError::AlreadyStopped { path })
+    }
+
     /// Writes one message (markers and sets are dropped when the recording has no channel for
-    /// them).
+    /// them), or a settings record (after which the file is flushed).
     pub fn write(&mut self, entry: &Entry) -> Result<(), RecordError> {
         let (index, bytes) = match &entry.payload {
             Payload::Candidate(m) => (0, cdr::encode(m.as_ref())?),
@@ -281,6 +442,7 @@ impl BagWriter {
             Payload::Markers(m) => (2, cdr::encode(m.as_ref())?),
             Payload::CandidateSet(m) => (3, cdr::encode(m.as_ref())?),
             Payload::RecommendationSet(m) => (4, cdr::encode(m.as_ref())?),
+            Payload::Settings(s) => return self.write_settings(s),
         };
         if index >= 3 && self.channels[index].is_none() {
             self.add_set_channel(index)?;
@@ -295,9 +457,9 @@ impl BagWriter {
             log_time: entry.log_time,
             publish_time: entry.publish_time,
         };
-        self.writer
-            .write_to_known_channel(&header, &bytes)
-            .map_err(|e| self.mcap_error(e))?;
+        if let Err(e) = self.writer()?.write_to_known_channel(&header, &bytes) {
+            return Err(self.mcap_failed(e));
+        }
         match index {
             0 => self.written.candidates += 1,
             1 => self.written.recommendations += 1,
@@ -308,7 +470,8 @@ impl BagWriter {
         Ok(())
     }
 
-    /// Makes set channel `index` (3: candidate sets, 4: their answers), if the recording has sets.
+    /// Makes set channel `index` (3: candidate sets, 4: their answers), if the recording has
+    /// sets; it joins the definitions a file closed after a failure is summarised with.
     fn add_set_channel(&mut self, index: usize) -> Result<(), RecordError> {
         let Some(topics) = &self.sets else {
             return Ok(());
@@ -322,75 +485,114 @@ impl BagWriter {
             )
         };
         let text = definitions::full_text(type_name).ok_or(RecordError::UnknownType(type_name))?;
-        let schema = self
-            .writer
+        let metadata = self.metadata.clone();
+        let schema = match self
+            .writer()?
             .add_schema(type_name, "ros2msg", text.as_bytes())
-            .map_err(|e| self.mcap_error(e))?;
-        let id = self
-            .writer
-            .add_channel(schema, &topic, "cdr", &self.metadata)
-            .map_err(|e| self.mcap_error(e))?;
+        {
+            Ok(id) => id,
+            Err(e) => return Err(self.mcap_failed(e)),
+        };
+        let id = match self.writer()?.add_channel(schema, &topic, "cdr", &metadata) {
+            Ok(id) => id,
+            Err(e) => return Err(self.mcap_failed(e)),
+        };
+        self.definitions.schemas.push(sink::SchemaDef {
+            id: schema,
+            name: type_name.to_string(),
+            encoding: "ros2msg".to_string(),
+            data: text.into_bytes(),
+        });
+        self.definitions.channels.push(sink::ChannelDef {
+            id,
+            schema_id: schema,
+            topic,
+            encoding: "cdr".to_string(),
+            metadata,
+        });
         self.channels[index] = Some(id);
         Ok(())
     }
 
+    fn write_settings(&mut self, settings: &SettingsRecord) -> Result<(), RecordError> {
+        let record = mcap::records::Metadata {
+            name: METADATA_NAME.to_string(),
+            metadata: settings.to_metadata(),
+        };
+        if let Err(e) = self.writer()?.write_metadata(&record) {
+            return Err(self.mcap_failed(e));
+        }
+        self.written.settings += 1;
+        self.flush()
+    }
+
     /// Closes the current chunk and hands the bytes to the OS.
     pub fn flush(&mut self) -> Result<(), RecordError> {
-        self.writer.flush().map_err(|e| self.mcap_error(e))
+        if let Err(e) = self.writer()?.flush() {
+            return Err(self.mcap_failed(e));
+        }
+        self.committed = (self.sink.position(), self.written);
+        Ok(())
     }
 
     /// Writes the summary and closes the file.
     pub fn finish(mut self) -> Result<Written, RecordError> {
-        self.writer.finish().map_err(|e| self.mcap_error(e))?;
+        self.flush()?;
+        if let Err(e) = self.writer()?.finish() {
+            return Err(self.mcap_failed(e));
+        }
+        drop(self.writer.take());
         Ok(self.written)
     }
 }
 
+/// A recording being written by its own thread.
+#[derive(Debug)]
+pub struct Recorder {
+    path: PathBuf,
+    /// Entries go over in batches that are written together: a flush never falls inside one.
+    tx: Option<mpsc::Sender<Vec<Entry>>>,
+    thread: Option<JoinHandle<Result<Written, RecordError>>>,
+    stopped: Arc<AtomicBool>,
+}
+
+/// Called from the writer thread when it stops on a failure.
+pub type OnStop = Arc<dyn Fn() + Send + Sync>;
+
 impl Recorder {
-    /// Starts a recording in `dir` (created if missing), named by the start time.
-    pub fn start(dir: &Path, topics: Topics, qos_depth: i64) -> Result<Self, RecordError> {
+    /// Starts a recording in `dir` (created if missing) for node `node` (its full name): a new
+    /// file `<node>_<UTC start>.mcap` ([`node_stem`], [`stamp_name`]), `_1`, `_2`, ... added
+    /// when that name is taken. `on_stop` hears when writing fails.
+    pub fn start(
+        dir: &Path,
+        node: &str,
+        topics: Topics,
+        qos_depth: i64,
+        on_stop: OnStop,
+    ) -> Result<Self, RecordError> {
         std::fs::create_dir_all(dir).map_err(|source| RecordError::Create {
             path: dir.to_path_buf(),
             source,
         })?;
-        let path = dir.join(format!("grasp_orient_{}.mcap", stamp_name(now_ns())));
-        let mut bag = BagWriter::create(&path, &topics, qos_depth)?;
-        let (tx, rx) = mpsc::channel::<Entry>();
+        let (file, path) = create_unique(dir, &node_stem(node), &stamp_name(now_ns()))?;
+        let bag = BagWriter::on_file(file, &path, &topics, qos_depth)?;
+        Self::spawn(bag, on_stop)
+    }
+
+    fn spawn(mut bag: BagWriter, on_stop: OnStop) -> Result<Self, RecordError> {
+        let path = bag.path().to_path_buf();
+        let (tx, rx) = mpsc::channel::<Vec<Entry>>();
+        let stopped = Arc::new(AtomicBool::new(false));
+        let flag = stopped.clone();
         let thread = std::thread::Builder::new()
             .name("grasp_orient-record".into())
             .spawn(move || {
-                // Wake every BATCH_EVERY and write what has come, rather than once per message:
-                // on a small machine the answering path and DDS keep the cores.
-                let mut last_flush = Instant::now();
-                let mut dirty = false;
-                loop {
-                    std::thread::sleep(BATCH_EVERY);
-                    let mut open = true;
-                    loop {
-                        match rx.try_recv() {
-                            Ok(entry) => {
-                                bag.write(&entry)?;
-                                dirty = true;
-                            }
-                            Err(mpsc::TryRecvError::Empty) => break,
-                            Err(mpsc::TryRecvError::Disconnected) => {
-                                open = false;
-                                break;
-                            }
-                        }
-                    }
-                    if !open {
-                        break;
-                    }
-                    if last_flush.elapsed() >= FLUSH_EVERY {
-                        if dirty {
-                            bag.flush()?;
-                            dirty = false;
-                        }
-                        last_flush = Instant::now();
-                    }
+                let result = pump(&mut bag, &rx).and_then(|()| bag.finish());
+                if result.is_err() {
+                    flag.store(true, Ordering::SeqCst);
+                    on_stop();
                 }
-                bag.finish()
+                result
             })
             .map_err(|source| RecordError::Create {
                 path: path.clone(),
@@ -400,6 +602,7 @@ impl Recorder {
             path,
             tx: Some(tx),
             thread: Some(thread),
+            stopped,
         })
     }
 
@@ -408,10 +611,21 @@ impl Recorder {
         &self.path
     }
 
+    /// Whether the writer stopped on a failure ([`Recorder::finish`] gives it).
+    pub fn has_stopped(&self) -> bool {
+        self.stopped.load(Ordering::SeqCst)
+    }
+
     /// Hands a message to the writer; never blocks. Returns false once the writer has stopped
     /// (its error comes out of [`Recorder::finish`]).
     pub fn record(&self, entry: Entry) -> bool {
-        self.tx.as_ref().is_some_and(|tx| tx.send(entry).is_ok())
+        self.record_all(vec![entry])
+    }
+
+    /// Hands messages to the writer to be written together (no flush falls between them, so a
+    /// candidate and its answer are both in the file or neither is); never blocks.
+    pub fn record_all(&self, entries: Vec<Entry>) -> bool {
+        self.tx.as_ref().is_some_and(|tx| tx.send(entries).is_ok())
     }
 
     /// Writes everything handed over, closes the file, and says how much it holds.
@@ -430,10 +644,66 @@ impl Drop for Recorder {
         drop(self.tx.take());
         if let Some(thread) = self.thread.take() {
             if let Ok(Err(e)) = thread.join() {
-                log::error!("recording {}: {e}", self.path.display());
+                log::error!("{e}");
             }
         }
     }
+}
+
+/// The writer thread's loop: wakes every [`BATCH_EVERY`] and writes what has come, rather than
+/// once per message (on a small machine the answering path and DDS keep the cores); flushes at
+/// least every [`FLUSH_EVERY`]. Ends when the sender is gone, or at the first failure.
+fn pump(bag: &mut BagWriter, rx: &mpsc::Receiver<Vec<Entry>>) -> Result<(), RecordError> {
+    let mut last_flush = Instant::now();
+    let mut dirty = false;
+    loop {
+        std::thread::sleep(BATCH_EVERY);
+        loop {
+            match rx.try_recv() {
+                Ok(batch) => {
+                    for entry in &batch {
+                        bag.write(entry)?;
+                    }
+                    dirty = true;
+                }
+                Err(mpsc::TryRecvError::Empty) => break,
+                Err(mpsc::TryRecvError::Disconnected) => return Ok(()),
+            }
+        }
+        if last_flush.elapsed() >= FLUSH_EVERY {
+            if dirty {
+                bag.flush()?;
+                dirty = false;
+            }
+            last_flush = Instant::now();
+        }
+    }
+}
+
+/// Creates `<stem>_<stamp>.mcap` in `dir`, or `<stem>_<stamp>_<n>.mcap` for the first free `n`,
+/// never opening an existing file.
+fn create_unique(dir: &Path, stem: &str, stamp: &str) -> Result<(File, PathBuf), RecordError> {
+    let mut last = None;
+    for n in 0..10_000u32 {
+        let name = if n == 0 {
+            format!("{stem}_{stamp}.mcap")
+        } else {
+            format!("{stem}_{stamp}_{n}.mcap")
+        };
+        let path = dir.join(name);
+        match OpenOptions::new().write(true).create_new(true).open(&path) {
+            Ok(file) => return Ok((file, path)),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => last = Some(path),
+            Err(source) => return Err(RecordError::Create { path, source }),
+        }
+    }
+    Err(RecordError::Create {
+        path: last.unwrap_or_else(|| dir.to_path_buf()),
+        source: std::io::Error::new(
+            std::io::ErrorKind::AlreadyExists,
+            "10,000 recordings of this node started in the same second",
+        ),
+    })
 }
 
 #[cfg(test)]
@@ -449,5 +719,166 @@ mod tests {
             "20261122T054000Z"
         );
         assert_eq!(stamp_name(951_782_400 * 1_000_000_000), "20000229T000000Z");
+    }
+
+    #[test]
+    fn node_names_make_distinct_file_names() {
+        assert_eq!(node_stem("/grasp_orient"), "grasp_orient");
+        assert_eq!(
+            node_stem("/arm/left/grasp_orient"),
+            "arm__left__grasp_orient"
+        );
+        assert_ne!(
+            node_stem("/arm/grasp_orient"),
+            node_stem("/arm_grasp/orient")
+        );
+        assert_eq!(node_stem(""), "grasp_orient");
+    }
+
+    #[test]
+    fn a_new_recording_never_opens_an_existing_file() {
+        let dir = tempfile::tempdir().expect("a temporary folder");
+        let taken = dir.path().join("taken.mcap");
+        std::fs::write(&taken, b"precious").expect("write");
+        let e = BagWriter::create(&taken, &topics(), 100).expect_err("exists");
+        assert!(matches!(e, RecordError::Create { .. }), "{e}");
+        assert_eq!(std::fs::read(&taken).expect("read"), b"precious");
+        let (_, a) = create_unique(dir.path(), "n", "20260101T000000Z").expect("first");
+        let (_, b) = create_unique(dir.path(), "n", "20260101T000000Z").expect("second");
+        let (_, c) = create_unique(dir.path(), "n", "20260101T000000Z").expect("third");
+        let names: Vec<_> = [a, b, c]
+            .iter()
+            .map(|p| p.file_name().expect("named").to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(
+            names,
+            [
+                "n_20260101T000000Z.mcap",
+                "n_20260101T000000Z_1.mcap",
+                "n_20260101T000000Z_2.mcap"
+            ]
+        );
+    }
+
+    fn topics() -> Topics {
+        Topics {
+            candidates: "/grasp_candidates".into(),
+            recommendations: "/grip_recommendations".into(),
+            markers: None,
+            sets: None,
+        }
+    }
+
+    fn candidate(i: usize) -> Entry {
+        let c = crate::msg::paper_cases().swap_remove(i % 4);
+        Entry {
+            payload: Payload::Candidate(Box::new(c)),
+            log_time: i as u64,
+            publish_time: i as u64,
+        }
+    }
+
+    /// A full disk, as the file system answers it (ENOSPC past a size): the writer stops with
+    /// the cause, and the file is closed at its last flush, readable, with what it says.
+    #[test]
+    fn a_full_disk_closes_the_file_at_its_last_flush() {
+        let dir = tempfile::tempdir().expect("a temporary folder");
+        let path = dir.path().join("full.mcap");
+        let mut bag = BagWriter::create(&path, &topics(), 100).expect("create");
+        let start = bag.sink.position();
+        bag.sink.fail_past(start + 64 * 1024);
+        let mut error = None;
+        for i in 0..100_000 {
+            if let Err(e) = bag.write(&candidate(i)) {
+                error = Some(e);
+                break;
+            }
+            if i % 100 == 99 {
+                if let Err(e) = bag.flush() {
+                    error = Some(e);
+                    break;
+                }
+            }
+        }
+        let Some(RecordError::Stopped {
+            cause,
+            kept,
+            closed,
+            ..
+        }) = error
+        else {
+            panic!("expected the recording to stop, got {error:?}");
+        };
+        assert!(
+            cause.to_string().contains("No space left on device"),
+            "{cause}"
+        );
+        assert!(closed.is_ok(), "{closed:?}");
+        assert!(
+            kept.candidates >= 100 && kept.candidates % 100 == 0,
+            "{kept:?}"
+        );
+        let back = bag::read(&path).expect("the closed file reads as it is");
+        assert_eq!(back.candidates.len() as u64, kept.candidates);
+        // Closed as the MCAP writer would have: both CRCs, and a summary that counts it all.
+        let bytes = std::fs::read(&path).expect("read");
+        let closed = scan::scan(&bytes).expect("an MCAP file");
+        assert!(
+            closed.data_verified && closed.summary_verified,
+            "{closed:?}"
+        );
+        assert_eq!(closed.summary_channels.len(), 2);
+        let (count, per_channel) = closed.statistics.expect("statistics");
+        assert_eq!(count, kept.candidates);
+        assert_eq!(per_channel.values().sum::<u64>(), kept.candidates);
+        assert!(bag.write(&candidate(0)).is_err(), "nothing more is written");
+        drop(bag);
+        assert_eq!(
+            bag::read(&path).expect("still whole").candidates.len() as u64,
+            kept.candidates,
+            "dropping the writer after the failure writes nothing"
+        );
+    }
+
+    /// The writer thread on a full disk: it stops, says so once through `on_stop`, and its
+    /// error names the cause and what the closed file holds.
+    #[test]
+    fn a_recorder_on_a_full_disk_stops_and_says_so_once() {
+        let dir = tempfile::tempdir().expect("a temporary folder");
+        let path = dir.path().join("full.mcap");
+        let bag = BagWriter::create(&path, &topics(), 100).expect("create");
+        bag.sink.fail_past(bag.sink.position() + 32 * 1024);
+        let calls = Arc::new(AtomicU64::new(0));
+        let counter = calls.clone();
+        let recorder = Recorder::spawn(
+            bag,
+            Arc::new(move || {
+                counter.fetch_add(1, Ordering::SeqCst);
+            }),
+        )
+        .expect("spawned");
+        let deadline = Instant::now() + Duration::from_secs(30);
+        let mut i = 0;
+        while !recorder.has_stopped() && Instant::now() < deadline {
+            for _ in 0..200 {
+                recorder.record(candidate(i));
+                i += 1;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        assert!(recorder.has_stopped(), "never stopped after {i} candidates");
+        assert!(
+            !recorder.record(candidate(0)),
+            "a stopped writer takes nothing"
+        );
+        let e = recorder.finish().expect_err("stopped");
+        assert_eq!(calls.load(Ordering::SeqCst), 1);
+        let text = e.to_string();
+        assert!(
+            text.contains("No space left on device")
+                && text.contains("closed at its last complete flush"),
+            "{text}"
+        );
+        bag::read(&path).expect("the file reads as it is");
     }
 }

@@ -2,20 +2,20 @@
 //! compared with its recorded answer: every recommendation like a single candidate's, the
 //! ranking, and the fields of the set.
 //!
-//! "As the node answered it": the objective its recorded recommendations name; the gripper drive
-//! and ranking that its `ranked_by` names (`internal_force`: grip force of coupled fingers,
-//! `finger_force`: of independent ones, `gripping_power`: the objective); the set's own
-//! `max_grip_force` when above 0; everything else from the replay's settings and rules.
+//! "As the node answered it": with the settings and gripper rules in force when it was received
+//! ([`Plan`]), and its own `max_grip_force` when above 0. A recording without settings records
+//! gives the objective its recorded recommendations name, and the gripper drive and ranking its
+//! `ranked_by` names (`internal_force`: grip force of coupled fingers, `finger_force`: of
+//! independent ones, `gripping_power`: the objective); the rest comes from the replay's settings.
 //!
 //! The ranking passes when it holds the same candidates as the new one, in an order sorted by the
 //! new answers' values within [`TOLERANCE`] (ties by `|wrist_rotation|`): candidates whose force
 //! agrees to rounding may swap places.
 
-use super::{compare_one, key, objective_like, Key, Summary, TOLERANCE};
+use super::{compare_one, key, objective_like, Key, Plan, Summary, TOLERANCE};
 use crate::msg::{short_id, GraspCandidateSet, GripRecommendation, GripRecommendationSet};
 use crate::record::bag::{keep_example, Bag, Recorded};
 use crate::sets::{answer_set, is_sorted_by, GripperDrive, RankBy, Rules};
-use crate::solver::Settings;
 use std::collections::{HashMap, VecDeque};
 
 /// For each recorded set, the index of its recorded answer (matched by id and header, in order),
@@ -60,8 +60,7 @@ fn rules_like(rules: &Rules, recorded: Option<&GripRecommendationSet>) -> Rules 
 /// each with its set's times, when `keep`.
 pub(super) fn replay_sets(
     bag: &Bag,
-    settings: &Settings,
-    rules: &Rules,
+    plan: &Plan,
     keep: bool,
 ) -> (Summary, Vec<Recorded<GripRecommendationSet>>) {
     let (pairs, unmatched) = pair(bag);
@@ -72,12 +71,18 @@ pub(super) fn replay_sets(
     let mut answers = Vec::with_capacity(if keep { bag.candidate_sets.len() } else { 0 });
     for (set, p) in bag.candidate_sets.iter().zip(pairs) {
         let theirs = p.map(|i| &bag.recommendation_sets[i].message);
-        let first = theirs.and_then(|t| t.recommendations.iter().find(|r| !r.objective.is_empty()));
-        let ours = answer_set(
-            &set.message,
-            &objective_like(settings, first),
-            &rules_like(rules, theirs),
-        );
+        let (settings, rules) = (plan.settings_at(set.log_time), plan.rules_at(set.log_time));
+        let ours = if plan.objective_from_answer {
+            let first =
+                theirs.and_then(|t| t.recommendations.iter().find(|r| !r.objective.is_empty()));
+            answer_set(
+                &set.message,
+                &objective_like(settings, first),
+                &rules_like(rules, theirs),
+            )
+        } else {
+            answer_set(&set.message, settings, rules)
+        };
         summary.sets += 1;
         summary.candidates += set.message.candidates.len() as u64;
         if let Some(theirs) = theirs {

@@ -649,6 +649,31 @@ impl Analysis {
     }
 }
 
+/// The objective on one piece, for the robust envelope (`robust.rs`): with `k = weight ·
+/// FORCE_SCALE`, the objective is `k · sqrt(Q)` on a [`Curve::Quad`] piece and `k · S` on a
+/// [`Curve::Sin`] piece.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Curve {
+    /// `Q`, a quadratic form in `(sin θ, cos θ)` (the 2-norm squared).
+    Quad(QuadForm),
+    /// `S`, a sinusoid (the 1-norm, the internal force).
+    Sin(Sinusoid),
+}
+
+impl Analysis {
+    /// The objective piece by piece, `(lo, hi, curve)` in increasing θ, tiling the graspable
+    /// range.
+    pub(crate) fn pieces(&self) -> impl Iterator<Item = (f64, f64, Curve)> + '_ {
+        self.segments.iter().map(|s| {
+            let curve = match s.shape {
+                Shape::Quad(q) => Curve::Quad(q),
+                Shape::Sin(f) => Curve::Sin(f),
+            };
+            (s.lo, s.hi, curve)
+        })
+    }
+}
+
 /// Index of the largest function at `t`; near-ties go to the steeper one (it stays on top).
 fn top_at(funcs: &[Sinusoid], t: f64, tol: f64) -> usize {
     let at = Angle::new(t);

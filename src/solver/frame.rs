@@ -192,6 +192,12 @@ impl GraspFrame {
             return Err(InvalidInput::SafetyFactor { value: safety });
         }
         validate(c)?;
+        Ok(Self::from_valid(c, safety))
+    }
+
+    /// The map of [`GraspFrame::new`] for a candidate [`validate`] accepts and a safety factor
+    /// `>= 1`, without checking them again (the spatial reduction has checked the 3D input).
+    pub(crate) fn from_valid(c: &Candidate, safety: f64) -> Self {
         let (mut p1, mut p2, mut n1, mut n2) = (c.contact_1, c.contact_2, c.normal_1, c.normal_2);
         let (mut mu1, mut mu2) = (c.friction_1 / safety, c.friction_2 / safety);
         let com = c.center_of_mass;
@@ -222,7 +228,7 @@ impl GraspFrame {
         let n2p = to_paper(&n2);
         let g = Vector2::new(c.gravity.x, c.gravity.y);
         let gp = to_paper(&g);
-        Ok(Self {
+        Self {
             x1,
             x2,
             y: y.max(0.0),
@@ -239,7 +245,7 @@ impl GraspFrame {
             swapped,
             e_x,
             e_y,
-        })
+        }
     }
 
     /// The contact of the candidate's labelling that is the paper's contact `paper_index` (1 or 2).

@@ -28,15 +28,30 @@
 //! objective (gripping power) is `P(θ) = min ||F_T + α F_N||` over feasible α. The recommendation
 //! is the exact minimiser of `P` over the allowed range, found from the envelope's breakpoints and
 //! the closed-form stationary points of each piece.
+//!
+//! When the centre of mass and the mass are known only to within tolerances, [`solve_robust`]
+//! minimises the worst case of `P` over them instead (issue 13; the mathematics is in
+//! `src/solver/robust.rs`).
 
 mod analysis;
 mod finger;
 mod frame;
 mod paper;
+mod robust;
 mod sinusoid;
+mod spatial;
 
 pub use analysis::{Analysis, PointValue};
 pub use paper::CandidateAngles;
+pub use robust::{
+    solve_robust, BoxPoint, BoxPointKind, NoCommonOrientation, RobustRecommendation, RobustVerdict,
+    Uncertainty,
+};
+pub use spatial::{
+    sliced_friction, solve_spatial, AxisRelation, CurrentPose, SpatialCandidate, SpatialMiss,
+    SpatialNoForceClosure, SpatialRecommendation, SpatialVerdict, IN_PLANE_TOLERANCE, NEAR_AXIS,
+    ON_AXIS,
+};
 
 use frame::GraspFrame;
 
@@ -249,6 +264,39 @@ pub enum InvalidInput {
         graspable_lo: f64,
         /// Graspable range end, rad.
         graspable_hi: f64,
+    },
+    /// A tolerance (centre of mass, mass) is negative or too large.
+    #[error("{field} must be at least 0 and less than {limit:e}{unit}, got {value:e}")]
+    Tolerance {
+        /// The field.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+        /// The least value refused.
+        limit: f64,
+        /// Unit of the limit, with its leading space.
+        unit: &'static str,
+    },
+    /// A vector that must have a direction is zero (spatial candidates).
+    #[error("{field} is the zero vector")]
+    ZeroVector {
+        /// The field.
+        field: &'static str,
+    },
+    /// A normal is perpendicular to the grasp plane through both contacts and the centre of mass,
+    /// so its projection into that plane, the planar normal, has no direction (spatial candidates).
+    #[error(
+        "{field} is perpendicular to the grasp plane through both contacts and the centre of mass"
+    )]
+    NormalPerpendicularToGraspPlane {
+        /// The field.
+        field: &'static str,
+    },
+    /// The centre of mass is at a contact point (spatial candidates).
+    #[error("center_of_mass coincides with {contact}")]
+    CenterOfMassAtContact {
+        /// The contact.
+        contact: Contact,
     },
 }
 

@@ -15,6 +15,8 @@ pub mod table_1 {
     use grasp_orient::solver::Candidate;
     include!("table_1.rs");
 }
+pub mod robust;
+pub mod spatial;
 
 use grasp_orient::solver::Candidate;
 use nalgebra::{Matrix3x4, Matrix4x3, Vector2, Vector3, Vector4};

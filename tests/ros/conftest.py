@@ -209,7 +209,7 @@ class NodeProcess:
     `binary` defaults to the one under test (GRASP_ORIENT_BIN)."""
 
     def __init__(self, args: list[str], env: dict, cwd: Path, name: str = "grasp_orient node",
-                 binary: Path | None = None):
+                 binary: Path | None = None, preexec_fn: Callable[[], None] | None = None):
         self.args = [str(binary or binary_path()), "node", *args]
         self.name = name
         self.lines: list[str] = []
@@ -217,7 +217,7 @@ class NodeProcess:
         self._lock = threading.Lock()
         self.proc = subprocess.Popen(self.args, env=env, cwd=str(cwd), stdin=subprocess.DEVNULL,
                                      stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                                     errors="replace", bufsize=1)
+                                     errors="replace", bufsize=1, preexec_fn=preexec_fn)
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
 
@@ -228,6 +228,23 @@ class NodeProcess:
                 self.lines.append(line.rstrip("\n"))
             if READY_MARK in line:
                 self._ready.set()
+
+    def all_lines(self) -> list[str]:
+        with self._lock:
+            return list(self.lines)
+
+    def wait_for_line(self, pattern: str, timeout: float = 10.0, after: int = 0) -> str:
+        """The first line from index `after` on that matches the regex `pattern`; fails after `timeout`."""
+        rx = re.compile(pattern)
+        deadline = time.monotonic() + timeout
+        while True:
+            for line in self.all_lines()[after:]:
+                if rx.search(line):
+                    return line
+            if time.monotonic() > deadline:
+                raise AssertionError(f"{self.name}: no line matching {pattern!r} within {timeout} s; "
+                                     f"output:\n{self.output()}")
+            time.sleep(0.02)
 
     def output(self, last: int = 60) -> str:
         with self._lock:
@@ -286,8 +303,9 @@ def start_node(grasp_bin, node_workdir):
     asserted) at the end of the session unless the test stopped it."""
     started: list[NodeProcess] = []
 
-    def start(*args: str, name: str = "grasp_orient node", ready: bool = True) -> NodeProcess:
-        n = NodeProcess(list(args), ros_env(DOMAIN_ID), node_workdir, name)
+    def start(*args: str, name: str = "grasp_orient node", ready: bool = True,
+              preexec_fn: Callable[[], None] | None = None) -> NodeProcess:
+        n = NodeProcess(list(args), ros_env(DOMAIN_ID), node_workdir, name, preexec_fn=preexec_fn)
         started.append(n)
         _ALL_NODES.append(n)
         if ready:

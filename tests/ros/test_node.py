@@ -507,8 +507,8 @@ def test_parameters_are_described_listed_and_set_atomically(peer, client):
 
 
 def test_record_switched_off_and_on_by_parameter(peer, client, tmp_path):
-    """record:=false stops the recording at the next candidate; record:=true starts a new file that
-    holds exactly what was answered while it was on (read back with the mcap reader)."""
+    """record:=false closes the recording when it is set; record:=true starts a new file that holds
+    exactly what was answered while it was on (read back with the mcap reader)."""
     import mcap_util as mu
 
     params = Params(peer)
@@ -526,7 +526,11 @@ def test_record_switched_off_and_on_by_parameter(peer, client, tmp_path):
         client.send_and_collect(on)
         (r,) = params.set(record=False)
         assert r.successful, r.reason
-        # The next candidate closes the file, and is not recorded itself.
+        # Closed at once, with no candidate needed: the file ends with the MCAP magic.
+        deadline = time.monotonic() + 5.0
+        while not all(f.read_bytes().endswith(b"\x89MCAP0\r\n") for f in rec_dir.glob("*.mcap")):
+            assert time.monotonic() < deadline, "record:=false did not close the file"
+            time.sleep(0.02)
         client.send_and_collect(random_batch(2, SEED + 9, "rec-after"))
         files = sorted(rec_dir.glob("*.mcap"))
         assert len(files) == 1, f"expected one recording, found {files}"
