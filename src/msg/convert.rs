@@ -126,6 +126,8 @@ fn refused(m: &GraspCandidate, status: u8, message: String) -> GripRecommendatio
         objective: String::new(),
         recommended_label: String::new(),
         candidate_c: GripRecommendation::CANDIDATE_C_OUT_OF_RANGE,
+        finger_force: nan,
+        finger_force_current: nan,
     }
 }
 
@@ -146,6 +148,7 @@ fn no_closure(m: &GraspCandidate, why: &NoForceClosure) -> GripRecommendation {
     );
     out.gripping_power_current = f64::INFINITY;
     out.internal_force_current = f64::INFINITY;
+    out.finger_force_current = f64::INFINITY;
     out
 }
 
@@ -187,6 +190,8 @@ fn recommended(m: &GraspCandidate, r: &Recommendation) -> GripRecommendation {
             .recommended_label
             .map_or(String::new(), |x| x.name().to_string()),
         candidate_c: r.candidate_c as u8,
+        finger_force: r.finger_force,
+        finger_force_current: r.finger_force_current,
     }
 }
 
@@ -270,5 +275,6 @@ mod tests {
             a.message
         );
         assert!(a.gripping_power_current.is_infinite());
+        assert!(a.finger_force_current.is_infinite() && a.finger_force.is_nan());
     }
 }
