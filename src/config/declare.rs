@@ -56,6 +56,12 @@ pub enum Domain {
 }
 
 impl Domain {
+    /// Every finite real number (no NaN, no infinity).
+    pub const FINITE: Domain = Domain::Real {
+        min: f64::MIN,
+        max: f64::MAX,
+    };
+
     /// Real numbers `>= min`, finite.
     pub const fn at_least(min: f64) -> Self {
         Domain::Real { min, max: f64::MAX }
@@ -68,6 +74,9 @@ impl fmt::Display for Domain {
             Domain::Any => f.write_str("any"),
             Domain::Choices(names) => write!(f, "one of {}", names.join(", ")),
             Domain::Integer { min, max } => write!(f, "in {min}..={max}"),
+            Domain::Real { min, max } if *min == f64::MIN && *max == f64::MAX => {
+                f.write_str("finite")
+            }
             Domain::Real { min, max } if *max == f64::MAX => write!(f, ">= {min}"),
             Domain::Real { min, max } => write!(f, "in [{min}, {max}]"),
         }

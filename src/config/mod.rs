@@ -196,8 +196,18 @@ mod tests {
         let e = c.solver_settings().expect_err("below one");
         assert_eq!(
             e.to_string(),
-            "parameter friction_safety_factor: must be >= 1, got 0.5"
+            "parameter friction_safety_factor: must be in [1, 1000], got 0.5"
         );
+        // Every double has a domain, checked whatever the other settings: NaN bounds are
+        // refused while range is not bounds too.
+        for name in ["range_min", "range_max", "friction_safety_factor"] {
+            for bad in [".nan", ".inf", "-.inf"] {
+                let mut c = Config::default();
+                c.set_from_yaml(name, bad).expect("a double");
+                let e = c.solver_settings().expect_err(bad);
+                assert!(e.to_string().contains(name), "{e}");
+            }
+        }
         c.friction_safety_factor = f64::INFINITY;
         assert!(c.solver_settings().is_err());
         let c = Config {
