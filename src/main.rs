@@ -4,6 +4,8 @@
 mod cli;
 
 use clap::{Parser, Subcommand};
+use grasp_orient::config::ConfigError;
+use grasp_orient::node::ros_args::{LogLevel, RosArgs, RosArgsError};
 use std::process::ExitCode;
 
 /// The object orientation that minimises gripping power in a two-finger planar grasp.
@@ -31,20 +33,26 @@ enum Command {
     Play(cli::play::Args),
 }
 
+/// What the logger shows without `RUST_LOG` or `--log-level`: RustDDS warns about every
+/// unreachable locator; its errors still show.
+const DEFAULT_LOG_FILTER: &str = "info,rustdds=error,rustdds::network::udp_listener=off,\
+                                  ros2_client=warn,ros2_client::distributions=error";
+
 fn main() -> ExitCode {
-    // RustDDS warns about every unreachable locator; its errors still show.
-    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or(
-        "info,rustdds=error,rustdds::network::udp_listener=off,ros2_client=warn,\
-         ros2_client::distributions=error",
-    ))
-    .target(env_logger::Target::Stderr)
-    .init();
     // Everything from --ros-args on belongs to ROS, not to clap.
     let argv: Vec<String> = std::env::args().collect();
     let split = argv
         .iter()
         .position(|a| a == "--ros-args")
         .unwrap_or(argv.len());
+    let levels = match RosArgs::parse(&argv[split..]) {
+        Ok(ros) => ros.log_levels,
+        Err(e) => {
+            eprintln!("grasp_orient: error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    init_logging(&levels);
     let cli = Cli::parse_from(&argv[..split]);
     let result = match &cli.command {
         Command::Solve(args) => cli::solve::run(args),
@@ -58,7 +66,33 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("grasp_orient: error: {e:#}");
-            ExitCode::FAILURE
+            if is_usage(&e) {
+                ExitCode::from(2)
+            } else {
+                ExitCode::FAILURE
+            }
         }
     }
+}
+
+/// The logger on stderr: `RUST_LOG` if set, else [`DEFAULT_LOG_FILTER`]; then each
+/// `--log-level` in order, the default level or one logger's (`unset` leaves it as it was).
+fn init_logging(levels: &[(Option<String>, LogLevel)]) {
+    let mut builder = env_logger::Builder::new();
+    builder.parse_filters(
+        &std::env::var("RUST_LOG").unwrap_or_else(|_| DEFAULT_LOG_FILTER.to_string()),
+    );
+    for (logger, level) in levels {
+        if let Some(filter) = level.filter() {
+            builder.filter(logger.as_deref(), filter);
+        }
+    }
+    builder.target(env_logger::Target::Stderr).init();
+}
+
+/// Whether an error lies in the command line or in a file it names as settings (exit code 2,
+/// like clap's own): bad `--config`, `--ros-args`, `-p` or `--params-file`.
+fn is_usage(e: &anyhow::Error) -> bool {
+    e.chain()
+        .any(|cause| cause.is::<ConfigError>() || cause.is::<RosArgsError>())
 }

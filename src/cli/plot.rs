@@ -17,9 +17,10 @@ pub struct Args {
     /// Where to write the SVG.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Samples per curve.
-    #[arg(long, default_value_t = 2000)]
-    pub samples: usize,
+    /// Samples per curve, from 10 to 100000.
+    #[arg(long, default_value_t = 2000, allow_negative_numbers = true,
+          value_parser = super::integer_in(10, 100_000))]
+    pub samples: i64,
     #[command(flatten)]
     pub options: SolveOptions,
 }
@@ -119,7 +120,10 @@ fn drawing_failed(e: impl std::fmt::Debug) -> anyhow::Error {
 type Area<'a> = DrawingArea<SVGBackend<'a>, plotters::coord::Shift>;
 
 fn draw(analysis: &Analysis, best: &Recommendation, args: &Args) -> anyhow::Result<()> {
-    let curves = Curves::sample(analysis, args.samples.max(10));
+    let curves = Curves::sample(
+        analysis,
+        usize::try_from(args.samples).unwrap_or(10).max(10),
+    );
     let root = SVGBackend::new(&args.output, (1400, 560)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
     let (left, right) = root.split_horizontally(700);

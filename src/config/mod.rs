@@ -51,6 +51,16 @@ pub enum ConfigError {
         /// What is wrong.
         why: String,
     },
+    /// A params file has no `ros__parameters` section for the node.
+    #[error("{origin} has no section for node {node} (found: {}); a params file for it starts with `{node}:` or `/**:`, then `ros__parameters:`", if .found.is_empty() { "none".to_string() } else { .found.join(", ") })]
+    NoSection {
+        /// The file.
+        origin: String,
+        /// The node's name.
+        node: String,
+        /// The top-level keys it has.
+        found: Vec<String>,
+    },
     /// A params file holds a refused parameter.
     #[error("{origin}: {source}")]
     InFile {
@@ -59,6 +69,15 @@ pub enum ConfigError {
         /// What is wrong with it.
         source: Box<ConfigError>,
     },
+}
+
+/// The top-level sections of a params file: which there are, and which applied to the node.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Sections {
+    /// Every top-level key, in file order.
+    pub found: Vec<String>,
+    /// The keys whose `ros__parameters` were applied (`/**`, `**`, the node's name, `/name`).
+    pub applied: Vec<String>,
 }
 
 impl Parameter {
@@ -70,15 +89,31 @@ impl Parameter {
 
 impl Config {
     /// Reads a params file: the `ros__parameters` of `node` (or of `/**`) are applied over `self`.
-    pub fn merge_yaml(&mut self, text: &str, origin: &str, node: &str) -> Result<(), ConfigError> {
+    /// Like rcl, sections for other nodes are left alone; what applied is returned, for the
+    /// callers that must not ignore a file with nothing for them ([`Config::load`]).
+    pub fn merge_yaml(
+        &mut self,
+        text: &str,
+        origin: &str,
+        node: &str,
+    ) -> Result<Sections, ConfigError> {
         let doc: serde_yaml_ng::Value =
             serde_yaml_ng::from_str(text).map_err(|source| ConfigError::Yaml {
                 origin: origin.to_string(),
                 source,
             })?;
+        let mut sections = Sections::default();
         let Some(map) = doc.as_mapping() else {
-            return Ok(());
+            return Ok(sections);
         };
+        sections.found = map
+            .keys()
+            .map(|k| match k.as_str() {
+                Some(s) => s.to_string(),
+                None => serde_yaml_ng::to_string(k)
+                    .map_or_else(|_| "?".to_string(), |s| s.trim_end().to_string()),
+            })
+            .collect();
         let keys = ["/**", "**", node, &format!("/{node}")];
         for key in keys {
             if let Some(params) = map
@@ -86,6 +121,7 @@ impl Config {
                 .and_then(|v| v.get("ros__parameters"))
                 .and_then(|v| v.as_mapping())
             {
+                sections.applied.push(key.to_string());
                 for (name, value) in params {
                     let name = name.as_str().unwrap_or_default();
                     self.set_value(name, value.clone())
@@ -96,7 +132,7 @@ impl Config {
                 }
             }
         }
-        Ok(())
+        Ok(sections)
     }
 
     /// Sets one parameter from its YAML text (as in `-p name:=value`), checking its type only.
@@ -118,7 +154,15 @@ impl Config {
                 path: path.display().to_string(),
                 source,
             })?;
-            config.merge_yaml(&text, &path.display().to_string(), node)?;
+            let origin = path.display().to_string();
+            let sections = config.merge_yaml(&text, &origin, node)?;
+            if sections.applied.is_empty() {
+                return Err(ConfigError::NoSection {
+                    origin,
+                    node: node.to_string(),
+                    found: sections.found,
+                });
+            }
         }
         config.solver_settings()?;
         Ok(config)
@@ -185,6 +229,38 @@ mod tests {
             )
             .expect_err("typo");
         assert!(e.to_string().contains("objectiv"), "{e}");
+    }
+
+    #[test]
+    fn a_config_file_without_a_section_for_us_is_an_error() {
+        let dir = std::env::temp_dir().join(format!("grasp_orient_cfg_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let path = dir.join("other.yaml");
+        std::fs::write(
+            &path,
+            "other_node:\n  ros__parameters:\n    objective: norm1\n",
+        )
+        .expect("write");
+        let e = Config::load(Some(&path), "grasp_orient").expect_err("no section for us");
+        let text = e.to_string();
+        assert!(
+            text.contains("no section for node grasp_orient") && text.contains("found: other_node"),
+            "{text}"
+        );
+        std::fs::write(&path, "").expect("write");
+        let e = Config::load(Some(&path), "grasp_orient").expect_err("empty");
+        assert!(e.to_string().contains("found: none"), "{e}");
+        std::fs::write(&path, "/**:\n  ros__parameters:\n    objective: norm1\n").expect("write");
+        let c = Config::load(Some(&path), "grasp_orient").expect("a wildcard applies");
+        assert_eq!(c.objective, Objective::Norm1);
+        // rcl's rule for --params-file: other nodes' sections are left alone.
+        let mut c = Config::default();
+        let s = c
+            .merge_yaml("a:\n  ros__parameters: {}\nb: 1\n", "t", "grasp_orient")
+            .expect("valid");
+        assert_eq!(s.found, ["a", "b"]);
+        assert!(s.applied.is_empty());
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]
