@@ -1,6 +1,7 @@
 //! Reading recordings back: ours, or any rosbag2-style MCAP with a `GraspCandidate` topic, and
 //! recovering what a killed recording holds.
 
+use super::bounded;
 use crate::msg::{cdr, GraspCandidate, GripRecommendation};
 use std::collections::{BTreeMap, HashMap};
 use std::fs::File;
@@ -139,20 +140,25 @@ impl Bag {
 /// Reads every grasp_orient message of a bag, in file order. When the summary indexes every
 /// message into chunks, the chunks are decompressed and decoded on all cores.
 pub fn read(path: &Path) -> Result<Bag, BagError> {
-    let bytes = std::fs::read(path).map_err(io(path))?;
-    if let Some(bag) = read_chunks_in_parallel(&bytes).map_err(mcap_err(path))? {
+    let bytes = bounded::read_file(path).map_err(io(path))?;
+    parse(&bytes).map_err(mcap_err(path))
+}
+
+/// [`read`] for bytes in memory: any bytes, with every length checked ([`bounded`]).
+pub fn parse(bytes: &[u8]) -> Result<Bag, mcap::McapError> {
+    if let Some(bag) = read_chunks_in_parallel(bytes)? {
         return Ok(bag);
     }
     let mut bag = Bag::default();
-    for message in mcap::MessageStream::new(&bytes).map_err(mcap_err(path))? {
-        take(&mut bag, &message.map_err(mcap_err(path))?);
+    for message in bounded::Messages::file(bytes, false) {
+        take(&mut bag, &message?);
     }
     Ok(bag)
 }
 
 /// `None` when the file has no summary or not all messages are in indexed chunks.
 fn read_chunks_in_parallel(bytes: &[u8]) -> Result<Option<Bag>, mcap::McapError> {
-    let Some(summary) = mcap::Summary::read(bytes)? else {
+    let Some(summary) = bounded::summary(bytes)? else {
         return Ok(None);
     };
     let indexed: u64 = summary
@@ -176,7 +182,7 @@ fn read_chunks_in_parallel(bytes: &[u8]) -> Result<Option<Bag>, mcap::McapError>
                 scope.spawn(move || {
                     let mut part = Bag::default();
                     for chunk in group {
-                        for message in summary.stream_chunk(bytes, chunk)? {
+                        for message in bounded::Messages::chunk(bytes, chunk, summary)? {
                             take(&mut part, &message?);
                         }
                     }
@@ -213,28 +219,28 @@ pub struct Recovered {
 /// Copies every complete message of a recording that was cut short (a killed process, a full
 /// disk) into a fresh, finished MCAP file, with the same schemas, channels and profile.
 pub fn recover(broken: &Path, fixed: &Path) -> Result<Recovered, BagError> {
-    let bytes = std::fs::read(broken).map_err(io(broken))?;
-    let options = enumset::EnumSet::only(mcap::read::Options::IgnoreEndMagic);
-    let profile = mcap::read::LinearReader::new_with_options(&bytes, options)
-        .map_err(mcap_err(broken))?
-        .next()
-        .and_then(|r| match r {
-            Ok(mcap::records::Record::Header(h)) => Some(h.profile),
-            _ => None,
-        })
-        .unwrap_or_default();
+    let bytes = bounded::read_file(broken).map_err(io(broken))?;
     let file = File::create(fixed).map_err(io(fixed))?;
+    recover_bytes(&bytes, BufWriter::new(file)).map_err(mcap_err(fixed))
+}
+
+/// [`recover`] from bytes in memory into any seekable writer; an error is the writer's (what
+/// stops the reading is [`Recovered::stopped`]).
+pub fn recover_bytes<W: std::io::Write + std::io::Seek>(
+    bytes: &[u8],
+    sink: W,
+) -> Result<Recovered, mcap::McapError> {
+    let profile = bounded::header(bytes)
+        .map(|h| h.profile)
+        .unwrap_or_default();
     let mut writer = mcap::WriteOptions::new()
         .profile(profile)
         .library(concat!("grasp_orient recover ", env!("CARGO_PKG_VERSION")))
         .compression(Some(mcap::Compression::Zstd))
-        .create(BufWriter::new(file))
-        .map_err(mcap_err(fixed))?;
+        .create(sink)?;
     let mut channels: HashMap<u16, u16> = HashMap::new();
     let mut out = Recovered::default();
-    let stream =
-        mcap::MessageStream::new_with_options(&bytes, options).map_err(mcap_err(broken))?;
-    for message in stream {
+    for message in bounded::Messages::file(bytes, true) {
         let message = match message {
             Ok(m) => m,
             Err(e) => {
@@ -247,19 +253,15 @@ pub fn recover(broken: &Path, fixed: &Path) -> Result<Recovered, BagError> {
             Some(id) => *id,
             None => {
                 let schema = match &channel.schema {
-                    Some(s) => writer
-                        .add_schema(&s.name, &s.encoding, &s.data)
-                        .map_err(mcap_err(fixed))?,
+                    Some(s) => writer.add_schema(&s.name, &s.encoding, &s.data)?,
                     None => 0,
                 };
-                let id = writer
-                    .add_channel(
-                        schema,
-                        &channel.topic,
-                        &channel.message_encoding,
-                        &channel.metadata,
-                    )
-                    .map_err(mcap_err(fixed))?;
+                let id = writer.add_channel(
+                    schema,
+                    &channel.topic,
+                    &channel.message_encoding,
+                    &channel.metadata,
+                )?;
                 channels.insert(channel.id, id);
                 id
             }
@@ -270,12 +272,10 @@ pub fn recover(broken: &Path, fixed: &Path) -> Result<Recovered, BagError> {
             log_time: message.log_time,
             publish_time: message.publish_time,
         };
-        writer
-            .write_to_known_channel(&header, &message.data)
-            .map_err(mcap_err(fixed))?;
+        writer.write_to_known_channel(&header, &message.data)?;
         *out.per_topic.entry(channel.topic.clone()).or_default() += 1;
     }
-    writer.finish().map_err(mcap_err(fixed))?;
+    writer.finish()?;
     Ok(out)
 }
 

@@ -11,6 +11,7 @@
 //! its `record` parameter says.
 
 pub mod bag;
+pub mod bounded;
 pub mod lifecycle;
 
 use crate::msg::{cdr, definitions, GraspCandidate, GripRecommendation, MarkerArray};
