@@ -578,6 +578,27 @@ impl Reader {
         writer_guid,
         writer_seq_num,
       ),
+      // Patched for grasp_orient (vendor/rustdds/PATCHED.md): a DATA without a usable payload
+      // (Fast DDS sends a zero-length serialized message as DATA with no payload and no flags)
+      // still takes up its sequence number. Dropped here, it was never marked received, so a
+      // reliable reader held back every later sample of that writer until the writer's history
+      // let go of it. A user topic's reader now gets an empty sample, which fails to decode
+      // where the application can see and count it, and the stream goes on.
+      Err(e) if self.my_guid.entity_id.entity_kind.is_user_defined() => {
+        info!(
+          "DATA seq={writer_seq_num:?} from {writer_guid:?} on topic {:?} has no usable payload \
+           ({e}); delivered as an empty sample",
+          self.topic_name
+        );
+        let empty = SerializedPayload::new(representation_identifier, Vec::new());
+        self.process_received_data(
+          DDSData::new(empty),
+          receive_timestamp,
+          write_options_b.build(),
+          writer_guid,
+          writer_seq_num,
+        );
+      }
       Err(e) => debug!("Parsing DATA to DDSData failed: {e}"),
     }
   }
