@@ -6,6 +6,7 @@ mod cli;
 use clap::{Parser, Subcommand};
 use grasp_orient::config::ConfigError;
 use grasp_orient::node::ros_args::{LogLevel, RosArgs, RosArgsError};
+use log::LevelFilter;
 use std::process::ExitCode;
 
 /// The object orientation that minimises gripping power in a two-finger planar grasp.
@@ -33,10 +34,14 @@ enum Command {
     Play(cli::play::Args),
 }
 
-/// What the logger shows without `RUST_LOG` or `--log-level`: RustDDS warns about every
-/// unreachable locator; its errors still show.
-const DEFAULT_LOG_FILTER: &str = "info,rustdds=error,rustdds::network::udp_listener=off,\
-                                  ros2_client=warn,ros2_client::distributions=error";
+/// What the libraries log without `RUST_LOG`: RustDDS warns about every unreachable locator; its
+/// errors still show. Everything else logs from `info` on.
+const LIBRARY_LEVELS: [(&str, LevelFilter); 4] = [
+    ("rustdds", LevelFilter::Error),
+    ("rustdds::network::udp_listener", LevelFilter::Off),
+    ("ros2_client", LevelFilter::Warn),
+    ("ros2_client::distributions", LevelFilter::Error),
+];
 
 fn main() -> ExitCode {
     // Everything from --ros-args on belongs to ROS, not to clap.
@@ -75,16 +80,40 @@ fn main() -> ExitCode {
     }
 }
 
-/// The logger on stderr: `RUST_LOG` if set, else [`DEFAULT_LOG_FILTER`]; then each
-/// `--log-level` in order, the default level or one logger's (`unset` leaves it as it was).
+/// The logger on stderr: `RUST_LOG` if set, else `info` with [`LIBRARY_LEVELS`]. Then
+/// `--log-level LEVEL` sets the default level (and caps the libraries' at it: `fatal` silences
+/// them too), and `--log-level NAME:=LEVEL` one logger's, whatever the order; `unset` changes
+/// nothing.
 fn init_logging(levels: &[(Option<String>, LogLevel)]) {
     let mut builder = env_logger::Builder::new();
-    builder.parse_filters(
-        &std::env::var("RUST_LOG").unwrap_or_else(|_| DEFAULT_LOG_FILTER.to_string()),
-    );
+    let from_env = std::env::var("RUST_LOG").ok();
+    match &from_env {
+        Some(filters) => {
+            builder.parse_filters(filters);
+        }
+        None => {
+            builder.filter_level(LevelFilter::Info);
+            for (module, level) in LIBRARY_LEVELS {
+                builder.filter_module(module, level);
+            }
+        }
+    }
+    let default = levels
+        .iter()
+        .filter(|(logger, _)| logger.is_none())
+        .filter_map(|(_, level)| level.filter())
+        .next_back();
+    if let Some(default) = default {
+        builder.filter_level(default);
+        if from_env.is_none() {
+            for (module, level) in LIBRARY_LEVELS {
+                builder.filter_module(module, level.min(default));
+            }
+        }
+    }
     for (logger, level) in levels {
-        if let Some(filter) = level.filter() {
-            builder.filter(logger.as_deref(), filter);
+        if let (Some(logger), Some(level)) = (logger, level.filter()) {
+            builder.filter_module(logger, level);
         }
     }
     builder.target(env_logger::Target::Stderr).init();

@@ -218,7 +218,9 @@ async fn serve(
     }
     .fuse());
     loop {
-        futures::select! {
+        // Biased: a stop request wins over whatever is queued, and the demo's end over more
+        // candidates; each candidate costs microseconds, so a signal is seen within one.
+        futures::select_biased! {
             signal = shutdown.requested().fuse() => {
                 say(node, log::Level::Info, &format!("{signal}: leaving the ROS graph"));
                 return Ok(());
