@@ -5,7 +5,12 @@
 
 use crate::msg::{answer, invalid, GraspCandidate, GripRecommendation};
 use crate::solver::Settings;
-use std::io::{BufRead, Write};
+use std::io::{BufRead, Read, Write};
+
+/// Longest line read, bytes (a candidate with a 1 MiB id is about 1 MiB); a longer line is
+/// answered with status 2 and skipped, so memory stays bounded even by an input without line
+/// breaks.
+pub const MAX_LINE_BYTES: usize = 16 << 20;
 
 /// What a run of [`answer_lines`] did.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -63,21 +68,33 @@ pub fn answer_lines(
     let mut line = Vec::new();
     for number in 1.. {
         line.clear();
-        let read = input
+        let read_error = |source| LinesError::Read {
+            line: number,
+            source,
+        };
+        let read = (&mut input)
+            .take(MAX_LINE_BYTES as u64 + 1)
             .read_until(b'\n', &mut line)
-            .map_err(|source| LinesError::Read {
-                line: number,
-                source,
-            })?;
+            .map_err(read_error)?;
         if read == 0 {
             break;
         }
-        let text = line.strip_suffix(b"\n").unwrap_or(&line);
-        let text = text.strip_suffix(b"\r").unwrap_or(text);
-        if text.iter().all(u8::is_ascii_whitespace) {
-            continue;
-        }
-        let reply = answer_line(text, number, settings);
+        let reply = if line.len() > MAX_LINE_BYTES && !line.ends_with(b"\n") {
+            skip_line(&mut input).map_err(read_error)?;
+            let mut r = invalid(
+                &GraspCandidate::default(),
+                &format_args!("longer than {MAX_LINE_BYTES} bytes"),
+            );
+            r.message = format!("line {number}: {}", r.message);
+            r
+        } else {
+            let text = line.strip_suffix(b"\n").unwrap_or(&line);
+            let text = text.strip_suffix(b"\r").unwrap_or(text);
+            if text.iter().all(u8::is_ascii_whitespace) {
+                continue;
+            }
+            answer_line(text, number, settings)
+        };
         counts.answered += 1;
         if reply.status != GripRecommendation::STATUS_OK {
             counts.not_solved += 1;
@@ -94,6 +111,26 @@ pub fn answer_lines(
         }
     }
     Ok(counts)
+}
+
+/// Reads past the rest of the current line, its line break included, keeping nothing.
+fn skip_line(input: &mut impl BufRead) -> std::io::Result<()> {
+    loop {
+        let buf = input.fill_buf()?;
+        if buf.is_empty() {
+            return Ok(());
+        }
+        match buf.iter().position(|&b| b == b'\n') {
+            Some(i) => {
+                input.consume(i + 1);
+                return Ok(());
+            }
+            None => {
+                let n = buf.len();
+                input.consume(n);
+            }
+        }
+    }
 }
 
 /// What can be salvaged from a line that is not a valid candidate: its `id` and `header`, so the
@@ -157,6 +194,21 @@ mod tests {
         assert!(out[2]["message"]
             .as_str()
             .is_some_and(|m| m.starts_with("line 4: ")));
+    }
+
+    #[test]
+    fn a_line_too_long_is_refused_and_skipped() {
+        let mut input = vec![b'x'; MAX_LINE_BYTES + 10];
+        input.extend_from_slice(b"\n{}\n");
+        let (out, counts) = run(&input);
+        assert_eq!(counts.answered, 2);
+        assert_eq!(
+            out[0]["message"],
+            format!("line 1: invalid input: longer than {MAX_LINE_BYTES} bytes")
+        );
+        assert!(out[1]["message"]
+            .as_str()
+            .is_some_and(|m| m.starts_with("line 2: ")));
     }
 
     #[test]

@@ -17,10 +17,11 @@
 //!   through malloc and are not counted (see `record::bounded`).
 //! - **Hangs**: a watchdog aborts the process when one case runs longer than 20 s.
 //!
-//! The default is a few thousand cases per target, seconds in `cargo test`. The long run:
+//! The default is 2,000 cases per target, seconds in `cargo test`. The long run (the test profile
+//! is optimised; `--release` works as well):
 //!
 //! ```sh
-//! GRASP_ORIENT_FUZZ_CASES=1000000 cargo test --release --test fuzz -- --nocapture
+//! GRASP_ORIENT_FUZZ_CASES=1000000 cargo test --test fuzz -- --nocapture
 //! ```
 //!
 //! `GRASP_ORIENT_FUZZ_SEED=N` repeats a run; `GRASP_ORIENT_FUZZ_SAVE=FILE` writes each input to

@@ -37,8 +37,9 @@ const COLOURS: [RGBColor; 6] = [
 /// Draws the figure.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let settings = args.options.settings()?;
-    let text = std::fs::read_to_string(&args.candidate)
-        .with_context(|| format!("cannot read {}", args.candidate.display()))?;
+    let text =
+        grasp_orient::config::read_text(&args.candidate, grasp_orient::config::MAX_FILE_BYTES)
+            .with_context(|| format!("cannot read {}", args.candidate.display()))?;
     let message: GraspCandidate = serde_json::from_str(&text)
         .with_context(|| format!("{} is not a GraspCandidate", args.candidate.display()))?;
     let candidate = Candidate::try_from(&message).map_err(|e| anyhow!("invalid input: {e}"))?;

@@ -15,6 +15,27 @@ pub use params::{Config, PARAMETERS};
 use crate::solver::Settings;
 use std::path::Path;
 
+/// Largest settings file read, bytes: far above any params file, far below a device that never
+/// ends (`--config /dev/zero`).
+pub const MAX_FILE_BYTES: u64 = 16 << 20;
+
+/// The text of a file of at most `max` bytes (any kind of file: a pipe, `/dev/stdin`); longer is
+/// an error, not a read that never ends.
+pub fn read_text(path: &Path, max: u64) -> std::io::Result<String> {
+    use std::io::Read;
+    let mut text = String::new();
+    std::fs::File::open(path)?
+        .take(max + 1)
+        .read_to_string(&mut text)?;
+    if text.len() as u64 > max {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("longer than {max} bytes"),
+        ));
+    }
+    Ok(text)
+}
+
 /// The params file shipped with the package, compiled in.
 pub const DEFAULT_YAML: &str = include_str!("../../config/grasp_orient.yaml");
 
@@ -150,7 +171,7 @@ impl Config {
         let mut config = Config::default();
         config.merge_yaml(DEFAULT_YAML, "built-in config/grasp_orient.yaml", node)?;
         if let Some(path) = file {
-            let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+            let text = read_text(path, MAX_FILE_BYTES).map_err(|source| ConfigError::Read {
                 path: path.display().to_string(),
                 source,
             })?;

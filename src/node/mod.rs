@@ -45,7 +45,7 @@ pub struct Options {
 fn load_config(ros: &RosArgs, node: &str) -> anyhow::Result<(Config, crate::solver::Settings)> {
     let mut config = Config::load(None, node)?;
     for path in &ros.params_files {
-        let text = std::fs::read_to_string(path)
+        let text = crate::config::read_text(path, crate::config::MAX_FILE_BYTES)
             .map_err(|source| crate::config::ConfigError::Read {
                 path: path.display().to_string(),
                 source,
