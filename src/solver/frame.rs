@@ -118,26 +118,52 @@ fn vector(
     Ok(())
 }
 
-/// `v` divided by its largest component's magnitude, and that magnitude; `None` for the zero
-/// vector.
+/// Vectors whose largest component lies in this range are squared as they are: no square of
+/// theirs can underflow or overflow.
+const SQUARE_SAFE: std::ops::RangeInclusive<f64> = 1e-150..=1e150;
+
+/// `x · 2^k`, exact (in steps, since one power of two covers only `2^-1022 ..= 2^1023`).
+fn times_pow2(x: f64, mut k: i32) -> f64 {
+    let mut out = x;
+    while k != 0 {
+        let step = k.clamp(-1000, 1000);
+        out *= f64::from_bits(((step + 1023) as u64) << 52);
+        k -= step;
+    }
+    out
+}
+
+/// `v` times `2^k` and `k`, with `k` chosen so that the largest component lies in
+/// [`SQUARE_SAFE`] (`k = 0` when it already does); `None` for the zero vector.
 ///
 /// # Formula
-/// `m = max(|v_x|, |v_y|)`, `v / m`. Every later square is of a number in `[-1, 1]`, so no
-/// length the contract admits (from the smallest subnormal up) underflows or overflows when
-/// squared; and scaling `v` by a power of two leaves `v / m` bit for bit unchanged.
-fn scaled(v: &Vector2<f64>) -> Option<(Vector2<f64>, f64)> {
+/// With `m = max(|v_x|, |v_y|)` outside the safe range, `k = -floor(log2 m)`, so `m 2^k` is
+/// about 1. Multiplying by a power of two is exact, so a vector and any power-of-two multiple of
+/// it come out bit for bit the same, and a vector already in range is left as it is (the same
+/// arithmetic as squaring it directly): no length the contract admits, from the smallest
+/// subnormal up, underflows or overflows when squared.
+fn in_square_range(v: &Vector2<f64>) -> Option<(Vector2<f64>, i32)> {
     let m = v.x.abs().max(v.y.abs());
-    (m > 0.0).then(|| (v / m, m))
+    if m.is_nan() || m == 0.0 {
+        return None;
+    }
+    if SQUARE_SAFE.contains(&m) {
+        return Some((*v, 0));
+    }
+    let k = -(m.log2().floor() as i32);
+    Some((v.map(|c| times_pow2(c, k)), k))
 }
 
-/// The Euclidean length of `v`, without squaring `v` itself (see [`scaled`]).
+/// The Euclidean length of `v`, without squaring a component out of range (see
+/// [`in_square_range`]).
 pub(crate) fn length(v: &Vector2<f64>) -> f64 {
-    scaled(v).map_or(0.0, |(u, m)| m * u.norm())
+    in_square_range(v).map_or(0.0, |(w, k)| times_pow2(w.norm(), -k))
 }
 
-/// The unit vector along `v`, computed scale-free (see [`scaled`]); `None` for the zero vector.
+/// The unit vector along `v`, computed scale-free (see [`in_square_range`]); `None` for the zero
+/// vector.
 pub(crate) fn unit(v: &Vector2<f64>) -> Option<Vector2<f64>> {
-    scaled(v).map(|(u, _)| u / u.norm())
+    in_square_range(v).map(|(w, _)| w / w.norm())
 }
 
 fn unit_in_plane(field: &'static str, v: &Vector2<f64>) -> Result<Vector2<f64>, InvalidInput> {
