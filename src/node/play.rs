@@ -37,9 +37,9 @@ pub fn publish(
     let total = candidates.len();
     let sent = session.run(async |node, shutdown| {
         let mut wait = std::pin::pin!(publisher.wait_for_subscription(node).fuse());
-        let mut timeout = std::pin::pin!(FutureExt::fuse(smol::Timer::after(
-            Duration::from_secs_f64(pace.wait)
-        )));
+        let timer = Duration::try_from_secs_f64(pace.wait)
+            .map_or_else(|_| smol::Timer::never(), smol::Timer::after);
+        let mut timeout = std::pin::pin!(FutureExt::fuse(timer));
         futures::select! {
             _ = wait => {}
             _ = timeout => bail!("no subscriber on {topic_name} after {} s", pace.wait),
@@ -55,8 +55,12 @@ pub fn publish(
         for c in candidates {
             if pace.rate > 0.0 {
                 let offset = c.log_time.saturating_sub(first) as f64 / 1e9 / pace.rate;
-                let due = start + Duration::from_secs_f64(offset);
-                let mut sleep = std::pin::pin!(FutureExt::fuse(smol::Timer::at(due)));
+                // Beyond what a clock can hold: never due (a stop request still ends it).
+                let due = Duration::try_from_secs_f64(offset)
+                    .ok()
+                    .and_then(|d| start.checked_add(d));
+                let timer = due.map_or_else(smol::Timer::never, smol::Timer::at);
+                let mut sleep = std::pin::pin!(FutureExt::fuse(timer));
                 futures::select! {
                     _ = sleep => {}
                     _ = shutdown.requested().fuse() => break,
