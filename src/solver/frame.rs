@@ -241,8 +241,8 @@ pub fn validate(c: &Candidate) -> Result<(), InvalidInput> {
     Ok(())
 }
 
-/// A friction coefficient in `[MIN_FRICTION, MAX_FRICTION]`.
-fn friction(field: &'static str, v: f64) -> Result<f64, InvalidInput> {
+/// A friction coefficient in `[MIN_FRICTION, MAX_FRICTION]` (the spatial model's too).
+pub(crate) fn friction(field: &'static str, v: f64) -> Result<f64, InvalidInput> {
     positive(field, v, MAX_FRICTION, "")?;
     if v < MIN_FRICTION {
         Err(InvalidInput::BelowMinimum {
