@@ -6,10 +6,16 @@
 //! the singles' answers kept in a list (as a set keeps them until it is published), and the
 //! ranking alone.
 //!
+//! The allocator is the binary's (mimalloc, `src/main.rs`): with glibc's, keeping 1,000 answers
+//! cost 1.2 times the singles (1.39 ms against 1.67 ms), with mimalloc nothing measurable.
+//!
 //! `cargo bench --bench sets` (add `-- N` for sets of N candidates; default 1000).
 
 #[path = "../tests/common/mod.rs"]
 mod common;
+
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 use common::random_grasp;
 use grasp_orient::msg::{GraspCandidate, GraspCandidateSet, Point, Vector3};
