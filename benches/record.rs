@@ -58,6 +58,8 @@ fn message(i: usize, c: &grasp_orient::solver::Candidate) -> GraspCandidate {
     }
 }
 
+/// Longer than a screen: it reads top to bottom as the report it prints, one measurement after
+/// another, each with its baseline.
 fn main() {
     let n: usize = std::env::args()
         .skip(1)

@@ -45,6 +45,8 @@ fn time_pair(rounds: usize, n: usize, mut a: impl FnMut(), mut b: impl FnMut()) 
     (best_a, best_b, ratios[ratios.len() / 2])
 }
 
+/// Longer than a screen: it reads top to bottom as the report it prints, one measurement after
+/// another, each with its baseline.
 fn main() {
     let mut rng = ChaCha8Rng::seed_from_u64(2027);
     let mut cases: Vec<(Candidate, Uncertainty)> = Vec::new();

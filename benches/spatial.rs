@@ -35,6 +35,8 @@ fn time_per<T>(items: &[T], rounds: usize, mut f: impl FnMut(&T)) -> f64 {
     best
 }
 
+/// Longer than a screen: it reads top to bottom as the report it prints, one kind of grasp after
+/// another, each against the planar baseline.
 fn main() {
     let settings = Settings::default();
     let mut rng = ChaCha8Rng::seed_from_u64(2026);

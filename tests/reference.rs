@@ -33,6 +33,10 @@ fn solve(c: &Candidate, settings: &Settings) -> Recommendation {
     }
 }
 
+/// The solver's answer against the reference: the power at the solver's angle, no scanned angle
+/// lower, the current pose and the reported forces.
+///
+/// Longer than a screen: one block per quantity compared, each with its tolerance and why.
 fn check(
     c: &Candidate,
     settings: &Settings,

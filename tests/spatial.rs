@@ -70,6 +70,9 @@ fn rotate(k: &Vector3<f64>, angle: f64, v: &Vector3<f64>) -> Vector3<f64> {
 
 /// Everything checkable at the solver's own answer: the reference's power there, the solver's
 /// forces against the 3D balance and cones, the rotation, and the current pose.
+///
+/// Longer than a screen: one block of checks per part of the answer, in the answer's order, each
+/// with the tolerance it needs and why.
 fn check_answer(c: &SpatialCandidate, s: &Settings, worst: &mut Worst) {
     let r = spatial(c, s);
     let reference = SpatialReference::new(c, s.friction_safety_factor);
@@ -589,6 +592,8 @@ fn refused(c: &SpatialCandidate) -> InvalidInput {
 }
 
 /// Bad input names the field; grasps without force closure name the contact and the reason.
+///
+/// Longer than a screen: the catalogue of refusals, one case each, in one table-like list.
 #[test]
 fn refusals_name_the_field_and_the_contact() {
     assert!(matches!(

@@ -95,6 +95,9 @@ fn close_within(a: f64, b: f64, scale: f64, rel: f64) -> bool {
 /// `b` is `a` seen after rotating the scene by `rot`, scaling forces by `w`, and (with `swap`)
 /// exchanging the contacts' labels. Where the minimum is a tie (two orientations of equal power)
 /// only the power is compared.
+///
+/// Longer than a screen: one check per field of the answer, each with the rule by which it
+/// transforms, so that a relation is stated in one place.
 fn same_answer(
     c: &SpatialCandidate,
     other: &SpatialCandidate,

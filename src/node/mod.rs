@@ -137,28 +137,7 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
     let endpoints = Endpoints::create(&mut session, config.qos_depth)?;
     let services = ParameterServices::offer(session.node_mut(), &shared)?;
     let topics = &endpoints.topics;
-    say(
-        session.node(),
-        log::Level::Info,
-        &format!(
-            "node {} on ROS_DOMAIN_ID={}{}: waiting for grasp_orient/msg/GraspCandidate on \
-             {}; answers on {}, markers on {}; sets on {} -> {} and the service {}/{}. \
-             Send a test grasp with: python3 examples/publish_test_grasp.py",
-            session.node().fully_qualified_name(),
-            session.graph.domain_id,
-            session.graph.scope(),
-            topics.candidates,
-            topics.recommendations,
-            topics.markers.as_deref().unwrap_or_default(),
-            topics.sets.as_ref().map_or("", |s| s.candidates.as_str()),
-            topics
-                .sets
-                .as_ref()
-                .map_or("", |s| s.recommendations.as_str()),
-            session.node().fully_qualified_name(),
-            sets::SERVICE,
-        ),
-    );
+    announce(&session, topics);
     let (on_stop, mut woken) = wake_on_change(&shared);
     let mut answerer = Answerer::new(
         shared,
@@ -206,6 +185,32 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
     }
     session.close();
     outcome
+}
+
+/// The first line a user reads: where the node listens and answers, and how to try it.
+fn announce(session: &Session, topics: &Topics) {
+    say(
+        session.node(),
+        log::Level::Info,
+        &format!(
+            "node {} on ROS_DOMAIN_ID={}{}: waiting for grasp_orient/msg/GraspCandidate on \
+             {}; answers on {}, markers on {}; sets on {} -> {} and the service {}/{}. \
+             Send a test grasp with: python3 examples/publish_test_grasp.py",
+            session.node().fully_qualified_name(),
+            session.graph.domain_id,
+            session.graph.scope(),
+            topics.candidates,
+            topics.recommendations,
+            topics.markers.as_deref().unwrap_or_default(),
+            topics.sets.as_ref().map_or("", |s| s.candidates.as_str()),
+            topics
+                .sets
+                .as_ref()
+                .map_or("", |s| s.recommendations.as_str()),
+            session.node().fully_qualified_name(),
+            sets::SERVICE,
+        ),
+    );
 }
 
 /// Parameter sets and a recording writer that stops both wake the answering loop, so that each

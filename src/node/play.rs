@@ -2,7 +2,7 @@
 //! `rate` times it), like `ros2 bag play`; `grasp_orient play` (`cli/play.rs`) reads the bag and
 //! opens the session.
 
-use super::session::{create_topic, qos, Session};
+use super::session::{create_topic, qos, Session, Shutdown};
 use crate::msg::{GraspCandidate, GraspCandidateSet};
 use crate::record::bag::Recorded;
 use anyhow::bail;
@@ -88,6 +88,20 @@ async fn wait_for_subscribers(
     Ok(true)
 }
 
+/// Waits until `offset` seconds after `start`; false when a stop request comes first. An
+/// offset beyond what a clock can hold is never due (a stop request still ends the wait).
+async fn paced(start: Instant, offset: f64, shutdown: &mut Shutdown) -> bool {
+    let due = Duration::try_from_secs_f64(offset)
+        .ok()
+        .and_then(|d| start.checked_add(d));
+    let timer = due.map_or_else(smol::Timer::never, smol::Timer::at);
+    let mut sleep = std::pin::pin!(FutureExt::fuse(timer));
+    futures::select! {
+        _ = sleep => true,
+        _ = shutdown.requested().fuse() => false,
+    }
+}
+
 /// Publishes `candidates` on `grasp_candidates` and `sets` on `grasp_candidate_sets` (both
 /// remappable), in the order and at the pace they were received (their `log_time`): waits for a
 /// subscriber on each topic with something to send, keeps the recorded gaps, stops early on
@@ -136,15 +150,8 @@ pub fn publish(
         for (time, item) in &items {
             if pace.rate > 0.0 {
                 let offset = time.saturating_sub(first) as f64 / 1e9 / pace.rate;
-                // Beyond what a clock can hold: never due (a stop request still ends it).
-                let due = Duration::try_from_secs_f64(offset)
-                    .ok()
-                    .and_then(|d| start.checked_add(d));
-                let timer = due.map_or_else(smol::Timer::never, smol::Timer::at);
-                let mut sleep = std::pin::pin!(FutureExt::fuse(timer));
-                futures::select! {
-                    _ = sleep => {}
-                    _ = shutdown.requested().fuse() => break,
+                if !paced(start, offset, shutdown).await {
+                    break;
                 }
             }
             match item {

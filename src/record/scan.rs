@@ -399,6 +399,10 @@ pub enum Parsed<'a> {
 
 /// Reads the fields of one record. Fields added after the ones read (later versions of the
 /// format) are ignored, as the specification asks.
+///
+/// Longer than a screen by a few lines: one short arm per record type of the specification,
+/// field by field in its order; the records with checks of their own (chunk, attachment,
+/// statistics) have functions of their own.
 pub fn parse<'a>(record: &Record<'a>) -> Result<Parsed<'a>, Damage> {
     Ok(match record.opcode {
         op::HEADER => {

@@ -117,6 +117,10 @@ impl Reference {
 
     /// The answer at `omega` and the derivative of the power with respect to `omega`, from the
     /// active constraint (one-sided at a switch of constraints).
+    ///
+    /// Longer than a screen: the whole reference computation at one angle (the SOCP, its
+    /// certificate, the slope from the active constraint) kept in one piece so that it can be read
+    /// against the paper without jumping.
     pub fn at_with_slope(&self, omega: f64) -> Option<(RefPoint, f64)> {
         let w = rot(self.weight, -omega);
         // d/dω of rot(W, -ω) is -rot(W, -ω + π/2).
