@@ -33,8 +33,8 @@ fn solve(c: &Candidate, settings: &Settings) -> Recommendation {
     }
 }
 
-/// The solver's answer against the reference: the power at the solver's angle, no scanned angle
-/// lower, the current pose and the reported forces.
+/// The solver's answer against the reference: its rotation inside the allowed arc, the power at
+/// the solver's angle, no scanned angle lower, the reported forces, and the current pose.
 ///
 /// Longer than a screen: one block per quantity compared, each with its tolerance and why.
 fn check(
