@@ -24,6 +24,7 @@ pub struct Counts {
 
 /// Why [`answer_lines`] stopped early.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum LinesError {
     /// The input could not be read.
     #[error("cannot read line {line}: {source}")]

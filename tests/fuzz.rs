@@ -2,7 +2,9 @@
 //! panics, zero aborts, no hang, and memory bounded by the input's size.
 //!
 //! Targets: the CDR decoding of every message the node and the recordings read
-//! (`GraspCandidate`, `GripRecommendation`, `MarkerArray`), the MCAP reader behind `replay` and
+//! (`GraspCandidate`, `GripRecommendation`, `GraspCandidateSet`, `GripRecommendationSet`,
+//! `MarkerArray`; the node's DDS reader decodes with the same `cdr-encoding` crate and the same
+//! serde implementations, after RustDDS has read the encapsulation header), the MCAP reader behind `replay` and
 //! `play` (`bag::read_bytes`, which `bag::read` calls), `recover` (`recover::recover_bytes`), and
 //! the JSON-lines reader behind `solve`. Inputs are random bytes (one in five) or valid seeds with one to eight mutations: bit
 //! flips, bytes and boundary words (0, 0xff.., 2^31, 2^63, u64::MAX) written anywhere, insertions,

@@ -16,6 +16,7 @@ pub trait Choice: Copy + FromStr<Err = UnknownName> + Display + 'static {
 /// A name that is not among the choices.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("{given:?} is not one of {}", .names.join(", "))]
+#[non_exhaustive]
 pub struct UnknownName {
     /// What was given.
     pub given: String,
@@ -143,6 +144,7 @@ named_choice!(RankBy, [RankBy::GripForce, RankBy::Objective]);
 /// Gravity-angle bounds that are not finite with `lo < hi`.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 #[error("bounds must be finite with lower < upper, got {lo} and {hi}")]
+#[non_exhaustive]
 pub struct InvalidBounds {
     /// Lower bound given, rad.
     pub lo: f64,

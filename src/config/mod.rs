@@ -42,6 +42,7 @@ pub const DEFAULT_YAML: &str = include_str!("../../config/grasp_orient.yaml");
 
 /// Why settings were refused.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ConfigError {
     /// The file could not be read.
     #[error("cannot read {path}: {source}")]

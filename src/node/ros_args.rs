@@ -75,6 +75,7 @@ impl std::str::FromStr for LogLevel {
 
 /// A malformed ROS argument.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum RosArgsError {
     /// A flag without its value.
     #[error("--ros-args: {flag} needs a value")]

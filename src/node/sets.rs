@@ -95,6 +95,7 @@ pub async fn answer_topic(
         recorded,
     } = outcome;
     super::tell(node, notes);
+    log_answer(&reply, "topic");
     if let Err(e) = endpoints.answers.async_publish(reply).await {
         say(
             node,
@@ -120,6 +121,7 @@ pub async fn answer_call(
     let received = now_ns();
     let outcome = answerer.handle_set(request.candidate_set, received, received);
     super::tell(node, outcome.notes);
+    log_answer(&outcome.reply, "service");
     let response = RecommendResponse {
         recommendation_set: outcome.reply,
     };
@@ -133,6 +135,18 @@ pub async fn answer_call(
     let answered = now_ns();
     publish_markers(markers, outcome.markers).await;
     super::tell(node, answerer.record_set(outcome.recorded, answered));
+}
+
+/// One line at debug per set answered, as for single candidates.
+fn log_answer(reply: &GripRecommendationSet, via: &str) {
+    log::debug!(
+        "set {:?} ({via}): {} candidates, {} ranked by {}, status {}",
+        reply.set_id.chars().take(64).collect::<String>(),
+        reply.recommendations.len(),
+        reply.ranking.len(),
+        reply.ranked_by,
+        reply.status
+    );
 }
 
 async fn publish_markers(markers: &Publisher<MarkerArray>, array: Option<MarkerArray>) {

@@ -145,10 +145,10 @@ pub struct RecordedFields {
 /// `pkg/Name` of our message types with trailing fields, and their fields.
 fn our_fields(type_name: &str) -> Option<Vec<&'static str>> {
     let fields = match type_name {
-        "grasp_orient/GraspCandidate" => GraspCandidate::fields(),
-        "grasp_orient/GripRecommendation" => GripRecommendation::fields(),
-        "grasp_orient/GraspCandidateSet" => GraspCandidateSet::fields(),
-        "grasp_orient/GripRecommendationSet" => GripRecommendationSet::fields(),
+        GraspCandidate::TYPE_NAME => GraspCandidate::fields(),
+        GripRecommendation::TYPE_NAME => GripRecommendation::fields(),
+        GraspCandidateSet::TYPE_NAME => GraspCandidateSet::fields(),
+        GripRecommendationSet::TYPE_NAME => GripRecommendationSet::fields(),
         _ => return None,
     };
     Some(fields.into_iter().map(|(name, _)| name).collect())
@@ -158,10 +158,10 @@ impl RecordedFields {
     /// Notes the fields of every one of our types that `t` holds.
     fn note(&mut self, t: &RecordedType) {
         for name in [
-            "grasp_orient/GraspCandidate",
-            "grasp_orient/GripRecommendation",
-            "grasp_orient/GraspCandidateSet",
-            "grasp_orient/GripRecommendationSet",
+            GraspCandidate::TYPE_NAME,
+            GripRecommendation::TYPE_NAME,
+            GraspCandidateSet::TYPE_NAME,
+            GripRecommendationSet::TYPE_NAME,
         ] {
             if let Some(n) = t.field_count(name) {
                 self.limit(name, n);

@@ -6,7 +6,7 @@ one a good candidate answered exactly as `grasp_orient solve` answers it (issue 
 - Payloads that are not a GraspCandidate (empty, truncated, lying lengths, another message type): no answer,
   a counted and logged refusal, and the same publisher's next candidate answered at once.
 - Parameters out of their domain: refused with the reason; bounds of any span: answered at once.
-- A stop request with candidates queued: exit within a second. --log-level: the level the user asked for.
+- A stop request with seconds of work queued: exit within a second, the work left undone. --log-level: the level the user asked for.
 """
 from __future__ import annotations
 
@@ -221,27 +221,46 @@ def test_descriptors_state_every_numeric_domain(peer, client):
 # ---------------------------------------------------------------------------------------------------
 # The process: stop requests, log levels, params files
 # ---------------------------------------------------------------------------------------------------
-def test_stop_request_honoured_within_a_second_with_candidates_queued(start_node, peer):
-    """Bounds 1e8 rad wide made every candidate take seconds; with a queue of them SIGTERM took 9 s. Now the
-    node answers in microseconds and a stop request wins over the queue."""
-    n = start_node("--ros-args", "-r", "__ns:=/slow", "-r", "__node:=slow", "-p", "range:=bounds",
-                   "-p", "range_min:=-1e8", "-p", "range_max:=1e8", "-p", "record:=false", "-p", "qos_depth:=5000",
-                   name="grasp_orient node /slow (bounds 1e8)")
-    c = GraspClient(peer, ns="/slow", depth=5000)
+def test_stop_request_honoured_within_a_second_with_work_queued(start_node, peer):
+    """With slow candidates queued (bounds 1e8 rad wide took seconds each) SIGTERM took 9 s. Candidates are
+    cheap now, so the queue here is of sets of 10,000 candidates (tens of ms each, answers of about 3 MB):
+    seconds of work in all. The node must stop within a second and leave most of it unanswered, which a
+    loop that drained its queue before looking at the signal would not."""
+    from rclpy.serialization import serialize_message
+
+    from grasp_orient.msg import GraspCandidateSet, GripRecommendationSet
+
+    n = start_node("--ros-args", "-r", "__ns:=/slow", "-r", "__node:=slow", "-p", "record:=false",
+                   "-p", "publish_markers:=false", "-p", "qos_depth:=100", "--log-level", "debug",
+                   name="grasp_orient node /slow (sets of 10,000 queued)")
+    sets, per_set = 40, 10_000
+    big = GraspCandidateSet()
+    big.id = "queued"
+    big.candidates = [candidate_msg(c) for c in random_batch(per_set, SEED + 91, "queued")]
+    raw = serialize_message(big)
+    pub = peer.node.create_publisher(GraspCandidateSet, "/slow/grasp_candidate_sets", reliable_qos(sets))
+    sub = peer.node.create_subscription(GripRecommendationSet, "/slow/grip_recommendation_sets",
+                                        lambda m: None, reliable_qos(sets), raw=True)
     try:
-        c.ensure_roundtrip()
-        cands = random_batch(2000, SEED + 91, "queued")
-        for cand in cands:
-            c.pub.publish(candidate_msg(cand))
+        assert peer.spin_until(lambda: pub.get_subscription_count() > 0 and sub.get_publisher_count() > 0, 10.0), \
+            "the node's set topics did not match"
+        for _ in range(sets):
+            pub.publish(raw)
+        # The node's own line for its first set: from then on it has the other sets to answer.
+        n.wait_for_line(r'set "queued" \(topic\): 10000 candidates', timeout=60.0)
         t0 = time.monotonic()
         n.proc.send_signal(signal.SIGTERM)
-        rc = n.proc.wait(10)
+        rc = n.proc.wait(30)
         took = time.monotonic() - t0
     finally:
-        peer.node.destroy_publisher(c.pub)
-        peer.node.destroy_subscription(c.sub)
+        peer.node.destroy_publisher(pub)
+        peer.node.destroy_subscription(sub)
     assert rc == 0, f"exit {rc}\n{n.output(20)}"
     assert took < 1.0, f"SIGTERM honoured after {took:.2f} s\n{n.output(20)}"
+    done = [int(m.group(1)) for m in map(re.compile(r"answered (\d+) candidates").search, n.all_lines()) if m]
+    assert done, f"no summary line\n{n.output(20)}"
+    assert done[-1] < sets * per_set // 2, \
+        f"{done[-1]} of {sets * per_set} candidates answered: the queue was drained before the stop\n{n.output(20)}"
 
 
 def _debug_lines(node, cid: str) -> list[str]:
