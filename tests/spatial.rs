@@ -11,8 +11,8 @@ mod common;
 use common::spatial::{random_spatial_grasp, Held, Kind, RefRange, SpatialReference};
 use common::{random_grasp, wrap};
 use grasp_orient::solver::{
-    solve_orientation, solve_spatial, AllowedRange, AxisRelation, Contact, CurrentPose,
-    InvalidInput, Objective, Recommendation, Settings, SpatialCandidate, SpatialMiss,
+    analyse_spatial, solve_orientation, solve_spatial, AllowedRange, AxisRelation, Contact,
+    CurrentPose, InvalidInput, Objective, Recommendation, Settings, SpatialCandidate, SpatialMiss,
     SpatialRecommendation, SpatialVerdict, Verdict,
 };
 use nalgebra::{Rotation3, Unit, Vector3};
@@ -276,6 +276,54 @@ fn graspable_range_internal_force_and_safety_factor_match_the_reference() {
         worst.power
     );
     assert!(lost > 0 && held > 0);
+}
+
+/// `analyse_spatial` (what `plot` draws for a spatial candidate) is the objective over Π: its
+/// recommendation is `solve_spatial`'s, and its power at every gravity angle of the graspable range
+/// equals the reference's with gravity along that angle's direction in Π (the paper frame of Π is
+/// right-handed about `plane_normal`, so the direction at `θ` is the recommended one turned by
+/// `θ − θ*` about it).
+#[test]
+fn analysis_in_the_plane_is_the_objective_over_the_plane() {
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let settings = Settings::default();
+    let mut worst = 0f64;
+    for kind in kinds(60) {
+        let c = random_spatial_grasp(&mut rng, kind);
+        let (analysis, r) = match analyse_spatial(&c, &settings) {
+            Ok(Ok(pair)) => pair,
+            other => panic!("analyse_spatial refused a force-closure grasp {c:?}: {other:?}"),
+        };
+        assert_eq!(r, spatial(&c, &settings));
+        let again = analysis.recommend(&settings.range).expect("the same range");
+        let weight = c.mass * c.gravity.norm();
+        let scale = r.planar.gripping_power.max(weight);
+        assert!((again.gripping_power - r.planar.gripping_power).abs() <= 1e-12 * scale);
+        assert!((again.gravity_angle - r.planar.gravity_angle).abs() <= 1e-12);
+        let reference = SpatialReference::new(&c, 1.0);
+        let (lo, hi) = analysis.graspable_range();
+        for k in 1..8 {
+            let theta = lo + (hi - lo) * k as f64 / 8.0;
+            let dir = rotate(
+                &r.plane_normal,
+                theta - r.planar.gravity_angle,
+                &r.gravity_direction,
+            );
+            let want = reference
+                .at(&dir)
+                .power()
+                .unwrap_or_else(|| panic!("{kind:?}: the reference cannot hold θ = {theta}"));
+            let got = analysis.evaluate(theta).power;
+            // Relative to the power compared: near the friction angle it reaches 1e5 weights.
+            let err = (got - want).abs() / want.max(scale);
+            assert!(
+                err <= SOCP_TOL,
+                "{kind:?} θ = {theta}: analysis {got}, reference {want} ({err:e}); {c:?}"
+            );
+            worst = worst.max(err);
+        }
+    }
+    println!("analysis over Π against the reference: worst {worst:.1e}");
 }
 
 /// No gravity direction the reference finds, scanning the allowed directions of the plane (or

@@ -538,6 +538,10 @@ impl<'a> PlaneSolve<'a> {
             current_pose,
             axis,
             center_of_mass_offset: self.geometry.offset,
+            plane_candidate: Candidate {
+                mass: w,
+                ..self.candidate
+            },
             planar,
         }
     }
