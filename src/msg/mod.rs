@@ -12,7 +12,10 @@ mod convert;
 pub mod definitions;
 
 pub use contract::{message_type_name, RosMessage, RosType};
-pub use convert::{answer, clip, invalid, short_id, MessageLimits, MAX_TEXT_BYTES, SHORT_ID_CHARS};
+pub use convert::{
+    answer, answer_in_full, answer_spatial, clip, invalid, short_id, Answered, MessageLimits,
+    MAX_TEXT_BYTES, SHORT_ID_CHARS,
+};
 
 use serde::{Deserialize, Serialize};
 
