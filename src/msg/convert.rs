@@ -564,7 +564,8 @@ mod spatial_tests {
             assert!(a.spatial.is_none());
             a.reply
         };
-        let cases: [(&dyn Fn(&mut GraspCandidate), &str); 7] = [
+        type Change<'a> = &'a dyn Fn(&mut GraspCandidate);
+        let cases: [(Change, &str); 7] = [
             (
                 &|m| m.contact_1.z = f64::NAN,
                 "contact_1.z is not a finite number",
