@@ -6,7 +6,9 @@
 use super::markers;
 use super::params::Shared;
 use super::params::Version;
-use crate::msg::{answer, short_id, GraspCandidate, GripRecommendation, MarkerArray};
+use crate::msg::{
+    answer_in_full, short_id, Answered, GraspCandidate, GripRecommendation, MarkerArray,
+};
 use crate::record::lifecycle::{Change, Recording, Wanted};
 use crate::record::settings::SettingsRecord;
 use crate::record::{Entry, OnStop, Payload, RecordError, Topics};
@@ -196,14 +198,17 @@ impl Answerer {
             let version = live.version_at(received);
             (version.settings, version.config.publish_markers)
         };
-        let reply = if self.echo {
-            GripRecommendation {
-                header: candidate.header.clone(),
-                candidate_id: candidate.id.clone(),
-                ..GripRecommendation::default()
+        let Answered { reply, spatial } = if self.echo {
+            Answered {
+                reply: GripRecommendation {
+                    header: candidate.header.clone(),
+                    candidate_id: candidate.id.clone(),
+                    ..GripRecommendation::default()
+                },
+                spatial: None,
             }
         } else {
-            answer(&candidate, &settings)
+            answer_in_full(&candidate, &settings)
         };
         match reply.status {
             GripRecommendation::STATUS_OK => {}
@@ -223,7 +228,7 @@ impl Answerer {
         }
         self.counts.answered += 1;
         let markers = (markers_on && !self.echo && reply.status == GripRecommendation::STATUS_OK)
-            .then(|| markers::build(&candidate, &reply));
+            .then(|| markers::build(&candidate, &reply, spatial.as_deref()));
         let recorded = Recorded {
             reply: self.recording.is_on().then(|| reply.clone()),
             markers: markers
