@@ -22,6 +22,7 @@ fn topics() -> Topics {
         candidates: "/grasp_candidates".into(),
         recommendations: "/grip_recommendations".into(),
         markers: None,
+        sets: None,
     }
 }
 

@@ -18,6 +18,9 @@ struct Cli {
 enum Command {
     /// Solve JSON-lines grasp candidates: one JSON recommendation per line.
     Solve(cli::solve::Args),
+    /// Answer JSON-lines grasp candidates as one set, ranked by the force they need: a table, or
+    /// the set's answer as JSON.
+    Rank(cli::rank::Args),
     /// Plot the bounds and the gripping power of one candidate to SVG (like the paper's Fig. 9).
     Plot(cli::plot::Args),
     /// Run the ROS 2 node (ROS arguments follow --ros-args, as from ros2 run or launch).
@@ -52,6 +55,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse_from(&argv[..split]);
     let result = match &cli.command {
         Command::Solve(args) => cli::solve::run(args),
+        Command::Rank(args) => cli::rank::run(args),
         Command::Plot(args) => cli::plot::run(args),
         Command::Node(args) => cli::node::run(args, &argv[split..]),
         Command::Replay(args) => cli::replay::run(args),

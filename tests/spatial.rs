@@ -81,7 +81,7 @@ fn check_answer(c: &SpatialCandidate, s: &Settings, worst: &mut Worst) {
         power,
         clarabel,
         squeeze,
-        ..
+        forces,
     } = held
     else {
         panic!("reference: {held:?} at the solver's pose; grasp {c:?}, answer {r:?}");
@@ -114,6 +114,15 @@ fn check_answer(c: &SpatialCandidate, s: &Settings, worst: &mut Worst) {
         r.planar.internal_force
     );
     worst.power = worst.power.max(err);
+    // The finger force: the larger push of the reference's forces along the contact line.
+    let finger = pushes(c, &forces);
+    let finger_err = (finger - r.planar.finger_force).abs() / scale;
+    assert!(
+        finger_err <= SOCP_TOL,
+        "finger force: solver {} reference {finger} ({finger_err:e}); grasp {c:?}",
+        r.planar.finger_force
+    );
+    worst.power = worst.power.max(finger_err);
     // 2. The solver's own forces hold the object in 3D, inside the true cones.
     let [f1, f2] = r.force_vectors;
     let w = r.gravity_direction * weight;
@@ -173,16 +182,35 @@ fn check_answer(c: &SpatialCandidate, s: &Settings, worst: &mut Worst) {
                 "current power: solver {} reference {power}; grasp {c:?}",
                 r.planar.gripping_power_current
             );
-            worst.current = worst.current.max(err);
+            let Held::Yes { forces, .. } = held else {
+                unreachable!("matched above")
+            };
+            let finger = pushes(c, &forces);
+            let finger_err = (finger - r.planar.finger_force_current).abs()
+                / r.planar.finger_force_current.max(1e-3 * weight);
+            assert!(
+                finger_err <= SOCP_TOL,
+                "current finger force: solver {} reference {finger}; grasp {c:?}",
+                r.planar.finger_force_current
+            );
+            worst.current = worst.current.max(err).max(finger_err);
         }
         (CurrentPose::Swings { out_of_plane }, Held::No) => {
             assert!(r.planar.gripping_power_current.is_infinite());
+            assert!(r.planar.finger_force_current.is_infinite());
             assert!(out_of_plane > 0.0);
             worst.swings += 1;
         }
         (pose, held) => panic!("current pose {pose:?} but the reference says {held:?}; {c:?}"),
     }
     worst.grasps += 1;
+}
+
+/// The larger push of two 3D contact forces along the contact line, into the object, N: what
+/// `finger_force` reports (`src/solver/finger.rs`), computed here from the forces themselves.
+fn pushes(c: &SpatialCandidate, forces: &[Vector3<f64>; 2]) -> f64 {
+    let line = (c.contact_2 - c.contact_1).normalize();
+    forces[0].dot(&line).max(-forces[1].dot(&line))
 }
 
 fn report(title: &str, tally: &BTreeMap<String, Worst>) {
@@ -507,6 +535,8 @@ fn planar_gap(p: &Recommendation, s: &SpatialRecommendation, weight: f64) -> f64
         (p.internal_force, q.internal_force),
         (p.gripping_power_current, q.gripping_power_current),
         (p.internal_force_current, q.internal_force_current),
+        (p.finger_force, q.finger_force),
+        (p.finger_force_current, q.finger_force_current),
     ];
     for (m, n) in p.local_minima.iter().zip(&q.local_minima) {
         assert_eq!(m.label, n.label);

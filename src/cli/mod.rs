@@ -3,6 +3,7 @@
 pub mod node;
 pub mod play;
 pub mod plot;
+pub mod rank;
 pub mod recover;
 pub mod replay;
 pub mod solve;
@@ -10,6 +11,7 @@ pub mod solve;
 use anyhow::{bail, Context};
 use grasp_orient::config::{bounds, params_in_yaml, Config, Parameter, RangeKind};
 use grasp_orient::replay::Override;
+use grasp_orient::sets::{GripperDrive, Rules};
 use grasp_orient::solver::{AllowedRange, Objective, Settings};
 use serde_yaml_ng::Value;
 use std::path::PathBuf;
@@ -42,6 +44,14 @@ pub struct SolveOptions {
     /// Divides both friction coefficients (>= 1; 1 reproduces the paper).
     #[arg(long, value_name = "S")]
     pub friction_safety_factor: Option<f64>,
+    /// The most grip force the gripper gives, N (>= 0; 0: no limit). A grasp that needs more
+    /// gets status 3.
+    #[arg(long, value_name = "N")]
+    pub max_grip_force: Option<f64>,
+    /// How the fingers are driven, which picks the grip force: coupled (internal_force) or
+    /// independent (finger_force).
+    #[arg(long, value_name = "DRIVE")]
+    pub gripper_drive: Option<String>,
 }
 
 impl SolveOptions {
@@ -67,6 +77,14 @@ impl SolveOptions {
         }
         if let Some(s) = self.friction_safety_factor {
             out.push(("friction_safety_factor".into(), Value::Number(s.into())));
+        }
+        if let Some(f) = self.max_grip_force {
+            out.push(("max_grip_force".into(), Value::Number(f.into())));
+        }
+        if let Some(d) = &self.gripper_drive {
+            d.parse::<GripperDrive>()
+                .map_err(|e| anyhow::anyhow!("--gripper-drive {e}"))?;
+            out.push(("gripper_drive".into(), Value::String(d.clone())));
         }
         if let Some(r) = &self.range {
             let text = |s: &str| Value::String(s.to_string());
@@ -96,6 +114,14 @@ impl SolveOptions {
     /// The solver settings of [`SolveOptions::config`].
     pub fn settings(&self) -> anyhow::Result<Settings> {
         Ok(self.config()?.solver_settings()?)
+    }
+
+    /// [`SolveOptions::config`], its solver settings and its gripper rules.
+    pub fn configured(&self) -> anyhow::Result<(Config, Settings, Rules)> {
+        let config = self.config()?;
+        let settings = config.solver_settings()?;
+        let rules = config.rules();
+        Ok((config, settings, rules))
     }
 }
 

@@ -12,7 +12,7 @@ use std::path::PathBuf;
 /// Arguments of `play`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
-    /// A recording with grasp_orient/msg/GraspCandidate messages.
+    /// A recording with grasp_orient/msg/GraspCandidate or GraspCandidateSet messages.
     pub bag: PathBuf,
     /// Speed relative to the recording (2 = twice as fast); 0 sends as fast as possible.
     #[arg(long, default_value_t = 1.0)]
@@ -25,16 +25,17 @@ pub struct Args {
     pub depth: i64,
 }
 
-/// Publishes every candidate of the bag on `grasp_candidates` (remappable with `--ros-args`).
+/// Publishes every candidate of the bag on `grasp_candidates` and every set on
+/// `grasp_candidate_sets` (remappable with `--ros-args`).
 pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
     if !(args.rate.is_finite() && args.rate >= 0.0) {
         bail!("--rate must be a finite number >= 0, got {}", args.rate);
     }
     let start = Start::new(ros_argv)?;
     let recorded = bag::read(&args.bag)?;
-    if recorded.candidates.is_empty() {
+    if recorded.candidates.is_empty() && recorded.candidate_sets.is_empty() {
         bail!(
-            "{}: no grasp_orient/msg/GraspCandidate messages",
+            "{}: no grasp_orient/msg/GraspCandidate or GraspCandidateSet messages",
             args.bag.display()
         );
     }
@@ -45,13 +46,30 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
         wait: args.wait,
         depth: args.depth,
     };
-    let played = publish(&mut session, &args.bag, &recorded.candidates, pace);
+    let played = publish(
+        &mut session,
+        &args.bag,
+        &recorded.candidates,
+        &recorded.candidate_sets,
+        pace,
+    );
     session.close();
-    let (sent, topic) = played?;
+    let played = played?;
     writeln!(
         std::io::stdout(),
-        "published {sent} of {} candidates on {topic}",
-        recorded.candidates.len()
+        "published {} of {} candidates on {}",
+        played.candidates,
+        recorded.candidates.len(),
+        played.candidates_topic
     )?;
+    if !recorded.candidate_sets.is_empty() {
+        writeln!(
+            std::io::stdout(),
+            "published {} of {} candidate sets on {}",
+            played.sets,
+            recorded.candidate_sets.len(),
+            played.sets_topic
+        )?;
+    }
     Ok(())
 }

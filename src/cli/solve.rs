@@ -2,7 +2,8 @@
 
 use super::SolveOptions;
 use anyhow::Context;
-use grasp_orient::msg::{answer, invalid, GraspCandidate, GripRecommendation};
+use grasp_orient::msg::{invalid, GraspCandidate, GripRecommendation};
+use grasp_orient::sets::answer_one;
 use std::io::{BufRead, BufReader, Write};
 use std::path::PathBuf;
 
@@ -18,7 +19,7 @@ pub struct Args {
 
 /// Solves every line; a bad line gets status 2 with its line number and the run goes on.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let settings = args.options.settings()?;
+    let (_, settings, rules) = args.options.configured()?;
     let input: Box<dyn BufRead> = match &args.file {
         Some(path) if path.as_os_str() != "-" => Box::new(BufReader::new(
             std::fs::File::open(path).with_context(|| format!("cannot open {}", path.display()))?,
@@ -36,7 +37,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         }
         total += 1;
         let mut reply = match serde_json::from_str::<GraspCandidate>(&line) {
-            Ok(candidate) => answer(&candidate, &settings),
+            Ok(candidate) => answer_one(&candidate, &settings, &rules),
             Err(e) => invalid(&partial(&line), &e),
         };
         if reply.status == GripRecommendation::STATUS_INVALID_INPUT {
@@ -56,7 +57,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 
 /// What can be salvaged from a line that is not a valid candidate: its `id` and `header`, so the
 /// answer can still be matched to it.
-fn partial(line: &str) -> GraspCandidate {
+pub(super) fn partial(line: &str) -> GraspCandidate {
     let mut out = GraspCandidate::default();
     if let Ok(value) = serde_json::from_str::<serde_json::Value>(line) {
         if let Some(id) = value.get("id").and_then(|v| v.as_str()) {

@@ -60,6 +60,11 @@ impl Domain {
     pub const fn at_least(min: f64) -> Self {
         Domain::Real { min, max: f64::MAX }
     }
+
+    /// Integers `>= min`.
+    pub const fn at_least_integer(min: i64) -> Self {
+        Domain::Integer { min, max: i64::MAX }
+    }
 }
 
 impl fmt::Display for Domain {
@@ -67,6 +72,7 @@ impl fmt::Display for Domain {
         match self {
             Domain::Any => f.write_str("any"),
             Domain::Choices(names) => write!(f, "one of {}", names.join(", ")),
+            Domain::Integer { min, max } if *max == i64::MAX => write!(f, ">= {min}"),
             Domain::Integer { min, max } => write!(f, "in {min}..={max}"),
             Domain::Real { min, max } if *max == f64::MAX => write!(f, ">= {min}"),
             Domain::Real { min, max } => write!(f, "in [{min}, {max}]"),

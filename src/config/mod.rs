@@ -12,6 +12,7 @@ pub use choices::{bounds, Choice, InvalidBounds, RangeKind, UnknownName};
 pub use declare::{Domain, Parameter, RosType};
 pub use params::{Config, PARAMETERS};
 
+use crate::sets::Rules;
 use crate::solver::Settings;
 use std::path::Path;
 
@@ -153,6 +154,17 @@ impl Config {
             friction_safety_factor: self.friction_safety_factor,
         })
     }
+
+    /// The gripper and set rules: `gripper_drive`, `max_grip_force`, `rank_by`, `max_set_size`
+    /// (their domains are checked by [`Config::solver_settings`]).
+    pub fn rules(&self) -> Rules {
+        Rules {
+            drive: self.gripper_drive,
+            max_grip_force: self.max_grip_force,
+            rank_by: self.rank_by,
+            max_set_size: usize::try_from(self.max_set_size).unwrap_or(1),
+        }
+    }
 }
 
 #[cfg(test)]
@@ -228,5 +240,39 @@ mod tests {
             .set_from_yaml("qos_depth", "abc")
             .expect_err("not a number");
         assert!(e.to_string().contains("qos_depth"), "{e}");
+    }
+
+    #[test]
+    fn gripper_and_set_parameters_are_checked_and_give_the_rules() {
+        use crate::sets::{GripperDrive, RankBy, Rules};
+        let c = Config::default();
+        assert_eq!(c.rules(), Rules::default());
+        let mut c = Config::default();
+        c.set_from_yaml("gripper_drive", "independent")
+            .expect("a drive");
+        c.set_from_yaml("max_grip_force", "40.0").expect("a number");
+        c.set_from_yaml("rank_by", "objective").expect("a name");
+        c.set_from_yaml("max_set_size", "7").expect("an integer");
+        c.solver_settings().expect("valid");
+        assert_eq!(
+            c.rules(),
+            Rules {
+                drive: GripperDrive::Independent,
+                max_grip_force: 40.0,
+                rank_by: RankBy::Objective,
+                max_set_size: 7
+            }
+        );
+        assert!(c.set_from_yaml("gripper_drive", "hydraulic").is_err());
+        for (name, bad) in [
+            ("max_grip_force", "-1.0"),
+            ("max_grip_force", ".nan"),
+            ("max_set_size", "0"),
+        ] {
+            let mut c = Config::default();
+            c.set_from_yaml(name, bad).expect("the type is right");
+            let e = c.solver_settings().expect_err("out of the domain");
+            assert!(e.to_string().contains(name), "{e}");
+        }
     }
 }

@@ -10,6 +10,7 @@
 
 use super::choices::RangeKind;
 use super::declare::{parameters, Domain};
+use crate::sets::{GripperDrive, RankBy, DEFAULT_MAX_SET_SIZE};
 use crate::solver::Objective;
 use std::f64::consts::PI;
 
@@ -42,4 +43,17 @@ parameters! {
     /// Record the markers as well; set while recording, the file is closed and a new one
     /// started.
     record_markers: bool = false, "";
+    /// How the gripper's fingers are driven, which picks the grip force: coupled (one motor, the
+    /// grip force is internal_force) or independent (each finger its own, the grip force is
+    /// finger_force).
+    gripper_drive: GripperDrive = GripperDrive::Coupled, "";
+    /// The most grip force the gripper gives; a grasp that needs more gets status 3. 0 (the
+    /// default) means no limit.
+    max_grip_force: f64 = 0.0, "N", in Domain::at_least(0.0);
+    /// What ranks the candidates of a set, least first: grip_force (the one gripper_drive picks)
+    /// or objective (gripping_power); ties go to the smaller wrist rotation.
+    rank_by: RankBy = RankBy::GripForce, "";
+    /// The most candidates a set may hold; a larger set is refused whole (STATUS_TOO_LARGE of
+    /// GripRecommendationSet) rather than stalling the node.
+    max_set_size: i64 = DEFAULT_MAX_SET_SIZE as i64, "candidates", in Domain::at_least_integer(1);
 }

@@ -169,6 +169,8 @@ fn refused(m: &GraspCandidate, status: u8, message: String) -> GripRecommendatio
         objective: String::new(),
         recommended_label: String::new(),
         candidate_c: GripRecommendation::CANDIDATE_C_OUT_OF_RANGE,
+        finger_force: nan,
+        finger_force_current: nan,
     }
 }
 
@@ -191,6 +193,7 @@ fn no_closure(m: &GraspCandidate, why: &dyn std::fmt::Display) -> GripRecommenda
     );
     out.gripping_power_current = f64::INFINITY;
     out.internal_force_current = f64::INFINITY;
+    out.finger_force_current = f64::INFINITY;
     out
 }
 
@@ -232,6 +235,8 @@ fn recommended(m: &GraspCandidate, r: &Recommendation) -> GripRecommendation {
             .recommended_label
             .map_or(String::new(), |x| x.name().to_string()),
         candidate_c: r.candidate_c as u8,
+        finger_force: r.finger_force,
+        finger_force_current: r.finger_force_current,
     }
 }
 
@@ -386,6 +391,7 @@ mod tests {
             a.message
         );
         assert!(a.gripping_power_current.is_infinite());
+        assert!(a.finger_force_current.is_infinite() && a.finger_force.is_nan());
     }
 }
 

@@ -10,6 +10,7 @@ pub mod cdr;
 mod contract;
 mod convert;
 pub mod definitions;
+pub mod schema;
 
 pub use contract::{message_type_name, RosMessage, RosType};
 pub use convert::{
@@ -191,6 +192,7 @@ ros_message! {
         CANDIDATE_C_NOT_A_MINIMUM: u8 = 1,
         CANDIDATE_C_BEATEN: u8 = 2,
         CANDIDATE_C_OUT_OF_RANGE: u8 = 3,
+        STATUS_EXCEEDS_GRIPPER: u8 = 3,
     ] {
         /// Stamp and frame of the candidate.
         header: Header,
@@ -232,5 +234,89 @@ ros_message! {
         recommended_label: String,
         /// `CANDIDATE_C_*`.
         candidate_c: u8,
+        /// The larger push along the contact line that either finger gives at the recommendation,
+        /// N: what each independently driven finger must give.
+        #[serde(default)]
+        finger_force: f64,
+        /// The same at the current pose, N (inf where it cannot be held).
+        #[serde(default)]
+        finger_force_current: f64,
+    }
+}
+
+ros_message! {
+    /// `msg/GraspCandidateSet.msg`: many candidates at once.
+    GraspCandidateSet = grasp_orient/GraspCandidateSet [] {
+        /// Stamp and frame of the set.
+        #[serde(default)]
+        header: Header,
+        /// Caller's name for this set.
+        #[serde(default)]
+        id: String,
+        /// The candidates, answered in order.
+        #[serde(default)]
+        candidates: Vec<GraspCandidate>,
+        /// The most grip force the gripper gives, N; 0 means the node's `max_grip_force`.
+        #[serde(default)]
+        max_grip_force: f64,
+    }
+}
+
+ros_message! {
+    /// `msg/GripRecommendationSet.msg`: the answer to one [`GraspCandidateSet`].
+    GripRecommendationSet = grasp_orient/GripRecommendationSet [
+        STATUS_OK: u8 = 0,
+        STATUS_TOO_LARGE: u8 = 1,
+        STATUS_INVALID_INPUT: u8 = 2,
+    ] {
+        /// Stamp and frame of the set.
+        header: Header,
+        /// Id of the set answered.
+        set_id: String,
+        /// One per candidate, in order.
+        recommendations: Vec<GripRecommendation>,
+        /// Indices of the candidates with status 0, least force first.
+        ranking: Vec<u32>,
+        /// The field of [`GripRecommendation`] the ranking sorts by.
+        ranked_by: String,
+        /// `STATUS_*` of the set as a whole.
+        #[serde(default)]
+        status: u8,
+        /// Why, when status is not OK; empty otherwise.
+        #[serde(default)]
+        message: String,
+    }
+}
+
+/// `srv/Recommend.srv`, request: the set to answer.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecommendRequest {
+    /// The set.
+    pub candidate_set: GraspCandidateSet,
+}
+
+/// `srv/Recommend.srv`, response: the set's answer.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecommendResponse {
+    /// The answer, as on `grip_recommendation_sets`.
+    pub recommendation_set: GripRecommendationSet,
+}
+
+impl ros2_client::Message for RecommendRequest {}
+impl ros2_client::Message for RecommendResponse {}
+
+impl RecommendRequest {
+    /// `(name, ROS type)` of each field, as in `srv/Recommend.srv` above `---`.
+    pub fn fields() -> Vec<(&'static str, String)> {
+        vec![("candidate_set", GraspCandidateSet::ros_type())]
+    }
+}
+
+impl RecommendResponse {
+    /// `(name, ROS type)` of each field, as in `srv/Recommend.srv` below `---`.
+    pub fn fields() -> Vec<(&'static str, String)> {
+        vec![("recommendation_set", GripRecommendationSet::ros_type())]
     }
 }

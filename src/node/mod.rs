@@ -1,5 +1,7 @@
 //! The ROS 2 node: subscribes `grasp_candidates`, answers on `grip_recommendations` and
-//! `grip_markers`, with parameters, rosout, remapping and a clean exit on Ctrl-C and SIGTERM.
+//! `grip_markers`; answers sets on `grasp_candidate_sets` → `grip_recommendation_sets` and through
+//! the service `~/recommend` ([`sets`]); with parameters, rosout, remapping and a clean exit on
+//! Ctrl-C and SIGTERM.
 //!
 //! [`run`] reads the settings, opens the [`session::Session`], creates the endpoints and the
 //! parameter services, and then only moves messages: each candidate goes to
@@ -13,6 +15,7 @@ mod params;
 pub mod play;
 pub mod ros_args;
 pub mod session;
+pub mod sets;
 
 use crate::config::Config;
 use crate::msg::{GraspCandidate, GripRecommendation, MarkerArray};
@@ -26,6 +29,7 @@ use params::Shared;
 use ros2_client::{MessageInfo, Node, NodeOptions, Publisher, Subscription};
 use ros_args::RosArgs;
 use session::{create_topic, qos, say, Session, Shutdown, Start};
+use sets::SetEndpoints;
 use std::pin::pin;
 
 /// Default node name.
@@ -67,22 +71,27 @@ struct Endpoints {
     candidates: Subscription<GraspCandidate>,
     answers: Publisher<GripRecommendation>,
     markers: Publisher<MarkerArray>,
+    sets: SetEndpoints,
 }
 
 impl Endpoints {
     fn create(session: &mut Session, qos_depth: i64) -> anyhow::Result<Self> {
         let qos = qos(qos_depth);
+        let set_topics = SetEndpoints::topics(session);
         let topics = Topics {
             candidates: session.topic_name("grasp_candidates"),
             recommendations: session.topic_name("grip_recommendations"),
             markers: Some(session.topic_name("grip_markers")),
+            sets: Some(set_topics.clone()),
         };
         let markers_name = topics.markers.clone().unwrap_or_default();
         let node = session.node_mut();
         let candidates = create_topic::<GraspCandidate>(node, &topics.candidates, &qos)?;
         let answers = create_topic::<GripRecommendation>(node, &topics.recommendations, &qos)?;
         let markers = create_topic::<MarkerArray>(node, &markers_name, &qos)?;
+        let sets = SetEndpoints::create(node, &set_topics, qos_depth)?;
         Ok(Self {
+            sets,
             candidates: node
                 .create_subscription(&candidates, None)
                 .context("cannot subscribe")?,
@@ -117,7 +126,7 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
         log::Level::Info,
         &format!(
             "node {} on ROS_DOMAIN_ID={}{}: waiting for grasp_orient/msg/GraspCandidate on \
-             {}; answers on {}, markers on {}. \
+             {}; answers on {}, markers on {}; sets on {} -> {} and the service {}/{}. \
              Send a test grasp with: python3 examples/publish_test_grasp.py",
             session.node().fully_qualified_name(),
             session.graph.domain_id,
@@ -125,6 +134,13 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
             topics.candidates,
             topics.recommendations,
             topics.markers.as_deref().unwrap_or_default(),
+            topics.sets.as_ref().map_or("", |s| s.candidates.as_str()),
+            topics
+                .sets
+                .as_ref()
+                .map_or("", |s| s.recommendations.as_str()),
+            session.node().fully_qualified_name(),
+            sets::SERVICE,
         ),
     );
     let (on_stop, mut woken) = wake_on_change(&shared);
@@ -204,6 +220,8 @@ async fn serve(
     demo: Option<&Demo>,
 ) -> anyhow::Result<()> {
     let mut stream = pin!(endpoints.candidates.async_stream());
+    let mut set_stream = pin!(endpoints.sets.candidates.async_stream());
+    let mut calls = pin!(endpoints.sets.service.receive_request_stream());
     let mut demo_done = pin!(async {
         match demo {
             Some(d) => d.finished().await,
@@ -225,6 +243,27 @@ async fn serve(
                 }
                 Err(e) => {
                     let note = answerer.undecodable(&endpoints.topics.candidates, &e);
+                    tell(node, vec![note]);
+                }
+            },
+            received = set_stream.select_next_some() => match received {
+                Ok((set, info)) => {
+                    let markers = &endpoints.markers;
+                    sets::answer_topic(node, &endpoints.sets, markers, answerer, set, &info).await;
+                }
+                Err(e) => {
+                    let topic = endpoints.topics.sets.as_ref().map_or("", |s| &s.candidates);
+                    let note = answerer.undecodable(topic, &e);
+                    tell(node, vec![note]);
+                }
+            },
+            call = calls.select_next_some() => match call {
+                Ok((id, request)) => {
+                    let markers = &endpoints.markers;
+                    sets::answer_call(node, &endpoints.sets, markers, answerer, id, request).await;
+                }
+                Err(e) => {
+                    let note = answerer.undecodable(sets::SERVICE, &e);
                     tell(node, vec![note]);
                 }
             },

@@ -10,6 +10,7 @@
 //!
 //! So the minimiser is one of a short list of closed-form angles, each of which is evaluated.
 
+use super::finger;
 use super::frame::GraspFrame;
 use super::paper::{self, FORCE_SCALE};
 use super::sinusoid::{next_periodic, wrap_angle, Angle, QuadForm, Sinusoid};
@@ -642,6 +643,8 @@ impl Analysis {
             local_minima: minima,
             recommended_label,
             candidate_c,
+            finger_force: finger::finger_force(f, &at_best.forces),
+            finger_force_current: finger::finger_force(f, &at_current.forces),
         }
     }
 }

@@ -34,6 +34,7 @@
 //! `src/solver/robust.rs`).
 
 mod analysis;
+mod finger;
 mod frame;
 mod paper;
 mod robust;
@@ -474,6 +475,13 @@ pub struct Recommendation {
     pub recommended_label: Option<PaperCandidate>,
     /// What became of candidate C.
     pub candidate_c: CandidateC,
+    /// The larger push along the contact line that either finger gives at the recommendation, N:
+    /// `internal_force + |W_line|/2`, with `W_line` the weight's component along the line. What
+    /// each independently driven finger must give (coupled fingers give `internal_force`; the
+    /// derivation is in `finger.rs`).
+    pub finger_force: f64,
+    /// The same at the current pose, N.
+    pub finger_force_current: f64,
 }
 
 /// The solver's verdict on valid input.

@@ -115,6 +115,27 @@ def rosbag2_full_text(type_name: str) -> str:
     return rec(type_name, 50)
 
 
+def _sections(text: str) -> list[str]:
+    return text.split("\n" + SEPARATOR)
+
+
+def is_rosbag2_text_of_an_older_version(type_name: str, recorded: str) -> bool:
+    """Whether `recorded` is what rosbag2 wrote for `type_name` before some of its messages grew by trailing
+    fields: the same sections (the type's text, then each dependency) as today's text, each one a prefix of
+    today's, cut at the end of a line. (Message contracts only ever grow by lines appended to a .msg file.)"""
+    now = _sections(rosbag2_full_text(type_name))
+    then = _sections(recorded)
+    if len(now) != len(then):
+        return False
+    for a, b in zip(then, now):
+        head_a, head_b = a.split("\n", 1)[0], b.split("\n", 1)[0]
+        if a.startswith("MSG: ") and head_a != head_b:
+            return False
+        if not b.startswith(a) or (a != b and not a.endswith("\n")):
+            return False
+    return True
+
+
 def _normal(name: str) -> str:
     p = name.split("/")
     return f"{p[0]}/msg/{p[-1]}"
@@ -376,7 +397,7 @@ def random_grasp(rng: random.Random, cid: str, frame_id: str = "object", stamp: 
 # `solve` answers as recommendation messages
 # ---------------------------------------------------------------------------------------------------
 _LINE_PREFIX = re.compile(r"^line \d+: ")
-_CURRENT = ("gripping_power_current", "internal_force_current")
+_CURRENT = ("gripping_power_current", "internal_force_current", "finger_force_current")
 
 
 def recommendation_from_solve(ans: dict) -> dict:

@@ -500,6 +500,8 @@ impl<'a> PlaneSolve<'a> {
         let w = self.geometry.weight;
         planar.gripping_power *= w;
         planar.internal_force *= w;
+        // The pushes along the contact line (which lies in Π) are those of the planar forces.
+        planar.finger_force *= w;
         for f in planar.contact_forces.iter_mut() {
             *f *= w;
         }
@@ -510,10 +512,12 @@ impl<'a> PlaneSolve<'a> {
             CurrentPose::Held => {
                 planar.gripping_power_current *= w;
                 planar.internal_force_current *= w;
+                planar.finger_force_current *= w;
             }
             CurrentPose::Swings { .. } => {
                 planar.gripping_power_current = f64::INFINITY;
                 planar.internal_force_current = f64::INFINITY;
+                planar.finger_force_current = f64::INFINITY;
             }
         }
         let b = &self.basis;
