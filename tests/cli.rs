@@ -135,3 +135,110 @@ fn plot_writes_an_svg() {
     let text = std::fs::read_to_string(&svg).expect("svg written");
     assert!(text.starts_with("<svg") && text.contains("α_3") && text.contains("recommended"));
 }
+
+/// The paper's case (c) stood up in the y-z plane (model 1), gravity along -z, as a JSON line.
+fn upright_square(id: &str, gravity_x: f64) -> String {
+    format!(
+        r#"{{"id": "{id}", "model": 1, "contact_1": {{"x": 0, "y": 1, "z": 1}}, "contact_2": {{"x": 0, "y": -1, "z": 1}}, "normal_1": {{"x": 0, "y": -1, "z": 0}}, "normal_2": {{"x": 0, "y": 1, "z": 0}}, "friction_1": 1.7320508075688772, "friction_2": 0.5773502691896258, "center_of_mass": {{"x": 0, "y": 0, "z": 0}}, "mass": 1, "gravity": {{"x": {gravity_x}, "y": 0, "z": -1}}}}"#
+    )
+}
+
+#[test]
+fn solve_reads_the_model_absent_as_planar() {
+    let case_c = paper_cases().lines().nth(2).expect("case c").to_string();
+    let explicit = case_c.replacen('{', "{\"model\": 0, ", 1);
+    let unknown = case_c.replacen('{', "{\"model\": 7, ", 1);
+    let input = [
+        case_c,
+        explicit,
+        unknown,
+        upright_square("upright", 0.0),
+        upright_square("swinging", 0.5),
+    ]
+    .join("\n");
+    let (out, stderr, ok) = run_solve(&[], &input);
+    assert!(ok, "{stderr}");
+    // Absent and 0: the planar model, turning about +z.
+    assert_eq!(out[0], out[1]);
+    assert_eq!(
+        out[0]["rotation_axis"],
+        serde_json::json!({"x": 0.0, "y": 0.0, "z": 1.0})
+    );
+    // Neither 0 nor 1: refused, naming the field.
+    assert_eq!(out[2]["status"], 2);
+    let why = out[2]["message"].as_str().expect("a message");
+    assert!(
+        why.contains("line 3") && why.contains("model is 7"),
+        "{why}"
+    );
+    // Spatial: the same turn, about x, in [0, π], with the 3D gravity direction.
+    let up = &out[3];
+    assert_eq!(up["status"], 0, "{up}");
+    let num = |v: &Value| v.as_f64().expect("a number");
+    assert!((num(&up["wrist_rotation"]) - std::f64::consts::PI / 12.0).abs() < 1e-12);
+    assert!(
+        (num(&up["rotation_axis"]["x"]).abs() - 1.0).abs() < 1e-12,
+        "{up}"
+    );
+    assert!(
+        (num(&up["gravity_direction"]["z"]) + (std::f64::consts::PI / 12.0).cos()).abs() < 1e-12
+    );
+    assert_eq!(up["gripping_power"], out[0]["gripping_power"]);
+    assert_eq!(up["message"], "");
+    // Gravity out of the grasp plane: the object would swing; said, and the current fields are
+    // infinite (written as null).
+    let swing = &out[4];
+    assert_eq!(swing["status"], 0, "{swing}");
+    assert!(swing["gripping_power_current"].is_null() && swing["finger_force_current"].is_null());
+    let why = swing["message"].as_str().expect("a message");
+    assert!(why.contains("swings about the contact axis"), "{why}");
+}
+
+#[test]
+fn plot_draws_a_spatial_candidate_in_its_grasp_plane() {
+    let dir = temp_dir("plot-spatial");
+    for (name, gravity_x, current) in [("held", 0.0, true), ("swinging", 0.5, false)] {
+        let candidate = dir.path().join(format!("{name}.json"));
+        std::fs::write(&candidate, upright_square(name, gravity_x)).expect("write");
+        let svg = dir.path().join(format!("{name}.svg"));
+        let out = bin()
+            .args(["plot", candidate.to_str().expect("utf-8"), "-o"])
+            .arg(&svg)
+            .output()
+            .expect("runs");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(
+            stdout.contains("grasp plane normal (1.000000, 0.000000, 0.000000)")
+                && stdout.contains("rotation 0.261799 rad about (")
+                && stdout.contains("norm2 1.000000 N"),
+            "{stdout}"
+        );
+        assert_eq!(stdout.contains("swings"), !current, "{stdout}");
+        let text = std::fs::read_to_string(&svg).expect("svg written");
+        assert!(text.contains("in the grasp plane") && text.contains("recommended"));
+        assert_eq!(
+            text.contains(">current<"),
+            current,
+            "the current pose is drawn only when held"
+        );
+    }
+    // A model that is neither 0 nor 1 is refused.
+    let candidate = dir.path().join("bad.json");
+    std::fs::write(
+        &candidate,
+        upright_square("bad", 0.0).replace("\"model\": 1", "\"model\": 3"),
+    )
+    .expect("write");
+    let out = bin()
+        .args(["plot", candidate.to_str().expect("utf-8"), "-o"])
+        .arg(dir.path().join("bad.svg"))
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("model is 3"));
+}

@@ -5,7 +5,7 @@
 
 use super::SolveOptions;
 use anyhow::{anyhow, Context};
-use grasp_orient::msg::GraspCandidate;
+use grasp_orient::msg::{GraspCandidate, MessageLimits};
 use grasp_orient::record::output::Replacement;
 use grasp_orient::solver::{
     analyse, analyse_spatial, Analysis, AxisRelation, Candidate, CurrentPose, Recommendation,
@@ -59,7 +59,11 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .with_context(|| format!("cannot read {}", args.candidate.display()))?;
     let message: GraspCandidate = serde_json::from_str(&text)
         .with_context(|| format!("{} is not a GraspCandidate", args.candidate.display()))?;
-    let figure = planar_figure(&message, &settings)?;
+    let figure = match message.model {
+        GraspCandidate::MODEL_PLANAR => planar_figure(&message, &settings)?,
+        GraspCandidate::MODEL_SPATIAL => spatial_figure(&message, &settings)?,
+        value => return Err(refused(MessageLimits::Model { value })),
+    };
     draw(&figure, args)?;
     writeln!(
         std::io::stdout(),
@@ -98,13 +102,15 @@ fn planar_figure(message: &GraspCandidate, settings: &Settings) -> anyhow::Resul
 }
 
 /// A spatial candidate: its grasp plane Π.
-#[allow(dead_code)] // until the message says which model a candidate is in
 fn spatial_figure(message: &GraspCandidate, settings: &Settings) -> anyhow::Result<Figure> {
     let candidate = SpatialCandidate::try_from(message).map_err(refused)?;
     let (analysis, r) = analyse_spatial(&candidate, settings)
         .map_err(refused)?
         .map_err(|e| anyhow!("{e}"))?;
-    let v = |v: &nalgebra::Vector3<f64>| format!("({:.6}, {:.6}, {:.6})", v.x, v.y, v.z);
+    // `+ 0.0` prints a negative zero as 0.
+    let v = |v: &nalgebra::Vector3<f64>| {
+        format!("({:.6}, {:.6}, {:.6})", v.x + 0.0, v.y + 0.0, v.z + 0.0)
+    };
     let mut summary = format!(
         "grasp plane normal {}; recommended gravity angle {:.6} rad in the plane, direction {}; \
          rotation {:.6} rad about {}; {} {:.6} N",

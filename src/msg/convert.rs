@@ -33,6 +33,14 @@ pub enum MessageLimits {
     /// A field the solver ignores (z) is still not a number.
     #[error(transparent)]
     Solver(#[from] InvalidInput),
+    /// `model` names no model.
+    #[error(
+        "model is {value}: it must be 0 (MODEL_PLANAR: the x-y plane) or 1 (MODEL_SPATIAL: 3D)"
+    )]
+    Model {
+        /// The value given.
+        value: u8,
+    },
 }
 
 fn planar(fields: [&'static str; 3], x: f64, y: f64, z: f64) -> Result<Vector2<f64>, InvalidInput> {
@@ -171,6 +179,11 @@ fn refused(m: &GraspCandidate, status: u8, message: String) -> GripRecommendatio
         candidate_c: GripRecommendation::CANDIDATE_C_OUT_OF_RANGE,
         finger_force: nan,
         finger_force_current: nan,
+        rotation_axis: Vector3 {
+            x: nan,
+            y: nan,
+            z: nan,
+        },
     }
 }
 
@@ -237,6 +250,12 @@ fn recommended(m: &GraspCandidate, r: &Recommendation) -> GripRecommendation {
         candidate_c: r.candidate_c as u8,
         finger_force: r.finger_force,
         finger_force_current: r.finger_force_current,
+        // `wrist_rotation` is signed about +z.
+        rotation_axis: Vector3 {
+            x: 0.0,
+            y: 0.0,
+            z: 1.0,
+        },
     }
 }
 
@@ -252,6 +271,12 @@ fn spatial_recommended(m: &GraspCandidate, r: &SpatialRecommendation) -> GripRec
         x: d.x,
         y: d.y,
         z: d.z,
+    };
+    let k = &r.rotation_axis;
+    out.rotation_axis = Vector3 {
+        x: k.x,
+        y: k.y,
+        z: k.z,
     };
     let notes: Vec<String> = [r.current_pose.note(), r.axis.note().map(str::to_string)]
         .into_iter()
@@ -279,7 +304,18 @@ pub fn answer(m: &GraspCandidate, settings: &Settings) -> GripRecommendation {
 
 /// [`answer`], with the 3D solution of a spatial grasp.
 pub fn answer_in_full(m: &GraspCandidate, settings: &Settings) -> Answered {
-    answer_planar(m, settings)
+    match m.model {
+        GraspCandidate::MODEL_PLANAR => answer_planar(m, settings),
+        GraspCandidate::MODEL_SPATIAL => answer_spatial(m, settings),
+        value => {
+            let mut reply = invalid(m, &MessageLimits::Model { value });
+            reply.objective = settings.objective.name().to_string();
+            Answered {
+                reply,
+                spatial: None,
+            }
+        }
+    }
 }
 
 /// The answer to a candidate read in the planar model.
@@ -306,7 +342,7 @@ fn answer_planar(m: &GraspCandidate, settings: &Settings) -> Answered {
 }
 
 /// The answer to a candidate read in the spatial model.
-pub fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {
+fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {
     let mut out = match SpatialCandidate::try_from(m) {
         Err(e) => invalid(m, &e),
         Ok(candidate) => match solve_spatial(&candidate, settings) {
@@ -426,6 +462,7 @@ mod spatial_tests {
             center_of_mass: p(0.0, 0.0, 0.0),
             mass: 1.0,
             gravity: v(0.0, 0.0, -1.0),
+            model: GraspCandidate::MODEL_SPATIAL,
         }
     }
 
@@ -433,7 +470,7 @@ mod spatial_tests {
     fn spatial_answer_carries_the_3d_rotation_and_the_planar_answer_in_the_plane() {
         let m = upright_square();
         let settings = Settings::default();
-        let Answered { reply: a, spatial } = answer_spatial(&m, &settings);
+        let Answered { reply: a, spatial } = answer_in_full(&m, &settings);
         let r = spatial.expect("a spatial answer with status 0");
         assert_eq!(a.status, GripRecommendation::STATUS_OK, "{}", a.message);
         assert_eq!(
@@ -450,6 +487,9 @@ mod spatial_tests {
         assert!((2.0 * q.x.abs().atan2(q.w) - a.wrist_rotation).abs() < 1e-12);
         assert!(q.y == 0.0 && q.z == 0.0);
         assert_eq!(q.x.signum(), r.rotation_axis.x.signum());
+        let k = &a.rotation_axis;
+        assert_eq!((k.x, k.y, k.z), (r.rotation_axis.x, 0.0, 0.0));
+        assert_eq!(k.x.abs(), 1.0);
         // Gravity after the rotation: in the y-z plane, a unit vector, π/12 from -z.
         let g = &a.gravity_direction;
         assert!(g.x.abs() < 1e-15 && (g.y.hypot(g.z) - 1.0).abs() < 1e-15);
@@ -468,7 +508,23 @@ mod spatial_tests {
         let settings = Settings::default();
         for m in crate::msg::paper_cases() {
             let planar = answer(&m, &settings);
-            let spatial = answer_spatial(&m, &settings).reply;
+            let spatial = answer(
+                &GraspCandidate {
+                    model: GraspCandidate::MODEL_SPATIAL,
+                    ..m.clone()
+                },
+                &settings,
+            );
+            assert_eq!(
+                (
+                    planar.rotation_axis.x,
+                    planar.rotation_axis.y,
+                    planar.rotation_axis.z
+                ),
+                (0.0, 0.0, 1.0)
+            );
+            let k = &spatial.rotation_axis;
+            assert_eq!((k.x, k.y, k.z.abs()), (0.0, 0.0, 1.0), "{}", m.id);
             assert_eq!(spatial.status, planar.status, "{}", m.id);
             assert!(spatial.message.is_empty(), "{}: {}", m.id, spatial.message);
             let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(1.0);
@@ -522,7 +578,7 @@ mod spatial_tests {
     fn an_object_that_would_swing_has_infinite_current_fields_and_says_so() {
         let mut m = upright_square();
         m.gravity = v(0.3, 0.0, -1.0); // out of the y-z plane
-        let a = answer_spatial(&m, &Settings::default()).reply;
+        let a = answer_in_full(&m, &Settings::default()).reply;
         assert_eq!(a.status, GripRecommendation::STATUS_OK, "{}", a.message);
         assert!(a.gripping_power_current == f64::INFINITY);
         assert!(a.internal_force_current == f64::INFINITY);
@@ -543,16 +599,16 @@ mod spatial_tests {
     fn a_centre_of_mass_on_or_near_the_axis_is_flagged_sensitive() {
         let mut m = upright_square();
         m.center_of_mass = p(0.0, 0.2, 1.0); // on the contact axis
-        let a = answer_spatial(&m, &Settings::default()).reply;
+        let a = answer_in_full(&m, &Settings::default()).reply;
         assert_eq!(a.status, GripRecommendation::STATUS_OK, "{}", a.message);
         assert!(a.message.contains("sensitive") && a.message.contains("on the contact axis"));
         m.center_of_mass = p(0.0, 0.2, 0.99); // 0.5% of the contact distance off it
-        let a = answer_spatial(&m, &Settings::default()).reply;
+        let a = answer_in_full(&m, &Settings::default()).reply;
         assert_eq!(a.status, GripRecommendation::STATUS_OK, "{}", a.message);
         assert!(a.message.contains("sensitive") && a.message.contains("within 1%"));
         // Both notes at once, joined.
         m.gravity = v(1.0, 0.0, -1.0);
-        let a = answer_spatial(&m, &Settings::default()).reply;
+        let a = answer_in_full(&m, &Settings::default()).reply;
         assert!(
             a.message.contains("swings") && a.message.contains("; sensitive"),
             "{}",
@@ -566,12 +622,12 @@ mod spatial_tests {
         let refused = |f: &dyn Fn(&mut GraspCandidate)| {
             let mut m = upright_square();
             f(&mut m);
-            let a = answer_spatial(&m, &settings);
+            let a = answer_in_full(&m, &settings);
             assert!(a.spatial.is_none());
             a.reply
         };
         type Change<'a> = &'a dyn Fn(&mut GraspCandidate);
-        let cases: [(Change, &str); 7] = [
+        let cases: [(Change, &str); 9] = [
             (
                 &|m| m.contact_1.z = f64::NAN,
                 "contact_1.z is not a finite number",
@@ -597,6 +653,8 @@ mod spatial_tests {
                 "center_of_mass coincides with contact_1",
             ),
             (&|m| m.id = "x".repeat(2000), "id is 2000 bytes long"),
+            (&|m| m.model = 2, "model is 2: it must be 0 (MODEL_PLANAR"),
+            (&|m| m.model = 255, "model is 255"),
         ];
         for (f, words) in cases {
             let a = refused(f);
@@ -607,6 +665,7 @@ mod spatial_tests {
             );
             assert!(a.message.contains(words), "{} lacks {words:?}", a.message);
             assert!(a.gravity_angle.is_nan() && a.wrist_rotation.is_nan());
+            assert!(a.rotation_axis.x.is_nan() && a.rotation_axis.z.is_nan());
             assert_eq!(a.objective, "norm2");
         }
         // Normal 1 tilted 0.6 rad out of the y-z plane, friction angle 0.5 rad.

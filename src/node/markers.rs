@@ -303,6 +303,7 @@ mod tests {
             center_of_mass: point(0.0, 0.0, 0.0),
             mass: 2.0,
             gravity: vector(0.0, 0.2, -9.81),
+            model: GraspCandidate::MODEL_SPATIAL,
         }
     }
 
@@ -318,7 +319,7 @@ mod tests {
     fn spatial_markers_are_drawn_in_3d_on_the_true_cones() {
         let c = spatial_candidate();
         let settings = Settings::default();
-        let crate::msg::Answered { reply, spatial } = crate::msg::answer_spatial(&c, &settings);
+        let crate::msg::Answered { reply, spatial } = crate::msg::answer_in_full(&c, &settings);
         assert_eq!(
             reply.status,
             GripRecommendation::STATUS_OK,
