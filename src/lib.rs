@@ -6,10 +6,12 @@
 //! 2. [`msg`]: wire structs mirroring `msg/*.msg`, and conversions to and from solver types;
 //!    [`config`]: every parameter declared once, typed, read from params files and checked;
 //!    [`sets`]: the grip force, the gripper's limit, and sets of candidates answered and ranked.
-//! 3. [`record`] and [`replay`]: MCAP recordings; [`node`]: the ROS 2 node on ros2-client.
+//! 3. [`record`] and [`replay`]: MCAP recordings; [`node`]: the ROS 2 node on ros2-client;
+//!    [`jsonl`]: JSON lines in and out, for `solve`.
 //! 4. The command line (`src/cli/`, one `run` per subcommand) belongs to the binary.
 
 pub mod config;
+pub mod jsonl;
 pub mod msg;
 pub mod node;
 pub mod record;

@@ -242,3 +242,155 @@ fn plot_draws_a_spatial_candidate_in_its_grasp_plane() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("model is 3"));
 }
+
+#[test]
+fn a_line_of_invalid_utf8_is_answered_and_the_run_goes_on() {
+    let cases = paper_cases();
+    let mut input = cases.lines().next().expect("case a").as_bytes().to_vec();
+    input.extend_from_slice(b"\n{\"id\": \"caf\xe9\"}\n");
+    input.extend_from_slice(cases.lines().nth(1).expect("case b").as_bytes());
+    input.push(b'\n');
+    let mut child = bin()
+        .arg("solve")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("binary runs");
+    child
+        .stdin
+        .take()
+        .expect("stdin")
+        .write_all(&input)
+        .expect("write stdin");
+    let out = child.wait_with_output().expect("binary exits");
+    assert!(out.status.success());
+    let lines: Vec<Value> = String::from_utf8(out.stdout)
+        .expect("utf-8")
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("JSON"))
+        .collect();
+    assert_eq!(lines.len(), 3, "one answer per line");
+    assert_eq!(lines[1]["status"], 2);
+    assert!(lines[1]["message"]
+        .as_str()
+        .is_some_and(|m| m.starts_with("line 2: ") && m.contains("UTF-8")));
+    assert_eq!(lines[2]["status"], 0);
+    assert_eq!(lines[2]["candidate_id"], "paper-b");
+}
+
+/// Runs the binary with `args`; (exit code, stderr).
+fn exit_of(args: &[&str]) -> (Option<i32>, String) {
+    let out = bin()
+        .args(args)
+        .stdin(Stdio::null())
+        .output()
+        .expect("runs");
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn every_numeric_option_has_a_domain_and_exit_code_2() {
+    let bag = concat!(env!("CARGO_MANIFEST_DIR"), "/bags/paper_cases.mcap");
+    let json = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper_cases.jsonl");
+    let cases: &[(&[&str], &str)] = &[
+        (&["play", bag, "--wait", "nan"], "--wait"),
+        (&["play", bag, "--wait", "inf"], "--wait"),
+        (&["play", bag, "--wait", "1e300"], "--wait"),
+        (&["play", bag, "--wait", "-1"], "--wait"),
+        (&["play", bag, "--rate", "1e-300"], "--rate"),
+        (&["play", bag, "--rate", "-2"], "--rate"),
+        (&["play", bag, "--rate", "nan"], "--rate"),
+        (&["play", bag, "--depth", "0"], "--depth"),
+        (&["play", bag, "--depth", "-5"], "--depth"),
+        (&["play", bag, "--depth", "100001"], "--depth"),
+        (
+            &["plot", json, "-o", "x.svg", "--samples", "1e11"],
+            "--samples",
+        ),
+        (
+            &["plot", json, "-o", "x.svg", "--samples", "0"],
+            "--samples",
+        ),
+        (
+            &["solve", "--friction-safety-factor", "nan"],
+            "--friction-safety-factor",
+        ),
+        (
+            &["solve", "--friction-safety-factor", "0.5"],
+            "--friction-safety-factor",
+        ),
+        (
+            &["solve", "--friction-safety-factor", "1e300"],
+            "--friction-safety-factor",
+        ),
+        (&["solve", "--range=nan:1"], "--range"),
+        (&["solve", "--range=1:inf"], "--range"),
+        (&["solve", "--range=1:0"], "--range"),
+        (&["solve", "--objective", "norm3"], "--objective"),
+        (
+            &["replay", bag, "--friction-safety-factor", "-1"],
+            "--friction-safety-factor",
+        ),
+        (&["node", "--ros-args", "-p", "qos_depth:=0"], "qos_depth"),
+        (
+            &["node", "--ros-args", "-p", "range_min:=.nan"],
+            "range_min",
+        ),
+        (
+            &["node", "--ros-args", "-p", "friction_safety_factor:=1e9"],
+            "friction_safety_factor",
+        ),
+        (&["node", "--ros-args", "-p", "no_such:=1"], "no_such"),
+        (&["node", "--ros-args", "--log-level", "loud"], "loud"),
+        (
+            &["play", bag, "--ros-args", "--log-level", "x:=loud"],
+            "loud",
+        ),
+    ];
+    for (args, named) in cases {
+        let (code, stderr) = exit_of(args);
+        assert_eq!(code, Some(2), "{args:?}: {stderr}");
+        let first = stderr.lines().next().unwrap_or_default();
+        assert!(
+            first.contains("error") && first.contains(named),
+            "{args:?}: {stderr}"
+        );
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    }
+}
+
+#[test]
+fn a_config_for_another_node_is_an_error_naming_the_sections() {
+    let dir = temp_dir("cfg_cli");
+    let cfg = dir.path().join("other.yaml");
+    std::fs::write(
+        &cfg,
+        "gripper:\n  ros__parameters:\n    objective: norm1\narm:\n  ros__parameters: {}\n",
+    )
+    .expect("write");
+    let (code, stderr) = exit_of(&["solve", "--config", cfg.to_str().expect("utf-8")]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(
+        stderr.contains("no section for node grasp_orient") && stderr.contains("gripper, arm"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn any_span_of_bounds_is_answered_at_once() {
+    let input = paper_cases();
+    let (graspable, _, _) = run_solve(&["--range", "graspable"], &input);
+    for range in [
+        "--range=-1e308:1e308",
+        "--range=-1e12:1e12",
+        "--range=-1e8:1e8",
+    ] {
+        let (wide, stderr, ok) = run_solve(&[range], &input);
+        assert!(ok, "{range}: {stderr}");
+        assert_eq!(wide, graspable, "{range}");
+    }
+}

@@ -741,6 +741,25 @@ fn refusals_name_the_field_and_the_contact() {
         solve_spatial(&base(), &s),
         Err(InvalidInput::SafetyFactor { value: 0.5 })
     );
+    // The planar model's domain (issue 9): friction from 1e-6, a safety factor up to 1000.
+    let s = Settings {
+        friction_safety_factor: 1001.0,
+        ..Settings::default()
+    };
+    assert_eq!(
+        solve_spatial(&base(), &s),
+        Err(InvalidInput::SafetyFactor { value: 1001.0 })
+    );
+    let mut c = base();
+    c.friction_2 = 1e-7;
+    assert_eq!(
+        refused(&c),
+        InvalidInput::BelowMinimum {
+            field: "friction_2",
+            value: 1e-7,
+            minimum: 1e-6
+        }
+    );
 }
 
 /// A normal tilted out of Π beyond its friction angle, or an on-axis cone that misses the other

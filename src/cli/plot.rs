@@ -23,9 +23,10 @@ pub struct Args {
     /// Where to write the SVG.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Samples per curve.
-    #[arg(long, default_value_t = 2000)]
-    pub samples: usize,
+    /// Samples per curve, from 10 to 100000.
+    #[arg(long, default_value_t = 2000, allow_negative_numbers = true,
+          value_parser = super::integer_in(10, 100_000))]
+    pub samples: i64,
     #[command(flatten)]
     pub options: SolveOptions,
 }
@@ -55,8 +56,9 @@ struct Figure {
 /// Draws the figure.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let settings = args.options.settings()?;
-    let text = std::fs::read_to_string(&args.candidate)
-        .with_context(|| format!("cannot read {}", args.candidate.display()))?;
+    let text =
+        grasp_orient::config::read_text(&args.candidate, grasp_orient::config::MAX_FILE_BYTES)
+            .with_context(|| format!("cannot read {}", args.candidate.display()))?;
     let message: GraspCandidate = serde_json::from_str(&text)
         .with_context(|| format!("{} is not a GraspCandidate", args.candidate.display()))?;
     let figure = match message.model {
@@ -216,7 +218,10 @@ type Area<'a> = DrawingArea<SVGBackend<'a>, plotters::coord::Shift>;
 
 /// Draws into memory, then writes the SVG beside `args.output` and renames it into place.
 fn draw(figure: &Figure, args: &Args) -> anyhow::Result<()> {
-    let curves = Curves::sample(&figure.analysis, args.samples.max(10));
+    let curves = Curves::sample(
+        &figure.analysis,
+        usize::try_from(args.samples).unwrap_or(10).max(10),
+    );
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (1400, 560)).into_drawing_area();

@@ -22,11 +22,12 @@ pub struct Args {
     pub json: bool,
     /// What ranks the candidates, least first: grip_force (the one --gripper-drive picks) or
     /// objective (gripping_power).
-    #[arg(long, value_name = "WHAT")]
-    pub rank_by: Option<String>,
+    #[arg(long, value_name = "WHAT", value_parser = super::parse_name::<RankBy>)]
+    pub rank_by: Option<RankBy>,
     /// The most candidates the set may hold (>= 1); a larger one is refused.
-    #[arg(long, value_name = "N")]
-    pub max_set_size: Option<u64>,
+    #[arg(long, value_name = "N", allow_negative_numbers = true,
+          value_parser = super::parameter::<i64>("max_set_size"))]
+    pub max_set_size: Option<i64>,
     #[command(flatten)]
     pub options: SolveOptions,
 }
@@ -38,15 +39,10 @@ const ID_CHARS: usize = 32;
 /// with status 2 and its line number), answers it, and prints the table or the JSON answer.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let (_, settings, mut rules) = args.options.configured()?;
-    if let Some(r) = &args.rank_by {
-        rules.rank_by = r
-            .parse::<RankBy>()
-            .map_err(|e| anyhow::anyhow!("--rank-by {e}"))?;
+    if let Some(r) = args.rank_by {
+        rules.rank_by = r;
     }
     if let Some(n) = args.max_set_size {
-        if n == 0 {
-            bail!("--max-set-size must be at least 1");
-        }
         rules.max_set_size = usize::try_from(n).unwrap_or(usize::MAX);
     }
     let (set, bad) = read_set(args)?;
@@ -54,7 +50,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     for (index, number, line, reason) in bad {
         if let Some(r) = reply.recommendations.get_mut(index) {
             // As `solve` answers a line that is no candidate.
-            *r = invalid(&super::solve::partial(&line), &reason);
+            *r = invalid(&grasp_orient::jsonl::partial(&line), &reason);
             r.message = format!("line {number}: {}", r.message);
         }
     }

@@ -11,7 +11,7 @@
 use super::choices::RangeKind;
 use super::declare::{parameters, Domain};
 use crate::sets::{GripperDrive, RankBy, DEFAULT_MAX_SET_SIZE};
-use crate::solver::Objective;
+use crate::solver::{Objective, MAX_SAFETY_FACTOR};
 use std::f64::consts::PI;
 
 parameters! {
@@ -21,14 +21,14 @@ parameters! {
     /// Where the recommended orientation may lie: from_above (the object hangs below the
     /// fingers), graspable (the paper's whole range, eq. 8) or bounds (range_min to range_max).
     range: RangeKind = RangeKind::FromAbove, "";
-    /// Lower bound of the gravity angle in the paper's object frame when range is bounds;
-    /// finite and below range_max.
-    range_min: f64 = -PI, "rad";
-    /// Upper bound of the gravity angle in the paper's object frame when range is bounds;
-    /// finite and above range_min.
-    range_max: f64 = PI, "rad";
+    /// Lower bound of the gravity angle in the paper's object frame when range is bounds, below
+    /// range_max; bounds a turn (2π) or more apart allow every angle.
+    range_min: f64 = -PI, "rad", in Domain::FINITE;
+    /// Upper bound of the gravity angle in the paper's object frame when range is bounds, above
+    /// range_min.
+    range_max: f64 = PI, "rad", in Domain::FINITE;
     /// Divides both friction coefficients before solving; 1 reproduces the paper.
-    friction_safety_factor: f64 = 1.0, "", in Domain::at_least(1.0);
+    friction_safety_factor: f64 = 1.0, "", in Domain::Real { min: 1.0, max: MAX_SAFETY_FACTOR };
     /// QoS history depth (keep-last, reliable, volatile) of every topic.
     qos_depth (fixed): i64 = 100, "messages", in Domain::Integer { min: 1, max: 100_000 };
     /// Publish visualization_msgs/MarkerArray on grip_markers.

@@ -21,7 +21,7 @@ use crate::config::Config;
 use crate::msg::{GraspCandidate, GripRecommendation, MarkerArray};
 use crate::record::{now_ns, OnStop, Topics};
 use answer::{Answerer, Note};
-use anyhow::{bail, Context as _};
+use anyhow::Context as _;
 use demo::Demo;
 use futures::{FutureExt, StreamExt};
 use param_services::ParameterServices;
@@ -49,13 +49,28 @@ pub struct Options {
 fn load_config(ros: &RosArgs, node: &str) -> anyhow::Result<(Config, crate::solver::Settings)> {
     let mut config = Config::load(None, node)?;
     for path in &ros.params_files {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read --params-file {}", path.display()))?;
-        config.merge_yaml(&text, &path.display().to_string(), node)?;
+        let text = crate::config::read_text(path, crate::config::MAX_FILE_BYTES)
+            .map_err(|source| crate::config::ConfigError::Read {
+                path: path.display().to_string(),
+                source,
+            })
+            .context("--params-file")?;
+        let sections = config.merge_yaml(&text, &path.display().to_string(), node)?;
+        if sections.applied.is_empty() {
+            // rcl skips such a file without a word (one file may serve several nodes); a line
+            // saves a user who misspelt the node's name.
+            log::warn!(
+                "--params-file {}: no section applies to node {node} (found: {}); its settings \
+                 are not used",
+                path.display(),
+                sections.found.join(", ")
+            );
+        }
     }
     for (name, value) in &ros.params {
         if crate::config::Parameter::find(name).is_none() {
-            bail!("-p {name}:={value}: grasp_orient has no parameter {name}");
+            let unknown = crate::config::ConfigError::Unknown { name: name.clone() };
+            return Err(anyhow::Error::new(unknown).context(format!("-p {name}:={value}")));
         }
         config
             .set_from_yaml(name, value)
@@ -111,6 +126,7 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
     let start = Start::new(ros_argv)?;
     let name = start.node_name(NODE_NAME);
     let (config, settings) = load_config(&start.ros, &name)?;
+    log::debug!("settings: {config:?}");
     let shared = Shared::new(config.clone(), settings);
     let node_options = shared.declare(
         NodeOptions::new()
@@ -230,7 +246,11 @@ async fn serve(
     }
     .fuse());
     loop {
-        futures::select! {
+        // Biased, in this order: a stop request wins over whatever is queued, then the demo's
+        // end, then a parameter set or a stopped writer (so that it applies to every candidate
+        // still queued), then candidates; each candidate costs microseconds, so a signal is
+        // seen within one.
+        futures::select_biased! {
             signal = shutdown.requested().fuse() => {
                 say(node, log::Level::Info, &format!("{signal}: leaving the ROS graph"));
                 return Ok(());
@@ -286,6 +306,19 @@ async fn answer_one(
         u64::try_from(t.to_nanos()).unwrap_or(received)
     });
     let outcome = answerer.handle(candidate, received, sent);
+    log::debug!(
+        "candidate {:?}: status {}, gravity angle {}, {} {} N",
+        outcome
+            .reply
+            .candidate_id
+            .chars()
+            .take(64)
+            .collect::<String>(),
+        outcome.reply.status,
+        outcome.reply.gravity_angle,
+        outcome.reply.objective,
+        outcome.reply.gripping_power
+    );
     tell(node, outcome.notes);
     if let Err(e) = endpoints.answers.async_publish(outcome.reply).await {
         say(

@@ -65,9 +65,10 @@ async fn wait_for_subscribers(
     sets: Option<(&Publisher<GraspCandidateSet>, &str)>,
     wait: f64,
 ) -> anyhow::Result<bool> {
-    let mut deadline = std::pin::pin!(FutureExt::fuse(smol::Timer::after(
-        Duration::from_secs_f64(wait)
-    )));
+    // A wait too long for a clock to hold never times out (a stop request still ends it).
+    let timer =
+        Duration::try_from_secs_f64(wait).map_or_else(|_| smol::Timer::never(), smol::Timer::after);
+    let mut deadline = std::pin::pin!(FutureExt::fuse(timer));
     if let Some((publisher, topic)) = candidates {
         let mut found = std::pin::pin!(publisher.wait_for_subscription(node).fuse());
         futures::select! {
@@ -135,8 +136,12 @@ pub fn publish(
         for (time, item) in &items {
             if pace.rate > 0.0 {
                 let offset = time.saturating_sub(first) as f64 / 1e9 / pace.rate;
-                let due = start + Duration::from_secs_f64(offset);
-                let mut sleep = std::pin::pin!(FutureExt::fuse(smol::Timer::at(due)));
+                // Beyond what a clock can hold: never due (a stop request still ends it).
+                let due = Duration::try_from_secs_f64(offset)
+                    .ok()
+                    .and_then(|d| start.checked_add(d));
+                let timer = due.map_or_else(smol::Timer::never, smol::Timer::at);
+                let mut sleep = std::pin::pin!(FutureExt::fuse(timer));
                 futures::select! {
                     _ = sleep => {}
                     _ = shutdown.requested().fuse() => break,

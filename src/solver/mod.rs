@@ -42,6 +42,7 @@ mod sinusoid;
 mod spatial;
 
 pub use analysis::{Analysis, PointValue};
+pub use frame::MAX_SAFETY_FACTOR;
 pub use paper::CandidateAngles;
 pub use robust::{
     solve_robust, BoxPoint, BoxPointKind, NoCommonOrientation, RobustRecommendation, RobustVerdict,
@@ -218,6 +219,22 @@ pub enum InvalidInput {
         /// Unit of the limit, with its leading space (empty for none).
         unit: &'static str,
     },
+    /// A field is below the smallest value the solver accepts.
+    #[error("{field} is out of range: {value:e} is below the smallest accepted {minimum:e}")]
+    BelowMinimum {
+        /// The field.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+        /// Smallest accepted value.
+        minimum: f64,
+    },
+    /// The weight `mass × |gravity|` (in-plane gravity) is too small to compute forces with.
+    #[error("mass and gravity give a weight of {weight:e} N, below the smallest the forces can be computed for ({:e} N)", frame::MIN_WEIGHT)]
+    WeightTooSmall {
+        /// `mass × |gravity|`, N.
+        weight: f64,
+    },
     /// A vector has no component in the grasp plane.
     #[error("{field} has no component in the x-y plane")]
     ZeroInPlane {
@@ -239,8 +256,11 @@ pub enum InvalidInput {
         /// The contact whose tangent line separates it.
         contact: Contact,
     },
-    /// The friction safety factor is below 1 or not finite.
-    #[error("friction safety factor must be a finite number >= 1, got {value}")]
+    /// The friction safety factor is not in `[1, MAX_SAFETY_FACTOR]`.
+    #[error(
+        "friction safety factor must be in [1, {:e}], got {value}",
+        frame::MAX_SAFETY_FACTOR
+    )]
     SafetyFactor {
         /// The value given.
         value: f64,
