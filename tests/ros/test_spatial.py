@@ -7,6 +7,9 @@
 - the bad-input catalogue of the spatial model: every case answered with status 2 naming the field (status 1
   naming the contact for a normal tilted beyond its friction angle), equal to `solve` where JSON can carry it,
   and a good spatial candidate right after it answered as `solve` answers it;
+- spatial candidates in a set, on `grasp_candidate_sets` and through `~/recommend`: both answers equal, each
+  recommendation equal to `solve`'s, the whole answer equal to `grasp_orient rank --json`'s; a set whose best
+  candidate is spatial gets 3D markers;
 - the markers of a spatial answer are drawn in 3D and obey the physics: the forces balance the weight along the
   recommended gravity, and lie in their true 3D cones;
 - a recording of spatial candidates (with markers) replays without a difference.
@@ -156,7 +159,13 @@ def _spatial_bad_cases(base: dict):
         ("nan friction", mut(lambda c: c.update(friction_2=math.nan)), 2, ["friction_2"], False),
         ("1 MB id", mut(lambda c: c.update(id="s" * (1 << 20))), 2, ["id is 1048576 bytes"], True),
         ("2 kB frame_id", mut(lambda c: c["header"].update(frame_id="f" * 2000)), 2, ["frame_id"], True),
+        ("nan centre of mass z", mut(lambda c: c["center_of_mass"].update(z=math.nan)), 2, ["center_of_mass.z"],
+         False),
+        ("centre of mass on the contact axis, beyond contact_2",
+         mut(lambda c: c.update(center_of_mass={"x": 0.0, "y": -0.1, "z": 0.3})), 2,
+         ["center_of_mass lies outside the object"], True),
         ("model 2", mut(lambda c: c.update(model=2)), 2, ["model"], True),
+        ("model 7", mut(lambda c: c.update(model=7)), 2, ["model is 7: it must be 0", "or 1 (MODEL_SPATIAL"], True),
         ("model 255", mut(lambda c: c.update(model=255)), 2, ["model"], True),
         ("normal tilted beyond the friction angle",
          mut(lambda c: c.update(normal_1={"x": math.sin(0.7), "y": -math.cos(0.7), "z": 0.0}, friction_1=0.5)), 1,
@@ -360,11 +369,11 @@ def test_a_recording_of_spatial_candidates_replays(start_node, rclpy_context, tm
     (path,) = record_dir.glob("*.mcap")
     recs = mu.read_mcap(path)
     recorded = [r.msg for r in recs if r.topic == f"{ns}/grasp_candidates"]
-    # the model field is recorded as sent: 1, and 2 and 255 for the refused models
+    # the model field is recorded as sent: 1, and 2, 7 and 255 for the refused models
     models = {m["id"]: m["model"] for m in recorded}
     wrong = [(c["id"], c["model"], models.get(c["id"])) for c in cands if models.get(c["id"]) != c["model"]]
     assert not wrong, f"the model field is not recorded as sent (id, sent, recorded): {wrong[:5]}"
-    assert {c["model"] for c in cands} == {1, 2, 255}
+    assert {c["model"] for c in cands} == {1, 2, 7, 255}
     solved = [r.msg for r in recs if r.topic == f"{ns}/grip_recommendations" and r.msg["status"] == 0]
     markers = [r.msg for r in recs if r.topic == f"{ns}/grip_markers"]
     assert len(markers) == len(solved), f"{len(markers)} marker arrays for {len(solved)} solved candidates"
