@@ -102,7 +102,7 @@ fn random_spatial(seed: u64, kind: usize) -> SpatialCandidate {
 
 /// `c` with field `field` multiplied by `k`, as [`scaled`] does for planar candidates.
 fn scaled_spatial(c: &SpatialCandidate, field: &str, k: f64) -> SpatialCandidate {
-    let mut s = c.clone();
+    let mut s = *c;
     match field {
         "contact_1" => s.contact_1 *= k,
         "contact_2" => s.contact_2 *= k,
