@@ -176,6 +176,19 @@ def _spatial_bad_cases(base: dict):
     ]
 
 
+def test_normals_along_the_contact_axis_are_answered_not_refused(client):
+    """Normals along the contact axis lie in every plane through it: a can gripped through its centre (centre of
+    mass on the axis) and a box with its centre of mass off the axis are both held, as `solve` answers them."""
+    can = dict(upright_square("along-axis-on"), center_of_mass={"x": 0.0, "y": 0.0, "z": 0.3})
+    box = upright_square("along-axis-off")
+    answers = client.send_and_collect([can, box])
+    check_against_solve(answers, [can, box])
+    assert answers["along-axis-on"].status == 0 and answers["along-axis-on"].message.startswith("sensitive"), \
+        to_plain(answers["along-axis-on"])
+    assert answers["along-axis-off"].status == 0 and answers["along-axis-off"].message == "", \
+        to_plain(answers["along-axis-off"])
+
+
 def test_spatial_bad_input_is_answered_and_the_node_keeps_serving(client):
     goods = spatial_batch(40, SEED + 2, "after-spatial-bad")
     problems = []
