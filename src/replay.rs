@@ -95,12 +95,15 @@ type ExactField = (
 );
 
 /// Every number compared, in report order.
-const NUMBERS: [NumberField; 16] = [
+const NUMBERS: [NumberField; 22] = [
     ("wrist_rotation", |r| r.wrist_rotation),
+    ("rotation.x", |r| r.rotation.x),
+    ("rotation.y", |r| r.rotation.y),
     ("rotation.z", |r| r.rotation.z),
     ("rotation.w", |r| r.rotation.w),
     ("gravity_direction.x", |r| r.gravity_direction.x),
     ("gravity_direction.y", |r| r.gravity_direction.y),
+    ("gravity_direction.z", |r| r.gravity_direction.z),
     ("gravity_angle", |r| r.gravity_angle),
     ("gripping_power", |r| r.gripping_power),
     ("internal_force", |r| r.internal_force),
@@ -112,6 +115,9 @@ const NUMBERS: [NumberField; 16] = [
     ("internal_force_current", |r| r.internal_force_current),
     ("finger_force", |r| r.finger_force),
     ("finger_force_current", |r| r.finger_force_current),
+    ("rotation_axis.x", |r| r.rotation_axis.x),
+    ("rotation_axis.y", |r| r.rotation_axis.y),
+    ("rotation_axis.z", |r| r.rotation_axis.z),
 ];
 
 /// Every list of numbers compared: a different length is a gap of 1.

@@ -22,8 +22,8 @@
 //!   `max_grip_force` of 0 means the node's.
 
 use crate::msg::{
-    answer, clip, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
-    MAX_TEXT_BYTES,
+    answer, answer_in_full, clip, Answered, GraspCandidate, GraspCandidateSet, GripRecommendation,
+    GripRecommendationSet, MAX_TEXT_BYTES,
 };
 use crate::solver::Settings;
 use std::cmp::Ordering;
@@ -153,6 +153,13 @@ pub fn answer_one(m: &GraspCandidate, settings: &Settings, rules: &Rules) -> Gri
     let mut r = answer(m, settings);
     apply_limit(&mut r, rules.drive, rules.max_grip_force);
     r
+}
+
+/// [`answer_one`], with the 3D solution of a spatial grasp (for its markers).
+pub fn answer_one_in_full(m: &GraspCandidate, settings: &Settings, rules: &Rules) -> Answered {
+    let mut out = answer_in_full(m, settings);
+    apply_limit(&mut out.reply, rules.drive, rules.max_grip_force);
+    out
 }
 
 /// The indices of the answers with status 0, least [`Rules::ranked_by`] first; ties go to the

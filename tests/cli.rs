@@ -136,6 +136,122 @@ fn plot_writes_an_svg() {
     assert!(text.starts_with("<svg") && text.contains("α_3") && text.contains("recommended"));
 }
 
+/// The paper's case (c) stood up in the y-z plane (model 1), gravity along -z, as a JSON line.
+fn upright_square(id: &str, gravity_x: f64) -> String {
+    format!(
+        r#"{{"id": "{id}", "model": 1, "contact_1": {{"x": 0, "y": 1, "z": 1}}, "contact_2": {{"x": 0, "y": -1, "z": 1}}, "normal_1": {{"x": 0, "y": -1, "z": 0}}, "normal_2": {{"x": 0, "y": 1, "z": 0}}, "friction_1": 1.7320508075688772, "friction_2": 0.5773502691896258, "center_of_mass": {{"x": 0, "y": 0, "z": 0}}, "mass": 1, "gravity": {{"x": {gravity_x}, "y": 0, "z": -1}}}}"#
+    )
+}
+
+#[test]
+fn solve_reads_the_model_absent_as_planar() {
+    let case_c = paper_cases().lines().nth(2).expect("case c").to_string();
+    let explicit = case_c.replacen('{', "{\"model\": 0, ", 1);
+    let unknown = case_c.replacen('{', "{\"model\": 7, ", 1);
+    let input = [
+        case_c,
+        explicit,
+        unknown,
+        upright_square("upright", 0.0),
+        upright_square("swinging", 0.5),
+    ]
+    .join("\n");
+    let (out, stderr, ok) = run_solve(&[], &input);
+    assert!(ok, "{stderr}");
+    // Absent and 0: the planar model, turning about +z.
+    assert_eq!(out[0], out[1]);
+    assert_eq!(
+        out[0]["rotation_axis"],
+        serde_json::json!({"x": 0.0, "y": 0.0, "z": 1.0})
+    );
+    // Neither 0 nor 1: refused, naming the field.
+    assert_eq!(out[2]["status"], 2);
+    let why = out[2]["message"].as_str().expect("a message");
+    assert!(
+        why.contains("line 3") && why.contains("model is 7"),
+        "{why}"
+    );
+    // Spatial: the same turn, about x, in [0, π], with the 3D gravity direction.
+    let up = &out[3];
+    assert_eq!(up["status"], 0, "{up}");
+    let num = |v: &Value| v.as_f64().expect("a number");
+    assert!((num(&up["wrist_rotation"]) - std::f64::consts::PI / 12.0).abs() < 1e-12);
+    assert!(
+        (num(&up["rotation_axis"]["x"]).abs() - 1.0).abs() < 1e-12,
+        "{up}"
+    );
+    assert!(
+        (num(&up["gravity_direction"]["z"]) + (std::f64::consts::PI / 12.0).cos()).abs() < 1e-12
+    );
+    assert_eq!(up["gripping_power"], out[0]["gripping_power"]);
+    assert_eq!(up["message"], "");
+    // Gravity out of the grasp plane: the object would swing; said, and the current fields are
+    // infinite (written as null).
+    let swing = &out[4];
+    assert_eq!(swing["status"], 0, "{swing}");
+    assert!(swing["gripping_power_current"].is_null() && swing["finger_force_current"].is_null());
+    let why = swing["message"].as_str().expect("a message");
+    assert!(why.contains("swings about the contact axis"), "{why}");
+}
+
+#[test]
+fn plot_draws_a_spatial_candidate_in_its_grasp_plane() {
+    let dir = temp_dir("plot-spatial");
+    for (name, gravity_x, current) in [("held", 0.0, true), ("swinging", 0.5, false)] {
+        let candidate = dir.path().join(format!("{name}.json"));
+        std::fs::write(&candidate, upright_square(name, gravity_x)).expect("write");
+        let svg = dir.path().join(format!("{name}.svg"));
+        let out = bin()
+            .args(["plot", candidate.to_str().expect("utf-8"), "-o"])
+            .arg(&svg)
+            .output()
+            .expect("runs");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        // The recommended gravity is (0, -sin 15°, -cos 15°) either way; the rotation turns the
+        // current gravity onto it, and the weight is mass × |gravity|.
+        let g = [gravity_x, 0.0, -1.0_f64];
+        let g_norm = g.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let cos_turn = (std::f64::consts::PI / 12.0).cos() / g_norm;
+        let expected = [
+            "grasp plane normal (1.000000, 0.000000, 0.000000)".to_string(),
+            format!("rotation {:.6} rad about (", cos_turn.acos()),
+            format!("norm2 {g_norm:.6} N"),
+        ];
+        assert!(expected.iter().all(|e| stdout.contains(e)), "{stdout}");
+        assert_eq!(stdout.contains("swings"), !current, "{stdout}");
+        let text = std::fs::read_to_string(&svg).expect("svg written");
+        assert!(text.contains("in the grasp plane") && text.contains("recommended"));
+        // plotters writes each text on a line of its own, between `<text …>` and `</text>`; the
+        // current pose is a blue dot of radius 5 (its legend's dot has radius 4).
+        let legend = text.lines().any(|line| line.trim() == "current");
+        let dot = text.contains(r##"r="5" opacity="1" fill="#0000FF""##);
+        assert_eq!(
+            (legend, dot),
+            (current, current),
+            "the current pose is drawn only when held"
+        );
+    }
+    // A model that is neither 0 nor 1 is refused.
+    let candidate = dir.path().join("bad.json");
+    std::fs::write(
+        &candidate,
+        upright_square("bad", 0.0).replace("\"model\": 1", "\"model\": 3"),
+    )
+    .expect("write");
+    let out = bin()
+        .args(["plot", candidate.to_str().expect("utf-8"), "-o"])
+        .arg(dir.path().join("bad.svg"))
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("model is 3"));
+}
+
 #[test]
 fn a_line_of_invalid_utf8_is_answered_and_the_run_goes_on() {
     let cases = paper_cases();
@@ -285,5 +401,53 @@ fn any_span_of_bounds_is_answered_at_once() {
         let (wide, stderr, ok) = run_solve(&[range], &input);
         assert!(ok, "{range}: {stderr}");
         assert_eq!(wide, graspable, "{range}");
+    }
+}
+
+/// The README's spatial example is what `solve` prints for `examples/spatial_cases.jsonl`.
+#[test]
+fn the_readme_spatial_example_is_solves_output() {
+    let readme = include_str!("../README.md");
+    let command = "$ grasp_orient solve examples/spatial_cases.jsonl | jq -c '{";
+    let at = readme.find(command).expect("the example in the README");
+    let block = &readme[at..readme[at..].find("```").map_or(readme.len(), |e| at + e)];
+    let mut lines = block.lines();
+    let head = lines.next().expect("the command line");
+    let fields: Vec<&str> = head
+        [head.find("'{").expect("jq filter") + 2..head.rfind("}'").expect("jq filter end")]
+        .split(", ")
+        .collect();
+    let shown: Vec<Value> = lines
+        .filter(|l| l.starts_with('{'))
+        .map(|l| serde_json::from_str(l).expect("a JSON line"))
+        .collect();
+    let input = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/spatial_cases.jsonl"
+    ))
+    .expect("the example file");
+    let (out, stderr, ok) = run_solve(&[], &input);
+    assert!(ok, "{stderr}");
+    assert_eq!(shown.len(), out.len(), "one line per candidate");
+    // jq prints 0.0 as 0: numbers compare as numbers.
+    fn same(a: &Value, b: &Value) -> bool {
+        match (a, b) {
+            (Value::Number(x), Value::Number(y)) => x.as_f64() == y.as_f64(),
+            (Value::Object(x), Value::Object(y)) => {
+                x.len() == y.len() && x.iter().all(|(k, v)| y.get(k).is_some_and(|w| same(v, w)))
+            }
+            _ => a == b,
+        }
+    }
+    for (want, got) in shown.iter().zip(&out) {
+        for f in &fields {
+            assert!(
+                same(&want[f], &got[f]),
+                "{f} of {}: {} / {}",
+                got["candidate_id"],
+                want[f],
+                got[f]
+            );
+        }
     }
 }

@@ -127,6 +127,17 @@ fn number(v: f64, digits: usize) -> String {
     }
 }
 
+/// The wrist rotation, rad, with its axis when that is not +z (a spatial candidate's).
+fn rotation(r: &GripRecommendation) -> String {
+    let angle = number(r.wrist_rotation, 4);
+    let k = &r.rotation_axis;
+    if !r.wrist_rotation.is_finite() || (k.x, k.y, k.z) == (0.0, 0.0, 1.0) {
+        angle
+    } else {
+        format!("{angle} about ({:.3}, {:.3}, {:.3})", k.x, k.y, k.z)
+    }
+}
+
 /// The table: the ranked candidates first, least force first, then the others in file order.
 fn table(set: &GraspCandidateSet, reply: &GripRecommendationSet, rules: &Rules) -> String {
     let recs = &reply.recommendations;
@@ -177,7 +188,7 @@ fn table(set: &GraspCandidateSet, reply: &GripRecommendationSet, rules: &Rules) 
             short(&r.candidate_id),
             number(rules.drive.grip_force(r), 3),
             number(r.gripping_power, 3),
-            number(r.wrist_rotation, 4),
+            rotation(r),
             status_name(r.status).into(),
             r.message.clone(),
         ]);
@@ -227,7 +238,41 @@ mod tests {
                 .push(serde_json::from_str(l).expect("a candidate"));
         }
         set.candidates[1].mass = -1.0;
+        // Case (c) as a spatial candidate too, stood up in the y-z plane: it turns about x.
+        let mut spatial = set.candidates[2].clone();
+        spatial.model = GraspCandidate::MODEL_SPATIAL;
+        spatial.id = "paper-c-spatial".into();
+        for p in [
+            &mut spatial.contact_1,
+            &mut spatial.contact_2,
+            &mut spatial.center_of_mass,
+        ] {
+            (p.x, p.y, p.z) = (p.z, p.x, p.y);
+        }
+        for v in [
+            &mut spatial.normal_1,
+            &mut spatial.normal_2,
+            &mut spatial.gravity,
+        ] {
+            (v.x, v.y, v.z) = (v.z, v.x, v.y);
+        }
+        set.candidates.push(spatial);
         let rules = Rules::default();
+        let reply = answer_set(&set, &Settings::default(), &rules);
+        let text = table(&set, &reply, &rules);
+        let lines: Vec<&str> = text.lines().collect();
+        let row = |id: &str| {
+            *lines
+                .iter()
+                .find(|l| l.contains(&format!(" {id} ")))
+                .expect("a row")
+        };
+        assert!(row("paper-c").contains(" 0.2618  ok"), "{text}");
+        assert!(
+            row("paper-c-spatial").contains(" 0.2618 about (1.000, 0.000, 0.000)  ok"),
+            "{text}"
+        );
+        set.candidates.pop();
         let reply = answer_set(&set, &Settings::default(), &rules);
         let text = table(&set, &reply, &rules);
         let lines: Vec<&str> = text.lines().collect();

@@ -13,7 +13,10 @@ pub mod definitions;
 pub mod schema;
 
 pub use contract::{message_type_name, RosMessage, RosType};
-pub use convert::{answer, clip, invalid, short_id, MessageLimits, MAX_TEXT_BYTES, SHORT_ID_CHARS};
+pub use convert::{
+    answer, answer_in_full, clip, invalid, short_id, Answered, MessageLimits, MAX_TEXT_BYTES,
+    SHORT_ID_CHARS,
+};
 
 use serde::{Deserialize, Serialize};
 
@@ -149,9 +152,12 @@ ros_message! {
 }
 
 ros_message! {
-    /// `msg/GraspCandidate.msg`: a two-finger planar grasp to orient. SI units; vectors in the
-    /// x-y plane of `header.frame_id`.
-    GraspCandidate = grasp_orient/GraspCandidate [] {
+    /// `msg/GraspCandidate.msg`: a two-finger grasp to orient. SI units; vectors in the x-y plane
+    /// of `header.frame_id` (`model` 0), or in 3D (`model` 1).
+    GraspCandidate = grasp_orient/GraspCandidate [
+        MODEL_PLANAR: u8 = 0,
+        MODEL_SPATIAL: u8 = 1,
+    ] {
         /// Stamp and frame of the candidate.
         #[serde(default)]
         header: Header,
@@ -176,6 +182,10 @@ ros_message! {
         mass: f64,
         /// Gravitational acceleration at the current pose, m/s².
         gravity: Vector3,
+        /// `MODEL_PLANAR` (0, the default: the x-y plane, z ignored) or `MODEL_SPATIAL` (1: every
+        /// point and vector in 3D).
+        #[serde(default)]
+        model: u8,
     }
 }
 
@@ -238,6 +248,10 @@ ros_message! {
         /// The same at the current pose, N (inf where it cannot be held).
         #[serde(default)]
         finger_force_current: f64,
+        /// Unit axis of the rotation `wrist_rotation` and `rotation` describe: +z for a planar
+        /// candidate, the smallest rotation's axis for a spatial one.
+        #[serde(default)]
+        rotation_axis: Vector3,
     }
 }
 

@@ -538,7 +538,8 @@ impl Copy<'_> {
 mod tests {
     use super::*;
     use crate::msg::{
-        cdr, paper_cases, GraspCandidateSet, GripRecommendation, GripRecommendationSet, RosMessage,
+        cdr, paper_cases, GraspCandidate, GraspCandidateSet, GripRecommendation,
+        GripRecommendationSet, RosMessage, Vector3,
     };
     use crate::sets::{answer_set, Rules};
     use crate::solver::Settings;
@@ -678,7 +679,8 @@ mod tests {
         assert!(layout.fields("builtin_interfaces/Time").is_some());
     }
 
-    /// A recording made before `finger_force` and `finger_force_current`: decoded with them at 0,
+    /// A recording made before `finger_force`, `finger_force_current` (and `rotation_axis`):
+    /// decoded with them at 0,
     /// every other field as recorded; the recording is said not to have them.
     #[test]
     fn an_older_recommendation_decodes_with_its_trailing_fields_at_zero() {
@@ -699,10 +701,92 @@ mod tests {
             let want = GripRecommendation {
                 finger_force: 0.0,
                 finger_force_current: 0.0,
+                rotation_axis: Vector3::default(),
                 ..now.clone()
             };
             assert_eq!(format!("{got:?}"), format!("{want:?}"));
         }
+    }
+
+    /// `GraspCandidate` as it was before issue 11 (no `model`), field for field.
+    #[derive(Debug, Clone, Serialize)]
+    struct OldCandidate {
+        header: crate::msg::Header,
+        id: String,
+        contact_1: crate::msg::Point,
+        contact_2: crate::msg::Point,
+        normal_1: crate::msg::Vector3,
+        normal_2: crate::msg::Vector3,
+        friction_1: f64,
+        friction_2: f64,
+        center_of_mass: crate::msg::Point,
+        mass: f64,
+        gravity: crate::msg::Vector3,
+    }
+
+    impl From<&GraspCandidate> for OldCandidate {
+        fn from(c: &GraspCandidate) -> Self {
+            Self {
+                header: c.header.clone(),
+                id: c.id.clone(),
+                contact_1: c.contact_1.clone(),
+                contact_2: c.contact_2.clone(),
+                normal_1: c.normal_1.clone(),
+                normal_2: c.normal_2.clone(),
+                friction_1: c.friction_1,
+                friction_2: c.friction_2,
+                center_of_mass: c.center_of_mass.clone(),
+                mass: c.mass,
+                gravity: c.gravity.clone(),
+            }
+        }
+    }
+
+    /// Candidates recorded before `model` existed (issue 11) decode as planar ones (`model` 0),
+    /// alone and inside a set recorded then, where each candidate is one byte shorter.
+    #[test]
+    fn an_older_candidate_decodes_as_a_planar_one() {
+        let cases = paper_cases();
+        let cut = [("grasp_orient/GraspCandidate", "gravity")];
+        let t = RecordedType::new(
+            &older_text(GraspCandidate::TYPE_NAME, &cut),
+            GraspCandidate::TYPE_NAME,
+        )
+        .expect("a prefix of ours");
+        assert!(!t.is_ours() && !t.has_field("grasp_orient/GraspCandidate", "model"));
+        for c in &cases {
+            let spatial = GraspCandidate {
+                model: GraspCandidate::MODEL_SPATIAL,
+                ..c.clone()
+            };
+            let bytes = cdr::encode(&OldCandidate::from(&spatial)).expect("encodes");
+            let got: GraspCandidate = t.decode(&bytes).expect("decodes");
+            assert_eq!(got, *c);
+            assert_eq!(got.model, GraspCandidate::MODEL_PLANAR);
+        }
+        #[derive(Serialize)]
+        struct OldSet {
+            header: crate::msg::Header,
+            id: String,
+            candidates: Vec<OldCandidate>,
+            max_grip_force: f64,
+        }
+        let old = OldSet {
+            header: crate::msg::Header::default(),
+            id: "old set".into(),
+            candidates: cases.iter().map(OldCandidate::from).collect(),
+            max_grip_force: 12.5,
+        };
+        let t = RecordedType::new(
+            &older_text(GraspCandidateSet::TYPE_NAME, &cut),
+            GraspCandidateSet::TYPE_NAME,
+        )
+        .expect("a prefix of ours");
+        let got: GraspCandidateSet = t
+            .decode(&cdr::encode(&old).expect("encodes"))
+            .expect("decodes");
+        assert_eq!(got.candidates, cases);
+        assert_eq!((got.id.as_str(), got.max_grip_force), ("old set", 12.5));
     }
 
     /// Nested: a set whose recommendations are the older ones, and which itself lacks the status
@@ -744,6 +828,7 @@ mod tests {
         for r in &mut want.recommendations {
             r.finger_force = 0.0;
             r.finger_force_current = 0.0;
+            r.rotation_axis = Vector3::default();
         }
         assert_eq!(format!("{got:?}"), format!("{want:?}"));
         // Big-endian CDR too.

@@ -7,13 +7,13 @@ use super::markers;
 use super::params::Shared;
 use super::params::Version;
 use crate::msg::{
-    short_id, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
-    MarkerArray,
+    answer_in_full, short_id, Answered, GraspCandidate, GraspCandidateSet, GripRecommendation,
+    GripRecommendationSet, MarkerArray,
 };
 use crate::record::lifecycle::{Change, Recording, Wanted};
 use crate::record::settings::SettingsRecord;
 use crate::record::{Entry, OnStop, Payload, RecordError, Topics};
-use crate::sets::{answer_one, answer_set_on, echo_set};
+use crate::sets::{answer_one_in_full, answer_set_on, echo_set};
 use log::Level;
 use std::path::Path;
 
@@ -234,14 +234,17 @@ impl Answerer {
                 version.config.rules(),
             )
         };
-        let reply = if self.echo {
-            GripRecommendation {
-                header: candidate.header.clone(),
-                candidate_id: candidate.id.clone(),
-                ..GripRecommendation::default()
+        let Answered { reply, spatial } = if self.echo {
+            Answered {
+                reply: GripRecommendation {
+                    header: candidate.header.clone(),
+                    candidate_id: candidate.id.clone(),
+                    ..GripRecommendation::default()
+                },
+                spatial: None,
             }
         } else {
-            answer_one(&candidate, &settings, &rules)
+            answer_one_in_full(&candidate, &settings, &rules)
         };
         match reply.status {
             GripRecommendation::STATUS_OK => {}
@@ -262,7 +265,7 @@ impl Answerer {
         }
         self.counts.answered += 1;
         let markers = (markers_on && !self.echo && reply.status == GripRecommendation::STATUS_OK)
-            .then(|| markers::build(&candidate, &reply));
+            .then(|| markers::build(&candidate, &reply, spatial.as_deref()));
         let recorded = Recorded {
             reply: self.recording.is_on().then(|| reply.clone()),
             markers: markers
@@ -343,9 +346,16 @@ impl Answerer {
         self.count_set(&reply, &mut notes);
         let best = reply.ranking.first().map(|&i| i as usize);
         let markers = best.filter(|_| markers_on && !self.echo).and_then(|i| {
+            let candidate = set.candidates.get(i)?;
+            // A spatial best candidate is drawn in 3D: its 3D solution is solved again (one
+            // candidate; the set's answers keep only the message fields).
+            let spatial = (candidate.model == GraspCandidate::MODEL_SPATIAL)
+                .then(|| answer_in_full(candidate, &settings).spatial)
+                .flatten();
             Some(markers::build(
-                set.candidates.get(i)?,
+                candidate,
                 reply.recommendations.get(i)?,
+                spatial.as_deref(),
             ))
         });
         let recorded = RecordedSet {

@@ -49,9 +49,9 @@ pub use robust::{
     Uncertainty,
 };
 pub use spatial::{
-    sliced_friction, solve_spatial, AxisRelation, CurrentPose, SpatialCandidate, SpatialMiss,
-    SpatialNoForceClosure, SpatialRecommendation, SpatialVerdict, IN_PLANE_TOLERANCE, NEAR_AXIS,
-    ON_AXIS,
+    analyse_spatial, sliced_friction, solve_spatial, AxisRelation, CurrentPose, SpatialCandidate,
+    SpatialMiss, SpatialNoForceClosure, SpatialRecommendation, SpatialVerdict, IN_PLANE_TOLERANCE,
+    NEAR_AXIS, ON_AXIS,
 };
 
 use frame::GraspFrame;
