@@ -142,29 +142,37 @@ pub struct RecordedFields {
     counts: BTreeMap<String, usize>,
 }
 
-/// `pkg/Name` of our message types with trailing fields, and their fields.
+/// [`RosMessage::fields`] of one type.
+type FieldList = fn() -> Vec<(&'static str, String)>;
+
+/// The field-type name (`pkg/Name`, as a field names a type) of each of our message types with
+/// trailing fields, with its fields: the keys of [`RecordedFields`].
+fn our_types() -> [(String, FieldList); 4] {
+    fn entry<M: RosMessage>() -> (String, FieldList) {
+        (format!("{}/{}", M::PACKAGE, M::NAME), M::fields)
+    }
+    [
+        entry::<GraspCandidate>(),
+        entry::<GripRecommendation>(),
+        entry::<GraspCandidateSet>(),
+        entry::<GripRecommendationSet>(),
+    ]
+}
+
+/// The fields of our type named `type_name` (`pkg/Name`), if it is one with trailing fields.
 fn our_fields(type_name: &str) -> Option<Vec<&'static str>> {
-    let fields = match type_name {
-        GraspCandidate::TYPE_NAME => GraspCandidate::fields(),
-        GripRecommendation::TYPE_NAME => GripRecommendation::fields(),
-        GraspCandidateSet::TYPE_NAME => GraspCandidateSet::fields(),
-        GripRecommendationSet::TYPE_NAME => GripRecommendationSet::fields(),
-        _ => return None,
-    };
-    Some(fields.into_iter().map(|(name, _)| name).collect())
+    let (_, fields) = our_types()
+        .into_iter()
+        .find(|(name, _)| name == type_name)?;
+    Some(fields().into_iter().map(|(name, _)| name).collect())
 }
 
 impl RecordedFields {
     /// Notes the fields of every one of our types that `t` holds.
     fn note(&mut self, t: &RecordedType) {
-        for name in [
-            GraspCandidate::TYPE_NAME,
-            GripRecommendation::TYPE_NAME,
-            GraspCandidateSet::TYPE_NAME,
-            GripRecommendationSet::TYPE_NAME,
-        ] {
-            if let Some(n) = t.field_count(name) {
-                self.limit(name, n);
+        for (name, _) in our_types() {
+            if let Some(n) = t.field_count(&name) {
+                self.limit(&name, n);
             }
         }
     }
