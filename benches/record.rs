@@ -22,6 +22,7 @@ fn topics() -> Topics {
         candidates: "/grasp_candidates".into(),
         recommendations: "/grip_recommendations".into(),
         markers: None,
+        sets: None,
     }
 }
 
@@ -54,6 +55,7 @@ fn message(i: usize, c: &grasp_orient::solver::Candidate) -> GraspCandidate {
         center_of_mass: p(c.center_of_mass),
         mass: c.mass,
         gravity: q(c.gravity),
+        model: GraspCandidate::MODEL_PLANAR,
     }
 }
 

@@ -4,6 +4,8 @@
 mod cli;
 
 use clap::{Parser, Subcommand};
+use grasp_orient::node::ros_args::{LogLevel, RosArgs};
+use log::LevelFilter;
 use std::process::ExitCode;
 
 /// The object orientation that minimises gripping power in a two-finger planar grasp.
@@ -18,6 +20,9 @@ struct Cli {
 enum Command {
     /// Solve JSON-lines grasp candidates: one JSON recommendation per line.
     Solve(cli::solve::Args),
+    /// Answer JSON-lines grasp candidates as one set, ranked by the force they need: a table, or
+    /// the set's answer as JSON.
+    Rank(cli::rank::Args),
     /// Plot the bounds and the gripping power of one candidate to SVG (like the paper's Fig. 9).
     Plot(cli::plot::Args),
     /// Run the ROS 2 node (ROS arguments follow --ros-args, as from ros2 run or launch).
@@ -35,23 +40,34 @@ enum Command {
     Play(cli::play::Args),
 }
 
+/// What the libraries log without `RUST_LOG`: RustDDS warns about every unreachable locator; its
+/// errors still show. Everything else logs from `info` on.
+const LIBRARY_LEVELS: [(&str, LevelFilter); 4] = [
+    ("rustdds", LevelFilter::Error),
+    ("rustdds::network::udp_listener", LevelFilter::Off),
+    ("ros2_client", LevelFilter::Warn),
+    ("ros2_client::distributions", LevelFilter::Error),
+];
+
 fn main() -> ExitCode {
-    // RustDDS warns about every unreachable locator; its errors still show.
-    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or(
-        "info,rustdds=error,rustdds::network::udp_listener=off,ros2_client=warn,\
-         ros2_client::distributions=error",
-    ))
-    .target(env_logger::Target::Stderr)
-    .init();
     // Everything from --ros-args on belongs to ROS, not to clap.
     let argv: Vec<String> = std::env::args().collect();
     let split = argv
         .iter()
         .position(|a| a == "--ros-args")
         .unwrap_or(argv.len());
+    let levels = match RosArgs::parse(&argv[split..]) {
+        Ok(ros) => ros.log_levels,
+        Err(e) => {
+            eprintln!("grasp_orient: error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    init_logging(&levels);
     let cli = Cli::parse_from(&argv[..split]);
     let result = match &cli.command {
         Command::Solve(args) => cli::solve::run(args),
+        Command::Rank(args) => cli::rank::run(args),
         Command::Plot(args) => cli::plot::run(args),
         Command::Node(args) => cli::node::run(args, &argv[split..]),
         Command::Replay(args) => cli::replay::run(args),
@@ -87,4 +103,43 @@ fn closed_pipe(e: &anyhow::Error) -> bool {
             .downcast_ref::<std::io::Error>()
             .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
     })
+}
+
+/// The logger on stderr: `RUST_LOG` if set, else `info` with [`LIBRARY_LEVELS`]. Then
+/// `--log-level LEVEL` sets the default level (and caps the libraries' at it: `fatal` silences
+/// them too), and `--log-level NAME:=LEVEL` one logger's, whatever the order; `unset` changes
+/// nothing.
+fn init_logging(levels: &[(Option<String>, LogLevel)]) {
+    let mut builder = env_logger::Builder::new();
+    let from_env = std::env::var("RUST_LOG").ok();
+    match &from_env {
+        Some(filters) => {
+            builder.parse_filters(filters);
+        }
+        None => {
+            builder.filter_level(LevelFilter::Info);
+            for (module, level) in LIBRARY_LEVELS {
+                builder.filter_module(module, level);
+            }
+        }
+    }
+    let default = levels
+        .iter()
+        .filter(|(logger, _)| logger.is_none())
+        .filter_map(|(_, level)| level.filter())
+        .next_back();
+    if let Some(default) = default {
+        builder.filter_level(default);
+        if from_env.is_none() {
+            for (module, level) in LIBRARY_LEVELS {
+                builder.filter_module(module, level.min(default));
+            }
+        }
+    }
+    for (logger, level) in levels {
+        if let (Some(logger), Some(level)) = (logger, level.filter()) {
+            builder.filter_module(logger, level);
+        }
+    }
+    builder.target(env_logger::Target::Stderr).init();
 }

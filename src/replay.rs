@@ -1,11 +1,17 @@
 //! Replaying recordings: every recorded candidate is solved again, with the settings in force
 //! when it was recorded ([`Plan`]), and compared, field by field, with the recommendation
-//! recorded for it.
+//! recorded for it; every recorded set likewise ([`sets`]). Only the fields the recording has are
+//! compared: a recording made before a message grew decodes with the new trailing fields at their
+//! defaults, which say nothing.
+
+mod sets;
 
 use crate::config::{Config, ConfigError};
-use crate::msg::{answer, clip, short_id, GraspCandidate, GripRecommendation};
+use crate::msg::{clip, short_id, GraspCandidate, GripRecommendation, GripRecommendationSet};
 use crate::record::bag::{keep_example, Bag, Recorded};
+use crate::record::channels::RecordedFields;
 use crate::record::settings::{SettingsError, SettingsRecord, METADATA_NAME};
+use crate::sets::{answer_one, Rules};
 use crate::solver::{Objective, Settings};
 use serde_yaml_ng::Value;
 use std::collections::{BTreeMap, HashMap, VecDeque};
@@ -28,6 +34,14 @@ pub struct Summary {
     pub examples: Vec<String>,
     /// Recorded recommendations no candidate matched.
     pub unmatched_recommendations: u64,
+    /// Candidate sets solved again (their candidates count in `candidates` too).
+    pub sets: u64,
+    /// Of them, with a recorded answer to compare with.
+    pub sets_compared: u64,
+    /// Of those, differing in any recommendation, the ranking or a field of the set.
+    pub sets_differing: u64,
+    /// Recorded set answers no set matched.
+    pub unmatched_set_answers: u64,
 }
 
 impl Summary {
@@ -37,6 +51,10 @@ impl Summary {
         self.compared += other.compared;
         self.differing += other.differing;
         self.unmatched_recommendations += other.unmatched_recommendations;
+        self.sets += other.sets;
+        self.sets_compared += other.sets_compared;
+        self.sets_differing += other.sets_differing;
+        self.unmatched_set_answers += other.unmatched_set_answers;
         for (field, gap) in other.largest {
             self.note_gap(field, gap);
         }
@@ -77,12 +95,15 @@ type ExactField = (
 );
 
 /// Every number compared, in report order.
-const NUMBERS: [NumberField; 14] = [
+const NUMBERS: [NumberField; 22] = [
     ("wrist_rotation", |r| r.wrist_rotation),
+    ("rotation.x", |r| r.rotation.x),
+    ("rotation.y", |r| r.rotation.y),
     ("rotation.z", |r| r.rotation.z),
     ("rotation.w", |r| r.rotation.w),
     ("gravity_direction.x", |r| r.gravity_direction.x),
     ("gravity_direction.y", |r| r.gravity_direction.y),
+    ("gravity_direction.z", |r| r.gravity_direction.z),
     ("gravity_angle", |r| r.gravity_angle),
     ("gripping_power", |r| r.gripping_power),
     ("internal_force", |r| r.internal_force),
@@ -92,6 +113,11 @@ const NUMBERS: [NumberField; 14] = [
     ("contact_forces", |r| r.contact_forces[3]),
     ("gripping_power_current", |r| r.gripping_power_current),
     ("internal_force_current", |r| r.internal_force_current),
+    ("finger_force", |r| r.finger_force),
+    ("finger_force_current", |r| r.finger_force_current),
+    ("rotation_axis.x", |r| r.rotation_axis.x),
+    ("rotation_axis.y", |r| r.rotation_axis.y),
+    ("rotation_axis.z", |r| r.rotation_axis.z),
 ];
 
 /// Every list of numbers compared: a different length is a gap of 1.
@@ -120,6 +146,17 @@ pub fn differences(
     ours: &GripRecommendation,
     recorded: &GripRecommendation,
 ) -> Vec<(&'static str, f64)> {
+    differences_in(ours, recorded, &RecordedFields::default())
+}
+
+/// [`differences`] on the fields the recording has (`fields`); the others are not compared.
+pub fn differences_in(
+    ours: &GripRecommendation,
+    recorded: &GripRecommendation,
+    fields: &RecordedFields,
+) -> Vec<(&'static str, f64)> {
+    // "rotation.z" is a part of "rotation".
+    let has = |name: &str| fields.has::<GripRecommendation>(name.split('.').next().unwrap_or(name));
     let numbers = NUMBERS
         .iter()
         .map(|(field, get)| (*field, number_gap(get(ours), get(recorded))));
@@ -141,7 +178,7 @@ pub fn differences(
     numbers
         .chain(lists)
         .chain(exact)
-        .filter(|(_, gap)| *gap > 0.0)
+        .filter(|(field, gap)| *gap > 0.0 && has(field))
         .collect()
 }
 
@@ -215,10 +252,10 @@ pub type Override = (String, Value);
 /// Command-line overrides apply over both.
 #[derive(Debug, Clone)]
 pub struct Plan {
-    /// From which `log_time` on each applies, in time order.
-    timeline: Vec<(u64, Settings)>,
+    /// From which `log_time` on each applies, in time order, with the gripper rules.
+    timeline: Vec<(u64, Settings, Rules)>,
     /// For a recording without settings records.
-    fallback: Settings,
+    fallback: (Settings, Rules),
     /// Whether each candidate is solved with the objective its recorded answer names.
     objective_from_answer: bool,
     /// The bag's settings records, overrides applied.
@@ -241,6 +278,7 @@ impl Plan {
             let settings = config.solver_settings().map_err(ReplayError::Overrides)?;
             Ok((config, settings))
         };
+        let (base, base_settings) = apply(base)?;
         let mut recorded = Vec::new();
         for (name, entries) in &bag.metadata {
             if name == METADATA_NAME {
@@ -252,14 +290,15 @@ impl Plan {
         let mut timeline = Vec::with_capacity(recorded.len());
         for record in &mut recorded {
             let (config, settings) = apply(&record.config)?;
+            let rules = config.rules();
             record.config = config;
-            timeline.push((record.since, settings));
+            timeline.push((record.since, settings, rules));
         }
         let overridden: Vec<String> = overrides.iter().map(|(n, _)| n.clone()).collect();
         Ok(Self {
             objective_from_answer: timeline.is_empty()
                 && !overridden.iter().any(|n| n == "objective"),
-            fallback: apply(base)?.1,
+            fallback: (base_settings, base.rules()),
             timeline,
             recorded,
             overridden,
@@ -268,9 +307,14 @@ impl Plan {
 
     /// The same settings for every candidate, whatever the bag holds (for tests and benches).
     pub fn fixed(settings: Settings) -> Self {
+        Self::fixed_with(settings, Rules::default())
+    }
+
+    /// [`Plan::fixed`] with gripper rules too.
+    pub fn fixed_with(settings: Settings, rules: Rules) -> Self {
         Self {
             timeline: Vec::new(),
-            fallback: settings,
+            fallback: (settings, rules),
             objective_from_answer: true,
             recorded: Vec::new(),
             overridden: Vec::new(),
@@ -285,34 +329,67 @@ impl Plan {
     /// The settings for a candidate received at `log_time`: the last record from before it (the
     /// first record for earlier candidates).
     pub fn settings_at(&self, log_time: u64) -> &Settings {
+        match self.index_at(log_time) {
+            Some(i) => &self.timeline[i].1,
+            None => &self.fallback.0,
+        }
+    }
+
+    /// The gripper rules for a candidate (or set) received at `log_time`, as [`Plan::settings_at`].
+    pub fn rules_at(&self, log_time: u64) -> &Rules {
+        match self.index_at(log_time) {
+            Some(i) => &self.timeline[i].2,
+            None => &self.fallback.1,
+        }
+    }
+
+    /// The timeline entry in force at `log_time`: the last from before it, the first for earlier
+    /// times; `None` without a timeline.
+    fn index_at(&self, log_time: u64) -> Option<usize> {
         let after = self
             .timeline
-            .partition_point(|(since, _)| *since <= log_time);
-        match after.checked_sub(1).or(self.timeline.first().map(|_| 0)) {
-            Some(i) => &self.timeline[i].1,
-            None => &self.fallback,
-        }
+            .partition_point(|(since, _, _)| *since <= log_time);
+        after.checked_sub(1).or(self.timeline.first().map(|_| 0))
     }
 }
 
-/// Solves every candidate of `bag` again as `plan` says and compares. The work is shared among
-/// the machine's cores; `progress` hears of every 4096 candidates done.
+/// Solves every candidate and every set of `bag` again as `plan` says and compares. The work is
+/// shared among the machine's cores; `progress` hears of every 4096 candidates done.
 pub fn replay(
     bag: &Bag,
     plan: &Plan,
     progress: impl Fn(u64) + Sync,
 ) -> Result<Summary, ReplayError> {
-    replay_on_cores(bag, plan, false, &progress).map(|(summary, _)| summary)
+    let (mut summary, _) = replay_on_cores(bag, plan, false, &progress)?;
+    summary.merge(sets::replay_sets(bag, plan, false).0);
+    Ok(summary)
 }
 
-/// [`replay`], also returning the new answers, each with its candidate's times, in the
-/// candidates' order.
+/// The new answers of a replay, each with its candidate's (or set's) times.
+#[derive(Debug, Default)]
+pub struct Answers {
+    /// One per recorded candidate, in the candidates' order.
+    pub recommendations: Vec<Recorded<GripRecommendation>>,
+    /// One per recorded set, in the sets' order.
+    pub sets: Vec<Recorded<GripRecommendationSet>>,
+}
+
+/// [`replay`], also returning the new answers.
 pub fn replay_with_answers(
     bag: &Bag,
     plan: &Plan,
     progress: impl Fn(u64) + Sync,
-) -> Result<(Summary, Vec<Recorded<GripRecommendation>>), ReplayError> {
-    replay_on_cores(bag, plan, true, &progress)
+) -> Result<(Summary, Answers), ReplayError> {
+    let (mut summary, recommendations) = replay_on_cores(bag, plan, true, &progress)?;
+    let (of_sets, sets) = sets::replay_sets(bag, plan, true);
+    summary.merge(of_sets);
+    Ok((
+        summary,
+        Answers {
+            recommendations,
+            sets,
+        },
+    ))
 }
 
 /// One share of the candidates per core; the answers are kept only when asked for, since a
@@ -340,8 +417,17 @@ fn replay_on_cores(
                     for (k, (c, p)) in cands.iter().zip(pairs).enumerate() {
                         let theirs = p.map(|i| &bag.recommendations[i].message);
                         let settings = plan.settings_at(c.log_time);
+                        let rules = plan.rules_at(c.log_time);
                         let from_answer = plan.objective_from_answer;
-                        let ours = check(&c.message, settings, from_answer, theirs, &mut part);
+                        let ours = check(
+                            &c.message,
+                            settings,
+                            rules,
+                            from_answer,
+                            theirs,
+                            &bag.fields,
+                            &mut part,
+                        );
                         if keep {
                             answers.push(Recorded {
                                 message: ours,
@@ -388,59 +474,80 @@ fn panic_words(payload: &(dyn std::any::Any + Send)) -> String {
 fn check(
     candidate: &GraspCandidate,
     settings: &Settings,
+    rules: &Rules,
     objective_from_answer: bool,
     theirs: Option<&GripRecommendation>,
+    fields: &RecordedFields,
     summary: &mut Summary,
 ) -> GripRecommendation {
     summary.candidates += 1;
     let recorded = theirs.filter(|_| objective_from_answer);
-    let ours = solve_like(candidate, settings, recorded);
+    let ours = solve_like(candidate, settings, rules, recorded);
     if let Some(theirs) = theirs {
-        summary.compared += 1;
-        let diffs = differences(&ours, theirs);
-        for (field, gap) in &diffs {
-            summary.note_gap(field, *gap);
-        }
-        let beyond: Vec<_> = diffs.iter().filter(|(_, g)| *g > TOLERANCE).collect();
-        if !beyond.is_empty() {
-            summary.differing += 1;
-            keep_example(&mut summary.examples, || {
-                format!(
-                    "candidate {:?}: {}",
-                    short_id(&candidate.id),
-                    beyond
-                        .iter()
-                        .map(|(f, g)| format!("{f} (gap {g:.3e})"))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )
-            });
-        }
+        let label = || format!("candidate {:?}", short_id(&candidate.id));
+        compare_one(label, &ours, theirs, fields, summary);
     }
     ours
 }
 
-/// Solves with `settings`, and with the objective `recorded` names, if given.
+/// Compares one new answer with its recorded one on the recorded fields; true when it differs.
+/// `label` names the candidate in the report.
+fn compare_one(
+    label: impl FnOnce() -> String,
+    ours: &GripRecommendation,
+    theirs: &GripRecommendation,
+    fields: &RecordedFields,
+    summary: &mut Summary,
+) -> bool {
+    summary.compared += 1;
+    let diffs = differences_in(ours, theirs, fields);
+    for (field, gap) in &diffs {
+        summary.note_gap(field, *gap);
+    }
+    let beyond: Vec<_> = diffs.iter().filter(|(_, g)| *g > TOLERANCE).collect();
+    if beyond.is_empty() {
+        return false;
+    }
+    summary.differing += 1;
+    keep_example(&mut summary.examples, || {
+        format!(
+            "{}: {}",
+            label(),
+            beyond
+                .iter()
+                .map(|(f, g)| format!("{f} (gap {g:.3e})"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    });
+    true
+}
+
+/// Solves with `settings` and `rules`, and with the objective `recorded` names, if given.
 fn solve_like(
     candidate: &GraspCandidate,
     settings: &Settings,
+    rules: &Rules,
     recorded: Option<&GripRecommendation>,
 ) -> GripRecommendation {
+    answer_one(candidate, &objective_like(settings, recorded), rules)
+}
+
+/// `settings` with the objective `recorded` names, if any.
+fn objective_like(settings: &Settings, recorded: Option<&GripRecommendation>) -> Settings {
     let objective = recorded
         .and_then(|r| Objective::from_name(&r.objective))
         .unwrap_or(settings.objective);
-    answer(
-        candidate,
-        &Settings {
-            objective,
-            ..*settings
-        },
-    )
+    Settings {
+        objective,
+        ..*settings
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::msg::answer;
 
     #[test]
     fn equal_answers_have_no_differences_and_changed_ones_are_named() {
@@ -488,11 +595,14 @@ mod tests {
             Ok((summary, answers)) => panic!(
                 "a failed worker went unnoticed: {} candidates, {} answers",
                 summary.candidates,
-                answers.len()
+                answers.recommendations.len()
             ),
         }
         let (summary, answers) = replay_with_answers(&bag, &plan, |_| {}).expect("replays");
-        assert_eq!((summary.candidates, answers.len()), (8192, 8192));
+        assert_eq!(
+            (summary.candidates, answers.recommendations.len()),
+            (8192, 8192)
+        );
     }
 
     #[test]

@@ -135,3 +135,262 @@ fn plot_writes_an_svg() {
     let text = std::fs::read_to_string(&svg).expect("svg written");
     assert!(text.starts_with("<svg") && text.contains("α_3") && text.contains("recommended"));
 }
+
+/// The paper's case (c) stood up in the y-z plane (model 1), gravity along -z, as a JSON line.
+fn upright_square(id: &str, gravity_x: f64) -> String {
+    format!(
+        r#"{{"id": "{id}", "model": 1, "contact_1": {{"x": 0, "y": 1, "z": 1}}, "contact_2": {{"x": 0, "y": -1, "z": 1}}, "normal_1": {{"x": 0, "y": -1, "z": 0}}, "normal_2": {{"x": 0, "y": 1, "z": 0}}, "friction_1": 1.7320508075688772, "friction_2": 0.5773502691896258, "center_of_mass": {{"x": 0, "y": 0, "z": 0}}, "mass": 1, "gravity": {{"x": {gravity_x}, "y": 0, "z": -1}}}}"#
+    )
+}
+
+#[test]
+fn solve_reads_the_model_absent_as_planar() {
+    let case_c = paper_cases().lines().nth(2).expect("case c").to_string();
+    let explicit = case_c.replacen('{', "{\"model\": 0, ", 1);
+    let unknown = case_c.replacen('{', "{\"model\": 7, ", 1);
+    let input = [
+        case_c,
+        explicit,
+        unknown,
+        upright_square("upright", 0.0),
+        upright_square("swinging", 0.5),
+    ]
+    .join("\n");
+    let (out, stderr, ok) = run_solve(&[], &input);
+    assert!(ok, "{stderr}");
+    // Absent and 0: the planar model, turning about +z.
+    assert_eq!(out[0], out[1]);
+    assert_eq!(
+        out[0]["rotation_axis"],
+        serde_json::json!({"x": 0.0, "y": 0.0, "z": 1.0})
+    );
+    // Neither 0 nor 1: refused, naming the field.
+    assert_eq!(out[2]["status"], 2);
+    let why = out[2]["message"].as_str().expect("a message");
+    assert!(
+        why.contains("line 3") && why.contains("model is 7"),
+        "{why}"
+    );
+    // Spatial: the same turn, about x, in [0, π], with the 3D gravity direction.
+    let up = &out[3];
+    assert_eq!(up["status"], 0, "{up}");
+    let num = |v: &Value| v.as_f64().expect("a number");
+    assert!((num(&up["wrist_rotation"]) - std::f64::consts::PI / 12.0).abs() < 1e-12);
+    assert!(
+        (num(&up["rotation_axis"]["x"]).abs() - 1.0).abs() < 1e-12,
+        "{up}"
+    );
+    assert!(
+        (num(&up["gravity_direction"]["z"]) + (std::f64::consts::PI / 12.0).cos()).abs() < 1e-12
+    );
+    assert_eq!(up["gripping_power"], out[0]["gripping_power"]);
+    assert_eq!(up["message"], "");
+    // Gravity out of the grasp plane: the object would swing; said, and the current fields are
+    // infinite (written as null).
+    let swing = &out[4];
+    assert_eq!(swing["status"], 0, "{swing}");
+    assert!(swing["gripping_power_current"].is_null() && swing["finger_force_current"].is_null());
+    let why = swing["message"].as_str().expect("a message");
+    assert!(why.contains("swings about the contact axis"), "{why}");
+}
+
+#[test]
+fn plot_draws_a_spatial_candidate_in_its_grasp_plane() {
+    let dir = temp_dir("plot-spatial");
+    for (name, gravity_x, current) in [("held", 0.0, true), ("swinging", 0.5, false)] {
+        let candidate = dir.path().join(format!("{name}.json"));
+        std::fs::write(&candidate, upright_square(name, gravity_x)).expect("write");
+        let svg = dir.path().join(format!("{name}.svg"));
+        let out = bin()
+            .args(["plot", candidate.to_str().expect("utf-8"), "-o"])
+            .arg(&svg)
+            .output()
+            .expect("runs");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(
+            stdout.contains("grasp plane normal (1.000000, 0.000000, 0.000000)")
+                && stdout.contains("rotation 0.261799 rad about (")
+                && stdout.contains("norm2 1.000000 N"),
+            "{stdout}"
+        );
+        assert_eq!(stdout.contains("swings"), !current, "{stdout}");
+        let text = std::fs::read_to_string(&svg).expect("svg written");
+        assert!(text.contains("in the grasp plane") && text.contains("recommended"));
+        assert_eq!(
+            text.contains(">current<"),
+            current,
+            "the current pose is drawn only when held"
+        );
+    }
+    // A model that is neither 0 nor 1 is refused.
+    let candidate = dir.path().join("bad.json");
+    std::fs::write(
+        &candidate,
+        upright_square("bad", 0.0).replace("\"model\": 1", "\"model\": 3"),
+    )
+    .expect("write");
+    let out = bin()
+        .args(["plot", candidate.to_str().expect("utf-8"), "-o"])
+        .arg(dir.path().join("bad.svg"))
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("model is 3"));
+}
+
+#[test]
+fn a_line_of_invalid_utf8_is_answered_and_the_run_goes_on() {
+    let cases = paper_cases();
+    let mut input = cases.lines().next().expect("case a").as_bytes().to_vec();
+    input.extend_from_slice(b"\n{\"id\": \"caf\xe9\"}\n");
+    input.extend_from_slice(cases.lines().nth(1).expect("case b").as_bytes());
+    input.push(b'\n');
+    let mut child = bin()
+        .arg("solve")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("binary runs");
+    child
+        .stdin
+        .take()
+        .expect("stdin")
+        .write_all(&input)
+        .expect("write stdin");
+    let out = child.wait_with_output().expect("binary exits");
+    assert!(out.status.success());
+    let lines: Vec<Value> = String::from_utf8(out.stdout)
+        .expect("utf-8")
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("JSON"))
+        .collect();
+    assert_eq!(lines.len(), 3, "one answer per line");
+    assert_eq!(lines[1]["status"], 2);
+    assert!(lines[1]["message"]
+        .as_str()
+        .is_some_and(|m| m.starts_with("line 2: ") && m.contains("UTF-8")));
+    assert_eq!(lines[2]["status"], 0);
+    assert_eq!(lines[2]["candidate_id"], "paper-b");
+}
+
+/// Runs the binary with `args`; (exit code, stderr).
+fn exit_of(args: &[&str]) -> (Option<i32>, String) {
+    let out = bin()
+        .args(args)
+        .stdin(Stdio::null())
+        .output()
+        .expect("runs");
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn every_numeric_option_has_a_domain_and_exit_code_2() {
+    let bag = concat!(env!("CARGO_MANIFEST_DIR"), "/bags/paper_cases.mcap");
+    let json = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/paper_cases.jsonl");
+    let cases: &[(&[&str], &str)] = &[
+        (&["play", bag, "--wait", "nan"], "--wait"),
+        (&["play", bag, "--wait", "inf"], "--wait"),
+        (&["play", bag, "--wait", "1e300"], "--wait"),
+        (&["play", bag, "--wait", "-1"], "--wait"),
+        (&["play", bag, "--rate", "1e-300"], "--rate"),
+        (&["play", bag, "--rate", "-2"], "--rate"),
+        (&["play", bag, "--rate", "nan"], "--rate"),
+        (&["play", bag, "--depth", "0"], "--depth"),
+        (&["play", bag, "--depth", "-5"], "--depth"),
+        (&["play", bag, "--depth", "100001"], "--depth"),
+        (
+            &["plot", json, "-o", "x.svg", "--samples", "1e11"],
+            "--samples",
+        ),
+        (
+            &["plot", json, "-o", "x.svg", "--samples", "0"],
+            "--samples",
+        ),
+        (
+            &["solve", "--friction-safety-factor", "nan"],
+            "--friction-safety-factor",
+        ),
+        (
+            &["solve", "--friction-safety-factor", "0.5"],
+            "--friction-safety-factor",
+        ),
+        (
+            &["solve", "--friction-safety-factor", "1e300"],
+            "--friction-safety-factor",
+        ),
+        (&["solve", "--range=nan:1"], "--range"),
+        (&["solve", "--range=1:inf"], "--range"),
+        (&["solve", "--range=1:0"], "--range"),
+        (&["solve", "--objective", "norm3"], "--objective"),
+        (
+            &["replay", bag, "--friction-safety-factor", "-1"],
+            "--friction-safety-factor",
+        ),
+        (&["node", "--ros-args", "-p", "qos_depth:=0"], "qos_depth"),
+        (
+            &["node", "--ros-args", "-p", "range_min:=.nan"],
+            "range_min",
+        ),
+        (
+            &["node", "--ros-args", "-p", "friction_safety_factor:=1e9"],
+            "friction_safety_factor",
+        ),
+        (&["node", "--ros-args", "-p", "no_such:=1"], "no_such"),
+        (&["node", "--ros-args", "--log-level", "loud"], "loud"),
+        (
+            &["play", bag, "--ros-args", "--log-level", "x:=loud"],
+            "loud",
+        ),
+    ];
+    for (args, named) in cases {
+        let (code, stderr) = exit_of(args);
+        assert_eq!(code, Some(2), "{args:?}: {stderr}");
+        let first = stderr.lines().next().unwrap_or_default();
+        assert!(
+            first.contains("error") && first.contains(named),
+            "{args:?}: {stderr}"
+        );
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    }
+}
+
+#[test]
+fn a_config_for_another_node_is_an_error_naming_the_sections() {
+    let dir = temp_dir("cfg_cli");
+    let cfg = dir.path().join("other.yaml");
+    std::fs::write(
+        &cfg,
+        "gripper:\n  ros__parameters:\n    objective: norm1\narm:\n  ros__parameters: {}\n",
+    )
+    .expect("write");
+    let (code, stderr) = exit_of(&["solve", "--config", cfg.to_str().expect("utf-8")]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(
+        stderr.contains("no section for node grasp_orient") && stderr.contains("gripper, arm"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn any_span_of_bounds_is_answered_at_once() {
+    let input = paper_cases();
+    let (graspable, _, _) = run_solve(&["--range", "graspable"], &input);
+    for range in [
+        "--range=-1e308:1e308",
+        "--range=-1e12:1e12",
+        "--range=-1e8:1e8",
+    ] {
+        let (wide, stderr, ok) = run_solve(&[range], &input);
+        assert!(ok, "{range}: {stderr}");
+        assert_eq!(wide, graspable, "{range}");
+    }
+}

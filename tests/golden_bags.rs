@@ -36,6 +36,39 @@ fn paper_cases_replay_unchanged() {
     );
 }
 
+/// The golden bags were recorded before `finger_force` and `finger_force_current` were added to
+/// GripRecommendation: their shorter messages decode (by their schema text), and replay says it
+/// compares the fields they have.
+#[test]
+fn bags_recorded_before_the_grip_force_fields_decode_and_replay() {
+    use grasp_orient::msg::GripRecommendation;
+    use grasp_orient::record::bag;
+    for name in [
+        "paper_cases.mcap",
+        "random_grasps.mcap",
+        "node_recorded.mcap",
+    ] {
+        let path = format!("{}/bags/{name}", env!("CARGO_MANIFEST_DIR"));
+        let recorded = bag::read(std::path::Path::new(&path)).expect("golden bag reads");
+        assert_eq!(
+            recorded.fields.missing::<GripRecommendation>(),
+            ["finger_force", "finger_force_current"],
+            "{name}"
+        );
+        assert_eq!(recorded.undecodable_count, 0, "{:?}", recorded.undecodable);
+        assert!(recorded
+            .recommendations
+            .iter()
+            .all(|r| r.message.finger_force == 0.0 && r.message.finger_force_current == 0.0));
+        let (ok, text) = replay(name);
+        assert!(ok, "{text}");
+        assert!(
+            text.contains("recorded before finger_force, finger_force_current were added"),
+            "{text}"
+        );
+    }
+}
+
 #[test]
 fn random_grasps_with_refused_ones_replay_unchanged() {
     let (ok, text) = replay("random_grasps.mcap");
@@ -96,6 +129,7 @@ fn a_changed_answer_fails_the_replay() {
         candidates: "/grasp_candidates".into(),
         recommendations: "/grip_recommendations".into(),
         markers: None,
+        sets: None,
     };
     let mut w = BagWriter::create(&out, &topics, 100).expect("create");
     for c in &recorded.candidates {

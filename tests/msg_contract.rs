@@ -10,8 +10,9 @@
 
 use grasp_orient::msg::definitions::{split_type_name, DEFINITIONS};
 use grasp_orient::msg::{
-    ColorRgba, CompressedImage, Duration, GraspCandidate, GripRecommendation, Header, Marker,
-    MarkerArray, MeshFile, Point, Pose, Quaternion, RosMessage, Time, UvCoordinate, Vector3,
+    ColorRgba, CompressedImage, Duration, GraspCandidate, GraspCandidateSet, GripRecommendation,
+    GripRecommendationSet, Header, Marker, MarkerArray, MeshFile, Point, Pose, Quaternion,
+    RecommendRequest, RecommendResponse, RosMessage, Time, UvCoordinate, Vector3,
 };
 use std::collections::BTreeSet;
 use std::path::PathBuf;
@@ -108,13 +109,18 @@ fn parse(text: &str, package: &str) -> Parsed {
     Parsed { fields, constants }
 }
 
+/// Rust fields `(name, ROS type)` with relative types qualified by `package`.
+fn qualified_fields(fields: Vec<(&'static str, String)>, package: &str) -> Vec<(String, String)> {
+    fields
+        .into_iter()
+        .map(|(n, t)| (n.to_string(), qualified(&t, package)))
+        .collect()
+}
+
 /// `M` against its `.msg` file: same fields in the same order, same types, same constants.
 fn check<M: RosMessage>() {
     let parsed = parse(&msg_file(M::TYPE_NAME), M::PACKAGE);
-    let rust: Vec<(String, String)> = M::fields()
-        .into_iter()
-        .map(|(n, t)| (n.to_string(), qualified(&t, M::PACKAGE)))
-        .collect();
+    let rust = qualified_fields(M::fields(), M::PACKAGE);
     assert_eq!(
         rust,
         parsed.fields,
@@ -148,6 +154,43 @@ fn grip_recommendation_matches_its_msg_file() {
     check::<GripRecommendation>();
 }
 
+#[test]
+fn sets_match_their_msg_files() {
+    check::<GraspCandidateSet>();
+    check::<GripRecommendationSet>();
+}
+
+/// `srv/Recommend.srv`: the request above `---`, the response below, field for field.
+#[test]
+fn the_recommend_service_matches_its_srv_file() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("srv/Recommend.srv");
+    let text = std::fs::read_to_string(&path).expect("srv/Recommend.srv");
+    let (request, response) = text.split_once("\n---\n").expect("request --- response");
+    assert_eq!(
+        parse(request, "grasp_orient").fields,
+        qualified_fields(RecommendRequest::fields(), "grasp_orient")
+    );
+    assert_eq!(
+        parse(response, "grasp_orient").fields,
+        qualified_fields(RecommendResponse::fields(), "grasp_orient")
+    );
+}
+
+/// Issue 12's fields come after every field of the contract before it, in this order.
+#[test]
+fn grip_force_fields_come_last_in_order() {
+    let fields: Vec<&str> = GripRecommendation::fields()
+        .into_iter()
+        .map(|(n, _)| n)
+        .collect();
+    let at = fields
+        .iter()
+        .position(|f| *f == "finger_force")
+        .expect("finger_force");
+    assert_eq!(fields[at - 1], "candidate_c");
+    assert_eq!(fields[at + 1], "finger_force_current");
+}
+
 /// Every standard wire struct against the file ROS 2 Jazzy installs, and no embedded definition
 /// without its struct.
 #[test]
@@ -168,6 +211,11 @@ fn standard_structs_match_the_jazzy_msg_files() {
         (MarkerArray::TYPE_NAME, check::<MarkerArray>),
         (GraspCandidate::TYPE_NAME, check::<GraspCandidate>),
         (GripRecommendation::TYPE_NAME, check::<GripRecommendation>),
+        (GraspCandidateSet::TYPE_NAME, check::<GraspCandidateSet>),
+        (
+            GripRecommendationSet::TYPE_NAME,
+            check::<GripRecommendationSet>,
+        ),
     ];
     for (_, check) in &checked {
         check();

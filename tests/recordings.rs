@@ -32,6 +32,7 @@ fn topics() -> Topics {
         candidates: "/grasp_candidates".into(),
         recommendations: "/grip_recommendations".into(),
         markers: None,
+        sets: None,
     }
 }
 

@@ -11,8 +11,8 @@ mod common;
 use common::spatial::{random_spatial_grasp, Held, Kind, RefRange, SpatialReference};
 use common::{random_grasp, wrap};
 use grasp_orient::solver::{
-    solve_orientation, solve_spatial, AllowedRange, AxisRelation, Contact, CurrentPose,
-    InvalidInput, Objective, Recommendation, Settings, SpatialCandidate, SpatialMiss,
+    analyse_spatial, solve_orientation, solve_spatial, AllowedRange, AxisRelation, Contact,
+    CurrentPose, InvalidInput, Objective, Recommendation, Settings, SpatialCandidate, SpatialMiss,
     SpatialRecommendation, SpatialVerdict, Verdict,
 };
 use nalgebra::{Rotation3, Unit, Vector3};
@@ -81,7 +81,7 @@ fn check_answer(c: &SpatialCandidate, s: &Settings, worst: &mut Worst) {
         power,
         clarabel,
         squeeze,
-        ..
+        forces,
     } = held
     else {
         panic!("reference: {held:?} at the solver's pose; grasp {c:?}, answer {r:?}");
@@ -114,6 +114,15 @@ fn check_answer(c: &SpatialCandidate, s: &Settings, worst: &mut Worst) {
         r.planar.internal_force
     );
     worst.power = worst.power.max(err);
+    // The finger force: the larger push of the reference's forces along the contact line.
+    let finger = pushes(c, &forces);
+    let finger_err = (finger - r.planar.finger_force).abs() / scale;
+    assert!(
+        finger_err <= SOCP_TOL,
+        "finger force: solver {} reference {finger} ({finger_err:e}); grasp {c:?}",
+        r.planar.finger_force
+    );
+    worst.power = worst.power.max(finger_err);
     // 2. The solver's own forces hold the object in 3D, inside the true cones.
     let [f1, f2] = r.force_vectors;
     let w = r.gravity_direction * weight;
@@ -173,16 +182,35 @@ fn check_answer(c: &SpatialCandidate, s: &Settings, worst: &mut Worst) {
                 "current power: solver {} reference {power}; grasp {c:?}",
                 r.planar.gripping_power_current
             );
-            worst.current = worst.current.max(err);
+            let Held::Yes { forces, .. } = held else {
+                unreachable!("matched above")
+            };
+            let finger = pushes(c, &forces);
+            let finger_err = (finger - r.planar.finger_force_current).abs()
+                / r.planar.finger_force_current.max(1e-3 * weight);
+            assert!(
+                finger_err <= SOCP_TOL,
+                "current finger force: solver {} reference {finger}; grasp {c:?}",
+                r.planar.finger_force_current
+            );
+            worst.current = worst.current.max(err).max(finger_err);
         }
         (CurrentPose::Swings { out_of_plane }, Held::No) => {
             assert!(r.planar.gripping_power_current.is_infinite());
+            assert!(r.planar.finger_force_current.is_infinite());
             assert!(out_of_plane > 0.0);
             worst.swings += 1;
         }
         (pose, held) => panic!("current pose {pose:?} but the reference says {held:?}; {c:?}"),
     }
     worst.grasps += 1;
+}
+
+/// The larger push of two 3D contact forces along the contact line, into the object, N: what
+/// `finger_force` reports (`src/solver/finger.rs`), computed here from the forces themselves.
+fn pushes(c: &SpatialCandidate, forces: &[Vector3<f64>; 2]) -> f64 {
+    let line = (c.contact_2 - c.contact_1).normalize();
+    forces[0].dot(&line).max(-forces[1].dot(&line))
 }
 
 fn report(title: &str, tally: &BTreeMap<String, Worst>) {
@@ -276,6 +304,54 @@ fn graspable_range_internal_force_and_safety_factor_match_the_reference() {
         worst.power
     );
     assert!(lost > 0 && held > 0);
+}
+
+/// `analyse_spatial` (what `plot` draws for a spatial candidate) is the objective over Π: its
+/// recommendation is `solve_spatial`'s, and its power at every gravity angle of the graspable range
+/// equals the reference's with gravity along that angle's direction in Π (the paper frame of Π is
+/// right-handed about `plane_normal`, so the direction at `θ` is the recommended one turned by
+/// `θ − θ*` about it).
+#[test]
+fn analysis_in_the_plane_is_the_objective_over_the_plane() {
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let settings = Settings::default();
+    let mut worst = 0f64;
+    for kind in kinds(60) {
+        let c = random_spatial_grasp(&mut rng, kind);
+        let (analysis, r) = match analyse_spatial(&c, &settings) {
+            Ok(Ok(pair)) => pair,
+            other => panic!("analyse_spatial refused a force-closure grasp {c:?}: {other:?}"),
+        };
+        assert_eq!(r, spatial(&c, &settings));
+        let again = analysis.recommend(&settings.range).expect("the same range");
+        let weight = c.mass * c.gravity.norm();
+        let scale = r.planar.gripping_power.max(weight);
+        assert!((again.gripping_power - r.planar.gripping_power).abs() <= 1e-12 * scale);
+        assert!((again.gravity_angle - r.planar.gravity_angle).abs() <= 1e-12);
+        let reference = SpatialReference::new(&c, 1.0);
+        let (lo, hi) = analysis.graspable_range();
+        for k in 1..8 {
+            let theta = lo + (hi - lo) * k as f64 / 8.0;
+            let dir = rotate(
+                &r.plane_normal,
+                theta - r.planar.gravity_angle,
+                &r.gravity_direction,
+            );
+            let want = reference
+                .at(&dir)
+                .power()
+                .unwrap_or_else(|| panic!("{kind:?}: the reference cannot hold θ = {theta}"));
+            let got = analysis.evaluate(theta).power;
+            // Relative to the power compared: near the friction angle it reaches 1e5 weights.
+            let err = (got - want).abs() / want.max(scale);
+            assert!(
+                err <= SOCP_TOL,
+                "{kind:?} θ = {theta}: analysis {got}, reference {want} ({err:e}); {c:?}"
+            );
+            worst = worst.max(err);
+        }
+    }
+    println!("analysis over Π against the reference: worst {worst:.1e}");
 }
 
 /// No gravity direction the reference finds, scanning the allowed directions of the plane (or
@@ -459,6 +535,8 @@ fn planar_gap(p: &Recommendation, s: &SpatialRecommendation, weight: f64) -> f64
         (p.internal_force, q.internal_force),
         (p.gripping_power_current, q.gripping_power_current),
         (p.internal_force_current, q.internal_force_current),
+        (p.finger_force, q.finger_force),
+        (p.finger_force_current, q.finger_force_current),
     ];
     for (m, n) in p.local_minima.iter().zip(&q.local_minima) {
         assert_eq!(m.label, n.label);
@@ -662,6 +740,25 @@ fn refusals_name_the_field_and_the_contact() {
     assert_eq!(
         solve_spatial(&base(), &s),
         Err(InvalidInput::SafetyFactor { value: 0.5 })
+    );
+    // The planar model's domain (issue 9): friction from 1e-6, a safety factor up to 1000.
+    let s = Settings {
+        friction_safety_factor: 1001.0,
+        ..Settings::default()
+    };
+    assert_eq!(
+        solve_spatial(&base(), &s),
+        Err(InvalidInput::SafetyFactor { value: 1001.0 })
+    );
+    let mut c = base();
+    c.friction_2 = 1e-7;
+    assert_eq!(
+        refused(&c),
+        InvalidInput::BelowMinimum {
+            field: "friction_2",
+            value: 1e-7,
+            minimum: 1e-6
+        }
     );
 }
 

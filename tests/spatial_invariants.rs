@@ -60,7 +60,10 @@ fn solve(c: &SpatialCandidate, s: &Settings) -> SpatialRecommendation {
 /// centre of mass's distance `dist` from the contact axis turns it by about `ε M / dist`. Near
 /// the axis a motion of the scene that rounds the coordinates differently can move the answer by
 /// that much (the answer is flagged sensitive); such scenes are compared only where it is small.
+/// The contact axis itself is known to about `ε M / |p1 − p2|`, which adds to it (contacts a
+/// few millimetres apart, far from the origin).
 fn plane_uncertainty(c: &SpatialCandidate) -> f64 {
+    let span = (c.contact_1 - c.contact_2).norm();
     let a = (c.contact_1 - c.contact_2).normalize();
     let r = c.center_of_mass - c.contact_2;
     let dist = (r - a * r.dot(&a)).norm();
@@ -68,18 +71,20 @@ fn plane_uncertainty(c: &SpatialCandidate) -> f64 {
         .iter()
         .map(|v| v.amax())
         .fold(0.0, f64::max);
-    f64::EPSILON * m / dist
+    f64::EPSILON * m / dist + f64::EPSILON * m / span
 }
 
-/// Near the friction angle the sliced coefficient `μ' = sqrt((μ − t)(μ + t)/(1 + t²))` has
-/// condition `κ = μ²/μ'²` in the tilt `t`, so rounding of the plane moves the answer by a few
-/// `κ` times the plane's uncertainty: the comparisons allow `1e-9 + 16 κ (ε + δ)` (relative),
-/// with `δ` the [`plane_uncertainty`] of either scene.
+/// Near the friction angle the sliced coefficient `μ' = sqrt((μ − t)(μ + t)/(1 + t²))` moves
+/// with the tilt `t` as `d ln μ' / dt ≈ −1/(2(μ − t)) ≈ −μ/(μ'² (1 + μ²))`, and a plane turned by
+/// `δ` rad changes `t` by about `(1 + μ²) δ`: so `κ = μ/μ'²` per radian (at least `μ²/μ'²`,
+/// the relative condition, for `μ > 1`). Rounding of the plane moves the answer by a few `κ`
+/// times the plane's uncertainty: the comparisons allow `1e-9 + 16 κ (ε + δ)` (relative), with
+/// `δ` the [`plane_uncertainty`] of either scene.
 fn slice_condition(c: &SpatialCandidate, r: &SpatialRecommendation) -> f64 {
     [c.friction_1, c.friction_2]
         .iter()
         .zip(r.sliced_friction)
-        .map(|(mu, sliced)| (mu / sliced).powi(2))
+        .map(|(mu, sliced)| mu.max(mu * mu) / (sliced * sliced))
         .fold(1.0, f64::max)
 }
 

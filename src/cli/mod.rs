@@ -3,13 +3,16 @@
 pub mod node;
 pub mod play;
 pub mod plot;
+pub mod rank;
 pub mod recover;
 pub mod replay;
 pub mod solve;
 
-use anyhow::{bail, Context};
-use grasp_orient::config::{bounds, params_in_yaml, Config, Parameter, RangeKind};
+use anyhow::bail;
+use grasp_orient::config::declare::Setting;
+use grasp_orient::config::{bounds, params_in_file, Config, Domain, Parameter, RangeKind};
 use grasp_orient::replay::Override;
+use grasp_orient::sets::{GripperDrive, Rules};
 use grasp_orient::solver::{AllowedRange, Objective, Settings};
 use serde_yaml_ng::Value;
 use std::path::PathBuf;
@@ -26,22 +29,33 @@ found (replay) or messages lost (recover); 2 trouble: bad arguments, an unreadab
 cut-short input, an output that cannot be written.";
 
 /// Options shared by the commands that solve: the config file and overrides of its settings.
+/// Each value is checked by clap against its domain (exit code 2 with a one-line error).
 #[derive(Debug, Clone, Default, clap::Args)]
 pub struct SolveOptions {
-    /// ROS 2 params file to read settings from (`grasp_orient: ros__parameters:`); the
-    /// built-in config/grasp_orient.yaml otherwise.
+    /// ROS 2 params file to read settings from (`grasp_orient: ros__parameters:`, or `/**:`);
+    /// the built-in config/grasp_orient.yaml otherwise.
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
     /// What to minimise: norm2, norm1 or internal_force.
-    #[arg(long)]
-    pub objective: Option<String>,
-    /// Where the recommendation may lie: from_above, graspable, or LO:HI (gravity-angle bounds
-    /// in the paper's object frame, rad).
-    #[arg(long, allow_hyphen_values = true)]
-    pub range: Option<String>,
-    /// Divides both friction coefficients (>= 1; 1 reproduces the paper).
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_parser = parse_objective)]
+    pub objective: Option<Objective>,
+    /// Where the recommendation may lie: from_above, graspable, or LO:HI (finite gravity-angle
+    /// bounds in the paper's object frame, rad, LO < HI; a turn or more apart allows every angle).
+    #[arg(long, allow_hyphen_values = true, value_parser = parse_range)]
+    pub range: Option<AllowedRange>,
+    /// Divides both friction coefficients (in [1, 1000]; 1 reproduces the paper).
+    #[arg(long, value_name = "S", allow_negative_numbers = true,
+          value_parser = parameter::<f64>("friction_safety_factor"))]
     pub friction_safety_factor: Option<f64>,
+    /// The most grip force the gripper gives, N (>= 0; 0: no limit). A grasp that needs more
+    /// gets status 3.
+    #[arg(long, value_name = "N", allow_negative_numbers = true,
+          value_parser = parameter::<f64>("max_grip_force"))]
+    pub max_grip_force: Option<f64>,
+    /// How the fingers are driven, which picks the grip force: coupled (internal_force) or
+    /// independent (finger_force).
+    #[arg(long, value_name = "DRIVE", value_parser = parse_name::<GripperDrive>)]
+    pub gripper_drive: Option<GripperDrive>,
 }
 
 impl SolveOptions {
@@ -50,27 +64,28 @@ impl SolveOptions {
     pub fn overrides(&self) -> anyhow::Result<Vec<Override>> {
         let mut out: Vec<Override> = Vec::new();
         if let Some(path) = &self.config {
-            let text = std::fs::read_to_string(path)
-                .with_context(|| format!("cannot read --config {}", path.display()))?;
-            for (name, value) in params_in_yaml(&text, &path.display().to_string(), "grasp_orient")?
-            {
+            for (name, value) in params_in_file(path, "grasp_orient")? {
                 if Parameter::find(&name).is_none() {
                     bail!("{}: grasp_orient has no parameter {name}", path.display());
                 }
                 out.push((name, value));
             }
         }
-        if let Some(o) = &self.objective {
-            o.parse::<Objective>()
-                .map_err(|e| anyhow::anyhow!("--objective {e}"))?;
-            out.push(("objective".into(), Value::String(o.clone())));
+        if let Some(o) = self.objective {
+            out.push(("objective".into(), Value::String(o.to_string())));
         }
         if let Some(s) = self.friction_safety_factor {
             out.push(("friction_safety_factor".into(), Value::Number(s.into())));
         }
-        if let Some(r) = &self.range {
+        if let Some(f) = self.max_grip_force {
+            out.push(("max_grip_force".into(), Value::Number(f.into())));
+        }
+        if let Some(d) = self.gripper_drive {
+            out.push(("gripper_drive".into(), Value::String(d.to_string())));
+        }
+        if let Some(r) = self.range {
             let text = |s: &str| Value::String(s.to_string());
-            match parse_range(r)? {
+            match r {
                 AllowedRange::FromAbove => out.push(("range".into(), text("from_above"))),
                 AllowedRange::Graspable => out.push(("range".into(), text("graspable"))),
                 AllowedRange::Bounds { lo, hi } => {
@@ -97,20 +112,89 @@ impl SolveOptions {
     pub fn settings(&self) -> anyhow::Result<Settings> {
         Ok(self.config()?.solver_settings()?)
     }
+
+    /// [`SolveOptions::config`], its solver settings and its gripper rules.
+    pub fn configured(&self) -> anyhow::Result<(Config, Settings, Rules)> {
+        let config = self.config()?;
+        let settings = config.solver_settings()?;
+        let rules = config.rules();
+        Ok((config, settings, rules))
+    }
+}
+
+fn parse_objective(text: &str) -> Result<Objective, String> {
+    parse_name(text)
+}
+
+/// A clap parser for a setting that is one of a few names.
+pub fn parse_name<T>(text: &str) -> Result<T, String>
+where
+    T: std::str::FromStr,
+    T::Err: std::fmt::Display,
+{
+    text.parse::<T>().map_err(|e| e.to_string())
 }
 
 /// `from_above`, `graspable`, or `LO:HI` bounds in rad.
-fn parse_range(text: &str) -> anyhow::Result<AllowedRange> {
+fn parse_range(text: &str) -> Result<AllowedRange, String> {
     let Some((lo, hi)) = text.split_once(':') else {
         return match text.parse::<RangeKind>() {
-            Ok(kind @ (RangeKind::FromAbove | RangeKind::Graspable)) => Ok(kind.allowed(0.0, 0.0)?),
-            _ => bail!("--range {text:?}: expected from_above, graspable or LO:HI"),
+            Ok(kind @ (RangeKind::FromAbove | RangeKind::Graspable)) => {
+                kind.allowed(0.0, 0.0).map_err(|e| e.to_string())
+            }
+            _ => Err("expected from_above, graspable or LO:HI".to_string()),
         };
     };
-    let lo: f64 = lo.trim().parse().context("--range lower bound")?;
-    let hi: f64 = hi.trim().parse().context("--range upper bound")?;
-    bounds(lo, hi)
-        .map_err(|_| anyhow::anyhow!("--range {text:?}: bounds must be finite with LO < HI"))
+    let number = |s: &str| {
+        s.trim()
+            .parse::<f64>()
+            .map_err(|_| format!("{s:?} is not a number"))
+    };
+    bounds(number(lo)?, number(hi)?).map_err(|e| e.to_string())
+}
+
+/// A clap parser for a value of parameter `name`, checked against the domain the parameter
+/// table declares for it (so the option and the parameter agree).
+pub fn parameter<T>(name: &'static str) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync
+where
+    T: std::str::FromStr + Setting,
+{
+    move |text| {
+        let value: T = text
+            .trim()
+            .parse()
+            .map_err(|_| format!("{text:?} is not a valid {}", T::ROS_TYPE.name()))?;
+        let domain = Parameter::find(name).map_or(Domain::Any, |p| p.domain);
+        value.check(&domain)?;
+        Ok(value)
+    }
+}
+
+/// A clap parser for a real number in `[min, max]` (never NaN or infinite).
+pub fn real_in(min: f64, max: f64) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync {
+    move |text| {
+        let value: f64 = text
+            .trim()
+            .parse()
+            .map_err(|_| format!("{text:?} is not a number"))?;
+        value.check(&Domain::Real { min, max })?;
+        Ok(value)
+    }
+}
+
+/// A clap parser for an integer in `min..=max`.
+pub fn integer_in(
+    min: i64,
+    max: i64,
+) -> impl Fn(&str) -> Result<i64, String> + Clone + Send + Sync {
+    move |text| {
+        let value: i64 = text
+            .trim()
+            .parse()
+            .map_err(|_| format!("{text:?} is not an integer"))?;
+        value.check(&Domain::Integer { min, max })?;
+        Ok(value)
+    }
 }
 
 #[cfg(test)]
@@ -119,13 +203,28 @@ mod tests {
 
     #[test]
     fn ranges_parse() {
-        assert_eq!(parse_range("graspable").ok(), Some(AllowedRange::Graspable));
+        assert_eq!(parse_range("graspable"), Ok(AllowedRange::Graspable));
         assert_eq!(
-            parse_range("-1.5:0.5").ok(),
-            Some(AllowedRange::Bounds { lo: -1.5, hi: 0.5 })
+            parse_range("-1.5:0.5"),
+            Ok(AllowedRange::Bounds { lo: -1.5, hi: 0.5 })
         );
         assert!(parse_range("1:0").is_err());
         assert!(parse_range("sideways").is_err());
         assert!(parse_range("bounds").is_err());
+        assert!(parse_range("nan:1").is_err());
+        assert!(parse_range("-inf:1").is_err());
+    }
+
+    #[test]
+    fn numbers_are_checked_against_their_domains() {
+        let s = parameter::<f64>("friction_safety_factor");
+        assert_eq!(s("1.5"), Ok(1.5));
+        for bad in ["0.5", "nan", "inf", "1e300", "x"] {
+            assert!(s(bad).is_err(), "{bad}");
+        }
+        let r = real_in(0.0, 10.0);
+        assert!(r("-1").is_err() && r("NaN").is_err() && r("10").is_ok());
+        let i = integer_in(1, 5);
+        assert!(i("0").is_err() && i("-5").is_err() && i("1.5").is_err() && i("5").is_ok());
     }
 }

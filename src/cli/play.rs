@@ -2,6 +2,7 @@
 //! pace (or `--rate` times it), like `ros2 bag play`.
 
 use anyhow::bail;
+use grasp_orient::config::declare::Real;
 use grasp_orient::node::play::{publish, Pace};
 use grasp_orient::node::session::Start;
 use grasp_orient::record::bag;
@@ -12,29 +13,38 @@ use std::path::PathBuf;
 /// Arguments of `play`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
-    /// A recording with grasp_orient/msg/GraspCandidate messages.
+    /// A recording with grasp_orient/msg/GraspCandidate or GraspCandidateSet messages.
     pub bag: PathBuf,
-    /// Speed relative to the recording (2 = twice as fast); 0 sends as fast as possible.
-    #[arg(long, default_value_t = 1.0)]
+    /// Speed relative to the recording (2 = twice as fast), from 0.001 to 1000; 0 sends as fast
+    /// as possible.
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true, value_parser = rate)]
     pub rate: f64,
-    /// Seconds to wait for a subscriber before starting.
-    #[arg(long, default_value_t = 10.0)]
+    /// Seconds to wait for a subscriber before starting, from 0 to 86400.
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true,
+          value_parser = super::real_in(0.0, 86_400.0))]
     pub wait: f64,
-    /// QoS history depth of the publisher (reliable, volatile).
-    #[arg(long, default_value_t = 1000)]
+    /// QoS history depth of the publisher (reliable, volatile), as qos_depth: 1 to 100000.
+    #[arg(long, default_value_t = 1000, allow_negative_numbers = true,
+          value_parser = super::parameter::<i64>("qos_depth"))]
     pub depth: i64,
 }
 
-/// Publishes every candidate of the bag on `grasp_candidates` (remappable with `--ros-args`).
-pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
-    if !(args.rate.is_finite() && args.rate >= 0.0) {
-        bail!("--rate must be a finite number >= 0, got {}", args.rate);
+/// `--rate`: 0, or a speed-up from 0.001 to 1000.
+fn rate(text: &str) -> Result<f64, String> {
+    match super::real_in(0.0, 1e3)(text)? {
+        r if r == 0.0 || r >= 1e-3 => Ok(r),
+        r => Err(format!("must be 0 or in [0.001, 1000], got {}", Real(r))),
     }
+}
+
+/// Publishes every candidate of the bag on `grasp_candidates` and every set on
+/// `grasp_candidate_sets` (remappable with `--ros-args`).
+pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
     let start = Start::new(ros_argv)?;
     let recorded = bag::read(&args.bag)?;
-    if recorded.candidates.is_empty() {
+    if recorded.candidates.is_empty() && recorded.candidate_sets.is_empty() {
         bail!(
-            "{}: no grasp_orient/msg/GraspCandidate messages",
+            "{}: no grasp_orient/msg/GraspCandidate or GraspCandidateSet messages",
             args.bag.display()
         );
     }
@@ -45,13 +55,30 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
         wait: args.wait,
         depth: args.depth,
     };
-    let played = publish(&mut session, &args.bag, &recorded.candidates, pace);
+    let played = publish(
+        &mut session,
+        &args.bag,
+        &recorded.candidates,
+        &recorded.candidate_sets,
+        pace,
+    );
     session.close();
-    let (sent, topic) = played?;
+    let played = played?;
     writeln!(
         std::io::stdout(),
-        "published {sent} of {} candidates on {topic}",
-        recorded.candidates.len()
+        "published {} of {} candidates on {}",
+        played.candidates,
+        recorded.candidates.len(),
+        played.candidates_topic
     )?;
+    if !recorded.candidate_sets.is_empty() {
+        writeln!(
+            std::io::stdout(),
+            "published {} of {} candidate sets on {}",
+            played.sets,
+            recorded.candidate_sets.len(),
+            played.sets_topic
+        )?;
+    }
     Ok(())
 }

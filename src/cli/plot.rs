@@ -1,12 +1,16 @@
 //! `grasp_orient plot CANDIDATE.json -o OUT.svg`: the six bounds `α_k(θ)` and the gripping power
 //! `P(θ)` over the graspable range, with the paper's candidates and the recommendation marked,
-//! like the paper's Fig. 9.
+//! like the paper's Fig. 9. A spatial candidate is drawn in its grasp plane Π: the planar problem
+//! the reduction solves there (sliced friction, gravity angles in the paper frame of Π).
 
 use super::SolveOptions;
 use anyhow::{anyhow, Context};
-use grasp_orient::msg::GraspCandidate;
+use grasp_orient::msg::{GraspCandidate, MessageLimits};
 use grasp_orient::record::output::Replacement;
-use grasp_orient::solver::{analyse, Analysis, Candidate, Recommendation};
+use grasp_orient::solver::{
+    analyse, analyse_spatial, Analysis, AxisRelation, Candidate, CurrentPose, Recommendation,
+    Settings, SpatialCandidate, SpatialRecommendation, IN_PLANE_TOLERANCE,
+};
 use plotters::prelude::*;
 use std::io::Write;
 use std::path::PathBuf;
@@ -19,9 +23,10 @@ pub struct Args {
     /// Where to write the SVG.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Samples per curve.
-    #[arg(long, default_value_t = 2000)]
-    pub samples: usize,
+    /// Samples per curve, from 10 to 100000.
+    #[arg(long, default_value_t = 2000, allow_negative_numbers = true,
+          value_parser = super::integer_in(10, 100_000))]
+    pub samples: i64,
     #[command(flatten)]
     pub options: SolveOptions,
 }
@@ -35,31 +40,121 @@ const COLOURS: [RGBColor; 6] = [
     RGBColor(140, 86, 75),
 ];
 
+/// What the figure shows: one planar problem, its answer, and the current pose when it lies on
+/// the curve.
+struct Figure {
+    analysis: Analysis,
+    best: Recommendation,
+    /// `(gravity angle, power)` of the current pose, when it is a point of this plane's curve.
+    current: Option<(f64, f64)>,
+    /// Added to the power chart's caption.
+    plane: &'static str,
+    /// The line printed when the figure is written.
+    summary: String,
+}
+
 /// Draws the figure.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let settings = args.options.settings()?;
-    let text = std::fs::read_to_string(&args.candidate)
-        .with_context(|| format!("cannot read {}", args.candidate.display()))?;
+    let text =
+        grasp_orient::config::read_text(&args.candidate, grasp_orient::config::MAX_FILE_BYTES)
+            .with_context(|| format!("cannot read {}", args.candidate.display()))?;
     let message: GraspCandidate = serde_json::from_str(&text)
         .with_context(|| format!("{} is not a GraspCandidate", args.candidate.display()))?;
-    let candidate = Candidate::try_from(&message).map_err(|e| anyhow!("invalid input: {e}"))?;
-    let analysis = analyse(&candidate, &settings)
-        .map_err(|e| anyhow!("invalid input: {e}"))?
-        .map_err(|e| anyhow!("{e}"))?;
-    let best = analysis
-        .recommend(&settings.range)
-        .map_err(|e| anyhow!("invalid input: {e}"))?;
-    draw(&analysis, &best, args)?;
+    let figure = match message.model {
+        GraspCandidate::MODEL_PLANAR => planar_figure(&message, &settings)?,
+        GraspCandidate::MODEL_SPATIAL => spatial_figure(&message, &settings)?,
+        value => return Err(refused(MessageLimits::Model { value })),
+    };
+    draw(&figure, args)?;
     writeln!(
         std::io::stdout(),
-        "wrote {}: recommended gravity angle {:.6} rad, wrist rotation {:.6} rad, {} {:.6} N",
+        "wrote {}: {}",
         args.output.display(),
+        figure.summary
+    )?;
+    Ok(())
+}
+
+fn refused(e: impl std::fmt::Display) -> anyhow::Error {
+    anyhow!("invalid input: {e}")
+}
+
+/// A planar candidate: its x-y plane.
+fn planar_figure(message: &GraspCandidate, settings: &Settings) -> anyhow::Result<Figure> {
+    let candidate = Candidate::try_from(message).map_err(refused)?;
+    let analysis = analyse(&candidate, settings)
+        .map_err(refused)?
+        .map_err(|e| anyhow!("{e}"))?;
+    let best = analysis.recommend(&settings.range).map_err(refused)?;
+    let summary = format!(
+        "recommended gravity angle {:.6} rad, wrist rotation {:.6} rad, {} {:.6} N",
         best.gravity_angle,
         best.wrist_rotation,
         best.objective.name(),
         best.gripping_power
-    )?;
-    Ok(())
+    );
+    Ok(Figure {
+        current: Some((best.current_gravity_angle, best.gripping_power_current)),
+        analysis,
+        best,
+        plane: "",
+        summary,
+    })
+}
+
+/// A spatial candidate: its grasp plane Π.
+fn spatial_figure(message: &GraspCandidate, settings: &Settings) -> anyhow::Result<Figure> {
+    let candidate = SpatialCandidate::try_from(message).map_err(refused)?;
+    let (analysis, r) = analyse_spatial(&candidate, settings)
+        .map_err(refused)?
+        .map_err(|e| anyhow!("{e}"))?;
+    // `+ 0.0` prints a negative zero as 0.
+    let v = |v: &nalgebra::Vector3<f64>| {
+        format!("({:.6}, {:.6}, {:.6})", v.x + 0.0, v.y + 0.0, v.z + 0.0)
+    };
+    let mut summary = format!(
+        "grasp plane normal {}; recommended gravity angle {:.6} rad in the plane, direction {}; \
+         rotation {:.6} rad about {}; {} {:.6} N",
+        v(&r.plane_normal),
+        r.planar.gravity_angle,
+        v(&r.gravity_direction),
+        r.rotation_angle,
+        v(&r.rotation_axis),
+        r.planar.objective.name(),
+        r.planar.gripping_power
+    );
+    for note in [r.current_pose.note(), r.axis.note().map(str::to_string)]
+        .into_iter()
+        .flatten()
+    {
+        summary.push_str("; ");
+        summary.push_str(&note);
+    }
+    Ok(Figure {
+        current: current_in_plane(&candidate, &r),
+        analysis,
+        best: r.planar,
+        plane: ", in the grasp plane",
+        summary,
+    })
+}
+
+/// The current pose as a point of Π's curve, when gravity lies in Π: not when the object swings,
+/// nor, on the contact axis, when the current gravity is in another plane than the one chosen.
+fn current_in_plane(c: &SpatialCandidate, r: &SpatialRecommendation) -> Option<(f64, f64)> {
+    let point = (
+        r.planar.current_gravity_angle,
+        r.planar.gripping_power_current,
+    );
+    match (r.current_pose, r.axis) {
+        (CurrentPose::Swings { .. }, _) => None,
+        (CurrentPose::Held, AxisRelation::OnAxis) => {
+            let across = c.gravity.normalize().dot(&r.plane_normal).abs();
+            (across <= IN_PLANE_TOLERANCE).then_some(point)
+        }
+        (CurrentPose::Held, _) => Some(point),
+    }
 }
 
 /// The curves of the figure, sampled over the graspable range `[lo, hi]`.
@@ -122,15 +217,18 @@ fn drawing_failed(e: impl std::fmt::Debug) -> anyhow::Error {
 type Area<'a> = DrawingArea<SVGBackend<'a>, plotters::coord::Shift>;
 
 /// Draws into memory, then writes the SVG beside `args.output` and renames it into place.
-fn draw(analysis: &Analysis, best: &Recommendation, args: &Args) -> anyhow::Result<()> {
-    let curves = Curves::sample(analysis, args.samples.max(10));
+fn draw(figure: &Figure, args: &Args) -> anyhow::Result<()> {
+    let curves = Curves::sample(
+        &figure.analysis,
+        usize::try_from(args.samples).unwrap_or(10).max(10),
+    );
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (1400, 560)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
         let (left, right) = root.split_horizontally(700);
         draw_bounds(&left, &curves)?;
-        draw_power(&right, analysis, best, &curves)?;
+        draw_power(&right, figure, &curves)?;
         root.present().map_err(drawing_failed)?;
     }
     let cannot = || format!("cannot write {}", args.output.display());
@@ -196,19 +294,15 @@ fn draw_bounds(area: &Area<'_>, curves: &Curves) -> anyhow::Result<()> {
 /// the current orientation.
 // About 90 lines: one chart drawn series by series, each a short builder chain; split, its
 // pieces would only pass the chart's generic type around.
-fn draw_power(
-    area: &Area<'_>,
-    analysis: &Analysis,
-    best: &Recommendation,
-    curves: &Curves,
-) -> anyhow::Result<()> {
+fn draw_power(area: &Area<'_>, figure: &Figure, curves: &Curves) -> anyhow::Result<()> {
+    let (analysis, best) = (&figure.analysis, &figure.best);
     let err = drawing_failed;
     let (pmin, pmax) = span(curves.power.iter().map(|p| p.1));
     let (pmin, pmax) = (0f64.min(pmin), pmax + 0.1 * (pmax - pmin).max(1e-9));
     let objective = best.objective.name();
     let mut chart = ChartBuilder::on(area)
         .caption(
-            format!("gripping power P(θ), {objective}"),
+            format!("gripping power P(θ), {objective}{}", figure.plane),
             ("sans-serif", 20),
         )
         .margin(12)
@@ -267,15 +361,13 @@ fn draw_power(
         .map_err(err)?
         .label("recommended")
         .legend(|(x, y)| Circle::new((x + 10, y), 5, RED.filled()));
-    chart
-        .draw_series(std::iter::once(Circle::new(
-            (best.current_gravity_angle, best.gripping_power_current),
-            5,
-            BLUE.filled(),
-        )))
-        .map_err(err)?
-        .label("current")
-        .legend(|(x, y)| Circle::new((x + 10, y), 4, BLUE.filled()));
+    if let Some(current) = figure.current {
+        chart
+            .draw_series(std::iter::once(Circle::new(current, 5, BLUE.filled())))
+            .map_err(err)?
+            .label("current")
+            .legend(|(x, y)| Circle::new((x + 10, y), 4, BLUE.filled()));
+    }
     chart
         .configure_series_labels()
         .background_style(WHITE.mix(0.8))

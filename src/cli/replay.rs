@@ -8,18 +8,21 @@
 use super::{Negative, SolveOptions};
 use anyhow::{bail, Context};
 use grasp_orient::config::Config;
-use grasp_orient::msg::{GraspCandidate, RosMessage};
+use grasp_orient::msg::{GraspCandidate, GraspCandidateSet, GripRecommendation, RosMessage};
 use grasp_orient::record::bag::{self, Bag};
 use grasp_orient::record::output::{Pending, Replacement};
-use grasp_orient::record::{BagWriter, Entry, Payload, Topics};
-use grasp_orient::replay::{replay, replay_with_answers, Override, Plan, Summary, TOLERANCE};
+use grasp_orient::record::{BagWriter, Entry, Payload, SetTopics, Topics};
+use grasp_orient::replay::{
+    replay, replay_with_answers, Answers, Override, Plan, Summary, TOLERANCE,
+};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `replay`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
-    /// MCAP files (ours, or any rosbag2 MCAP with a grasp_orient/msg/GraspCandidate topic).
+    /// MCAP files (ours, or any rosbag2 MCAP with a grasp_orient/msg/GraspCandidate or
+    /// GraspCandidateSet topic).
     #[arg(required = true)]
     pub bags: Vec<PathBuf>,
     /// Also write a fresh recording of the replay: the candidates, the new recommendations and
@@ -82,6 +85,7 @@ impl Output {
             candidates: "/grasp_candidates".into(),
             recommendations: "/grip_recommendations".into(),
             markers: None,
+            sets: Some(SetTopics::default_names()),
         };
         let writer = BagWriter::on_file(file, &temp, &topics, 100)
             .with_context(|| format!("cannot write {}", path.display()))?;
@@ -99,9 +103,11 @@ impl Output {
             .with_context(|| format!("cannot write {}", self.path.display()))?;
         writeln!(
             std::io::stdout(),
-            "wrote {} candidates and {} recommendations to {}",
+            "wrote {} candidates, {} recommendations, {} candidate sets and {} set answers to {}",
             written.candidates,
             written.recommendations,
+            written.candidate_sets,
+            written.recommendation_sets,
             self.path.display()
         )?;
         Ok(())
@@ -119,12 +125,23 @@ fn replay_file(
     trouble: &mut Vec<String>,
 ) -> anyhow::Result<Summary> {
     let mut bag = bag::read(path)?;
-    if bag.candidates.is_empty() {
+    if bag.candidates.is_empty() && bag.candidate_sets.is_empty() {
         bail!(
-            "{}: no {} messages (cdr) in it",
+            "{}: no {} or {} messages (cdr) in it",
             path.display(),
-            GraspCandidate::TYPE_NAME
+            GraspCandidate::TYPE_NAME,
+            GraspCandidateSet::TYPE_NAME
         );
+    }
+    let missing = bag.fields.missing::<GripRecommendation>();
+    if !missing.is_empty() {
+        writeln!(
+            std::io::stdout(),
+            "{}: recorded before {} were added to {}: not compared",
+            path.display(),
+            missing.join(", "),
+            GripRecommendation::TYPE_NAME
+        )?;
     }
     if bag.undecodable_count > 0 {
         trouble.push(format!(
@@ -137,9 +154,11 @@ fn replay_file(
     let plan = Plan::for_bag(&bag, base, overrides)
         .with_context(|| format!("{}: cannot replay", path.display()))?;
     let recorded = bag.recommendations.len();
+    let recorded_sets = bag.recommendation_sets.len();
     if args.no_compare {
         bag = Bag {
             candidates: std::mem::take(&mut bag.candidates),
+            candidate_sets: std::mem::take(&mut bag.candidate_sets),
             ..Bag::default()
         };
     }
@@ -164,6 +183,14 @@ fn replay_file(
         bag.candidates.len(),
         settings_words(&plan)
     )?;
+    if !bag.candidate_sets.is_empty() || recorded_sets > 0 {
+        writeln!(
+            std::io::stdout(),
+            "{}: {} candidate sets, {recorded_sets} recorded set answers",
+            path.display(),
+            bag.candidate_sets.len(),
+        )?;
+    }
     Ok(summary)
 }
 
@@ -190,13 +217,8 @@ fn settings_words(plan: &Plan) -> String {
     }
 }
 
-/// Writes the settings used, every candidate and its new answer.
-fn write_replay(
-    w: &mut BagWriter,
-    bag: &Bag,
-    plan: &Plan,
-    answers: Vec<bag::Recorded<grasp_orient::msg::GripRecommendation>>,
-) -> anyhow::Result<()> {
+/// Writes the settings used, every set and its new answer, every candidate and its new answer.
+fn write_replay(w: &mut BagWriter, bag: &Bag, plan: &Plan, answers: Answers) -> anyhow::Result<()> {
     for record in &plan.recorded {
         w.write(&Entry {
             payload: Payload::Settings(Box::new(record.clone())),
@@ -204,7 +226,19 @@ fn write_replay(
             publish_time: record.since,
         })?;
     }
-    for (c, a) in bag.candidates.iter().zip(answers) {
+    for (s, a) in bag.candidate_sets.iter().zip(answers.sets) {
+        w.write(&Entry {
+            payload: Payload::CandidateSet(Box::new(s.message.clone())),
+            log_time: s.log_time,
+            publish_time: s.publish_time,
+        })?;
+        w.write(&Entry {
+            payload: Payload::RecommendationSet(Box::new(a.message)),
+            log_time: a.log_time,
+            publish_time: a.publish_time,
+        })?;
+    }
+    for (c, a) in bag.candidates.iter().zip(answers.recommendations) {
         w.write(&Entry {
             payload: Payload::Candidate(Box::new(c.message.clone())),
             log_time: c.log_time,
@@ -237,6 +271,17 @@ fn report(summary: &Summary, secs: f64, no_compare: bool) -> anyhow::Result<()> 
             ""
         }
     )?;
+    if summary.sets > 0 || summary.unmatched_set_answers > 0 {
+        writeln!(
+            out,
+            "replayed {} sets (their candidates counted above): {} compared with a recorded \
+             answer, {} differ, {} recorded set answers unmatched",
+            summary.sets,
+            summary.sets_compared,
+            summary.sets_differing,
+            summary.unmatched_set_answers
+        )?;
+    }
     if !summary.largest.is_empty() {
         writeln!(out, "largest difference per field:")?;
         for (field, gap) in &summary.largest {
@@ -262,6 +307,18 @@ fn verdict(summary: &Summary, no_compare: bool) -> anyhow::Result<()> {
         no.push(format!(
             "{} recorded recommendations answer no recorded candidate",
             summary.unmatched_recommendations
+        ));
+    }
+    if summary.sets_differing > 0 {
+        no.push(format!(
+            "{} of {} compared set answers differ",
+            summary.sets_differing, summary.sets_compared
+        ));
+    }
+    if summary.unmatched_set_answers > 0 {
+        no.push(format!(
+            "{} recorded set answers answer no recorded set",
+            summary.unmatched_set_answers
         ));
     }
     let uncompared = summary.candidates - summary.compared;

@@ -2,6 +2,7 @@
 //! ([`Display`]) itself. The solver's [`Objective`] gets its text form here, so that the solver
 //! stays free of parsing; its names are the solver's own ([`Objective::name`]).
 
+use crate::sets::{GripperDrive, RankBy};
 use crate::solver::{AllowedRange, Objective};
 use std::fmt::{self, Display};
 use std::str::FromStr;
@@ -107,6 +108,38 @@ impl Display for RangeKind {
     }
 }
 
+/// Implements [`Choice`], [`FromStr`] and [`Display`] for a type with `name()` and its variants.
+macro_rules! named_choice {
+    ($ty:ty, [$($variant:expr),+ $(,)?]) => {
+        impl Choice for $ty {
+            const NAMES: &'static [&'static str] = &[$($variant.name()),+];
+        }
+
+        impl FromStr for $ty {
+            type Err = UnknownName;
+
+            fn from_str(s: &str) -> Result<Self, Self::Err> {
+                [$($variant),+]
+                    .into_iter()
+                    .find(|k| k.name() == s)
+                    .ok_or_else(|| UnknownName::new::<Self>(s))
+            }
+        }
+
+        impl Display for $ty {
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str(self.name())
+            }
+        }
+    };
+}
+
+named_choice!(
+    GripperDrive,
+    [GripperDrive::Coupled, GripperDrive::Independent]
+);
+named_choice!(RankBy, [RankBy::GripForce, RankBy::Objective]);
+
 /// Gravity-angle bounds that are not finite with `lo < hi`.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 #[error("bounds must be finite with lower < upper, got {lo} and {hi}")]
@@ -161,6 +194,20 @@ mod tests {
             }
         }
         round_trip(&kinds);
+        let drives = [GripperDrive::Coupled, GripperDrive::Independent];
+        for d in drives {
+            match d {
+                GripperDrive::Coupled | GripperDrive::Independent => {}
+            }
+        }
+        round_trip(&drives);
+        let ranks = [RankBy::GripForce, RankBy::Objective];
+        for r in ranks {
+            match r {
+                RankBy::GripForce | RankBy::Objective => {}
+            }
+        }
+        round_trip(&ranks);
     }
 
     #[test]

@@ -56,9 +56,20 @@ pub enum Domain {
 }
 
 impl Domain {
+    /// Every finite real number (no NaN, no infinity).
+    pub const FINITE: Domain = Domain::Real {
+        min: f64::MIN,
+        max: f64::MAX,
+    };
+
     /// Real numbers `>= min`, finite.
     pub const fn at_least(min: f64) -> Self {
         Domain::Real { min, max: f64::MAX }
+    }
+
+    /// Integers `>= min`.
+    pub const fn at_least_integer(min: i64) -> Self {
+        Domain::Integer { min, max: i64::MAX }
     }
 }
 
@@ -67,9 +78,29 @@ impl fmt::Display for Domain {
         match self {
             Domain::Any => f.write_str("any"),
             Domain::Choices(names) => write!(f, "one of {}", names.join(", ")),
+            Domain::Integer { min, max } if *max == i64::MAX => write!(f, ">= {min}"),
             Domain::Integer { min, max } => write!(f, "in {min}..={max}"),
-            Domain::Real { min, max } if *max == f64::MAX => write!(f, ">= {min}"),
-            Domain::Real { min, max } => write!(f, "in [{min}, {max}]"),
+            Domain::Real { min, max } if *min == f64::MIN && *max == f64::MAX => {
+                f.write_str("finite")
+            }
+            Domain::Real { min, max } if *max == f64::MAX => write!(f, ">= {}", Real(*min)),
+            Domain::Real { min, max } => write!(f, "in [{}, {}]", Real(*min), Real(*max)),
+        }
+    }
+}
+
+/// A double as people write it: plain when moderate, with an exponent when very large or small
+/// (`1e300`, not three hundred digits).
+#[derive(Debug, Clone, Copy)]
+pub struct Real(pub f64);
+
+impl fmt::Display for Real {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let v = self.0;
+        if v != 0.0 && v.is_finite() && !(1e-4..1e6).contains(&v.abs()) {
+            write!(f, "{v:e}")
+        } else {
+            write!(f, "{v}")
         }
     }
 }
@@ -170,7 +201,7 @@ impl Setting for f64 {
         match domain {
             // Written so that NaN fails.
             Domain::Real { min, max } if !(*self >= *min && *self <= *max) => {
-                Err(format!("must be {domain}, got {self}"))
+                Err(format!("must be {domain}, got {}", Real(*self)))
             }
             _ => Ok(()),
         }

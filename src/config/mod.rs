@@ -12,8 +12,30 @@ pub use choices::{bounds, Choice, InvalidBounds, RangeKind, UnknownName};
 pub use declare::{Domain, Parameter, RosType};
 pub use params::{Config, PARAMETERS};
 
+use crate::sets::Rules;
 use crate::solver::Settings;
 use std::path::Path;
+
+/// Largest settings file read, bytes: far above any params file, far below a device that never
+/// ends (`--config /dev/zero`).
+pub const MAX_FILE_BYTES: u64 = 16 << 20;
+
+/// The text of a file of at most `max` bytes (any kind of file: a pipe, `/dev/stdin`); longer is
+/// an error, not a read that never ends.
+pub fn read_text(path: &Path, max: u64) -> std::io::Result<String> {
+    use std::io::Read;
+    let mut text = String::new();
+    std::fs::File::open(path)?
+        .take(max + 1)
+        .read_to_string(&mut text)?;
+    if text.len() as u64 > max {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("longer than {max} bytes"),
+        ));
+    }
+    Ok(text)
+}
 
 /// The params file shipped with the package, compiled in.
 pub const DEFAULT_YAML: &str = include_str!("../../config/grasp_orient.yaml");
@@ -51,6 +73,16 @@ pub enum ConfigError {
         /// What is wrong.
         why: String,
     },
+    /// A params file has no `ros__parameters` section for the node.
+    #[error("{origin} has no section for node {node} (found: {}); a params file for it starts with `{node}:` or `/**:`, then `ros__parameters:`", if .found.is_empty() { "none".to_string() } else { .found.join(", ") })]
+    NoSection {
+        /// The file.
+        origin: String,
+        /// The node's name.
+        node: String,
+        /// The top-level keys it has.
+        found: Vec<String>,
+    },
     /// A params file holds a refused parameter.
     #[error("{origin}: {source}")]
     InFile {
@@ -61,6 +93,15 @@ pub enum ConfigError {
     },
 }
 
+/// The top-level sections of a params file: which there are, and which applied to the node.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Sections {
+    /// Every top-level key, in file order.
+    pub found: Vec<String>,
+    /// The keys whose `ros__parameters` were applied (`/**`, `**`, the node's name, `/name`).
+    pub applied: Vec<String>,
+}
+
 /// The parameters a params file sets for `node` (under `/**`, `**`, `node` or `/node`), in
 /// file order, as names and YAML values (not checked against the table).
 pub fn params_in_yaml(
@@ -68,28 +109,70 @@ pub fn params_in_yaml(
     origin: &str,
     node: &str,
 ) -> Result<Vec<(String, serde_yaml_ng::Value)>, ConfigError> {
+    Ok(read_sections(text, origin, node)?.1)
+}
+
+/// The parameters the params file `path` sets for `node`, as [`params_in_yaml`], for a file
+/// that is all settings (`--config`): it is read up to [`MAX_FILE_BYTES`], and a file with no
+/// section for the node is an error ([`ConfigError::NoSection`]) rather than nothing to apply.
+pub fn params_in_file(
+    path: &Path,
+    node: &str,
+) -> Result<Vec<(String, serde_yaml_ng::Value)>, ConfigError> {
+    let origin = path.display().to_string();
+    let text = read_text(path, MAX_FILE_BYTES).map_err(|source| ConfigError::Read {
+        path: origin.clone(),
+        source,
+    })?;
+    let (sections, params) = read_sections(&text, &origin, node)?;
+    if sections.applied.is_empty() {
+        return Err(ConfigError::NoSection {
+            origin,
+            node: node.to_string(),
+            found: sections.found,
+        });
+    }
+    Ok(params)
+}
+
+/// The sections of a params file and the parameters it sets for `node`, as [`params_in_yaml`].
+fn read_sections(
+    text: &str,
+    origin: &str,
+    node: &str,
+) -> Result<(Sections, Vec<(String, serde_yaml_ng::Value)>), ConfigError> {
     let doc: serde_yaml_ng::Value =
         serde_yaml_ng::from_str(text).map_err(|source| ConfigError::Yaml {
             origin: origin.to_string(),
             source,
         })?;
-    let Some(map) = doc.as_mapping() else {
-        return Ok(Vec::new());
-    };
+    let mut sections = Sections::default();
     let mut out = Vec::new();
+    let Some(map) = doc.as_mapping() else {
+        return Ok((sections, out));
+    };
+    sections.found = map
+        .keys()
+        .map(|k| match k.as_str() {
+            Some(s) => s.to_string(),
+            None => serde_yaml_ng::to_string(k)
+                .map_or_else(|_| "?".to_string(), |s| s.trim_end().to_string()),
+        })
+        .collect();
     for key in ["/**", "**", node, &format!("/{node}")] {
         if let Some(params) = map
             .get(key)
             .and_then(|v| v.get("ros__parameters"))
             .and_then(|v| v.as_mapping())
         {
+            sections.applied.push(key.to_string());
             for (name, value) in params {
                 let name = name.as_str().unwrap_or_default().to_string();
                 out.push((name, value.clone()));
             }
         }
     }
-    Ok(out)
+    Ok((sections, out))
 }
 
 impl Parameter {
@@ -101,15 +184,23 @@ impl Parameter {
 
 impl Config {
     /// Reads a params file: the `ros__parameters` of `node` (or of `/**`) are applied over `self`.
-    pub fn merge_yaml(&mut self, text: &str, origin: &str, node: &str) -> Result<(), ConfigError> {
-        for (name, value) in params_in_yaml(text, origin, node)? {
+    /// Like rcl, sections for other nodes are left alone; what applied is returned, for the
+    /// callers that must not ignore a file with nothing for them ([`Config::load`]).
+    pub fn merge_yaml(
+        &mut self,
+        text: &str,
+        origin: &str,
+        node: &str,
+    ) -> Result<Sections, ConfigError> {
+        let (sections, params) = read_sections(text, origin, node)?;
+        for (name, value) in params {
             self.set_value(&name, value)
                 .map_err(|e| ConfigError::InFile {
                     origin: origin.to_string(),
                     source: Box::new(e),
                 })?;
         }
-        Ok(())
+        Ok(sections)
     }
 
     /// Sets one parameter from its YAML text (as in `-p name:=value`), checking its type only.
@@ -122,16 +213,19 @@ impl Config {
         self.set_value(name, parsed)
     }
 
-    /// The compiled-in defaults, then `file` if given, checked.
+    /// The compiled-in defaults, then `file` if given (see [`params_in_file`]), checked.
     pub fn load(file: Option<&Path>, node: &str) -> Result<Self, ConfigError> {
         let mut config = Config::default();
         config.merge_yaml(DEFAULT_YAML, "built-in config/grasp_orient.yaml", node)?;
         if let Some(path) = file {
-            let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
-                path: path.display().to_string(),
-                source,
-            })?;
-            config.merge_yaml(&text, &path.display().to_string(), node)?;
+            for (name, value) in params_in_file(path, node)? {
+                config
+                    .set_value(&name, value)
+                    .map_err(|e| ConfigError::InFile {
+                        origin: path.display().to_string(),
+                        source: Box::new(e),
+                    })?;
+            }
         }
         config.solver_settings()?;
         Ok(config)
@@ -152,6 +246,17 @@ impl Config {
             range,
             friction_safety_factor: self.friction_safety_factor,
         })
+    }
+
+    /// The gripper and set rules: `gripper_drive`, `max_grip_force`, `rank_by`, `max_set_size`
+    /// (their domains are checked by [`Config::solver_settings`]).
+    pub fn rules(&self) -> Rules {
+        Rules {
+            drive: self.gripper_drive,
+            max_grip_force: self.max_grip_force,
+            rank_by: self.rank_by,
+            max_set_size: usize::try_from(self.max_set_size).unwrap_or(1),
+        }
     }
 }
 
@@ -201,6 +306,39 @@ mod tests {
     }
 
     #[test]
+    fn a_config_file_without_a_section_for_us_is_an_error() {
+        let dir = tempfile::Builder::new()
+            .prefix("grasp_orient_cfg_")
+            .tempdir()
+            .expect("a temporary folder");
+        let path = dir.path().join("other.yaml");
+        std::fs::write(
+            &path,
+            "other_node:\n  ros__parameters:\n    objective: norm1\n",
+        )
+        .expect("write");
+        let e = Config::load(Some(&path), "grasp_orient").expect_err("no section for us");
+        let text = e.to_string();
+        assert!(
+            text.contains("no section for node grasp_orient") && text.contains("found: other_node"),
+            "{text}"
+        );
+        std::fs::write(&path, "").expect("write");
+        let e = Config::load(Some(&path), "grasp_orient").expect_err("empty");
+        assert!(e.to_string().contains("found: none"), "{e}");
+        std::fs::write(&path, "/**:\n  ros__parameters:\n    objective: norm1\n").expect("write");
+        let c = Config::load(Some(&path), "grasp_orient").expect("a wildcard applies");
+        assert_eq!(c.objective, Objective::Norm1);
+        // rcl's rule for --params-file: other nodes' sections are left alone.
+        let mut c = Config::default();
+        let s = c
+            .merge_yaml("a:\n  ros__parameters: {}\nb: 1\n", "t", "grasp_orient")
+            .expect("valid");
+        assert_eq!(s.found, ["a", "b"]);
+        assert!(s.applied.is_empty());
+    }
+
+    #[test]
     fn domains_and_bounds_are_checked() {
         let mut c = Config {
             friction_safety_factor: 0.5,
@@ -209,8 +347,18 @@ mod tests {
         let e = c.solver_settings().expect_err("below one");
         assert_eq!(
             e.to_string(),
-            "parameter friction_safety_factor: must be >= 1, got 0.5"
+            "parameter friction_safety_factor: must be in [1, 1000], got 0.5"
         );
+        // Every double has a domain, checked whatever the other settings: NaN bounds are
+        // refused while range is not bounds too.
+        for name in ["range_min", "range_max", "friction_safety_factor"] {
+            for bad in [".nan", ".inf", "-.inf"] {
+                let mut c = Config::default();
+                c.set_from_yaml(name, bad).expect("a double");
+                let e = c.solver_settings().expect_err(bad);
+                assert!(e.to_string().contains(name), "{e}");
+            }
+        }
         c.friction_safety_factor = f64::INFINITY;
         assert!(c.solver_settings().is_err());
         let c = Config {
@@ -228,5 +376,39 @@ mod tests {
             .set_from_yaml("qos_depth", "abc")
             .expect_err("not a number");
         assert!(e.to_string().contains("qos_depth"), "{e}");
+    }
+
+    #[test]
+    fn gripper_and_set_parameters_are_checked_and_give_the_rules() {
+        use crate::sets::{GripperDrive, RankBy, Rules};
+        let c = Config::default();
+        assert_eq!(c.rules(), Rules::default());
+        let mut c = Config::default();
+        c.set_from_yaml("gripper_drive", "independent")
+            .expect("a drive");
+        c.set_from_yaml("max_grip_force", "40.0").expect("a number");
+        c.set_from_yaml("rank_by", "objective").expect("a name");
+        c.set_from_yaml("max_set_size", "7").expect("an integer");
+        c.solver_settings().expect("valid");
+        assert_eq!(
+            c.rules(),
+            Rules {
+                drive: GripperDrive::Independent,
+                max_grip_force: 40.0,
+                rank_by: RankBy::Objective,
+                max_set_size: 7
+            }
+        );
+        assert!(c.set_from_yaml("gripper_drive", "hydraulic").is_err());
+        for (name, bad) in [
+            ("max_grip_force", "-1.0"),
+            ("max_grip_force", ".nan"),
+            ("max_set_size", "0"),
+        ] {
+            let mut c = Config::default();
+            c.set_from_yaml(name, bad).expect("the type is right");
+            let e = c.solver_settings().expect_err("out of the domain");
+            assert!(e.to_string().contains(name), "{e}");
+        }
     }
 }

@@ -10,7 +10,8 @@
 
 use super::choices::RangeKind;
 use super::declare::{parameters, Domain};
-use crate::solver::Objective;
+use crate::sets::{GripperDrive, RankBy, DEFAULT_MAX_SET_SIZE};
+use crate::solver::{Objective, MAX_SAFETY_FACTOR};
 use std::f64::consts::PI;
 
 parameters! {
@@ -20,14 +21,14 @@ parameters! {
     /// Where the recommended orientation may lie: from_above (the object hangs below the
     /// fingers), graspable (the paper's whole range, eq. 8) or bounds (range_min to range_max).
     range: RangeKind = RangeKind::FromAbove, "";
-    /// Lower bound of the gravity angle in the paper's object frame when range is bounds;
-    /// finite and below range_max.
-    range_min: f64 = -PI, "rad";
-    /// Upper bound of the gravity angle in the paper's object frame when range is bounds;
-    /// finite and above range_min.
-    range_max: f64 = PI, "rad";
+    /// Lower bound of the gravity angle in the paper's object frame when range is bounds, below
+    /// range_max; bounds a turn (2π) or more apart allow every angle.
+    range_min: f64 = -PI, "rad", in Domain::FINITE;
+    /// Upper bound of the gravity angle in the paper's object frame when range is bounds, above
+    /// range_min.
+    range_max: f64 = PI, "rad", in Domain::FINITE;
     /// Divides both friction coefficients before solving; 1 reproduces the paper.
-    friction_safety_factor: f64 = 1.0, "", in Domain::at_least(1.0);
+    friction_safety_factor: f64 = 1.0, "", in Domain::Real { min: 1.0, max: MAX_SAFETY_FACTOR };
     /// QoS history depth (keep-last, reliable, volatile) of every topic.
     qos_depth (fixed): i64 = 100, "messages", in Domain::Integer { min: 1, max: 100_000 };
     /// Publish visualization_msgs/MarkerArray on grip_markers.
@@ -42,4 +43,17 @@ parameters! {
     /// Record the markers as well; set while recording, the file is closed and a new one
     /// started.
     record_markers: bool = false, "";
+    /// How the gripper's fingers are driven, which picks the grip force: coupled (one motor, the
+    /// grip force is internal_force) or independent (each finger its own, the grip force is
+    /// finger_force).
+    gripper_drive: GripperDrive = GripperDrive::Coupled, "";
+    /// The most grip force the gripper gives; a grasp that needs more gets status 3. 0 (the
+    /// default) means no limit.
+    max_grip_force: f64 = 0.0, "N", in Domain::at_least(0.0);
+    /// What ranks the candidates of a set, least first: grip_force (the one gripper_drive picks)
+    /// or objective (gripping_power); ties go to the smaller wrist rotation.
+    rank_by: RankBy = RankBy::GripForce, "";
+    /// The most candidates a set may hold; a larger set is refused whole (STATUS_TOO_LARGE of
+    /// GripRecommendationSet) rather than stalling the node.
+    max_set_size: i64 = DEFAULT_MAX_SET_SIZE as i64, "candidates", in Domain::at_least_integer(1);
 }

@@ -1,8 +1,17 @@
 //! Wire candidate → solver input, and solver outcome → wire recommendation.
+//!
+//! A planar candidate (`model` 0) uses the x-y components of its points and vectors; a spatial one
+//! (`model` 1) all three ([`SpatialCandidate`]). The spatial answer fills the same fields in the
+//! spatial reading of the message (`README.md`, "Spatial candidates"): the smallest 3D rotation
+//! as `wrist_rotation` (its angle) and `rotation`, the recommended 3D gravity direction, the
+//! planar answer in the grasp plane Π for the rest, and in `message` what the caller must know
+//! though the grasp holds: the object swings at its current pose, the answer is sensitive to the
+//! centre of mass.
 
 use super::{GraspCandidate, GripRecommendation, Point, Quaternion, Vector3};
 use crate::solver::{
-    solve_orientation, Candidate, InvalidInput, NoForceClosure, Recommendation, Settings, Verdict,
+    solve_orientation, solve_spatial, Candidate, InvalidInput, Recommendation, Settings,
+    SpatialCandidate, SpatialRecommendation, SpatialVerdict, Verdict,
 };
 use nalgebra::Vector2;
 
@@ -24,6 +33,14 @@ pub enum MessageLimits {
     /// A field the solver ignores (z) is still not a number.
     #[error(transparent)]
     Solver(#[from] InvalidInput),
+    /// `model` names no model.
+    #[error(
+        "model is {value}: it must be 0 (MODEL_PLANAR: the x-y plane) or 1 (MODEL_SPATIAL: 3D)"
+    )]
+    Model {
+        /// The value given.
+        value: u8,
+    },
 }
 
 fn planar(fields: [&'static str; 3], x: f64, y: f64, z: f64) -> Result<Vector2<f64>, InvalidInput> {
@@ -43,18 +60,24 @@ fn vector(fields: [&'static str; 3], v: &Vector3) -> Result<Vector2<f64>, Invali
     planar(fields, v.x, v.y, v.z)
 }
 
+/// The texts of a candidate are within [`MAX_TEXT_BYTES`].
+fn check_texts(m: &GraspCandidate) -> Result<(), MessageLimits> {
+    for (field, text) in [("id", &m.id), ("header.frame_id", &m.header.frame_id)] {
+        if text.len() > MAX_TEXT_BYTES {
+            return Err(MessageLimits::TooLong {
+                field,
+                len: text.len(),
+            });
+        }
+    }
+    Ok(())
+}
+
 impl TryFrom<&GraspCandidate> for Candidate {
     type Error = MessageLimits;
 
     fn try_from(m: &GraspCandidate) -> Result<Self, Self::Error> {
-        for (field, text) in [("id", &m.id), ("header.frame_id", &m.header.frame_id)] {
-            if text.len() > MAX_TEXT_BYTES {
-                return Err(MessageLimits::TooLong {
-                    field,
-                    len: text.len(),
-                });
-            }
-        }
+        check_texts(m)?;
         Ok(Candidate {
             contact_1: point(["contact_1.x", "contact_1.y", "contact_1.z"], &m.contact_1)?,
             contact_2: point(["contact_2.x", "contact_2.y", "contact_2.z"], &m.contact_2)?,
@@ -68,6 +91,34 @@ impl TryFrom<&GraspCandidate> for Candidate {
             )?,
             mass: m.mass,
             gravity: vector(["gravity.x", "gravity.y", "gravity.z"], &m.gravity)?,
+        })
+    }
+}
+
+fn point3(p: &Point) -> nalgebra::Vector3<f64> {
+    nalgebra::Vector3::new(p.x, p.y, p.z)
+}
+
+fn vector3(v: &Vector3) -> nalgebra::Vector3<f64> {
+    nalgebra::Vector3::new(v.x, v.y, v.z)
+}
+
+/// Every component as given: the spatial solver checks them all, naming each (`contact_1.z`).
+impl TryFrom<&GraspCandidate> for SpatialCandidate {
+    type Error = MessageLimits;
+
+    fn try_from(m: &GraspCandidate) -> Result<Self, Self::Error> {
+        check_texts(m)?;
+        Ok(SpatialCandidate {
+            contact_1: point3(&m.contact_1),
+            contact_2: point3(&m.contact_2),
+            normal_1: vector3(&m.normal_1),
+            normal_2: vector3(&m.normal_2),
+            friction_1: m.friction_1,
+            friction_2: m.friction_2,
+            center_of_mass: point3(&m.center_of_mass),
+            mass: m.mass,
+            gravity: vector3(&m.gravity),
         })
     }
 }
@@ -126,6 +177,13 @@ fn refused(m: &GraspCandidate, status: u8, message: String) -> GripRecommendatio
         objective: String::new(),
         recommended_label: String::new(),
         candidate_c: GripRecommendation::CANDIDATE_C_OUT_OF_RANGE,
+        finger_force: nan,
+        finger_force_current: nan,
+        rotation_axis: Vector3 {
+            x: nan,
+            y: nan,
+            z: nan,
+        },
     }
 }
 
@@ -138,7 +196,9 @@ pub fn invalid(m: &GraspCandidate, why: &dyn std::fmt::Display) -> GripRecommend
     )
 }
 
-fn no_closure(m: &GraspCandidate, why: &NoForceClosure) -> GripRecommendation {
+/// The answer to a valid grasp that no orientation holds: status 1, `why` naming the contact,
+/// the current-pose fields infinite.
+fn no_closure(m: &GraspCandidate, why: &dyn std::fmt::Display) -> GripRecommendation {
     let mut out = refused(
         m,
         GripRecommendation::STATUS_NO_FORCE_CLOSURE,
@@ -146,6 +206,7 @@ fn no_closure(m: &GraspCandidate, why: &NoForceClosure) -> GripRecommendation {
     );
     out.gripping_power_current = f64::INFINITY;
     out.internal_force_current = f64::INFINITY;
+    out.finger_force_current = f64::INFINITY;
     out
 }
 
@@ -187,23 +248,119 @@ fn recommended(m: &GraspCandidate, r: &Recommendation) -> GripRecommendation {
             .recommended_label
             .map_or(String::new(), |x| x.name().to_string()),
         candidate_c: r.candidate_c as u8,
+        finger_force: r.finger_force,
+        finger_force_current: r.finger_force_current,
+        // `wrist_rotation` is signed about +z.
+        rotation_axis: Vector3 {
+            x: 0.0,
+            y: 0.0,
+            z: 1.0,
+        },
     }
+}
+
+/// The answer to a spatial grasp that holds: the planar answer in Π, with the 3D rotation, the
+/// recommended 3D gravity direction, and the notes on the current pose and the centre of mass.
+fn spatial_recommended(m: &GraspCandidate, r: &SpatialRecommendation) -> GripRecommendation {
+    let mut out = recommended(m, &r.planar);
+    let [x, y, z, w] = r.quaternion();
+    out.wrist_rotation = r.rotation_angle;
+    out.rotation = Quaternion { x, y, z, w };
+    let d = &r.gravity_direction;
+    out.gravity_direction = Vector3 {
+        x: d.x,
+        y: d.y,
+        z: d.z,
+    };
+    let k = &r.rotation_axis;
+    out.rotation_axis = Vector3 {
+        x: k.x,
+        y: k.y,
+        z: k.z,
+    };
+    let notes: Vec<String> = [r.current_pose.note(), r.axis.note().map(str::to_string)]
+        .into_iter()
+        .flatten()
+        .collect();
+    out.message = notes.join("; ");
+    out
+}
+
+/// A candidate message answered, with the 3D solution when it is a spatial grasp that holds (the
+/// markers of a spatial answer are drawn from it).
+#[derive(Debug, Clone)]
+pub struct Answered {
+    /// The answer as published.
+    pub reply: GripRecommendation,
+    /// The spatial solver's answer, for a spatial candidate answered with status 0.
+    pub spatial: Option<Box<SpatialRecommendation>>,
 }
 
 /// Solves one candidate message and builds its answer: status 0 with the recommendation, 1 when
 /// no orientation holds the grasp, 2 when the input is bad.
 pub fn answer(m: &GraspCandidate, settings: &Settings) -> GripRecommendation {
+    answer_in_full(m, settings).reply
+}
+
+/// [`answer`], with the 3D solution of a spatial grasp.
+pub fn answer_in_full(m: &GraspCandidate, settings: &Settings) -> Answered {
+    match m.model {
+        GraspCandidate::MODEL_PLANAR => answer_planar(m, settings),
+        GraspCandidate::MODEL_SPATIAL => answer_spatial(m, settings),
+        value => {
+            let mut reply = invalid(m, &MessageLimits::Model { value });
+            reply.objective = settings.objective.name().to_string();
+            Answered {
+                reply,
+                spatial: None,
+            }
+        }
+    }
+}
+
+/// The answer to a candidate read in the planar model.
+fn answer_planar(m: &GraspCandidate, settings: &Settings) -> Answered {
     let mut out = match Candidate::try_from(m) {
         Err(e) => invalid(m, &e),
         Ok(candidate) => match solve_orientation(&candidate, settings) {
-            Ok(Verdict::Recommended(r)) => return recommended(m, &r),
+            Ok(Verdict::Recommended(r)) => {
+                return Answered {
+                    reply: recommended(m, &r),
+                    spatial: None,
+                }
+            }
             Ok(Verdict::NoForceClosure(why)) => no_closure(m, &why),
             Err(e) => invalid(m, &e),
         },
     };
     // A refused answer still says which objective it was asked under.
     out.objective = settings.objective.name().to_string();
-    out
+    Answered {
+        reply: out,
+        spatial: None,
+    }
+}
+
+/// The answer to a candidate read in the spatial model.
+fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {
+    let mut out = match SpatialCandidate::try_from(m) {
+        Err(e) => invalid(m, &e),
+        Ok(candidate) => match solve_spatial(&candidate, settings) {
+            Ok(SpatialVerdict::Recommended(r)) => {
+                return Answered {
+                    reply: spatial_recommended(m, &r),
+                    spatial: Some(r),
+                }
+            }
+            Ok(SpatialVerdict::NoForceClosure(why)) => no_closure(m, &why),
+            Err(e) => invalid(m, &e),
+        },
+    };
+    out.objective = settings.objective.name().to_string();
+    Answered {
+        reply: out,
+        spatial: None,
+    }
 }
 
 #[cfg(test)]
@@ -270,5 +427,259 @@ mod tests {
             a.message
         );
         assert!(a.gripping_power_current.is_infinite());
+        assert!(a.finger_force_current.is_infinite() && a.finger_force.is_nan());
+    }
+}
+
+#[cfg(test)]
+mod spatial_tests {
+    use super::*;
+    use crate::msg::Header;
+    use std::f64::consts::PI;
+
+    fn p(x: f64, y: f64, z: f64) -> Point {
+        Point { x, y, z }
+    }
+
+    fn v(x: f64, y: f64, z: f64) -> Vector3 {
+        Vector3 { x, y, z }
+    }
+
+    /// The paper's case (c) square stood up in the y-z plane, gravity along -z.
+    fn upright_square() -> GraspCandidate {
+        GraspCandidate {
+            header: Header {
+                frame_id: "tool0".into(),
+                ..Header::default()
+            },
+            id: "upright".into(),
+            contact_1: p(0.0, 1.0, 1.0),
+            contact_2: p(0.0, -1.0, 1.0),
+            normal_1: v(0.0, -1.0, 0.0),
+            normal_2: v(0.0, 1.0, 0.0),
+            friction_1: 3f64.sqrt(),
+            friction_2: 1.0 / 3f64.sqrt(),
+            center_of_mass: p(0.0, 0.0, 0.0),
+            mass: 1.0,
+            gravity: v(0.0, 0.0, -1.0),
+            model: GraspCandidate::MODEL_SPATIAL,
+        }
+    }
+
+    #[test]
+    fn spatial_answer_carries_the_3d_rotation_and_the_planar_answer_in_the_plane() {
+        let m = upright_square();
+        let settings = Settings::default();
+        let Answered { reply: a, spatial } = answer_in_full(&m, &settings);
+        let r = spatial.expect("a spatial answer with status 0");
+        assert_eq!(a.status, GripRecommendation::STATUS_OK, "{}", a.message);
+        assert_eq!(
+            (a.candidate_id.as_str(), a.header.frame_id.as_str()),
+            ("upright", "tool0")
+        );
+        assert!(a.message.is_empty(), "{}", a.message);
+        assert!((a.wrist_rotation - PI / 12.0).abs() < 1e-12);
+        assert_eq!(a.wrist_rotation, r.rotation_angle);
+        // The quaternion turns about the rotation axis (±x, the normal of the grasp plane) by the
+        // wrist rotation.
+        let q = &a.rotation;
+        assert!((q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w - 1.0).abs() < 1e-15);
+        assert!((2.0 * q.x.abs().atan2(q.w) - a.wrist_rotation).abs() < 1e-12);
+        assert!(q.y == 0.0 && q.z == 0.0);
+        assert_eq!(q.x.signum(), r.rotation_axis.x.signum());
+        let k = &a.rotation_axis;
+        assert_eq!((k.x, k.y, k.z), (r.rotation_axis.x, 0.0, 0.0));
+        assert_eq!(k.x.abs(), 1.0);
+        // Gravity after the rotation: in the y-z plane, a unit vector, π/12 from -z.
+        let g = &a.gravity_direction;
+        assert!(g.x.abs() < 1e-15 && (g.y.hypot(g.z) - 1.0).abs() < 1e-15);
+        assert!((-g.z - (PI / 12.0).cos()).abs() < 1e-12);
+        // The rest is the planar answer in Π.
+        assert_eq!(a.gravity_angle, r.planar.gravity_angle);
+        assert_eq!(a.gripping_power, r.planar.gripping_power);
+        assert_eq!(a.contact_forces, r.planar.contact_forces);
+        assert_eq!(a.local_minima.len(), r.planar.local_minima.len());
+        assert_eq!(a.recommended_label, "C");
+        assert!((a.gripping_power - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_planar_grasp_given_as_spatial_answers_as_the_planar_model() {
+        let settings = Settings::default();
+        for m in crate::msg::paper_cases() {
+            let planar = answer(&m, &settings);
+            let spatial = answer(
+                &GraspCandidate {
+                    model: GraspCandidate::MODEL_SPATIAL,
+                    ..m.clone()
+                },
+                &settings,
+            );
+            assert_eq!(
+                (
+                    planar.rotation_axis.x,
+                    planar.rotation_axis.y,
+                    planar.rotation_axis.z
+                ),
+                (0.0, 0.0, 1.0)
+            );
+            let k = &spatial.rotation_axis;
+            assert_eq!((k.x, k.y, k.z.abs()), (0.0, 0.0, 1.0), "{}", m.id);
+            assert_eq!(spatial.status, planar.status, "{}", m.id);
+            assert!(spatial.message.is_empty(), "{}: {}", m.id, spatial.message);
+            let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(1.0);
+            assert!(
+                close(spatial.wrist_rotation, planar.wrist_rotation.abs()),
+                "{}",
+                m.id
+            );
+            for (a, b) in [
+                (spatial.rotation.x, planar.rotation.x),
+                (spatial.rotation.y, planar.rotation.y),
+                (spatial.rotation.z, planar.rotation.z),
+                (spatial.rotation.w, planar.rotation.w),
+                (spatial.gravity_direction.x, planar.gravity_direction.x),
+                (spatial.gravity_direction.y, planar.gravity_direction.y),
+                (spatial.gravity_direction.z, planar.gravity_direction.z),
+                (spatial.gravity_angle, planar.gravity_angle),
+                (spatial.gripping_power, planar.gripping_power),
+                (spatial.internal_force, planar.internal_force),
+                (
+                    spatial.gripping_power_current,
+                    planar.gripping_power_current,
+                ),
+                (
+                    spatial.internal_force_current,
+                    planar.internal_force_current,
+                ),
+            ] {
+                assert!(close(a, b), "{}: {a} against planar {b}", m.id);
+            }
+            for (a, b) in spatial.contact_forces.iter().zip(&planar.contact_forces) {
+                assert!(close(*a, *b), "{}", m.id);
+            }
+            assert_eq!(spatial.local_minima_labels, planar.local_minima_labels);
+            assert_eq!(
+                (
+                    &spatial.grasp_case,
+                    &spatial.recommended_label,
+                    spatial.candidate_c
+                ),
+                (
+                    &planar.grasp_case,
+                    &planar.recommended_label,
+                    planar.candidate_c
+                )
+            );
+        }
+    }
+
+    #[test]
+    fn an_object_that_would_swing_has_infinite_current_fields_and_says_so() {
+        let mut m = upright_square();
+        m.gravity = v(0.3, 0.0, -1.0); // out of the y-z plane
+        let a = answer_in_full(&m, &Settings::default()).reply;
+        assert_eq!(a.status, GripRecommendation::STATUS_OK, "{}", a.message);
+        assert!(a.gripping_power_current == f64::INFINITY);
+        assert!(a.internal_force_current == f64::INFINITY);
+        assert!(a.gripping_power.is_finite());
+        assert!(
+            a.message.contains("swings about the contact axis"),
+            "{}",
+            a.message
+        );
+        assert!(
+            a.message.contains("0.291457 rad out of the grasp plane"),
+            "{}",
+            a.message
+        );
+    }
+
+    #[test]
+    fn a_centre_of_mass_on_or_near_the_axis_is_flagged_sensitive() {
+        let mut m = upright_square();
+        m.center_of_mass = p(0.0, 0.2, 1.0); // on the contact axis
+        let a = answer_in_full(&m, &Settings::default()).reply;
+        assert_eq!(a.status, GripRecommendation::STATUS_OK, "{}", a.message);
+        assert!(a.message.contains("sensitive") && a.message.contains("on the contact axis"));
+        m.center_of_mass = p(0.0, 0.2, 0.99); // 0.5% of the contact distance off it
+        let a = answer_in_full(&m, &Settings::default()).reply;
+        assert_eq!(a.status, GripRecommendation::STATUS_OK, "{}", a.message);
+        assert!(a.message.contains("sensitive") && a.message.contains("within 1%"));
+        // Both notes at once, joined.
+        m.gravity = v(1.0, 0.0, -1.0);
+        let a = answer_in_full(&m, &Settings::default()).reply;
+        assert!(
+            a.message.contains("swings") && a.message.contains("; sensitive"),
+            "{}",
+            a.message
+        );
+    }
+
+    #[test]
+    fn refusals_name_the_field_and_no_closure_names_the_contact() {
+        let settings = Settings::default();
+        let refused = |f: &dyn Fn(&mut GraspCandidate)| {
+            let mut m = upright_square();
+            f(&mut m);
+            let a = answer_in_full(&m, &settings);
+            assert!(a.spatial.is_none());
+            a.reply
+        };
+        type Change<'a> = &'a dyn Fn(&mut GraspCandidate);
+        let cases: [(Change, &str); 9] = [
+            (
+                &|m| m.contact_1.z = f64::NAN,
+                "contact_1.z is not a finite number",
+            ),
+            (
+                &|m| m.center_of_mass.z = 2e6,
+                "center_of_mass.z is out of range",
+            ),
+            (
+                &|m| m.normal_2 = v(0.0, 0.0, 0.0),
+                "normal_2 is the zero vector",
+            ),
+            (
+                &|m| m.gravity = v(0.0, 0.0, 0.0),
+                "gravity is the zero vector",
+            ),
+            (
+                &|m| m.normal_1 = v(1.0, 0.0, 0.0),
+                "normal_1 is perpendicular to the grasp plane",
+            ),
+            (
+                &|m| m.center_of_mass = p(0.0, 1.0, 1.0),
+                "center_of_mass coincides with contact_1",
+            ),
+            (&|m| m.id = "x".repeat(2000), "id is 2000 bytes long"),
+            (&|m| m.model = 2, "model is 2: it must be 0 (MODEL_PLANAR"),
+            (&|m| m.model = 255, "model is 255"),
+        ];
+        for (f, words) in cases {
+            let a = refused(f);
+            assert_eq!(
+                a.status,
+                GripRecommendation::STATUS_INVALID_INPUT,
+                "{words}"
+            );
+            assert!(a.message.contains(words), "{} lacks {words:?}", a.message);
+            assert!(a.gravity_angle.is_nan() && a.wrist_rotation.is_nan());
+            assert!(a.rotation_axis.x.is_nan() && a.rotation_axis.z.is_nan());
+            assert_eq!(a.objective, "norm2");
+        }
+        // Normal 1 tilted 0.6 rad out of the y-z plane, friction angle 0.5 rad.
+        let a = refused(&|m| {
+            m.normal_1 = v(0.6f64.sin(), -(0.6f64.cos()), 0.0);
+            m.friction_1 = 0.5f64.tan();
+        });
+        assert_eq!(a.status, GripRecommendation::STATUS_NO_FORCE_CLOSURE);
+        assert!(
+            a.message
+                .contains("normal at contact_1 is tilted out of the grasp plane by 0.6000 rad"),
+            "{}",
+            a.message
+        );
+        assert!(a.gripping_power_current.is_infinite() && a.gripping_power.is_nan());
     }
 }

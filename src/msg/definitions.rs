@@ -47,14 +47,15 @@
 //! independent Python port of rosbag2's algorithm over the peer's files.
 
 use super::{
-    ColorRgba, CompressedImage, Duration, GraspCandidate, GripRecommendation, Header, Marker,
-    MarkerArray, MeshFile, Point, Pose, Quaternion, RosMessage, Time, UvCoordinate, Vector3,
+    ColorRgba, CompressedImage, Duration, GraspCandidate, GraspCandidateSet, GripRecommendation,
+    GripRecommendationSet, Header, Marker, MarkerArray, MeshFile, Point, Pose, Quaternion,
+    RosMessage, Time, UvCoordinate, Vector3,
 };
 use std::collections::BTreeSet;
 
 /// Every message type this crate reads or writes, by full name, with its `.msg` text exactly as
 /// its package ships it.
-pub const DEFINITIONS: [(&str, &str); 15] = [
+pub const DEFINITIONS: [(&str, &str); 17] = [
     (
         GraspCandidate::TYPE_NAME,
         include_str!("../../msg/GraspCandidate.msg"),
@@ -62,6 +63,14 @@ pub const DEFINITIONS: [(&str, &str); 15] = [
     (
         GripRecommendation::TYPE_NAME,
         include_str!("../../msg/GripRecommendation.msg"),
+    ),
+    (
+        GraspCandidateSet::TYPE_NAME,
+        include_str!("../../msg/GraspCandidateSet.msg"),
+    ),
+    (
+        GripRecommendationSet::TYPE_NAME,
+        include_str!("../../msg/GripRecommendationSet.msg"),
     ),
     (
         Time::TYPE_NAME,
@@ -276,9 +285,11 @@ fn field_type_at(bytes: &[u8], start: usize) -> Option<(std::ops::Range<usize>, 
 mod tests {
     use super::*;
 
-    const TOP_LEVEL: [&str; 3] = [
+    const TOP_LEVEL: [&str; 5] = [
         GraspCandidate::TYPE_NAME,
         GripRecommendation::TYPE_NAME,
+        GraspCandidateSet::TYPE_NAME,
+        GripRecommendationSet::TYPE_NAME,
         MarkerArray::TYPE_NAME,
     ];
 

@@ -10,9 +10,13 @@ pub mod cdr;
 mod contract;
 mod convert;
 pub mod definitions;
+pub mod schema;
 
 pub use contract::{message_type_name, RosMessage, RosType};
-pub use convert::{answer, clip, invalid, short_id, MessageLimits, MAX_TEXT_BYTES, SHORT_ID_CHARS};
+pub use convert::{
+    answer, answer_in_full, clip, invalid, short_id, Answered, MessageLimits, MAX_TEXT_BYTES,
+    SHORT_ID_CHARS,
+};
 
 use serde::{Deserialize, Serialize};
 
@@ -148,9 +152,12 @@ ros_message! {
 }
 
 ros_message! {
-    /// `msg/GraspCandidate.msg`: a two-finger planar grasp to orient. SI units; vectors in the
-    /// x-y plane of `header.frame_id`.
-    GraspCandidate = grasp_orient/GraspCandidate [] {
+    /// `msg/GraspCandidate.msg`: a two-finger grasp to orient. SI units; vectors in the x-y plane
+    /// of `header.frame_id` (`model` 0), or in 3D (`model` 1).
+    GraspCandidate = grasp_orient/GraspCandidate [
+        MODEL_PLANAR: u8 = 0,
+        MODEL_SPATIAL: u8 = 1,
+    ] {
         /// Stamp and frame of the candidate.
         #[serde(default)]
         header: Header,
@@ -175,6 +182,10 @@ ros_message! {
         mass: f64,
         /// Gravitational acceleration at the current pose, m/s².
         gravity: Vector3,
+        /// `MODEL_PLANAR` (0, the default: the x-y plane, z ignored) or `MODEL_SPATIAL` (1: every
+        /// point and vector in 3D).
+        #[serde(default)]
+        model: u8,
     }
 }
 
@@ -188,6 +199,7 @@ ros_message! {
         CANDIDATE_C_NOT_A_MINIMUM: u8 = 1,
         CANDIDATE_C_BEATEN: u8 = 2,
         CANDIDATE_C_OUT_OF_RANGE: u8 = 3,
+        STATUS_EXCEEDS_GRIPPER: u8 = 3,
     ] {
         /// Stamp and frame of the candidate.
         header: Header,
@@ -229,5 +241,93 @@ ros_message! {
         recommended_label: String,
         /// `CANDIDATE_C_*`.
         candidate_c: u8,
+        /// The larger push along the contact line that either finger gives at the recommendation,
+        /// N: what each independently driven finger must give.
+        #[serde(default)]
+        finger_force: f64,
+        /// The same at the current pose, N (inf where it cannot be held).
+        #[serde(default)]
+        finger_force_current: f64,
+        /// Unit axis of the rotation `wrist_rotation` and `rotation` describe: +z for a planar
+        /// candidate, the smallest rotation's axis for a spatial one.
+        #[serde(default)]
+        rotation_axis: Vector3,
+    }
+}
+
+ros_message! {
+    /// `msg/GraspCandidateSet.msg`: many candidates at once.
+    GraspCandidateSet = grasp_orient/GraspCandidateSet [] {
+        /// Stamp and frame of the set.
+        #[serde(default)]
+        header: Header,
+        /// Caller's name for this set.
+        #[serde(default)]
+        id: String,
+        /// The candidates, answered in order.
+        #[serde(default)]
+        candidates: Vec<GraspCandidate>,
+        /// The most grip force the gripper gives, N; 0 means the node's `max_grip_force`.
+        #[serde(default)]
+        max_grip_force: f64,
+    }
+}
+
+ros_message! {
+    /// `msg/GripRecommendationSet.msg`: the answer to one [`GraspCandidateSet`].
+    GripRecommendationSet = grasp_orient/GripRecommendationSet [
+        STATUS_OK: u8 = 0,
+        STATUS_TOO_LARGE: u8 = 1,
+        STATUS_INVALID_INPUT: u8 = 2,
+    ] {
+        /// Stamp and frame of the set.
+        header: Header,
+        /// Id of the set answered.
+        set_id: String,
+        /// One per candidate, in order.
+        recommendations: Vec<GripRecommendation>,
+        /// Indices of the candidates with status 0, least force first.
+        ranking: Vec<u32>,
+        /// The field of [`GripRecommendation`] the ranking sorts by.
+        ranked_by: String,
+        /// `STATUS_*` of the set as a whole.
+        #[serde(default)]
+        status: u8,
+        /// Why, when status is not OK; empty otherwise.
+        #[serde(default)]
+        message: String,
+    }
+}
+
+/// `srv/Recommend.srv`, request: the set to answer.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecommendRequest {
+    /// The set.
+    pub candidate_set: GraspCandidateSet,
+}
+
+/// `srv/Recommend.srv`, response: the set's answer.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecommendResponse {
+    /// The answer, as on `grip_recommendation_sets`.
+    pub recommendation_set: GripRecommendationSet,
+}
+
+impl ros2_client::Message for RecommendRequest {}
+impl ros2_client::Message for RecommendResponse {}
+
+impl RecommendRequest {
+    /// `(name, ROS type)` of each field, as in `srv/Recommend.srv` above `---`.
+    pub fn fields() -> Vec<(&'static str, String)> {
+        vec![("candidate_set", GraspCandidateSet::ros_type())]
+    }
+}
+
+impl RecommendResponse {
+    /// `(name, ROS type)` of each field, as in `srv/Recommend.srv` below `---`.
+    pub fn fields() -> Vec<(&'static str, String)> {
+        vec![("recommendation_set", GripRecommendationSet::ros_type())]
     }
 }

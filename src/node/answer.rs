@@ -6,10 +6,14 @@
 use super::markers;
 use super::params::Shared;
 use super::params::Version;
-use crate::msg::{answer, short_id, GraspCandidate, GripRecommendation, MarkerArray};
+use crate::msg::{
+    short_id, Answered, GraspCandidate, GraspCandidateSet, GripRecommendation,
+    GripRecommendationSet, MarkerArray,
+};
 use crate::record::lifecycle::{Change, Recording, Wanted};
 use crate::record::settings::SettingsRecord;
 use crate::record::{Entry, OnStop, Payload, RecordError, Topics};
+use crate::sets::{answer_one_in_full, answer_set_on, echo_set};
 use log::Level;
 use std::path::Path;
 
@@ -27,6 +31,12 @@ pub struct Counts {
     pub no_closure: u64,
     /// Messages on the candidates topic that did not decode.
     pub undecodable: u64,
+    /// Answered with status 3 (more grip force than `max_grip_force`).
+    pub exceeds_gripper: u64,
+    /// Sets answered (on the topic or the service); their candidates count above too.
+    pub sets: u64,
+    /// Sets refused as a whole (too large, or bad fields of their own).
+    pub sets_refused: u64,
 }
 
 /// The answer to one candidate, to publish in this order: `reply`, then `markers`.
@@ -49,6 +59,30 @@ pub struct Recorded {
     received: u64,
     sent: u64,
     reply: Option<GripRecommendation>,
+    markers: Option<MarkerArray>,
+}
+
+/// The answer to one set, to publish (or send as the service's response) in this order:
+/// `reply`, then `markers`.
+#[derive(Debug)]
+pub struct SetOutcome {
+    /// The answer to the set.
+    pub reply: GripRecommendationSet,
+    /// The markers of the best candidate, when they are on and one can be held.
+    pub markers: Option<MarkerArray>,
+    /// Lines to log.
+    pub notes: Vec<Note>,
+    /// What goes to the recording once the answer is out.
+    pub recorded: RecordedSet,
+}
+
+/// The messages of one set's answer for the recording, with the set's times.
+#[derive(Debug)]
+pub struct RecordedSet {
+    set: GraspCandidateSet,
+    received: u64,
+    sent: u64,
+    reply: Option<GripRecommendationSet>,
     markers: Option<MarkerArray>,
 }
 
@@ -191,23 +225,31 @@ impl Answerer {
     /// epoch), with the settings in force when it was received.
     pub fn handle(&mut self, candidate: GraspCandidate, received: u64, sent: u64) -> Outcome {
         let mut notes = Vec::new();
-        let (settings, markers_on) = {
+        let (settings, markers_on, rules) = {
             let live = self.shared.lock();
             let version = live.version_at(received);
-            (version.settings, version.config.publish_markers)
+            (
+                version.settings,
+                version.config.publish_markers,
+                version.config.rules(),
+            )
         };
-        let reply = if self.echo {
-            GripRecommendation {
-                header: candidate.header.clone(),
-                candidate_id: candidate.id.clone(),
-                ..GripRecommendation::default()
+        let Answered { reply, spatial } = if self.echo {
+            Answered {
+                reply: GripRecommendation {
+                    header: candidate.header.clone(),
+                    candidate_id: candidate.id.clone(),
+                    ..GripRecommendation::default()
+                },
+                spatial: None,
             }
         } else {
-            answer(&candidate, &settings)
+            answer_one_in_full(&candidate, &settings, &rules)
         };
         match reply.status {
             GripRecommendation::STATUS_OK => {}
             GripRecommendation::STATUS_NO_FORCE_CLOSURE => self.counts.no_closure += 1,
+            GripRecommendation::STATUS_EXCEEDS_GRIPPER => self.counts.exceeds_gripper += 1,
             _ => {
                 self.counts.invalid += 1;
                 notes.push((
@@ -223,7 +265,7 @@ impl Answerer {
         }
         self.counts.answered += 1;
         let markers = (markers_on && !self.echo && reply.status == GripRecommendation::STATUS_OK)
-            .then(|| markers::build(&candidate, &reply));
+            .then(|| markers::build(&candidate, &reply, spatial.as_deref()));
         let recorded = Recorded {
             reply: self.recording.is_on().then(|| reply.clone()),
             markers: markers
@@ -280,6 +322,129 @@ impl Answerer {
         self.recording.check().iter().map(note).collect()
     }
 
+    /// The answer to one set, received at `received` and sent at `sent` (ns since the epoch), by
+    /// the same rules as [`Answerer::handle`]: the settings in force when it was received,
+    /// markers for the best candidate, one log line for the set when some of its candidates or
+    /// the set itself are refused. A large set is shared among the cores.
+    pub fn handle_set(&mut self, set: GraspCandidateSet, received: u64, sent: u64) -> SetOutcome {
+        let mut notes = Vec::new();
+        let (settings, markers_on, rules) = {
+            let live = self.shared.lock();
+            let version = live.version_at(received);
+            (
+                version.settings,
+                version.config.publish_markers,
+                version.config.rules(),
+            )
+        };
+        let reply = if self.echo {
+            echo_set(&set)
+        } else {
+            let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+            answer_set_on(&set, &settings, &rules, threads)
+        };
+        self.count_set(&reply, &mut notes);
+        let best = reply.ranking.first().map(|&i| i as usize);
+        let markers = best.filter(|_| markers_on && !self.echo).and_then(|i| {
+            Some(markers::build(
+                set.candidates.get(i)?,
+                reply.recommendations.get(i)?,
+                None,
+            ))
+        });
+        let recorded = RecordedSet {
+            reply: self.recording.is_on().then(|| reply.clone()),
+            markers: markers
+                .as_ref()
+                .filter(|_| self.recording.records_markers())
+                .cloned(),
+            set,
+            received,
+            sent,
+        };
+        SetOutcome {
+            reply,
+            markers,
+            notes,
+            recorded,
+        }
+    }
+
+    /// Counts a set's answer, and says what was refused in it.
+    fn count_set(&mut self, reply: &GripRecommendationSet, notes: &mut Vec<Note>) {
+        self.counts.sets += 1;
+        if reply.status != GripRecommendationSet::STATUS_OK {
+            self.counts.sets_refused += 1;
+            notes.push((
+                Level::Warn,
+                format!("set {:?}: {}", short_id(&reply.set_id), reply.message),
+            ));
+            return;
+        }
+        let (mut invalid, mut no_closure, mut exceeds) = (0u64, 0u64, 0u64);
+        for r in &reply.recommendations {
+            match r.status {
+                GripRecommendation::STATUS_OK => {}
+                GripRecommendation::STATUS_NO_FORCE_CLOSURE => no_closure += 1,
+                GripRecommendation::STATUS_EXCEEDS_GRIPPER => exceeds += 1,
+                _ => invalid += 1,
+            }
+        }
+        self.counts.answered += reply.recommendations.len() as u64;
+        self.counts.invalid += invalid;
+        self.counts.no_closure += no_closure;
+        self.counts.exceeds_gripper += exceeds;
+        if invalid > 0 {
+            notes.push((
+                Level::Warn,
+                format!(
+                    "set {:?}: {invalid} of {} candidates refused as invalid, e.g. {} ({} refused \
+                     so far)",
+                    short_id(&reply.set_id),
+                    reply.recommendations.len(),
+                    reply
+                        .recommendations
+                        .iter()
+                        .find(|r| r.status == GripRecommendation::STATUS_INVALID_INPUT)
+                        .map_or("", |r| r.message.as_str()),
+                    self.counts.invalid
+                ),
+            ));
+        }
+    }
+
+    /// Records a set's answer that went out at `answered` (ns since the epoch): its markers, the
+    /// set with its own times, and the answer, together. Says so if the recording's writer has
+    /// stopped on a failure.
+    pub fn record_set(&mut self, recorded: RecordedSet, answered: u64) -> Vec<Note> {
+        let RecordedSet {
+            set,
+            received,
+            sent,
+            reply,
+            markers,
+        } = recorded;
+        let entry = |payload, log_time, publish_time| Entry {
+            payload,
+            log_time,
+            publish_time,
+        };
+        let mut entries = Vec::with_capacity(3);
+        if let Some(array) = markers {
+            entries.push(entry(Payload::Markers(Box::new(array)), answered, answered));
+        }
+        entries.push(entry(Payload::CandidateSet(Box::new(set)), received, sent));
+        if let Some(r) = reply {
+            entries.push(entry(
+                Payload::RecommendationSet(Box::new(r)),
+                answered,
+                answered,
+            ));
+        }
+        self.recording.record_all(entries);
+        self.recording.check().iter().map(note).collect()
+    }
+
     /// Counts a message on `topic` that did not decode; the line to log.
     pub fn undecodable(&mut self, topic: &str, error: &dyn std::fmt::Debug) -> Note {
         self.counts.undecodable += 1;
@@ -303,6 +468,16 @@ impl Answerer {
                 c.answered, c.invalid, c.no_closure, c.undecodable
             ),
         )];
+        if c.exceeds_gripper + c.sets > 0 {
+            notes.push((
+                Level::Info,
+                format!(
+                    "{} candidates needed more than max_grip_force; {} sets answered, {} of them \
+                     refused whole",
+                    c.exceeds_gripper, c.sets, c.sets_refused
+                ),
+            ));
+        }
         notes.extend(self.recording.stop().iter().map(note));
         notes
     }
@@ -333,6 +508,7 @@ mod tests {
             candidates: "/grasp_candidates".into(),
             recommendations: "/grip_recommendations".into(),
             markers: Some("/grip_markers".into()),
+            sets: Some(crate::record::SetTopics::default_names()),
         };
         Answerer::new(
             Shared::new(config, settings),
@@ -388,7 +564,8 @@ mod tests {
                 answered: 2,
                 invalid: 1,
                 no_closure: 0,
-                undecodable: 1
+                undecodable: 1,
+                ..Counts::default()
             }
         );
         let last = a.finish();

@@ -1,5 +1,7 @@
 //! The ROS 2 node: subscribes `grasp_candidates`, answers on `grip_recommendations` and
-//! `grip_markers`, with parameters, rosout, remapping and a clean exit on Ctrl-C and SIGTERM.
+//! `grip_markers`; answers sets on `grasp_candidate_sets` → `grip_recommendation_sets` and through
+//! the service `~/recommend` ([`sets`]); with parameters, rosout, remapping and a clean exit on
+//! Ctrl-C and SIGTERM.
 //!
 //! [`run`] reads the settings, opens the [`session::Session`], creates the endpoints and the
 //! parameter services, and then only moves messages: each candidate goes to
@@ -13,12 +15,13 @@ mod params;
 pub mod play;
 pub mod ros_args;
 pub mod session;
+pub mod sets;
 
 use crate::config::Config;
 use crate::msg::{GraspCandidate, GripRecommendation, MarkerArray};
 use crate::record::{now_ns, OnStop, Topics};
 use answer::{Answerer, Note};
-use anyhow::{bail, Context as _};
+use anyhow::Context as _;
 use demo::Demo;
 use futures::{FutureExt, StreamExt};
 use param_services::ParameterServices;
@@ -26,6 +29,7 @@ use params::Shared;
 use ros2_client::{MessageInfo, Node, NodeOptions, Publisher, Subscription};
 use ros_args::RosArgs;
 use session::{create_topic, qos, say, Session, Shutdown, Start};
+use sets::SetEndpoints;
 use std::pin::pin;
 
 /// Default node name.
@@ -45,13 +49,28 @@ pub struct Options {
 fn load_config(ros: &RosArgs, node: &str) -> anyhow::Result<(Config, crate::solver::Settings)> {
     let mut config = Config::load(None, node)?;
     for path in &ros.params_files {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read --params-file {}", path.display()))?;
-        config.merge_yaml(&text, &path.display().to_string(), node)?;
+        let text = crate::config::read_text(path, crate::config::MAX_FILE_BYTES)
+            .map_err(|source| crate::config::ConfigError::Read {
+                path: path.display().to_string(),
+                source,
+            })
+            .context("--params-file")?;
+        let sections = config.merge_yaml(&text, &path.display().to_string(), node)?;
+        if sections.applied.is_empty() {
+            // rcl skips such a file without a word (one file may serve several nodes); a line
+            // saves a user who misspelt the node's name.
+            log::warn!(
+                "--params-file {}: no section applies to node {node} (found: {}); its settings \
+                 are not used",
+                path.display(),
+                sections.found.join(", ")
+            );
+        }
     }
     for (name, value) in &ros.params {
         if crate::config::Parameter::find(name).is_none() {
-            bail!("-p {name}:={value}: grasp_orient has no parameter {name}");
+            let unknown = crate::config::ConfigError::Unknown { name: name.clone() };
+            return Err(anyhow::Error::new(unknown).context(format!("-p {name}:={value}")));
         }
         config
             .set_from_yaml(name, value)
@@ -67,22 +86,27 @@ struct Endpoints {
     candidates: Subscription<GraspCandidate>,
     answers: Publisher<GripRecommendation>,
     markers: Publisher<MarkerArray>,
+    sets: SetEndpoints,
 }
 
 impl Endpoints {
     fn create(session: &mut Session, qos_depth: i64) -> anyhow::Result<Self> {
         let qos = qos(qos_depth);
+        let set_topics = SetEndpoints::topics(session);
         let topics = Topics {
             candidates: session.topic_name("grasp_candidates"),
             recommendations: session.topic_name("grip_recommendations"),
             markers: Some(session.topic_name("grip_markers")),
+            sets: Some(set_topics.clone()),
         };
         let markers_name = topics.markers.clone().unwrap_or_default();
         let node = session.node_mut();
         let candidates = create_topic::<GraspCandidate>(node, &topics.candidates, &qos)?;
         let answers = create_topic::<GripRecommendation>(node, &topics.recommendations, &qos)?;
         let markers = create_topic::<MarkerArray>(node, &markers_name, &qos)?;
+        let sets = SetEndpoints::create(node, &set_topics, qos_depth)?;
         Ok(Self {
+            sets,
             candidates: node
                 .create_subscription(&candidates, None)
                 .context("cannot subscribe")?,
@@ -102,6 +126,7 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
     let start = Start::new(ros_argv)?;
     let name = start.node_name(NODE_NAME);
     let (config, settings) = load_config(&start.ros, &name)?;
+    log::debug!("settings: {config:?}");
     let shared = Shared::new(config.clone(), settings);
     let node_options = shared.declare(
         NodeOptions::new()
@@ -117,7 +142,7 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
         log::Level::Info,
         &format!(
             "node {} on ROS_DOMAIN_ID={}{}: waiting for grasp_orient/msg/GraspCandidate on \
-             {}; answers on {}, markers on {}. \
+             {}; answers on {}, markers on {}; sets on {} -> {} and the service {}/{}. \
              Send a test grasp with: python3 examples/publish_test_grasp.py",
             session.node().fully_qualified_name(),
             session.graph.domain_id,
@@ -125,6 +150,13 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
             topics.candidates,
             topics.recommendations,
             topics.markers.as_deref().unwrap_or_default(),
+            topics.sets.as_ref().map_or("", |s| s.candidates.as_str()),
+            topics
+                .sets
+                .as_ref()
+                .map_or("", |s| s.recommendations.as_str()),
+            session.node().fully_qualified_name(),
+            sets::SERVICE,
         ),
     );
     let (on_stop, mut woken) = wake_on_change(&shared);
@@ -204,6 +236,8 @@ async fn serve(
     demo: Option<&Demo>,
 ) -> anyhow::Result<()> {
     let mut stream = pin!(endpoints.candidates.async_stream());
+    let mut set_stream = pin!(endpoints.sets.candidates.async_stream());
+    let mut calls = pin!(endpoints.sets.service.receive_request_stream());
     let mut demo_done = pin!(async {
         match demo {
             Some(d) => d.finished().await,
@@ -212,7 +246,11 @@ async fn serve(
     }
     .fuse());
     loop {
-        futures::select! {
+        // Biased, in this order: a stop request wins over whatever is queued, then the demo's
+        // end, then a parameter set or a stopped writer (so that it applies to every candidate
+        // still queued), then candidates; each candidate costs microseconds, so a signal is
+        // seen within one.
+        futures::select_biased! {
             signal = shutdown.requested().fuse() => {
                 say(node, log::Level::Info, &format!("{signal}: leaving the ROS graph"));
                 return Ok(());
@@ -225,6 +263,27 @@ async fn serve(
                 }
                 Err(e) => {
                     let note = answerer.undecodable(&endpoints.topics.candidates, &e);
+                    tell(node, vec![note]);
+                }
+            },
+            received = set_stream.select_next_some() => match received {
+                Ok((set, info)) => {
+                    let markers = &endpoints.markers;
+                    sets::answer_topic(node, &endpoints.sets, markers, answerer, set, &info).await;
+                }
+                Err(e) => {
+                    let topic = endpoints.topics.sets.as_ref().map_or("", |s| &s.candidates);
+                    let note = answerer.undecodable(topic, &e);
+                    tell(node, vec![note]);
+                }
+            },
+            call = calls.select_next_some() => match call {
+                Ok((id, request)) => {
+                    let markers = &endpoints.markers;
+                    sets::answer_call(node, &endpoints.sets, markers, answerer, id, request).await;
+                }
+                Err(e) => {
+                    let note = answerer.undecodable(sets::SERVICE, &e);
                     tell(node, vec![note]);
                 }
             },
@@ -247,6 +306,19 @@ async fn answer_one(
         u64::try_from(t.to_nanos()).unwrap_or(received)
     });
     let outcome = answerer.handle(candidate, received, sent);
+    log::debug!(
+        "candidate {:?}: status {}, gravity angle {}, {} {} N",
+        outcome
+            .reply
+            .candidate_id
+            .chars()
+            .take(64)
+            .collect::<String>(),
+        outcome.reply.status,
+        outcome.reply.gravity_angle,
+        outcome.reply.objective,
+        outcome.reply.gripping_power
+    );
     tell(node, outcome.notes);
     if let Err(e) = endpoints.answers.async_publish(outcome.reply).await {
         say(

@@ -17,8 +17,60 @@ pub struct RosArgs {
     pub params: Vec<(String, String)>,
     /// `--params-file FILE`, in order.
     pub params_files: Vec<PathBuf>,
-    /// `--log-level LEVEL` (or `name:=LEVEL`).
-    pub log_level: Option<String>,
+    /// `--log-level LEVEL` (logger `None`: the default level) and `--log-level NAME:=LEVEL`
+    /// (one logger), in order.
+    pub log_levels: Vec<(Option<String>, LogLevel)>,
+}
+
+/// A ROS log level, as `--log-level` takes it (any case).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LogLevel {
+    /// `debug`.
+    Debug,
+    /// `info`.
+    Info,
+    /// `warn` (or `warning`).
+    Warn,
+    /// `error`.
+    Error,
+    /// `fatal`: only fatal messages, which grasp_orient never logs (errors that end a command
+    /// are printed by the command itself).
+    Fatal,
+    /// `unset`: the logger follows the default level.
+    Unset,
+}
+
+impl LogLevel {
+    /// The level names rcl accepts.
+    pub const NAMES: [&'static str; 6] = ["debug", "info", "warn", "error", "fatal", "unset"];
+
+    /// The Rust log filter it stands for; `None` for `unset`.
+    pub fn filter(self) -> Option<log::LevelFilter> {
+        Some(match self {
+            LogLevel::Debug => log::LevelFilter::Debug,
+            LogLevel::Info => log::LevelFilter::Info,
+            LogLevel::Warn => log::LevelFilter::Warn,
+            LogLevel::Error => log::LevelFilter::Error,
+            LogLevel::Fatal => log::LevelFilter::Off,
+            LogLevel::Unset => return None,
+        })
+    }
+}
+
+impl std::str::FromStr for LogLevel {
+    type Err = RosArgsError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Ok(match s.to_ascii_lowercase().as_str() {
+            "debug" => LogLevel::Debug,
+            "info" => LogLevel::Info,
+            "warn" | "warning" => LogLevel::Warn,
+            "error" => LogLevel::Error,
+            "fatal" => LogLevel::Fatal,
+            "unset" => LogLevel::Unset,
+            _ => return Err(RosArgsError::LogLevel(s.to_string())),
+        })
+    }
 }
 
 /// A malformed ROS argument.
@@ -38,6 +90,9 @@ pub enum RosArgsError {
         /// What was given.
         value: String,
     },
+    /// A log level rcl does not know.
+    #[error("--ros-args: --log-level {0:?} is not one of debug, info, warn, error, fatal, unset (or NAME:=LEVEL)")]
+    LogLevel(String),
     /// A namespace that is not absolute.
     #[error("--ros-args: namespace {0:?} must start with '/'")]
     RelativeNamespace(String),
@@ -90,7 +145,11 @@ impl RosArgs {
                 "--params-file" => out.params_files.push(value(&mut it, arg)?.into()),
                 "--log-level" => {
                     let v = value(&mut it, arg)?;
-                    out.log_level = Some(v.rsplit_once(":=").map_or(v.clone(), |(_, l)| l.into()));
+                    out.log_levels.push(match v.split_once(":=") {
+                        // ROS logger names use dots where Rust's module paths use `::`.
+                        Some((name, level)) => (Some(name.replace('.', "::")), level.parse()?),
+                        None => (None, v.parse()?),
+                    });
                 }
                 "--enclave" | "-e" | "--log-config-file" | "--log-file-name" => {
                     value(&mut it, arg)?;
@@ -156,13 +215,40 @@ mod tests {
         assert_eq!(a.namespace(), "/robot1");
         assert_eq!(a.params, vec![("objective".into(), "norm1".into())]);
         assert_eq!(a.params_files, vec![PathBuf::from("/tmp/p.yaml")]);
-        assert_eq!(a.log_level.as_deref(), Some("debug"));
+        assert_eq!(a.log_levels, vec![(None, LogLevel::Debug)]);
         assert_eq!(a.topic("grasp_candidates", "gripper"), "/cands");
         assert_eq!(
             a.topic("grip_recommendations", "gripper"),
             "/robot1/grip_recommendations"
         );
         assert_eq!(a.topic("~/status", "gripper"), "/robot1/gripper/status");
+    }
+
+    #[test]
+    fn every_ros_log_level_and_one_logger_at_a_time() {
+        for name in LogLevel::NAMES {
+            let a = RosArgs::parse(&args(&format!("--log-level {name}"))).expect("a level");
+            assert_eq!(a.log_levels.len(), 1, "{name}");
+        }
+        let a = RosArgs::parse(&args(
+            "--log-level FATAL --log-level grasp_orient.node:=debug --log-level rustdds:=warn",
+        ))
+        .expect("valid");
+        assert_eq!(
+            a.log_levels,
+            vec![
+                (None, LogLevel::Fatal),
+                (Some("grasp_orient::node".into()), LogLevel::Debug),
+                (Some("rustdds".into()), LogLevel::Warn),
+            ]
+        );
+        assert_eq!(LogLevel::Fatal.filter(), Some(log::LevelFilter::Off));
+        assert_eq!(LogLevel::Unset.filter(), None);
+        assert!(matches!(
+            RosArgs::parse(&args("--log-level loud")),
+            Err(RosArgsError::LogLevel(_))
+        ));
+        assert!(RosArgs::parse(&args("--log-level grasp_orient:=loud")).is_err());
     }
 
     #[test]

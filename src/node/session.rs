@@ -4,7 +4,7 @@
 //! `ROS_DOMAIN_ID` nor `--ros-args`; both are handled here.
 //!
 //! ```text
-//! Start::new(argv)   signals caught first, --ros-args read, --log-level applied
+//! Start::new(argv)   signals caught first, --ros-args read
 //!   .open(..)        context on ROS_DOMAIN_ID, the node, its spinner        -> Session
 //! session.run(..)    the command's work, with the node and the shutdown request
 //! session.close()    node (stops the spinner), the spinner task, last the context
@@ -95,16 +95,11 @@ pub struct Start {
 
 impl Start {
     /// Catches SIGINT and SIGTERM first (a signal during start-up must still end the command
-    /// cleanly), then reads the ROS arguments and applies `--log-level`.
+    /// cleanly), then reads the ROS arguments (`--log-level` is the binary's: it sets up the
+    /// logger before any command runs).
     pub fn new(ros_argv: &[String]) -> anyhow::Result<Self> {
         let signals = Signals::new([Signal::Int, Signal::Term]).context("cannot catch signals")?;
         let ros = RosArgs::parse(ros_argv)?;
-        if let Some(level) = &ros.log_level {
-            let filter = level
-                .parse()
-                .with_context(|| format!("--log-level {level}"))?;
-            log::set_max_level(filter);
-        }
         Ok(Self {
             shutdown: Shutdown(Some(signals)),
             ros,

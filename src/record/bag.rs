@@ -7,9 +7,11 @@
 //! checks every length against the file before anything is allocated; chunks are decompressed
 //! and decoded on all cores.
 
+use super::channels::{Carried, Channels, RecordedFields};
 use super::scan::{self, Damage, Parsed, Table};
-use crate::msg::definitions::split_type_name;
-use crate::msg::{cdr, GraspCandidate, GripRecommendation, RosMessage};
+use crate::msg::{
+    cdr, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
+};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -49,6 +51,14 @@ pub enum BagError {
         path: PathBuf,
         /// The cause.
         source: mcap::McapError,
+    },
+    /// A channel carries one of our types in a version that is not a prefix of ours.
+    #[error("{path}: {why}")]
+    Incompatible {
+        /// The file.
+        path: PathBuf,
+        /// The channel, and the first field that differs.
+        why: String,
     },
 }
 
@@ -101,6 +111,15 @@ pub struct Bag {
     pub candidates: Vec<Recorded<GraspCandidate>>,
     /// Every recommendation.
     pub recommendations: Vec<Recorded<GripRecommendation>>,
+    /// Every candidate set.
+    pub candidate_sets: Vec<Recorded<GraspCandidateSet>>,
+    /// Every answer to a set.
+    pub recommendation_sets: Vec<Recorded<GripRecommendationSet>>,
+    /// Which fields of our types the recording has (recordings made before a type grew lack its
+    /// trailing fields, which decode at their defaults).
+    pub fields: RecordedFields,
+    /// Channels of our types in a version that is not a prefix of ours, with why.
+    pub incompatible: Vec<String>,
     /// Messages on other topics, left alone.
     pub other: u64,
     /// Messages of our types that did not decode, with why (first few).
@@ -117,6 +136,14 @@ impl Bag {
     fn append(&mut self, next: Bag) {
         self.candidates.extend(next.candidates);
         self.recommendations.extend(next.recommendations);
+        self.candidate_sets.extend(next.candidate_sets);
+        self.recommendation_sets.extend(next.recommendation_sets);
+        self.fields.merge(&next.fields);
+        for why in next.incompatible {
+            if !self.incompatible.contains(&why) {
+                self.incompatible.push(why);
+            }
+        }
         self.other += next.other;
         self.undecodable_count += next.undecodable_count;
         for example in next.undecodable {
@@ -129,6 +156,8 @@ impl Bag {
     fn messages(&self) -> u64 {
         self.candidates.len() as u64
             + self.recommendations.len() as u64
+            + self.candidate_sets.len() as u64
+            + self.recommendation_sets.len() as u64
             + self.other
             + self.undecodable_count
     }
@@ -153,10 +182,23 @@ pub fn read_file(path: &Path) -> Result<Vec<u8>, BagError> {
 /// damage, and a file that is not whole, is an error naming the byte offset.
 pub fn read(path: &Path) -> Result<Bag, BagError> {
     let bytes = read_file(path)?;
-    read_bytes(&bytes).map_err(|damage| BagError::Damaged {
+    let bag = read_bytes(&bytes).map_err(|damage| BagError::Damaged {
         path: path.to_path_buf(),
         damage,
-    })
+    })?;
+    compatible(bag, path)
+}
+
+/// The bag, or the error naming its first channel of ours in a version that is not a prefix of
+/// ours.
+fn compatible(bag: Bag, path: &Path) -> Result<Bag, BagError> {
+    match bag.incompatible.first() {
+        Some(why) => Err(BagError::Incompatible {
+            path: path.to_path_buf(),
+            why: why.clone(),
+        }),
+        None => Ok(bag),
+    }
 }
 
 /// [`read`] of a file's bytes.
@@ -276,13 +318,16 @@ fn decode_in_parallel(scan: &scan::Scan<'_>, table: &Table) -> Result<Option<Bag
 /// Decodes a run of data-section records in order, growing `table` with the definitions met.
 fn decode_share(items: &[scan::Item<'_>], mut table: Table) -> Result<Bag, Stop> {
     let mut bag = Bag::default();
+    let mut channels = Channels::default();
     for item in items {
         let parsed = item.parsed.as_ref().map_err(|d| Stop::Damage(d.clone()))?;
         match parsed {
             Parsed::Schema(s) => table.add_schema(s, item.offset)?,
             Parsed::Channel(c) => table.add_channel(c, item.offset)?,
-            Parsed::Message(m) => take(&mut bag, &table, m)?,
-            Parsed::Chunk(chunk) => decode_chunk(&mut bag, &mut table, chunk, item.offset)?,
+            Parsed::Message(m) => take(&mut bag, &table, &mut channels, m)?,
+            Parsed::Chunk(chunk) => {
+                decode_chunk(&mut bag, &mut table, &mut channels, chunk, item.offset)?
+            }
             Parsed::Metadata { name, entries } => {
                 bag.metadata.push((name.clone(), entries.clone()))
             }
@@ -296,6 +341,7 @@ fn decode_share(items: &[scan::Item<'_>], mut table: Table) -> Result<Bag, Stop>
 fn decode_chunk(
     bag: &mut Bag,
     table: &mut Table,
+    channels: &mut Channels,
     chunk: &scan::Chunk<'_>,
     offset: u64,
 ) -> Result<(), Stop> {
@@ -308,7 +354,7 @@ fn decode_chunk(
         match record? {
             (inner, Parsed::Schema(s)) => table.add_schema(&s, inner)?,
             (inner, Parsed::Channel(c)) => table.add_channel(&c, inner)?,
-            (_, Parsed::Message(m)) => take(bag, table, &m)?,
+            (_, Parsed::Message(m)) => take(bag, table, channels, &m)?,
             _ => {}
         }
     }
@@ -344,43 +390,30 @@ pub(crate) fn chunk_records<'a>(
     })
 }
 
-/// What a channel carries, as far as grasp_orient reads it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Carries {
-    /// `grasp_orient/msg/GraspCandidate` as CDR.
-    Candidates,
-    /// `grasp_orient/msg/GripRecommendation` as CDR.
-    Recommendations,
-    /// Anything else.
-    Other,
-}
-
-/// What the channel `channel_id` carries; `None` when no record defines it. Channels are picked
+/// Decodes one message into the bag's lists, or notes why it did not decode. Channels are picked
 /// by schema name alone (with or without the `/msg/`), never by the schema text, so recordings
-/// written with any form of the definitions read alike.
-pub(crate) fn carries(table: &Table, channel_id: u16) -> Option<Carries> {
-    let channel = table.channels.get(&channel_id)?;
-    let Some(schema) = table.schema_of(channel) else {
-        return Some(Carries::Other);
-    };
-    let name = split_type_name(&schema.name);
-    Some(if channel.message_encoding != "cdr" {
-        Carries::Other
-    } else if name == Some((GraspCandidate::PACKAGE, GraspCandidate::NAME)) {
-        Carries::Candidates
-    } else if name == Some((GripRecommendation::PACKAGE, GripRecommendation::NAME)) {
-        Carries::Recommendations
-    } else {
-        Carries::Other
-    })
-}
-
-/// Decodes one message into the bag's lists, or notes why it did not decode.
-fn take(out: &mut Bag, table: &Table, message: &scan::Message<'_>) -> Result<(), Stop> {
-    let Some(kind) = carries(table, message.channel_id) else {
+/// written with any form of the definitions read alike; the schema text only says which fields
+/// the recorded version of the type has ([`super::channels`]).
+fn take(
+    out: &mut Bag,
+    table: &Table,
+    channels: &mut Channels,
+    message: &scan::Message<'_>,
+) -> Result<(), Stop> {
+    let Some(reader) = channels.reader(table, message.channel_id, &mut out.fields) else {
         return Err(Stop::Unresolved);
     };
     let (log_time, publish_time) = (message.log_time, message.publish_time);
+    let reader = match reader {
+        Ok(reader) => reader.clone(),
+        Err(why) => {
+            if !out.incompatible.contains(why) {
+                out.incompatible.push(why.clone());
+            }
+            out.undecodable_count += 1;
+            return Ok(());
+        }
+    };
     let failed = |out: &mut Bag, e: cdr::CdrError| {
         out.undecodable_count += 1;
         keep_example(&mut out.undecodable, || {
@@ -391,24 +424,24 @@ fn take(out: &mut Bag, table: &Table, message: &scan::Message<'_>) -> Result<(),
             format!("{topic} #{} (log time {log_time}): {e}", message.sequence)
         });
     };
-    match kind {
-        Carries::Candidates => match cdr::decode::<GraspCandidate>(message.data) {
-            Ok(m) => out.candidates.push(Recorded {
-                message: m,
-                log_time,
-                publish_time,
-            }),
-            Err(e) => failed(out, e),
-        },
-        Carries::Recommendations => match cdr::decode::<GripRecommendation>(message.data) {
-            Ok(m) => out.recommendations.push(Recorded {
-                message: m,
-                log_time,
-                publish_time,
-            }),
-            Err(e) => failed(out, e),
-        },
-        Carries::Other => out.other += 1,
+    macro_rules! push {
+        ($list:ident) => {
+            match reader.decode(message.data) {
+                Ok(m) => out.$list.push(Recorded {
+                    message: m,
+                    log_time,
+                    publish_time,
+                }),
+                Err(e) => failed(out, e),
+            }
+        };
+    }
+    match reader.carried {
+        Carried::Candidate => push!(candidates),
+        Carried::Recommendation => push!(recommendations),
+        Carried::CandidateSet => push!(candidate_sets),
+        Carried::RecommendationSet => push!(recommendation_sets),
+        Carried::Other => out.other += 1,
     }
     Ok(())
 }
@@ -423,6 +456,7 @@ mod tests {
             candidates: "/grasp_candidates".into(),
             recommendations: "/grip_recommendations".into(),
             markers: None,
+            sets: Some(crate::record::SetTopics::default_names()),
         }
     }
 
@@ -475,6 +509,60 @@ mod tests {
         let text = e.to_string();
         assert!(text.contains("cut.mcap is cut short at byte "), "{text}");
         assert!(text.contains("grasp_orient recover"), "{text}");
+    }
+
+    /// A whole, valid MCAP file of about 2 kB whose one zstd chunk holds 64 MiB of zeros.
+    pub(crate) fn zstd_bomb() -> Vec<u8> {
+        use std::io::Write;
+        let record = |opcode: u8, body: &[u8]| {
+            let mut out = vec![opcode];
+            out.extend_from_slice(&(body.len() as u64).to_le_bytes());
+            out.extend_from_slice(body);
+            out
+        };
+        let string = |s: &str| {
+            let mut out = (s.len() as u32).to_le_bytes().to_vec();
+            out.extend_from_slice(s.as_bytes());
+            out
+        };
+        let size = 64u64 << 20;
+        let mut zstd = zstd::stream::write::Encoder::new(Vec::new(), 3).expect("an encoder");
+        for _ in 0..size >> 16 {
+            zstd.write_all(&[0; 1 << 16]).expect("compress");
+        }
+        let packed = zstd.finish().expect("compressed");
+        let mut chunk = [0u8; 16].to_vec();
+        chunk.extend_from_slice(&size.to_le_bytes());
+        chunk.extend_from_slice(&0u32.to_le_bytes());
+        chunk.extend(string("zstd"));
+        chunk.extend_from_slice(&(packed.len() as u64).to_le_bytes());
+        chunk.extend(packed);
+        let mut bytes = scan::MAGIC.to_vec();
+        bytes.extend(record(
+            scan::op::HEADER,
+            &[string("ros2"), string("")].concat(),
+        ));
+        bytes.extend(record(scan::op::CHUNK, &chunk));
+        bytes.extend(record(scan::op::DATA_END, &0u32.to_le_bytes()));
+        bytes.extend(record(scan::op::FOOTER, &[0; 20]));
+        bytes.extend_from_slice(scan::MAGIC);
+        bytes
+    }
+
+    #[test]
+    fn a_decompression_bomb_is_damage_never_decompressed() {
+        let bomb = zstd_bomb();
+        assert!(bomb.len() < 8 << 10, "{} bytes", bomb.len());
+        let d = read_bytes(&bomb).expect_err("refused");
+        assert_eq!(d.offset, 8 + 9 + 12, "the chunk's offset: {d}");
+        assert!(
+            d.what.contains("declares 67108864 bytes") && d.what.contains("1024 times"),
+            "{d}"
+        );
+        let (got, _) =
+            super::super::recover::recover_bytes(&bomb, std::io::Cursor::new(Vec::new()))
+                .expect("recovered");
+        assert_eq!((got.kept_total(), got.damage_count), (0, 1), "{got:?}");
     }
 
     #[test]

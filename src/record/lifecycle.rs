@@ -46,14 +46,24 @@ impl fmt::Display for Change {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Change::Started(path) => write!(f, "recording to {}", path.display()),
-            Change::Closed { path, written } => write!(
-                f,
-                "recording {} closed: {} candidates, {} recommendations, {} marker arrays",
-                path.display(),
-                written.candidates,
-                written.recommendations,
-                written.markers
-            ),
+            Change::Closed { path, written } => {
+                write!(
+                    f,
+                    "recording {} closed: {} candidates, {} recommendations, {} marker arrays",
+                    path.display(),
+                    written.candidates,
+                    written.recommendations,
+                    written.markers
+                )?;
+                if written.candidate_sets + written.recommendation_sets > 0 {
+                    write!(
+                        f,
+                        ", {} candidate sets, {} set answers",
+                        written.candidate_sets, written.recommendation_sets
+                    )?;
+                }
+                Ok(())
+            }
             Change::Failed(e) => write!(
                 f,
                 "{e}. Recording is off; set record to true to start a new file"
@@ -202,6 +212,7 @@ mod tests {
             candidates: "/grasp_candidates".into(),
             recommendations: "/grip_recommendations".into(),
             markers: Some("/grip_markers".into()),
+            sets: None,
         }
     }
 

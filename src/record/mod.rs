@@ -19,6 +19,7 @@
 //! a node run as its `record` parameters say.
 
 pub mod bag;
+pub mod channels;
 pub mod lifecycle;
 pub mod output;
 pub mod recover;
@@ -26,7 +27,10 @@ pub mod scan;
 pub mod settings;
 mod sink;
 
-use crate::msg::{cdr, definitions, GraspCandidate, GripRecommendation, MarkerArray, RosMessage};
+use crate::msg::{
+    cdr, definitions, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
+    MarkerArray, RosMessage,
+};
 use settings::{SettingsRecord, METADATA_NAME};
 use std::collections::BTreeMap;
 use std::fs::{File, OpenOptions};
@@ -133,6 +137,10 @@ pub enum Payload {
     Recommendation(Box<GripRecommendation>),
     /// On the markers topic.
     Markers(Box<MarkerArray>),
+    /// On the candidate sets topic.
+    CandidateSet(Box<GraspCandidateSet>),
+    /// On the set answers topic.
+    RecommendationSet(Box<GripRecommendationSet>),
     /// The settings in force from a time on, written as a metadata record (the entry's times
     /// are not used).
     Settings(Box<SettingsRecord>),
@@ -149,7 +157,7 @@ pub struct Entry {
     pub publish_time: u64,
 }
 
-/// Topic names of the three channels.
+/// Topic names of the channels.
 #[derive(Debug, Clone)]
 pub struct Topics {
     /// Candidates, e.g. `/grasp_candidates`.
@@ -158,6 +166,27 @@ pub struct Topics {
     pub recommendations: String,
     /// Markers; `None` leaves them out.
     pub markers: Option<String>,
+    /// Candidate sets and their answers; `None` leaves them out.
+    pub sets: Option<SetTopics>,
+}
+
+/// Topic names of the two set channels.
+#[derive(Debug, Clone)]
+pub struct SetTopics {
+    /// Candidate sets, e.g. `/grasp_candidate_sets`.
+    pub candidates: String,
+    /// Their answers, e.g. `/grip_recommendation_sets`.
+    pub recommendations: String,
+}
+
+impl SetTopics {
+    /// The node's default names, `/grasp_candidate_sets` and `/grip_recommendation_sets`.
+    pub fn default_names() -> Self {
+        Self {
+            candidates: "/grasp_candidate_sets".into(),
+            recommendations: "/grip_recommendation_sets".into(),
+        }
+    }
 }
 
 /// Messages written per channel, and settings records.
@@ -169,6 +198,10 @@ pub struct Written {
     pub recommendations: u64,
     /// Marker arrays.
     pub markers: u64,
+    /// Candidate sets.
+    pub candidate_sets: u64,
+    /// Answers to sets.
+    pub recommendation_sets: u64,
     /// Settings metadata records.
     pub settings: u64,
 }
@@ -224,16 +257,23 @@ pub fn qos_yaml(depth: i64) -> String {
     )
 }
 
-/// An MCAP writer with the three channels of a grasp_orient recording. It never truncates a
-/// file: [`BagWriter::create`] makes a new one, [`BagWriter::on_file`] takes an open one (a
-/// temporary file beside the destination). When a write fails, the file is cut back to its
-/// last complete flush and closed there ([`RecordError::Stopped`]).
+/// Channels of a recording: candidates, recommendations, markers, candidate sets, set answers.
+const CHANNELS: usize = 5;
+
+/// An MCAP writer with the channels of a grasp_orient recording. It never truncates a file:
+/// [`BagWriter::create`] makes a new one, [`BagWriter::on_file`] takes an open one (a temporary
+/// file beside the destination). When a write fails, the file is cut back to its last complete
+/// flush and closed there ([`RecordError::Stopped`]).
 pub struct BagWriter {
     path: PathBuf,
     writer: Option<mcap::Writer<BufWriter<sink::Sink>>>,
     sink: Arc<sink::State>,
-    channels: [Option<u16>; 3],
-    sequence: [u32; 3],
+    /// The set channels' topics, until their channels are made.
+    sets: Option<SetTopics>,
+    /// Channel metadata (`offered_qos_profiles`).
+    metadata: BTreeMap<String, String>,
+    channels: [Option<u16>; CHANNELS],
+    sequence: [u32; CHANNELS],
     written: Written,
     /// Where the last complete flush ended, and what the file held then.
     committed: (u64, Written),
@@ -332,6 +372,10 @@ impl BagWriter {
                 Some(t) => Some(channel(t, MarkerArray::TYPE_NAME)?),
                 None => None,
             },
+            // The set channels are made by their first message, as rosbag2 adds a topic when it
+            // first sees a publisher: a run without sets records no set channels.
+            None,
+            None,
         ];
         // The file on disk is at once a readable start of a recording.
         writer.flush().map_err(mcap_error)?;
@@ -340,8 +384,10 @@ impl BagWriter {
             committed: (state.position(), Written::default()),
             writer: Some(writer),
             sink: state,
+            sets: topics.sets.clone(),
+            metadata,
             channels,
-            sequence: [0; 3],
+            sequence: [0; CHANNELS],
             written: Written::default(),
             definitions: defs,
         })
@@ -387,15 +433,20 @@ impl BagWriter {
             .ok_or(RecordError::AlreadyStopped { path })
     }
 
-    /// Writes one message (markers are dropped when the recording has no markers channel), or
-    /// a settings record (after which the file is flushed).
+    /// Writes one message (markers and sets are dropped when the recording has no channel for
+    /// them), or a settings record (after which the file is flushed).
     pub fn write(&mut self, entry: &Entry) -> Result<(), RecordError> {
         let (index, bytes) = match &entry.payload {
             Payload::Candidate(m) => (0, cdr::encode(m.as_ref())?),
             Payload::Recommendation(m) => (1, cdr::encode(m.as_ref())?),
             Payload::Markers(m) => (2, cdr::encode(m.as_ref())?),
+            Payload::CandidateSet(m) => (3, cdr::encode(m.as_ref())?),
+            Payload::RecommendationSet(m) => (4, cdr::encode(m.as_ref())?),
             Payload::Settings(s) => return self.write_settings(s),
         };
+        if index >= 3 && self.channels[index].is_none() {
+            self.add_set_channel(index)?;
+        }
         let Some(channel_id) = self.channels[index] else {
             return Ok(());
         };
@@ -412,8 +463,54 @@ impl BagWriter {
         match index {
             0 => self.written.candidates += 1,
             1 => self.written.recommendations += 1,
-            _ => self.written.markers += 1,
+            2 => self.written.markers += 1,
+            3 => self.written.candidate_sets += 1,
+            _ => self.written.recommendation_sets += 1,
         }
+        Ok(())
+    }
+
+    /// Makes set channel `index` (3: candidate sets, 4: their answers), if the recording has
+    /// sets; it joins the definitions a file closed after a failure is summarised with.
+    fn add_set_channel(&mut self, index: usize) -> Result<(), RecordError> {
+        let Some(topics) = &self.sets else {
+            return Ok(());
+        };
+        let (topic, type_name) = if index == 3 {
+            (topics.candidates.clone(), GraspCandidateSet::TYPE_NAME)
+        } else {
+            (
+                topics.recommendations.clone(),
+                GripRecommendationSet::TYPE_NAME,
+            )
+        };
+        let text = definitions::full_text(type_name).ok_or(RecordError::UnknownType(type_name))?;
+        let metadata = self.metadata.clone();
+        let schema = match self
+            .writer()?
+            .add_schema(type_name, "ros2msg", text.as_bytes())
+        {
+            Ok(id) => id,
+            Err(e) => return Err(self.mcap_failed(e)),
+        };
+        let id = match self.writer()?.add_channel(schema, &topic, "cdr", &metadata) {
+            Ok(id) => id,
+            Err(e) => return Err(self.mcap_failed(e)),
+        };
+        self.definitions.schemas.push(sink::SchemaDef {
+            id: schema,
+            name: type_name.to_string(),
+            encoding: "ros2msg".to_string(),
+            data: text.into_bytes(),
+        });
+        self.definitions.channels.push(sink::ChannelDef {
+            id,
+            schema_id: schema,
+            topic,
+            encoding: "cdr".to_string(),
+            metadata,
+        });
+        self.channels[index] = Some(id);
         Ok(())
     }
 
@@ -668,6 +765,7 @@ mod tests {
             candidates: "/grasp_candidates".into(),
             recommendations: "/grip_recommendations".into(),
             markers: None,
+            sets: None,
         }
     }
 

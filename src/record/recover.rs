@@ -450,6 +450,7 @@ mod tests {
             candidates: "/grasp_candidates".into(),
             recommendations: "/grip_recommendations".into(),
             markers: None,
+            sets: None,
         };
         let mut w = BagWriter::create(&path, &topics, 100).expect("create");
         let settings = SettingsRecord {

@@ -8,7 +8,9 @@
 //! - [`decompress`] unpacks a chunk into at most the size it declares (memory grows only with
 //!   the bytes the decompressor actually produces) and checks its size and CRC.
 //! - [`scan`] walks a whole file: the data section, the summary, the footer and the end magic,
-//!   and checks the data section's and the summary's CRCs.
+//!   and checks the data section's and the summary's CRCs. The chunks of a file may declare at
+//!   most [`decompressed_limit`] bytes in all: a few kilobytes of zstd can expand to gigabytes,
+//!   and a chunk that would take the file beyond the limit is damage, never decompressed.
 //!
 //! Damage comes back as a [`Damage`]: the byte offset, what is wrong there, and whether the
 //! file merely ends early (a recorder that was killed or is still writing). The MCAP records and
@@ -21,6 +23,15 @@ use std::io::Read;
 
 /// The 8 bytes an MCAP file starts and ends with.
 pub const MAGIC: &[u8; 8] = b"\x89MCAP0\r\n";
+
+/// The most bytes of records the chunks of a file of `file_len` bytes may declare in all: 1024
+/// times its size, and at least 1 MiB. The recordings of `grasp_orient` (lz4, whose ratio cannot
+/// exceed 255) and of `recover` (zstd, a few times on messages) stay far below it; what lies
+/// beyond it is a decompression bomb. So reading a file holds at most this much decompressed at a
+/// time per thread, and decodes at most this much in all.
+pub fn decompressed_limit(file_len: u64) -> u64 {
+    file_len.saturating_mul(1024).max(1 << 20)
+}
 
 /// Record opcodes.
 pub mod op {
@@ -696,6 +707,7 @@ pub fn scan(bytes: &[u8]) -> Result<Scan<'_>, Damage> {
 fn walk<'a>(bytes: &'a [u8], records: &mut Records<'a>, out: &mut Scan<'a>) {
     let mut data_end: Option<(u64, u32)> = None;
     let mut summary = Vec::new();
+    let mut declared = Declared::new(bytes.len() as u64);
     loop {
         let record = match records.next() {
             None => {
@@ -733,8 +745,49 @@ fn walk<'a>(bytes: &'a [u8], records: &mut Records<'a>, out: &mut Scan<'a>) {
         out.items.push(Item {
             offset: record.offset,
             opcode: record.opcode,
-            parsed,
+            parsed: declared.admit(record.offset, parsed),
         });
+    }
+}
+
+/// The decompressed bytes the chunks of the data section declare, against
+/// [`decompressed_limit`].
+struct Declared {
+    total: u64,
+    limit: u64,
+}
+
+impl Declared {
+    fn new(file_len: u64) -> Self {
+        Self {
+            total: 0,
+            limit: decompressed_limit(file_len),
+        }
+    }
+
+    /// `parsed`, or damage for a chunk that would take the total beyond the limit (which then
+    /// does not count: `recover` drops it and goes on).
+    fn admit<'a>(
+        &mut self,
+        offset: u64,
+        parsed: Result<Parsed<'a>, Damage>,
+    ) -> Result<Parsed<'a>, Damage> {
+        let Ok(Parsed::Chunk(chunk)) = &parsed else {
+            return parsed;
+        };
+        let total = self.total.saturating_add(chunk.uncompressed_size);
+        if total > self.limit {
+            return Err(Damage::at(
+                offset,
+                format!(
+                    "chunk record: declares {} bytes of records, which takes the file's chunks \
+                     beyond {} bytes, 1024 times the file's size: refused undecompressed",
+                    chunk.uncompressed_size, self.limit
+                ),
+            ));
+        }
+        self.total = total;
+        parsed
     }
 }
 
@@ -977,6 +1030,42 @@ mod tests {
         assert!(decompress(&chunk)
             .expect_err("bad crc")
             .contains("CRC mismatch"));
+    }
+
+    #[test]
+    fn chunks_may_not_declare_more_than_the_limit_in_all() {
+        let limit = decompressed_limit(0);
+        assert_eq!(limit, 1 << 20);
+        assert_eq!(decompressed_limit(1 << 20), 1 << 30);
+        assert_eq!(decompressed_limit(u64::MAX), u64::MAX);
+        let chunk = |size: u64| {
+            let mut body = Vec::new();
+            body.extend_from_slice(&[0; 16]);
+            body.extend_from_slice(&size.to_le_bytes());
+            body.extend_from_slice(&0u32.to_le_bytes());
+            body.extend_from_slice(&0u32.to_le_bytes());
+            body.extend_from_slice(&0u64.to_le_bytes());
+            record(op::CHUNK, &body)
+        };
+        let mut bytes = MAGIC.to_vec();
+        bytes.extend(record(op::HEADER, &[0; 8]));
+        let first = bytes.len() as u64;
+        bytes.extend(chunk(limit - 10));
+        let second = bytes.len() as u64;
+        bytes.extend(chunk(11));
+        bytes.extend(chunk(10));
+        bytes.extend(chunk(u64::MAX));
+        let scan = scan(&bytes).expect("a header");
+        let parsed: Vec<_> = scan.items.iter().map(|i| i.parsed.is_ok()).collect();
+        // The second would take the total one byte beyond the limit; the third fits exactly.
+        assert_eq!(parsed, [true, false, true, false]);
+        assert_eq!(scan.items[0].offset, first);
+        let d = scan.record_damage().expect("damage");
+        assert_eq!(d.offset, second);
+        assert!(
+            d.what.contains("declares 11 bytes") && d.what.contains("1024 times"),
+            "{d}"
+        );
     }
 
     #[test]

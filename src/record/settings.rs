@@ -96,7 +96,7 @@ impl SettingsRecord {
         let mut config = Config::default();
         config
             .merge_yaml(get("parameters")?, "the recorded parameters", &node)
-            .and_then(|()| config.solver_settings().map(|_| ()))
+            .and_then(|_sections| config.solver_settings().map(|_| ()))
             .map_err(|source| SettingsError::Parameters {
                 node: node.clone(),
                 since,

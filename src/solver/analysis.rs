@@ -10,6 +10,7 @@
 //!
 //! So the minimiser is one of a short list of closed-form angles, each of which is evaluated.
 
+use super::finger;
 use super::frame::GraspFrame;
 use super::paper::{self, FORCE_SCALE};
 use super::sinusoid::{next_periodic, wrap_angle, Angle, QuadForm, Sinusoid};
@@ -24,6 +25,8 @@ const SAME_ANGLE: f64 = 1e-9;
 /// Objective values closer than this, relative to themselves or to the weight, tie; the smaller
 /// wrist rotation wins.
 const TIE: f64 = 1e-12;
+/// Range bounds beyond this magnitude (rad) are reduced by whole turns before use.
+const FAR_BOUND: f64 = 1e3;
 /// Bounds larger than this many times the scale are ignored in tie-breaks of the envelope.
 const ENVELOPE_TIE: f64 = 1e-12;
 
@@ -372,14 +375,17 @@ impl Analysis {
             }
         };
         let scale = self.frame.weight * FORCE_SCALE;
-        let forces: [f64; 4] = std::array::from_fn(|i| {
-            scale * (self.particular[i].value(&at) + alpha * self.internal[i])
-        });
-        let power = match self.objective {
-            Objective::Norm2 => forces.iter().map(|v| v * v).sum::<f64>().sqrt(),
-            Objective::Norm1 => forces.iter().map(|v| v.abs()).sum(),
-            Objective::InternalForce => scale * alpha,
-        };
+        // In units of the weight first, then in newtons: squares of newtons would underflow
+        // for a weight near the smallest double.
+        let unit_forces: [f64; 4] =
+            std::array::from_fn(|i| self.particular[i].value(&at) + alpha * self.internal[i]);
+        let forces = unit_forces.map(|v| scale * v);
+        let power = scale
+            * match self.objective {
+                Objective::Norm2 => unit_forces.iter().map(|v| v * v).sum::<f64>().sqrt(),
+                Objective::Norm1 => unit_forces.iter().map(|v| v.abs()).sum(),
+                Objective::InternalForce => alpha,
+            };
         PointValue {
             alpha_min,
             alpha,
@@ -494,20 +500,35 @@ impl Analysis {
             AllowedRange::FromAbove => Ok(vec![self.from_above_range()]),
             AllowedRange::Graspable => Ok(vec![(glo, ghi)]),
             AllowedRange::Bounds { lo, hi } => {
+                let (given_lo, given_hi) = (lo, hi);
                 if !(lo.is_finite() && hi.is_finite() && lo < hi) {
                     return Err(InvalidInput::RangeBounds { lo, hi });
                 }
-                // Angles are periodic: meet every 2π shift of the bounds with the range.
+                // A full turn or more allows every angle (`hi - lo` may overflow to +inf).
+                if hi - lo >= TAU {
+                    return Ok(vec![(glo, ghi)]);
+                }
+                // Far bounds are first brought within a turn of the range; the reduction is
+                // exact modulo the double nearest 2π, so the bounds keep the precision they had.
+                let (lo, hi) = if lo.abs().max(hi.abs()) > FAR_BOUND {
+                    let near = glo + (lo - glo).rem_euclid(TAU);
+                    (near, near + (hi - lo))
+                } else {
+                    (lo, hi)
+                };
+                // Angles are periodic: meet every 2π shift of the bounds with the range. Both
+                // spans are at most a turn, so this is at most five shifts.
                 let mut out = Vec::with_capacity(3);
                 let first = ((glo - hi) / TAU).floor() as i64;
                 let last = ((ghi - lo) / TAU).ceil() as i64;
-                for k in first..=last {
+                for k in first..=last.min(first + 4) {
                     let shift = TAU * k as f64;
                     let (a, b) = ((lo + shift).max(glo), (hi + shift).min(ghi));
                     if a <= b {
                         out.push((a, b));
                     }
                 }
+                let (lo, hi) = (given_lo, given_hi);
                 if out.is_empty() {
                     Err(InvalidInput::RangeOutsideGraspable {
                         lo,
@@ -642,6 +663,8 @@ impl Analysis {
             local_minima: minima,
             recommended_label,
             candidate_c,
+            finger_force: finger::finger_force(f, &at_best.forces),
+            finger_force_current: finger::finger_force(f, &at_current.forces),
         }
     }
 }
@@ -728,6 +751,51 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Bounds are gravity angles: any span of a turn or more is the whole graspable range, far
+    /// bounds are the near ones shifted by whole turns, and neither costs more than a few
+    /// intervals.
+    #[test]
+    fn wide_and_far_bounds_cost_no_more_than_near_ones() {
+        let c = paper_grasp((5.0, 4.0), -3.0, (0.785, 0.785), (1.5, 2.5));
+        let a = analysis(&c, Objective::Norm2);
+        let (glo, ghi) = a.graspable_range();
+        for (lo, hi) in [
+            (-1e308, 1e308),
+            (-f64::MAX, f64::MAX),
+            (-1e12, 1e12),
+            (0.0, TAU),
+        ] {
+            let got = a.allowed_intervals(&AllowedRange::Bounds { lo, hi });
+            assert_eq!(got, Ok(vec![(glo, ghi)]), "[{lo}, {hi}]");
+        }
+        for (lo, hi) in [(-0.5, 0.5), (2.0, 3.5), (-3.0, 2.9)] {
+            let near = a
+                .allowed_intervals(&AllowedRange::Bounds { lo, hi })
+                .expect("meets the range");
+            assert!(near.len() <= 3);
+            for turns in [1e3, -1e6, 1e9] {
+                let shift = TAU * turns;
+                let far = a
+                    .allowed_intervals(&AllowedRange::Bounds {
+                        lo: lo + shift,
+                        hi: hi + shift,
+                    })
+                    .expect("meets the range");
+                assert_eq!(far.len(), near.len(), "{turns} turns");
+                // As close as the shifted bounds themselves can be (their rounding).
+                let tol = 4.0 * f64::EPSILON * shift.abs();
+                for ((a0, b0), (a1, b1)) in near.iter().zip(&far) {
+                    assert!((a0 - a1).abs() <= tol && (b0 - b1).abs() <= tol, "{turns}");
+                }
+            }
+        }
+        let r = a.recommend(&AllowedRange::Bounds {
+            lo: -1e308,
+            hi: 1e308,
+        });
+        assert_eq!(r, a.recommend(&AllowedRange::Graspable));
     }
 
     #[test]

@@ -13,6 +13,16 @@ pub const MAX_FRICTION: f64 = 1e3;
 pub const MAX_MASS: f64 = 1e9;
 /// Largest accepted gravity component magnitude, m/s².
 pub const MAX_GRAVITY: f64 = 1e4;
+/// Smallest accepted friction coefficient: below it a grasp that holds at all needs a squeeze
+/// beyond about `1/μ` times the weight, which overflows the arithmetic long before `μ` reaches
+/// the smallest double.
+pub const MIN_FRICTION: f64 = 1e-6;
+/// Largest accepted friction safety factor: with [`MIN_FRICTION`] it keeps the effective
+/// friction at 1e-9 or more.
+pub const MAX_SAFETY_FACTOR: f64 = 1e3;
+/// Smallest weight `m |g|` (N, in-plane gravity) the forces can be computed for: the smallest
+/// normal double. Below it the weight itself has lost its precision (subnormal) or is zero.
+pub const MIN_WEIGHT: f64 = f64::MIN_POSITIVE;
 /// Contacts closer than this fraction of their distance to the centre of mass coincide.
 const COINCIDENT_FRACTION: f64 = 1e-9;
 
@@ -108,13 +118,56 @@ fn vector(
     Ok(())
 }
 
-fn unit_in_plane(field: &'static str, v: &Vector2<f64>) -> Result<Vector2<f64>, InvalidInput> {
-    let n = v.x.hypot(v.y);
-    if n > 0.0 {
-        Ok(v / n)
-    } else {
-        Err(InvalidInput::ZeroInPlane { field })
+/// Vectors whose largest component lies in this range are squared as they are: no square of
+/// theirs can underflow or overflow.
+const SQUARE_SAFE: std::ops::RangeInclusive<f64> = 1e-150..=1e150;
+
+/// `x · 2^k`, exact (in steps, since one power of two covers only `2^-1022 ..= 2^1023`).
+fn times_pow2(x: f64, mut k: i32) -> f64 {
+    let mut out = x;
+    while k != 0 {
+        let step = k.clamp(-1000, 1000);
+        out *= f64::from_bits(((step + 1023) as u64) << 52);
+        k -= step;
     }
+    out
+}
+
+/// `v` times `2^k` and `k`, with `k` chosen so that the largest component lies in
+/// [`SQUARE_SAFE`] (`k = 0` when it already does); `None` for the zero vector.
+///
+/// # Formula
+/// With `m = max(|v_x|, |v_y|)` outside the safe range, `k = -floor(log2 m)`, so `m 2^k` is
+/// about 1. Multiplying by a power of two is exact, so a vector and any power-of-two multiple of
+/// it come out bit for bit the same, and a vector already in range is left as it is (the same
+/// arithmetic as squaring it directly): no length the contract admits, from the smallest
+/// subnormal up, underflows or overflows when squared.
+fn in_square_range(v: &Vector2<f64>) -> Option<(Vector2<f64>, i32)> {
+    let m = v.x.abs().max(v.y.abs());
+    if m.is_nan() || m == 0.0 {
+        return None;
+    }
+    if SQUARE_SAFE.contains(&m) {
+        return Some((*v, 0));
+    }
+    let k = -(m.log2().floor() as i32);
+    Some((v.map(|c| times_pow2(c, k)), k))
+}
+
+/// The Euclidean length of `v`, without squaring a component out of range (see
+/// [`in_square_range`]).
+pub(crate) fn length(v: &Vector2<f64>) -> f64 {
+    in_square_range(v).map_or(0.0, |(w, k)| times_pow2(w.norm(), -k))
+}
+
+/// The unit vector along `v`, computed scale-free (see [`in_square_range`]); `None` for the zero
+/// vector.
+pub(crate) fn unit(v: &Vector2<f64>) -> Option<Vector2<f64>> {
+    in_square_range(v).map(|(w, _)| w / w.norm())
+}
+
+fn unit_in_plane(field: &'static str, v: &Vector2<f64>) -> Result<Vector2<f64>, InvalidInput> {
+    unit(v).ok_or(InvalidInput::ZeroInPlane { field })
 }
 
 /// Checks every field of a candidate, naming the first one at fault.
@@ -143,8 +196,8 @@ pub fn validate(c: &Candidate) -> Result<(), InvalidInput> {
         MAX_NORMAL_COMPONENT,
         "",
     )?;
-    positive("friction_1", c.friction_1, MAX_FRICTION, "")?;
-    positive("friction_2", c.friction_2, MAX_FRICTION, "")?;
+    friction("friction_1", c.friction_1)?;
+    friction("friction_2", c.friction_2)?;
     vector(
         ["center_of_mass.x", "center_of_mass.y"],
         &c.center_of_mass,
@@ -158,37 +211,54 @@ pub fn validate(c: &Candidate) -> Result<(), InvalidInput> {
         MAX_GRAVITY,
         " m/s^2",
     )?;
-    unit_in_plane("normal_1", &c.normal_1)?;
-    unit_in_plane("normal_2", &c.normal_2)?;
+    let n1 = unit_in_plane("normal_1", &c.normal_1)?;
+    let n2 = unit_in_plane("normal_2", &c.normal_2)?;
     unit_in_plane("gravity", &c.gravity)?;
-    let d = (c.contact_1 - c.contact_2).norm();
-    let reach = (c.contact_1 - c.center_of_mass)
-        .norm()
-        .max((c.contact_2 - c.center_of_mass).norm());
+    let weight = c.mass * length(&c.gravity);
+    if weight < MIN_WEIGHT {
+        return Err(InvalidInput::WeightTooSmall { weight });
+    }
+    let d = length(&(c.contact_1 - c.contact_2));
+    let reach =
+        length(&(c.contact_1 - c.center_of_mass)).max(length(&(c.contact_2 - c.center_of_mass)));
     if d == 0.0 || d <= COINCIDENT_FRACTION * reach {
         return Err(InvalidInput::CoincidentContacts);
     }
     for (contact, p, q, n) in [
-        (Contact::First, c.contact_1, c.contact_2, c.normal_1),
-        (Contact::Second, c.contact_2, c.contact_1, c.normal_2),
+        (Contact::First, c.contact_1, c.contact_2, n1),
+        (Contact::Second, c.contact_2, c.contact_1, n2),
     ] {
         // A convex object lies in the half-plane its inward normal points into, so the other
-        // contact and the centre of mass must lie there too.
-        if n.dot(&(q - p)) < 0.0 {
+        // contact and the centre of mass must lie there too. Unit vectors: the signs do not
+        // depend on the lengths' scale.
+        if unit(&(q - p)).is_some_and(|u| n.dot(&u) < 0.0) {
             return Err(InvalidInput::NormalOutward { contact });
         }
-        let to_com = c.center_of_mass - p;
-        if n.dot(&to_com) < -1e-12 * n.norm() * to_com.norm() {
+        if unit(&(c.center_of_mass - p)).is_some_and(|u| n.dot(&u) < -1e-12) {
             return Err(InvalidInput::CenterOfMassOutside { contact });
         }
     }
     Ok(())
 }
 
+/// A friction coefficient in `[MIN_FRICTION, MAX_FRICTION]` (the spatial model's too).
+pub(crate) fn friction(field: &'static str, v: f64) -> Result<f64, InvalidInput> {
+    positive(field, v, MAX_FRICTION, "")?;
+    if v < MIN_FRICTION {
+        Err(InvalidInput::BelowMinimum {
+            field,
+            value: v,
+            minimum: MIN_FRICTION,
+        })
+    } else {
+        Ok(v)
+    }
+}
+
 impl GraspFrame {
     /// Validates `c` and maps it into the paper frame, dividing friction by `safety`.
     pub fn new(c: &Candidate, safety: f64) -> Result<Self, InvalidInput> {
-        if !(safety.is_finite() && safety >= 1.0) {
+        if !(1.0..=MAX_SAFETY_FACTOR).contains(&safety) {
             return Err(InvalidInput::SafetyFactor { value: safety });
         }
         validate(c)?;
@@ -196,13 +266,14 @@ impl GraspFrame {
     }
 
     /// The map of [`GraspFrame::new`] for a candidate [`validate`] accepts and a safety factor
-    /// `>= 1`, without checking them again (the spatial reduction has checked the 3D input).
+    /// in `[1, MAX_SAFETY_FACTOR]`, without checking them again (the spatial reduction has checked the 3D input).
     pub(crate) fn from_valid(c: &Candidate, safety: f64) -> Self {
         let (mut p1, mut p2, mut n1, mut n2) = (c.contact_1, c.contact_2, c.normal_1, c.normal_2);
         let (mut mu1, mut mu2) = (c.friction_1 / safety, c.friction_2 / safety);
         let com = c.center_of_mass;
-        let d = (p1 - p2).norm();
-        let mut e_x = (p1 - p2) / d;
+        // `validate` has checked that the contacts do not coincide, so `d > 0`.
+        let d = length(&(p1 - p2));
+        let mut e_x = unit(&(p1 - p2)).unwrap_or_else(Vector2::zeros);
         let mut e_y = Vector2::new(-e_x.y, e_x.x);
         // Height of the contact line above the centre of mass, averaged over both contacts.
         let height = |e_y: &Vector2<f64>, p1: &Vector2<f64>, p2: &Vector2<f64>| {
@@ -220,14 +291,14 @@ impl GraspFrame {
         }
         let x1 = (p1 - com).dot(&e_x) / d;
         let x2 = -(p2 - com).dot(&e_x) / d;
+        // `validate` has checked that none of the three is zero.
         let to_paper = |v: &Vector2<f64>| {
-            let u = v / v.norm();
+            let u = unit(v).unwrap_or_else(Vector2::zeros);
             Vector2::new(u.dot(&e_x), u.dot(&e_y))
         };
         let n1p = to_paper(&n1);
         let n2p = to_paper(&n2);
-        let g = Vector2::new(c.gravity.x, c.gravity.y);
-        let gp = to_paper(&g);
+        let gp = to_paper(&c.gravity);
         Self {
             x1,
             x2,
@@ -240,7 +311,7 @@ impl GraspFrame {
             mu2,
             friction_safety_factor: safety,
             current_theta: gp.x.atan2(-gp.y),
-            weight: c.mass * g.norm(),
+            weight: c.mass * length(&c.gravity),
             contact_distance: d,
             swapped,
             e_x,
@@ -286,6 +357,26 @@ mod tests {
         assert_abs_diff_eq!(f.s2, FRAC_PI_3.sin(), epsilon = 1e-15);
         assert_abs_diff_eq!(f.c2, FRAC_PI_3.cos(), epsilon = 1e-15);
         assert_eq!(f.current_theta, 0.0);
+    }
+
+    /// Lengths and directions without squaring the vector: exact under power-of-two scaling,
+    /// and right for the smallest and largest doubles.
+    #[test]
+    fn lengths_and_units_are_scale_free() {
+        let v = Vector2::new(3.0, -4.0);
+        assert_eq!(length(&v), 5.0);
+        for k in [-1020, -600, 0, 600, 1020] {
+            let s = 2f64.powi(k);
+            let w = v * s;
+            assert_eq!(length(&w), 5.0 * s, "2^{k}");
+            assert_eq!(unit(&w), unit(&v), "2^{k}");
+        }
+        // The smallest subnormals: 3 and -4 of them, exact.
+        let tiny = f64::from_bits(1);
+        assert_eq!(unit(&(v * tiny)), unit(&v));
+        assert_eq!(length(&(v * tiny)), 5.0 * tiny);
+        assert_eq!(length(&Vector2::new(f64::MAX, f64::MAX)), f64::INFINITY);
+        assert_eq!(unit(&Vector2::zeros()), None);
     }
 
     #[test]

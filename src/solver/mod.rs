@@ -34,6 +34,7 @@
 //! `src/solver/robust.rs`).
 
 mod analysis;
+mod finger;
 mod frame;
 mod paper;
 mod robust;
@@ -41,17 +42,18 @@ mod sinusoid;
 mod spatial;
 
 pub use analysis::{Analysis, PointValue};
+pub use frame::MAX_SAFETY_FACTOR;
 pub use paper::CandidateAngles;
 pub use robust::{
     solve_robust, BoxPoint, BoxPointKind, NoCommonOrientation, RobustRecommendation, RobustVerdict,
     Uncertainty,
 };
 pub use spatial::{
-    sliced_friction, solve_spatial, solve_spatial_robust, AxisRelation, CurrentPose, RegionPoint,
-    RegionPointKind, SpatialCandidate, SpatialMiss, SpatialNoCommonOrientation,
-    SpatialNoForceClosure, SpatialRecommendation, SpatialRobustRecommendation,
-    SpatialRobustVerdict, SpatialUncertainty, SpatialVerdict, IN_PLANE_TOLERANCE, NEAR_AXIS,
-    ON_AXIS,
+    analyse_spatial, sliced_friction, solve_spatial, solve_spatial_robust, AxisRelation,
+    CurrentPose, RegionPoint, RegionPointKind, SpatialCandidate, SpatialMiss,
+    SpatialNoCommonOrientation, SpatialNoForceClosure, SpatialRecommendation,
+    SpatialRobustRecommendation, SpatialRobustVerdict, SpatialUncertainty, SpatialVerdict,
+    IN_PLANE_TOLERANCE, NEAR_AXIS, ON_AXIS,
 };
 
 use frame::GraspFrame;
@@ -219,6 +221,22 @@ pub enum InvalidInput {
         /// Unit of the limit, with its leading space (empty for none).
         unit: &'static str,
     },
+    /// A field is below the smallest value the solver accepts.
+    #[error("{field} is out of range: {value:e} is below the smallest accepted {minimum:e}")]
+    BelowMinimum {
+        /// The field.
+        field: &'static str,
+        /// Its value.
+        value: f64,
+        /// Smallest accepted value.
+        minimum: f64,
+    },
+    /// The weight `mass × |gravity|` (in-plane gravity) is too small to compute forces with.
+    #[error("mass and gravity give a weight of {weight:e} N, below the smallest the forces can be computed for ({:e} N)", frame::MIN_WEIGHT)]
+    WeightTooSmall {
+        /// `mass × |gravity|`, N.
+        weight: f64,
+    },
     /// A vector has no component in the grasp plane.
     #[error("{field} has no component in the x-y plane")]
     ZeroInPlane {
@@ -240,8 +258,11 @@ pub enum InvalidInput {
         /// The contact whose tangent line separates it.
         contact: Contact,
     },
-    /// The friction safety factor is below 1 or not finite.
-    #[error("friction safety factor must be a finite number >= 1, got {value}")]
+    /// The friction safety factor is not in `[1, MAX_SAFETY_FACTOR]`.
+    #[error(
+        "friction safety factor must be in [1, {:e}], got {value}",
+        frame::MAX_SAFETY_FACTOR
+    )]
     SafetyFactor {
         /// The value given.
         value: f64,
@@ -484,6 +505,13 @@ pub struct Recommendation {
     pub recommended_label: Option<PaperCandidate>,
     /// What became of candidate C.
     pub candidate_c: CandidateC,
+    /// The larger push along the contact line that either finger gives at the recommendation, N:
+    /// `internal_force + |W_line|/2`, with `W_line` the weight's component along the line. What
+    /// each independently driven finger must give (coupled fingers give `internal_force`; the
+    /// derivation is in `finger.rs`).
+    pub finger_force: f64,
+    /// The same at the current pose, N.
+    pub finger_force_current: f64,
 }
 
 /// The solver's verdict on valid input.

@@ -420,7 +420,8 @@ impl RobustRecommendation {
     /// `_current` values are the worst cases; `contact_forces` are the nominal object's there;
     /// `local_minima` are the worst case's, unlabelled; `recommended_label` is `None` (the
     /// recommendation is no paper candidate of one object); `grasp_case` and `candidate_c`
-    /// describe the nominal object (Theorem 1).
+    /// describe the nominal object (Theorem 1); `finger_force` and its `_current` value are the
+    /// worst cases.
     pub fn to_recommendation(&self) -> Recommendation {
         Recommendation {
             objective: self.objective,
@@ -437,6 +438,8 @@ impl RobustRecommendation {
             local_minima: self.local_minima.clone(),
             recommended_label: None,
             candidate_c: self.nominal.candidate_c,
+            finger_force: self.finger_force,
+            finger_force_current: self.finger_force_current,
         }
     }
 }
@@ -933,8 +936,7 @@ impl Envelope {
             let better = match best {
                 None => true,
                 Some((bt, bp)) => {
-                    let tie =
-                        (power - bp).abs() <= TIE * bp.abs().max(power.abs()).max(weight);
+                    let tie = (power - bp).abs() <= TIE * bp.abs().max(power.abs()).max(weight);
                     if tie {
                         rotation_to(theta) < rotation_to(bt)
                     } else {

@@ -2,7 +2,7 @@
 environment provides, and print what was used and what came back. tests/ros/test_colcon.py runs it in the
 environment of a colcon workspace's `install/setup.bash`, so the module is the workspace's.
 
-    python tests/colcon/ask_installed.py CANDIDATES.jsonl [--timeout S]
+    python tests/colcon/ask_installed.py CANDIDATES.jsonl [--ns NAMESPACE] [--timeout S]
 
 Prints one JSON object on stdout: `msg_module` (grasp_orient.msg.__file__), `msg_libraries` (the
 grasp_orient shared libraries this process loaded, from /proc/self/maps) and `answers` (one per candidate,
@@ -36,6 +36,7 @@ def loaded_libraries(fragment: str) -> list[str]:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("candidates", help="GraspCandidate JSON lines (the `solve` input form), each with an id")
+    ap.add_argument("--ns", default="", help="the node's namespace (topics NS/grasp_candidates, ...)")
     ap.add_argument("--timeout", type=float, default=30.0, help="seconds for the match and for the answers (30)")
     args = ap.parse_args()
     if conftest.RCLPY_IMPORT_ERROR:
@@ -48,7 +49,7 @@ def main() -> int:
     rclpy.init()
     try:
         peer = conftest.Peer("grasp_orient_colcon_check")
-        client = conftest.GraspClient(peer)
+        client = conftest.GraspClient(peer, args.ns)
         client.ensure_roundtrip(args.timeout)
         answers = client.send_and_collect(cands, args.timeout)
         print(json.dumps({

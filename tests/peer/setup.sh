@@ -10,7 +10,7 @@
 #                             else python3 if it is 3.11; installed with apt-get when none is found)
 #
 # Idempotent and cached: the venv is reinstalled only when tests/peer/requirements.txt (or the base Python)
-# changes, the msg package is rebuilt only when msg/*.msg, package.xml or CMakeLists.txt change.
+# changes, the msg package is rebuilt only when msg/*.msg, srv/*.srv, package.xml or CMakeLists.txt change.
 # Needs: Debian 12 (or any glibc >= 2.28 x86_64 Linux with a C/C++ compiler, make and CPython 3.11 with
 # headers), network access to PyPI (and to the Debian mirror when packages are missing).
 set -euo pipefail
@@ -158,7 +158,7 @@ MSG_HASH="$(
     cd "$REPO_ROOT"
     {
         echo "req=$REQ_HASH peer=$PEER_DIR"
-        for f in CMakeLists.txt package.xml msg/*.msg; do
+        for f in CMakeLists.txt package.xml msg/*.msg srv/*.srv; do
             if [ -f "$f" ]; then printf '%s %s\n' "$f" "$(sha256sum <"$f" | cut -d' ' -f1)"; fi
         done
     } | sha256sum | cut -d' ' -f1
@@ -185,9 +185,10 @@ else
     rm -rf "$BUILD" "$PREFIX" "$SRC"
     # Build from a copy: with a peer dir inside the repository (e.g. <repo>/.ros-peer) the venv lies inside it,
     # and CMake refuses to export include dirs of the venv (numpy) that are "prefixed in the source directory".
-    mkdir -p "$BUILD" "$SRC/msg"
+    mkdir -p "$BUILD" "$SRC/msg" "$SRC/srv"
     cp "$REPO_ROOT/CMakeLists.txt" "$REPO_ROOT/package.xml" "$SRC/"
     cp "$REPO_ROOT"/msg/*.msg "$SRC/msg/"
+    cp "$REPO_ROOT"/srv/*.srv "$SRC/srv/"
     run_logged cmake-configure "${BUILD_ENV[@]}" "$VENV/bin/cmake" -S "$SRC" -B "$BUILD" \
         -G "Unix Makefiles" \
         -DCMAKE_BUILD_TYPE=Release \
@@ -271,7 +272,7 @@ mv "$ENV_SH.tmp" "$ENV_SH"
 # 6. Check that the result imports
 # ---------------------------------------------------------------------------------------------------
 # shellcheck disable=SC1090
-if ! ( source "$ENV_SH" && python -c 'import rclpy; from grasp_orient.msg import GraspCandidate, GripRecommendation' ) >"$LOGS/import-check.log" 2>&1; then
+if ! ( source "$ENV_SH" && python -c 'import rclpy; from grasp_orient.msg import GraspCandidate, GripRecommendation, GraspCandidateSet, GripRecommendationSet; from grasp_orient.srv import Recommend' ) >"$LOGS/import-check.log" 2>&1; then
     cat "$LOGS/import-check.log" >&2
     die "rclpy / grasp_orient.msg import check failed with $ENV_SH"
 fi

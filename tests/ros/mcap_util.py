@@ -115,6 +115,27 @@ def rosbag2_full_text(type_name: str) -> str:
     return rec(type_name, 50)
 
 
+def _sections(text: str) -> list[str]:
+    return text.split("\n" + SEPARATOR)
+
+
+def is_rosbag2_text_of_an_older_version(type_name: str, recorded: str) -> bool:
+    """Whether `recorded` is what rosbag2 wrote for `type_name` before some of its messages grew by trailing
+    fields: the same sections (the type's text, then each dependency) as today's text, each one a prefix of
+    today's, cut at the end of a line. (Message contracts only ever grow by lines appended to a .msg file.)"""
+    now = _sections(rosbag2_full_text(type_name))
+    then = _sections(recorded)
+    if len(now) != len(then):
+        return False
+    for a, b in zip(then, now):
+        head_a, head_b = a.split("\n", 1)[0], b.split("\n", 1)[0]
+        if a.startswith("MSG: ") and head_a != head_b:
+            return False
+        if not b.startswith(a) or (a != b and not a.endswith("\n")):
+            return False
+    return True
+
+
 def _normal(name: str) -> str:
     p = name.split("/")
     return f"{p[0]}/msg/{p[-1]}"
@@ -372,11 +393,105 @@ def random_grasp(rng: random.Random, cid: str, frame_id: str = "object", stamp: 
         }
 
 
+def _unit3(v):
+    n = math.sqrt(sum(x * x for x in v))
+    return tuple(x / n for x in v)
+
+
+def _random_rotation(rng: random.Random):
+    """A uniformly random 3D rotation as a function on 3-tuples (a normalised Gaussian quaternion)."""
+    w, x, y, z = _unit3([rng.gauss(0.0, 1.0) for _ in range(4)])
+    m = ((1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)),
+         (2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)),
+         (2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)))
+    return lambda v: tuple(sum(m[i][j] * v[j] for j in range(3)) for i in range(3))
+
+
+SPATIAL_KINDS = ("in_plane", "tilted", "near_axis", "on_axis")
+
+
+def random_spatial_grasp(rng: random.Random, cid: str, kind: str, frame_id: str = "object",
+                         stamp: tuple[int, int] | None = None) -> dict:
+    """A random spatial candidate (`model` 1) with force closure, in a random 3D frame and unit, built in a local
+    frame whose x-y plane is the grasp plane (independently of tests/common/spatial.rs, the same kinds):
+    - in_plane: normals in the plane; tilted: each normal tilted out of it by up to half its friction angle
+      (so its sliced cone keeps the other contact); near_axis: the centre of mass 0.1% to 0.9% of the contact
+      distance off the contact axis; on_axis: on it, normals within 0.8 of the friction angle of the axis.
+    Gravity is random in 3D, or in the grasp plane (off the axis) one time in three, so that some current poses
+    can be held and others swing."""
+    u = rng.uniform
+    while True:
+        mu = (u(0.1, 2.0), u(0.1, 2.0))
+        if kind == "on_axis":
+            p1, p2 = (u(0.3, 1.0), 0.0, 0.0), (-u(0.3, 1.0), 0.0, 0.0)
+            com = (u(-0.2, 0.2), 0.0, 0.0)
+            normals = []
+            for i, sign in enumerate((-1.0, 1.0)):
+                delta, az = u(0.0, 0.8) * math.atan(mu[i]), u(-math.pi, math.pi)
+                normals.append((sign * math.cos(delta), math.sin(delta) * math.cos(az), math.sin(delta) * math.sin(az)))
+            break
+        p1, p2 = (u(-1, 1), u(-1, 1)), (u(-1, 1), u(-1, 1))
+        d = math.hypot(p1[0] - p2[0], p1[1] - p2[1])
+        if d < 0.05:
+            continue
+        along = ((p2[0] - p1[0]) / d, (p2[1] - p1[1]) / d)
+        n2d = (_rot(along, u(-1.4, 1.4)), _rot((-along[0], -along[1]), u(-1.4, 1.4)))
+        betas = [0.0, 0.0] if kind == "in_plane" else [u(-0.5, 0.5) * math.atan(m) for m in mu]
+        # The cone sliced by the plane: mu' = sqrt(mu^2 cos^2 b - sin^2 b) (README, "Spatial candidates").
+        sliced = [math.sqrt(m * m * math.cos(b) ** 2 - math.sin(b) ** 2) for m, b in zip(mu, betas)]
+        if not _cone_contains(p1, n2d[0], sliced[0], p2) or not _cone_contains(p2, n2d[1], sliced[1], p1):
+            continue
+        if kind == "near_axis":
+            t, off = u(0.2, 0.8), u(0.001, 0.009) * d * rng.choice((-1.0, 1.0))
+            com2 = (p2[0] + t * (p1[0] - p2[0]) - off * along[1], p2[1] + t * (p1[1] - p2[1]) + off * along[0])
+        else:
+            mid = ((p1[0] + p2[0]) / 2, (p1[1] + p2[1]) / 2)
+            com2 = (mid[0] + u(-1, 1), mid[1] + u(-1, 1))
+        if any(n[0] * (com2[0] - p[0]) + n[1] * (com2[1] - p[1]) <= 1e-3 * d for n, p in zip(n2d, (p1, p2))):
+            continue
+        p1, p2, com = (*p1, 0.0), (*p2, 0.0), (*com2, 0.0)
+        normals = [(n[0] * math.cos(b), n[1] * math.cos(b), math.sin(b)) for n, b in zip(n2d, betas)]
+        break
+    turn = _random_rotation(rng)
+    shift = (u(-2, 2), u(-2, 2), u(-2, 2))
+    scale = 10 ** u(-2, 1)
+
+    def place(p):
+        r = turn(p)
+        return {"x": r[0] * scale + shift[0], "y": r[1] * scale + shift[1], "z": r[2] * scale + shift[2]}
+
+    def vec(v, k):
+        r = turn(v)
+        return {"x": r[0] * k, "y": r[1] * k, "z": r[2] * k}
+
+    if kind != "on_axis" and rng.random() < 1 / 3:
+        phi = u(-math.pi, math.pi)
+        g = (math.cos(phi), math.sin(phi), 0.0)
+    else:
+        g = _unit3([rng.gauss(0.0, 1.0) for _ in range(3)])
+    if stamp is None:
+        stamp = (rng.randrange(0, 2**31), rng.randrange(0, 10**9))
+    return {
+        "header": {"stamp": {"sec": stamp[0], "nanosec": stamp[1]}, "frame_id": frame_id},
+        "id": cid,
+        "contact_1": place(p1),
+        "contact_2": place(p2),
+        "normal_1": vec(normals[0], u(0.1, 10.0)),
+        "normal_2": vec(normals[1], u(0.1, 10.0)),
+        "friction_1": mu[0],
+        "friction_2": mu[1],
+        "center_of_mass": place(com),
+        "mass": 10 ** u(-2, 2),
+        "gravity": vec(g, 9.81 * u(0.5, 1.5)),
+        "model": 1,
+    }
+
+
 # ---------------------------------------------------------------------------------------------------
 # `solve` answers as recommendation messages
 # ---------------------------------------------------------------------------------------------------
 _LINE_PREFIX = re.compile(r"^line \d+: ")
-_CURRENT = ("gripping_power_current", "internal_force_current")
+_CURRENT = ("gripping_power_current", "internal_force_current", "finger_force_current")
 
 
 def recommendation_from_solve(ans: dict) -> dict:

@@ -180,12 +180,14 @@ def test_setup_bash_puts_the_workspace_first(workspace):
 def test_installed_node_answers_rclpy_using_the_installed_messages(workspace, tmp_path):
     ws = workspace
     env = ros_env(DOMAIN_ID, ws.env)
-    node = NodeProcess(["--ros-args", "--params-file", str(ws.share / "config" / "grasp_orient.yaml")], env,
+    # In a namespace of its own: the session's default node may be serving the plain topics.
+    node = NodeProcess(["--ros-args", "-r", "__ns:=/colcon", "--params-file",
+                        str(ws.share / "config" / "grasp_orient.yaml")], env,
                        tmp_path, name="installed grasp_orient node (colcon workspace)", binary=ws.node_bin)
     _ALL_NODES.append(node)
     node.wait_ready()
     try:
-        r = subprocess.run([sys.executable, str(ASK_INSTALLED), str(PAPER_CASES)], env=env, capture_output=True,
+        r = subprocess.run([sys.executable, str(ASK_INSTALLED), str(PAPER_CASES), "--ns", "/colcon"], env=env, capture_output=True,
                            text=True, timeout=120)
         assert r.returncode == 0, f"ask_installed.py exited {r.returncode}:\n{r.stderr[-3000:]}"
         got = json.loads(r.stdout.strip().splitlines()[-1])

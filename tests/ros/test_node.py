@@ -466,7 +466,7 @@ def test_parameters_are_described_listed_and_set_atomically(peer, client):
     f = by["friction_safety_factor"]
     assert f.type == ParameterType.PARAMETER_DOUBLE and "friction coefficients" in f.description, f
     assert len(f.floating_point_range) == 1 and f.floating_point_range[0].from_value == 1.0, f
-    assert f.floating_point_range[0].to_value == sys.float_info.max and not f.read_only, f
+    assert f.floating_point_range[0].to_value == 1000.0 and not f.read_only, f
     q = by["qos_depth"]
     assert q.type == ParameterType.PARAMETER_INTEGER and q.read_only and "[messages]" in q.description, q
     assert [(r.from_value, r.to_value) for r in q.integer_range] == [(1, 100000)], q
@@ -479,7 +479,8 @@ def test_parameters_are_described_listed_and_set_atomically(peer, client):
     listed = peer.call(peer.node.create_client(ListParameters, f"{node}/list_parameters"),
                        ListParameters.Request()).result.names
     want = {"objective", "range", "range_min", "range_max", "friction_safety_factor", "qos_depth", "publish_markers",
-            "record", "record_dir", "record_markers", "use_sim_time"}
+            "record", "record_dir", "record_markers", "gripper_drive", "max_grip_force", "rank_by", "max_set_size",
+            "use_sim_time"}
     assert set(listed) == want, sorted(listed)
     types = peer.call(peer.node.create_client(GetParameterTypes, f"{node}/get_parameter_types"),
                       GetParameterTypes.Request(names=["qos_depth", "record", "nothing"])).types

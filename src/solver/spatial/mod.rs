@@ -273,6 +273,12 @@ pub struct SpatialRecommendation {
     pub axis: AxisRelation,
     /// Distance of the centre of mass from the contact axis over the contact distance.
     pub center_of_mass_offset: f64,
+    /// The planar candidate solved in Π, for [`analyse_spatial`]: contacts and centre of mass in
+    /// the coordinates `(plane_x, plane_y)` (as given, or relative to the centre of mass over the
+    /// reach), the projected normals, the sliced coefficients (already divided by the safety
+    /// factor), unit gravity along the projection of the current one, and the weight `m |g|` as
+    /// its mass, so that its powers are in newtons.
+    plane_candidate: Candidate,
 }
 
 impl SpatialRecommendation {
@@ -428,6 +434,35 @@ pub fn solve_spatial(
         current_pose,
         axis,
     ))))
+}
+
+/// The gripping power over the whole graspable range of the grasp plane Π, for plots and studies:
+/// the planar [`Analysis`] of the candidate the reduction solved in Π (module docs §3; friction
+/// sliced by Π after the safety factor, powers in newtons, gravity angles in the paper frame of
+/// Π), with the spatial answer. For a centre of mass on the contact axis Π is the plane the search
+/// chose (§6).
+///
+/// Bad input is an `Err`; a valid grasp without force closure is `Ok(Err(_))`, as from
+/// [`solve_spatial`].
+#[allow(clippy::type_complexity)]
+pub fn analyse_spatial(
+    candidate: &SpatialCandidate,
+    settings: &Settings,
+) -> Result<Result<(Analysis, SpatialRecommendation), SpatialNoForceClosure>, InvalidInput> {
+    let r = match solve_spatial(candidate, settings)? {
+        SpatialVerdict::Recommended(r) => r,
+        SpatialVerdict::NoForceClosure(why) => return Ok(Err(why)),
+    };
+    // The sliced friction is already divided by the safety factor: the planar frame gets 1.
+    let frame = GraspFrame::from_valid(&r.plane_candidate, 1.0);
+    Ok(match Analysis::new(&frame, settings.objective) {
+        Ok(analysis) => Ok((analysis, *r)),
+        // Not reached: the planar solver held this very candidate a moment ago.
+        Err(NoForceClosure { misses, .. }) => Err(SpatialNoForceClosure {
+            misses: misses.into_iter().map(SpatialMiss::Cone).collect(),
+            friction_safety_factor: settings.friction_safety_factor,
+        }),
+    })
 }
 
 /// The planar verdict of one plane: the recommendation (unit weight) or the misses, mapped into

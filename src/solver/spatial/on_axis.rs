@@ -499,6 +499,7 @@ fn search(g: &Geometry, grasp: &AxisGrasp, settings: &Settings) -> Result<Spatia
     let current = (
         best.answer.gripping_power_current,
         best.answer.internal_force_current,
+        best.answer.finger_force_current,
     );
     let mut planes = Vec::with_capacity(8);
     match settings.objective {
@@ -531,6 +532,7 @@ fn search(g: &Geometry, grasp: &AxisGrasp, settings: &Settings) -> Result<Spatia
     // Every plane through the axis holds; the current pose is solved in its own plane.
     out.planar.gripping_power_current = current.0 * g.weight;
     out.planar.internal_force_current = current.1 * g.weight;
+    out.planar.finger_force_current = current.2 * g.weight;
     Ok(SpatialVerdict::Recommended(Box::new(out)))
 }
 

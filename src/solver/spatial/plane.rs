@@ -2,7 +2,8 @@
 //! candidate in Π and the way back to 3D (§3, §4).
 
 use super::super::frame::{
-    MAX_COORDINATE, MAX_FRICTION, MAX_GRAVITY, MAX_MASS, MAX_NORMAL_COMPONENT,
+    friction, MAX_COORDINATE, MAX_FRICTION, MAX_GRAVITY, MAX_MASS, MAX_NORMAL_COMPONENT,
+    MAX_SAFETY_FACTOR, MIN_FRICTION,
 };
 use super::{
     planar_outcome, v2, AxisRelation, CurrentPose, PlanarOutcome, SpatialCandidate, SpatialMiss,
@@ -104,8 +105,8 @@ fn within_limits(c: &SpatialCandidate) -> bool {
         && all(&c.normal_1, MAX_NORMAL_COMPONENT)
         && all(&c.normal_2, MAX_NORMAL_COMPONENT)
         && all(&c.gravity, MAX_GRAVITY)
-        && positive(c.friction_1, MAX_FRICTION)
-        && positive(c.friction_2, MAX_FRICTION)
+        && (MIN_FRICTION..=MAX_FRICTION).contains(&c.friction_1)
+        && (MIN_FRICTION..=MAX_FRICTION).contains(&c.friction_2)
         && positive(c.mass, MAX_MASS)
 }
 
@@ -136,8 +137,9 @@ fn validate(c: &SpatialCandidate) -> Result<(), InvalidInput> {
         MAX_NORMAL_COMPONENT,
         "",
     )?;
-    positive("friction_1", c.friction_1, MAX_FRICTION, "")?;
-    positive("friction_2", c.friction_2, MAX_FRICTION, "")?;
+    // The planar model's domain, for the same reason (see `MIN_FRICTION`).
+    friction("friction_1", c.friction_1)?;
+    friction("friction_2", c.friction_2)?;
     vector(
         ["center_of_mass.x", "center_of_mass.y", "center_of_mass.z"],
         &c.center_of_mass,
@@ -188,7 +190,7 @@ pub(super) struct Geometry {
 impl Geometry {
     /// Validates `c` and divides friction by `safety`.
     pub fn new(c: &SpatialCandidate, safety: f64) -> Result<Self, InvalidInput> {
-        if !(safety.is_finite() && safety >= 1.0) {
+        if !(1.0..=MAX_SAFETY_FACTOR).contains(&safety) {
             return Err(InvalidInput::SafetyFactor { value: safety });
         }
         if !within_limits(c) {
@@ -500,6 +502,8 @@ impl<'a> PlaneSolve<'a> {
         let w = self.geometry.weight;
         planar.gripping_power *= w;
         planar.internal_force *= w;
+        // The pushes along the contact line (which lies in Π) are those of the planar forces.
+        planar.finger_force *= w;
         for f in planar.contact_forces.iter_mut() {
             *f *= w;
         }
@@ -510,10 +514,12 @@ impl<'a> PlaneSolve<'a> {
             CurrentPose::Held => {
                 planar.gripping_power_current *= w;
                 planar.internal_force_current *= w;
+                planar.finger_force_current *= w;
             }
             CurrentPose::Swings { .. } => {
                 planar.gripping_power_current = f64::INFINITY;
                 planar.internal_force_current = f64::INFINITY;
+                planar.finger_force_current = f64::INFINITY;
             }
         }
         let b = &self.basis;
@@ -538,6 +544,10 @@ impl<'a> PlaneSolve<'a> {
             current_pose,
             axis,
             center_of_mass_offset: self.geometry.offset,
+            plane_candidate: Candidate {
+                mass: w,
+                ..self.candidate
+            },
             planar,
         }
     }

@@ -139,7 +139,10 @@ mod worst;
 
 use super::on_axis::AxisGrasp;
 use super::plane::Geometry;
-use super::{solve_spatial, SpatialCandidate, SpatialMiss, SpatialNoForceClosure, SpatialRecommendation, SpatialVerdict};
+use super::{
+    solve_spatial, SpatialCandidate, SpatialMiss, SpatialNoForceClosure, SpatialRecommendation,
+    SpatialVerdict,
+};
 use crate::solver::analysis::Analysis;
 use crate::solver::frame::{GraspFrame, MAX_COORDINATE};
 use crate::solver::paper::FORCE_SCALE;
@@ -150,7 +153,6 @@ use region::Region;
 use std::f64::consts::FRAC_PI_2;
 use std::fmt;
 use worst::{AxisPoint, AxisView, Quantity, Segment};
-
 
 /// Stop adding points when the certified gap is at most this fraction of the worst case.
 pub const EXCHANGE: f64 = 1e-9;
@@ -256,7 +258,10 @@ impl fmt::Display for RegionPoint {
                 write!(f, "corner ({}) of the box, {at}", names.join(", "))
             }
             RegionPointKind::Cut { contact } => {
-                write!(f, "{at}, where the box meets the tangent plane at {contact}")
+                write!(
+                    f,
+                    "{at}, where the box meets the tangent plane at {contact}"
+                )
             }
             RegionPointKind::Edge => write!(f, "{at} on an edge of the region"),
             RegionPointKind::Axis => write!(f, "{at} on the contact axis"),
@@ -445,7 +450,9 @@ pub fn solve_spatial_robust(
     uncertainty.validate(candidate.mass)?;
     let nominal = match nominal {
         SpatialVerdict::Recommended(r) => *r,
-        SpatialVerdict::NoForceClosure(miss) => return Ok(SpatialRobustVerdict::NoForceClosure(miss)),
+        SpatialVerdict::NoForceClosure(miss) => {
+            return Ok(SpatialRobustVerdict::NoForceClosure(miss))
+        }
     };
     if uncertainty.center_of_mass_tolerance != Vector3::zeros()
         && settings.objective == Objective::Norm1
@@ -456,10 +463,12 @@ pub fn solve_spatial_robust(
     let axis = match AxisGrasp::new(&geometry) {
         Ok(axis) => axis,
         Err(misses) => {
-            return Ok(SpatialRobustVerdict::NoForceClosure(SpatialNoForceClosure {
-                misses: misses.into_iter().map(SpatialMiss::Cone).collect(),
-                friction_safety_factor: settings.friction_safety_factor,
-            }))
+            return Ok(SpatialRobustVerdict::NoForceClosure(
+                SpatialNoForceClosure {
+                    misses: misses.into_iter().map(SpatialMiss::Cone).collect(),
+                    friction_safety_factor: settings.friction_safety_factor,
+                },
+            ))
         }
     };
     let problem = Problem::new(candidate, uncertainty, settings, &geometry, &axis, &nominal);
@@ -512,9 +521,7 @@ impl Problem {
         nominal: &SpatialRecommendation,
     ) -> Self {
         let contacts = axis.contacts;
-        let across = contacts.map(|c| {
-            Vector2::new(c.azimuth.cos(), c.azimuth.sin()) * c.sin_delta
-        });
+        let across = contacts.map(|c| Vector2::new(c.azimuth.cos(), c.azimuth.sin()) * c.sin_delta);
         let view = AxisView {
             p2: g.p[1],
             a: axis.a,
@@ -696,8 +703,7 @@ impl Problem {
         } else {
             self.quantity
         };
-        self.view
-            .worst(q, theta, &self.segments, &self.axis_points)
+        self.view.worst(q, theta, &self.segments, &self.axis_points)
     }
 
     /// A point of the maximisation named as a point of the region.
@@ -850,8 +856,14 @@ impl Problem {
         };
         // Paper frame (e_x, e_y) = (a, −v): the paper's normals and tangents (`solver/paper.rs`).
         let [n1, f1, n2, f2] = value.forces;
-        let p1 = Vector2::new(-frame.s1 * n1 - frame.c1 * f1, -frame.c1 * n1 + frame.s1 * f1);
-        let p2 = Vector2::new(frame.s2 * n2 + frame.c2 * f2, -frame.c2 * n2 + frame.s2 * f2);
+        let p1 = Vector2::new(
+            -frame.s1 * n1 - frame.c1 * f1,
+            -frame.c1 * n1 + frame.s1 * f1,
+        );
+        let p2 = Vector2::new(
+            frame.s2 * n2 + frame.c2 * f2,
+            -frame.c2 * n2 + frame.s2 * f2,
+        );
         let v3 = self.view.b1 * self.reference.x + self.view.b2 * self.reference.y;
         let lift = |q: Vector2<f64>| self.view.a * q.x - v3 * q.y;
         let vectors = [lift(p1), lift(p2)];
@@ -900,7 +912,11 @@ mod tests {
         let normal = |toward: f64, mu: f64, a: f64, b: f64| {
             let delta = 0.9 * mu.atan() * a;
             let eta = 2.0 * PI * b;
-            Vector3::new(toward * delta.cos(), delta.sin() * eta.cos(), delta.sin() * eta.sin())
+            Vector3::new(
+                toward * delta.cos(),
+                delta.sin() * eta.cos(),
+                delta.sin() * eta.sin(),
+            )
         };
         SpatialCandidate {
             contact_1: Vector3::new(0.5, 0.0, 0.0),
@@ -943,10 +959,8 @@ mod tests {
             for j in 0..20 {
                 let q = AxisPoint {
                     xi: 0.5 + 0.6 * (uniform(1000 * k + j) - 0.5),
-                    across: Vector2::new(
-                        uniform(2000 * k + j) - 0.5,
-                        uniform(3000 * k + j) - 0.5,
-                    ) * if j == 0 { 0.0 } else { 1.0 },
+                    across: Vector2::new(uniform(2000 * k + j) - 0.5, uniform(3000 * k + j) - 0.5)
+                        * if j == 0 { 0.0 } else { 1.0 },
                 };
                 let frame = p.frame_at(&q, None);
                 let norm2 = Analysis::new(&frame, Objective::Norm2).expect("force closure");

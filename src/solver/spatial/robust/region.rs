@@ -64,12 +64,7 @@ impl Region {
     fn corners(&self) -> [Vector3<f64>; 8] {
         std::array::from_fn(|k| {
             let s = |bit: usize| if k & bit == 0 { -1.0 } else { 1.0 };
-            self.center
-                + Vector3::new(
-                    s(1) * self.half.x,
-                    s(2) * self.half.y,
-                    s(4) * self.half.z,
-                )
+            self.center + Vector3::new(s(1) * self.half.x, s(2) * self.half.y, s(4) * self.half.z)
         })
     }
 
@@ -208,11 +203,7 @@ impl Region {
     /// vertex or on an edge: seen from `apex`, an edge sweeps a great-circle arc `û(φ) = cos φ ê0 +
     /// sin φ ê1`, `φ ∈ [0, φ1]`, on which `û · dir = A cos φ + B sin φ` has its least value
     /// `−hypot(A, B)` at `φ = atan2(B, A) + π` when that lies inside the arc.
-    pub fn least_elevation(
-        &self,
-        apex: &Vector3<f64>,
-        dir: &Vector3<f64>,
-    ) -> (f64, RegionPoint) {
+    pub fn least_elevation(&self, apex: &Vector3<f64>, dir: &Vector3<f64>) -> (f64, RegionPoint) {
         if let Some((t0, _)) = self.clip(apex, &-dir, 0.0) {
             return (-std::f64::consts::FRAC_PI_2, self.on_edge(apex - dir * t0));
         }
@@ -259,7 +250,11 @@ impl Region {
 
     /// A point of the region that is not a vertex.
     fn on_edge(&self, x: Vector3<f64>) -> RegionPoint {
-        match self.vertices.iter().find(|v| (v.position - x).norm() <= self.eps) {
+        match self
+            .vertices
+            .iter()
+            .find(|v| (v.position - x).norm() <= self.eps)
+        {
             Some(v) => *v,
             None => RegionPoint {
                 position: x,

@@ -327,7 +327,10 @@ impl AxisView {
             let (mh, eh) = c.edge(-q.lo);
             let (kappa, kappa_slope) = (Iv::new(ml, mh), Iv::new(el, eh));
             terms[2 * i + 1] = b.mul(kappa).neg().shift(half);
-            slopes[2 * i + 1] = b_slope.mul(kappa).neg().add(b.mul(kappa_slope).mul(q_slope));
+            slopes[2 * i + 1] = b_slope
+                .mul(kappa)
+                .neg()
+                .add(b.mul(kappa_slope).mul(q_slope));
         }
         Bounds {
             terms,
@@ -341,7 +344,13 @@ impl AxisView {
 /// An upper bound of `quantity` over a piece of an edge from its value at the middle and the
 /// enclosures: per term, the least of the interval bound and the mean-value bound
 /// `F(m) + sup|F'| w/2` (module docs §4).
-fn upper_bound(quantity: Quantity, t: Tilt, mid: &([f64; 4], [f64; 2]), bd: &Bounds, w: f64) -> f64 {
+fn upper_bound(
+    quantity: Quantity,
+    t: Tilt,
+    mid: &([f64; 4], [f64; 2]),
+    bd: &Bounds,
+    w: f64,
+) -> f64 {
     let (terms, b) = mid;
     let mut best = 0.0f64;
     let base = 0.5 * t.s * t.s;
@@ -467,7 +476,13 @@ impl AxisView {
                     xi: edge.xi0 + foot * edge.dxi,
                     across: Vector2::zeros(),
                 };
-                consider(&mut best, self.held(t, &on_axis).get(quantity), Some(i), foot, on_axis);
+                consider(
+                    &mut best,
+                    self.held(t, &on_axis).get(quantity),
+                    Some(i),
+                    foot,
+                    on_axis,
+                );
                 edges.push(None);
                 continue;
             }
@@ -477,7 +492,13 @@ impl AxisView {
             if let Some(edge) = edge {
                 let mid = edge.at(0.5);
                 let m = self.terms(t, &mid);
-                consider(&mut best, self.held(t, &mid).get(quantity), Some(i), 0.5, mid);
+                consider(
+                    &mut best,
+                    self.held(t, &mid).get(quantity),
+                    Some(i),
+                    0.5,
+                    mid,
+                );
                 let bound = upper_bound(quantity, t, &m, &self.bounds(t, edge, 0.0, 1.0), 1.0);
                 pieces.push(Piece {
                     bound,
@@ -511,7 +532,13 @@ impl AxisView {
             for (a, b) in [(top.t0, half), (half, top.t1)] {
                 let tm = 0.5 * (a + b);
                 let mid = edge.at(tm);
-                consider(&mut best, self.held(t, &mid).get(quantity), Some(top.segment), tm, mid);
+                consider(
+                    &mut best,
+                    self.held(t, &mid).get(quantity),
+                    Some(top.segment),
+                    tm,
+                    mid,
+                );
                 let m = self.terms(t, &mid);
                 let bound = upper_bound(quantity, t, &m, &self.bounds(t, &edge, a, b), b - a);
                 pieces.push(Piece {

@@ -578,6 +578,27 @@ impl Reader {
         writer_guid,
         writer_seq_num,
       ),
+      // Patched for grasp_orient (0003-data-without-payload.patch): a DATA without a usable payload
+      // (Fast DDS sends a zero-length serialized message as DATA with no payload and no flags)
+      // still takes up its sequence number. Dropped here, it was never marked received, so a
+      // reliable reader held back every later sample of that writer until the writer's history
+      // let go of it. A user topic's reader now gets an empty sample, which fails to decode
+      // where the application can see and count it, and the stream goes on.
+      Err(e) if self.my_guid.entity_id.entity_kind.is_user_defined() => {
+        info!(
+          "DATA seq={writer_seq_num:?} from {writer_guid:?} on topic {:?} has no usable payload \
+           ({e}); delivered as an empty sample",
+          self.topic_name
+        );
+        let empty = SerializedPayload::new(representation_identifier, Vec::new());
+        self.process_received_data(
+          DDSData::new(empty),
+          receive_timestamp,
+          write_options_b.build(),
+          writer_guid,
+          writer_seq_num,
+        );
+      }
       Err(e) => debug!("Parsing DATA to DDSData failed: {e}"),
     }
   }
@@ -1688,6 +1709,103 @@ mod tests {
       cc_from_cache, &cc_locally_built,
       "The content of the cache change in the topic cache not as expected"
     );
+  }
+
+  #[test]
+  fn data_without_payload_takes_up_its_sequence_number() {
+    // A user topic's reader, as in reader_sends_data_to_topic_cache.
+    let dds_cache = Arc::new(RwLock::new(DDSCache::new()));
+    let topic_name = "test_name";
+    let qos_policy = QosPolicies::qos_none();
+    let topic_cache_handle = dds_cache.write().unwrap().add_new_topic(
+      topic_name.to_string(),
+      TypeDesc::new("test_type".to_string()),
+      &qos_policy,
+    );
+    let (notification_sender, _notification_receiver) =
+      crate::mio_source::notification_channel(100);
+    let (_notification_event_source, notification_event_sender) =
+      mio_source::make_poll_channel().unwrap();
+    let (status_sender, _status_receiver) = sync_status_channel::<DataReaderStatus>(4).unwrap();
+    let (participant_status_sender, _participant_status_receiver) =
+      sync_status_channel(16).unwrap();
+    let (_reader_command_sender, reader_command_receiver) =
+      wake_channel::<ReaderCommand>(10, &LoopWaker::new());
+    let reader_guid = GUID::dummy_test_guid(EntityKind::READER_NO_KEY_USER_DEFINED);
+    let mut reader = Reader::new(
+      ReaderIngredients {
+        guid: reader_guid,
+        notification_sender,
+        status_sender,
+        topic_name: topic_name.to_string(),
+        topic_cache_handle: topic_cache_handle.clone(),
+        like_stateless: false,
+        qos_policy,
+        data_reader_command_receiver: reader_command_receiver,
+        data_reader_waker: Arc::new(Mutex::new(None)),
+        poll_event_sender: notification_event_sender,
+        security_plugins: None,
+        discovery_notify: None,
+      },
+      Rc::new(UDPSender::new(0).unwrap()),
+      new_shared_timer(),
+      participant_status_sender,
+    );
+    let writer_guid = GUID::dummy_test_guid(EntityKind::WRITER_NO_KEY_USER_DEFINED);
+    let mr_state = MessageReceiverState {
+      source_guid_prefix: writer_guid.prefix,
+      ..Default::default()
+    };
+    reader.matched_writer_add(
+      writer_guid,
+      EntityId::UNKNOWN,
+      mr_state.unicast_reply_locator_list.to_vec(),
+      mr_state.multicast_reply_locator_list.to_vec(),
+      &QosPolicies::qos_none(),
+    );
+
+    // Sequence number 1: what Fast DDS sends for a zero-length serialized message (rclpy's
+    // publish(b"")): a DATA with no payload and neither the data nor the key flag.
+    let empty = Data {
+      reader_id: reader_guid.entity_id,
+      writer_id: writer_guid.entity_id,
+      writer_sn: SequenceNumber::new(1),
+      inline_qos: None,
+      serialized_payload: None,
+    };
+    reader.handle_data_msg(empty, BitFlags::<DATA_Flags>::empty(), &mr_state);
+    // Sequence number 2: an ordinary sample.
+    let data = Data {
+      reader_id: reader_guid.entity_id,
+      writer_id: writer_guid.entity_id,
+      writer_sn: SequenceNumber::new(2),
+      ..Data::default()
+    };
+    reader.handle_data_msg(data, BitFlags::from_flag(DATA_Flags::Data), &mr_state);
+
+    // Both are received: nothing is missing before 3, so no later sample waits for 1.
+    let proxy = reader
+      .matched_writer(writer_guid)
+      .expect("the writer is matched");
+    assert_eq!(
+      proxy.all_ackable_before(),
+      SequenceNumber::new(3),
+      "sequence number 1 was never marked received"
+    );
+    // The application gets sequence number 1 as an empty sample, which it cannot decode.
+    let instant = reader
+      .seqnum_instant_map
+      .get(&SequenceNumber::new(1))
+      .expect("sequence number 1 reached the topic cache");
+    let topic_cache = topic_cache_handle.lock().unwrap();
+    let change = topic_cache
+      .get_change(instant)
+      .expect("a cache change for sequence number 1");
+    assert_eq!(change.sequence_number, SequenceNumber::new(1));
+    match &change.data_value {
+      DDSData::Data { serialized_payload } => assert!(serialized_payload.value.is_empty()),
+      other => panic!("expected an empty sample, got {other:?}"),
+    }
   }
 
   #[test]

@@ -1,0 +1,136 @@
+//! A set of 1,000 candidates answered and ranked in-process, against the same 1,000 candidates
+//! answered one by one, in one process on one core: what a set costs over single candidates
+//! (targets: at most 1.1 times the singles, and at most 1 ms). Both answer with
+//! `sets::answer_one` under the default rules (the set adds its ranking); both build the full
+//! wire answers, as the node publishes them. Also printed, to show where a set's extra time goes:
+//! the singles' answers kept in a list (as a set keeps them until it is published), and the
+//! ranking alone.
+//!
+//! `cargo bench --bench sets` (add `-- N` for sets of N candidates; default 1000).
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+
+use common::random_grasp;
+use grasp_orient::msg::{GraspCandidate, GraspCandidateSet, Point, Vector3};
+use grasp_orient::sets::{answer_one, answer_set, Rules};
+use grasp_orient::solver::Settings;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use std::hint::black_box;
+use std::time::Instant;
+
+fn message(i: usize, c: &grasp_orient::solver::Candidate) -> GraspCandidate {
+    let p = |v: nalgebra::Vector2<f64>| Point {
+        x: v.x,
+        y: v.y,
+        z: 0.0,
+    };
+    let v = |v: nalgebra::Vector2<f64>| Vector3 {
+        x: v.x,
+        y: v.y,
+        z: 0.0,
+    };
+    GraspCandidate {
+        id: format!("bench-{i}"),
+        contact_1: p(c.contact_1),
+        contact_2: p(c.contact_2),
+        normal_1: v(c.normal_1),
+        normal_2: v(c.normal_2),
+        friction_1: c.friction_1,
+        friction_2: c.friction_2,
+        center_of_mass: p(c.center_of_mass),
+        mass: c.mass,
+        gravity: v(c.gravity),
+        ..GraspCandidate::default()
+    }
+}
+
+/// Median of `runs` timings of `f`, seconds.
+fn median_secs(runs: usize, mut f: impl FnMut()) -> f64 {
+    let mut times: Vec<f64> = (0..runs)
+        .map(|_| {
+            let t = Instant::now();
+            f();
+            t.elapsed().as_secs_f64()
+        })
+        .collect();
+    times.sort_by(f64::total_cmp);
+    times[runs / 2]
+}
+
+fn main() {
+    let n: usize = std::env::args()
+        .skip(1)
+        .find_map(|a| a.parse().ok())
+        .unwrap_or(1000);
+    let mut rng = ChaCha8Rng::seed_from_u64(12);
+    let set = GraspCandidateSet {
+        id: "bench".into(),
+        candidates: (0..n)
+            .map(|i| message(i, &random_grasp(&mut rng)))
+            .collect(),
+        ..GraspCandidateSet::default()
+    };
+    let (settings, rules) = (Settings::default(), Rules::default());
+    // Warm up both paths, then alternate them so that both see the same machine.
+    for _ in 0..20 {
+        black_box(answer_set(&set, &settings, &rules));
+    }
+    let runs = 201;
+    let (mut singles, mut kept, mut sets) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..5 {
+        singles.push(median_secs(runs, || {
+            for c in &set.candidates {
+                black_box(answer_one(black_box(c), &settings, &rules));
+            }
+        }));
+        kept.push(median_secs(runs, || {
+            let answers: Vec<_> = set
+                .candidates
+                .iter()
+                .map(|c| answer_one(black_box(c), &settings, &rules))
+                .collect();
+            black_box(answers);
+        }));
+        sets.push(median_secs(runs, || {
+            black_box(answer_set(black_box(&set), &settings, &rules));
+        }));
+    }
+    for v in [&mut singles, &mut kept, &mut sets] {
+        v.sort_by(f64::total_cmp);
+    }
+    let (single, kept, whole) = (singles[2], kept[2], sets[2]);
+    let answers = answer_set(&set, &settings, &rules);
+    let ranking = median_secs(runs, || {
+        black_box(grasp_orient::sets::rank(
+            black_box(&answers.recommendations),
+            &rules,
+        ));
+    });
+    println!(
+        "{n} candidates ({} ranked), one core, medians of 5 x {runs} runs:\n  \
+         {n} singles answered one by one:  {:.3} ms ({:.2} us each)\n  \
+         the same, answers kept in a list: {:.3} ms (ratio {:.3} to the singles)\n  \
+         the ranking alone:                {:.3} ms\n  \
+         one set answered and ranked:      {:.3} ms ({:.2} us each)\n  \
+         ratio set / singles: {:.3} (target <= 1.1); set time {:.3} ms (target <= 1 ms){}",
+        answers.ranking.len(),
+        single * 1e3,
+        single * 1e6 / n as f64,
+        kept * 1e3,
+        kept / single,
+        ranking * 1e3,
+        whole * 1e3,
+        whole * 1e6 / n as f64,
+        whole / single,
+        whole * 1e3,
+        if whole <= 1e-3 && whole / single <= 1.1 {
+            ": both met"
+        } else if whole / single <= 1.1 {
+            ": the ratio is met, the 1 ms is not"
+        } else {
+            ": the ratio is not met"
+        }
+    );
+}

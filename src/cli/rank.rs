@@ -1,0 +1,294 @@
+//! `grasp_orient rank [FILE]`: JSON lines of candidates answered as one set, ranked by the force
+//! they need; a table a person reads at a glance, or (`--json`) the set's answer.
+
+use super::SolveOptions;
+use anyhow::{bail, Context};
+use grasp_orient::msg::{
+    invalid, short_id, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
+};
+use grasp_orient::sets::{answer_set, RankBy, Rules};
+use std::fmt::Write as _;
+use std::io::{BufRead, BufReader, Write};
+use std::path::PathBuf;
+
+/// Arguments of `rank`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct Args {
+    /// File of JSON lines, one GraspCandidate per line (as `solve` reads them), taken as one set.
+    /// Standard input when absent or "-".
+    pub file: Option<PathBuf>,
+    /// Print the set's answer (a GripRecommendationSet, one JSON line) instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// What ranks the candidates, least first: grip_force (the one --gripper-drive picks) or
+    /// objective (gripping_power).
+    #[arg(long, value_name = "WHAT", value_parser = super::parse_name::<RankBy>)]
+    pub rank_by: Option<RankBy>,
+    /// The most candidates the set may hold (>= 1); a larger one is refused.
+    #[arg(long, value_name = "N", allow_negative_numbers = true,
+          value_parser = super::parameter::<i64>("max_set_size"))]
+    pub max_set_size: Option<i64>,
+    #[command(flatten)]
+    pub options: SolveOptions,
+}
+
+/// Longest id the table shows, characters.
+const ID_CHARS: usize = 32;
+
+/// Reads the lines into a set (a line that is no candidate is kept as an empty one and answered
+/// with status 2 and its line number), answers it, and prints the table or the JSON answer.
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    let (_, settings, mut rules) = args.options.configured()?;
+    if let Some(r) = args.rank_by {
+        rules.rank_by = r;
+    }
+    if let Some(n) = args.max_set_size {
+        rules.max_set_size = usize::try_from(n).unwrap_or(usize::MAX);
+    }
+    let (set, bad) = read_set(args)?;
+    let mut reply = answer_set(&set, &settings, &rules);
+    for (index, number, line, reason) in bad {
+        if let Some(r) = reply.recommendations.get_mut(index) {
+            // As `solve` answers a line that is no candidate.
+            *r = invalid(&grasp_orient::jsonl::partial(&line), &reason);
+            r.message = format!("line {number}: {}", r.message);
+        }
+    }
+    let stdout = std::io::stdout();
+    let mut out = std::io::BufWriter::new(stdout.lock());
+    if args.json {
+        serde_json::to_writer(&mut out, &reply).context("cannot write the answer")?;
+        out.write_all(b"\n").context("cannot write the answer")?;
+    } else if reply.status == GripRecommendationSet::STATUS_OK {
+        out.write_all(table(&set, &reply, &rules).as_bytes())
+            .context("cannot write the table")?;
+    }
+    out.flush().context("cannot write the answer")?;
+    if reply.status != GripRecommendationSet::STATUS_OK {
+        bail!("the set is refused: {}", reply.message);
+    }
+    Ok(())
+}
+
+/// A line that is no candidate: its index in the set, its number, its text and why.
+type BadLine = (usize, usize, String, String);
+
+/// The candidates of the file, and the lines that are none.
+fn read_set(args: &Args) -> anyhow::Result<(GraspCandidateSet, Vec<BadLine>)> {
+    let (input, name): (Box<dyn BufRead>, String) = match &args.file {
+        Some(path) if path.as_os_str() != "-" => (
+            Box::new(BufReader::new(
+                std::fs::File::open(path)
+                    .with_context(|| format!("cannot open {}", path.display()))?,
+            )),
+            path.display().to_string(),
+        ),
+        _ => (Box::new(std::io::stdin().lock()), "stdin".to_string()),
+    };
+    let mut set = GraspCandidateSet {
+        id: name,
+        ..GraspCandidateSet::default()
+    };
+    let mut bad = Vec::new();
+    for (index, line) in input.lines().enumerate() {
+        let number = index + 1;
+        let line = line.with_context(|| format!("cannot read line {number}"))?;
+        if line.trim().is_empty() {
+            continue;
+        }
+        match serde_json::from_str::<GraspCandidate>(&line) {
+            Ok(c) => set.candidates.push(c),
+            Err(e) => {
+                bad.push((set.candidates.len(), number, line, e.to_string()));
+                set.candidates.push(GraspCandidate::default());
+            }
+        }
+    }
+    Ok((set, bad))
+}
+
+/// The status in words.
+fn status_name(status: u8) -> &'static str {
+    match status {
+        GripRecommendation::STATUS_OK => "ok",
+        GripRecommendation::STATUS_NO_FORCE_CLOSURE => "no force closure",
+        GripRecommendation::STATUS_INVALID_INPUT => "invalid input",
+        GripRecommendation::STATUS_EXCEEDS_GRIPPER => "exceeds gripper",
+        _ => "unknown",
+    }
+}
+
+/// A number for the table, or "-" when there is none.
+fn number(v: f64, digits: usize) -> String {
+    if v.is_finite() {
+        format!("{v:.digits$}")
+    } else {
+        "-".to_string()
+    }
+}
+
+/// The wrist rotation, rad, with its axis when that is not +z (a spatial candidate's).
+fn rotation(r: &GripRecommendation) -> String {
+    let angle = number(r.wrist_rotation, 4);
+    let k = &r.rotation_axis;
+    if !r.wrist_rotation.is_finite() || (k.x, k.y, k.z) == (0.0, 0.0, 1.0) {
+        angle
+    } else {
+        format!("{angle} about ({:.3}, {:.3}, {:.3})", k.x, k.y, k.z)
+    }
+}
+
+/// The table: the ranked candidates first, least force first, then the others in file order.
+fn table(set: &GraspCandidateSet, reply: &GripRecommendationSet, rules: &Rules) -> String {
+    let recs = &reply.recommendations;
+    let limit = if set.max_grip_force > 0.0 {
+        set.max_grip_force
+    } else {
+        rules.max_grip_force
+    };
+    let mut text = format!(
+        "{} candidates, {} ranked by {} (gripper_drive {}{})\n",
+        recs.len(),
+        reply.ranking.len(),
+        reply.ranked_by,
+        rules.drive.name(),
+        if limit > 0.0 {
+            format!(", max_grip_force {limit} N")
+        } else {
+            String::new()
+        }
+    );
+    let mut rows: Vec<[String; 7]> = vec![[
+        "rank".into(),
+        "id".into(),
+        format!("grip force N ({})", rules.drive.field()),
+        "gripping power N".into(),
+        "wrist rotation rad".into(),
+        "status".into(),
+        "reason".into(),
+    ]];
+    let ranked = reply
+        .ranking
+        .iter()
+        .enumerate()
+        .map(|(k, &i)| (Some(k + 1), i as usize));
+    let mut in_ranking = vec![false; recs.len()];
+    for &i in &reply.ranking {
+        if let Some(seen) = in_ranking.get_mut(i as usize) {
+            *seen = true;
+        }
+    }
+    let others = (0..recs.len())
+        .filter(|&i| !in_ranking[i])
+        .map(|i| (None, i));
+    for (place, i) in ranked.chain(others) {
+        let Some(r) = recs.get(i) else { continue };
+        rows.push([
+            place.map_or("-".into(), |k| k.to_string()),
+            short(&r.candidate_id),
+            number(rules.drive.grip_force(r), 3),
+            number(r.gripping_power, 3),
+            rotation(r),
+            status_name(r.status).into(),
+            r.message.clone(),
+        ]);
+    }
+    let widths: Vec<usize> = (0..7)
+        .map(|c| rows.iter().map(|r| r[c].chars().count()).max().unwrap_or(0))
+        .collect();
+    for row in &rows {
+        let mut line = String::new();
+        for (c, cell) in row.iter().enumerate() {
+            let right = matches!(c, 0 | 2 | 3 | 4);
+            let pad = widths[c] - cell.chars().count();
+            if c == 6 {
+                line.push_str(cell);
+            } else if right {
+                let _ = write!(line, "{}{cell}  ", " ".repeat(pad));
+            } else {
+                let _ = write!(line, "{cell}{}  ", " ".repeat(pad));
+            }
+        }
+        text.push_str(line.trim_end());
+        text.push('\n');
+    }
+    text
+}
+
+/// An id cut for the table.
+fn short(id: &str) -> String {
+    let cut = short_id(id);
+    match cut.char_indices().nth(ID_CHARS) {
+        Some((end, _)) => format!("{}…", &cut[..end]),
+        None => cut.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use grasp_orient::solver::Settings;
+
+    #[test]
+    fn the_table_lists_ranked_candidates_first_then_the_rest() {
+        let lines = include_str!("../../examples/paper_cases.jsonl");
+        let mut set = GraspCandidateSet::default();
+        for l in lines.lines() {
+            set.candidates
+                .push(serde_json::from_str(l).expect("a candidate"));
+        }
+        set.candidates[1].mass = -1.0;
+        // Case (c) as a spatial candidate too, stood up in the y-z plane: it turns about x.
+        let mut spatial = set.candidates[2].clone();
+        spatial.model = GraspCandidate::MODEL_SPATIAL;
+        spatial.id = "paper-c-spatial".into();
+        for p in [
+            &mut spatial.contact_1,
+            &mut spatial.contact_2,
+            &mut spatial.center_of_mass,
+        ] {
+            (p.x, p.y, p.z) = (p.z, p.x, p.y);
+        }
+        for v in [
+            &mut spatial.normal_1,
+            &mut spatial.normal_2,
+            &mut spatial.gravity,
+        ] {
+            (v.x, v.y, v.z) = (v.z, v.x, v.y);
+        }
+        set.candidates.push(spatial);
+        let rules = Rules::default();
+        let reply = answer_set(&set, &Settings::default(), &rules);
+        let text = table(&set, &reply, &rules);
+        let lines: Vec<&str> = text.lines().collect();
+        let row = |id: &str| {
+            *lines
+                .iter()
+                .find(|l| l.contains(&format!(" {id} ")))
+                .expect("a row")
+        };
+        assert!(row("paper-c").contains(" 0.2618  ok"), "{text}");
+        assert!(
+            row("paper-c-spatial").contains(" 0.2618 about (1.000, 0.000, 0.000)  ok"),
+            "{text}"
+        );
+        set.candidates.pop();
+        let reply = answer_set(&set, &Settings::default(), &rules);
+        let text = table(&set, &reply, &rules);
+        let lines: Vec<&str> = text.lines().collect();
+        assert!(
+            lines[0].starts_with("4 candidates, 3 ranked by internal_force"),
+            "{text}"
+        );
+        assert!(lines[1].starts_with("rank  id"), "{text}");
+        assert!(lines[2].trim_start().starts_with("1  paper-"), "{text}");
+        assert!(
+            lines[5].starts_with("   -  paper-b") || lines[5].starts_with("-"),
+            "{text}"
+        );
+        assert!(
+            lines[5].contains("invalid input") && lines[5].contains("mass"),
+            "{text}"
+        );
+    }
+}

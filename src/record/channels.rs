@@ -1,0 +1,208 @@
+//! What each channel of a recording carries, decided once per channel: which of our types (by
+//! schema name, never by schema text), and, from the schema text, which fields the recording's
+//! version of the type has ([`crate::msg::schema`]). Recordings made before a message grew decode
+//! with the missing trailing fields at their defaults, and [`RecordedFields`] remembers which
+//! fields were recorded, so that `replay` compares only those.
+
+use super::scan::{Channel, KnownSchema, Table};
+use crate::msg::definitions::split_type_name;
+use crate::msg::schema::RecordedType;
+use crate::msg::{
+    cdr, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet, RosMessage,
+};
+use serde::de::DeserializeOwned;
+use std::collections::hash_map::Entry;
+use std::collections::{BTreeMap, HashMap};
+use std::sync::Arc;
+
+/// Which of our types a channel carries.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Carried {
+    /// `GraspCandidate`.
+    Candidate,
+    /// `GripRecommendation`.
+    Recommendation,
+    /// `GraspCandidateSet`.
+    CandidateSet,
+    /// `GripRecommendationSet`.
+    RecommendationSet,
+    /// Anything else.
+    Other,
+}
+
+impl Carried {
+    fn of(channel: &Channel, schema: Option<&KnownSchema>) -> (Self, &'static str) {
+        let Some(schema) = schema else {
+            return (Carried::Other, "");
+        };
+        if channel.message_encoding != "cdr" {
+            return (Carried::Other, "");
+        }
+        let Some(name) = split_type_name(&schema.name) else {
+            return (Carried::Other, "");
+        };
+        let is = |package: &str, n: &str| name == (package, n);
+        if is(GraspCandidate::PACKAGE, GraspCandidate::NAME) {
+            (Carried::Candidate, GraspCandidate::TYPE_NAME)
+        } else if is(GripRecommendation::PACKAGE, GripRecommendation::NAME) {
+            (Carried::Recommendation, GripRecommendation::TYPE_NAME)
+        } else if is(GraspCandidateSet::PACKAGE, GraspCandidateSet::NAME) {
+            (Carried::CandidateSet, GraspCandidateSet::TYPE_NAME)
+        } else if is(GripRecommendationSet::PACKAGE, GripRecommendationSet::NAME) {
+            (Carried::RecommendationSet, GripRecommendationSet::TYPE_NAME)
+        } else {
+            (Carried::Other, "")
+        }
+    }
+}
+
+/// How one channel decodes.
+#[derive(Debug, Clone)]
+pub(crate) struct ChannelReader {
+    /// What it carries.
+    pub(crate) carried: Carried,
+    /// The recorded version of its type when it differs from ours; `None` decodes as it is (our
+    /// own version, or a schema in a form this crate does not read, e.g. `ros2idl`).
+    recorded: Option<Arc<RecordedType>>,
+}
+
+impl ChannelReader {
+    /// Decodes one message of the channel.
+    pub(crate) fn decode<T: DeserializeOwned>(&self, bytes: &[u8]) -> Result<T, cdr::CdrError> {
+        match &self.recorded {
+            Some(t) => t.decode(bytes),
+            None => cdr::decode(bytes),
+        }
+    }
+}
+
+/// The readers of the channels seen so far, by channel id; an incompatible channel is the reason.
+#[derive(Debug, Default)]
+pub(crate) struct Channels {
+    by_id: HashMap<u16, Result<ChannelReader, String>>,
+}
+
+impl Channels {
+    /// The reader of channel `id` as `table` defines it, made on its first message; `fields`
+    /// hears which fields it has. `None` when no record defines the channel.
+    pub(crate) fn reader(
+        &mut self,
+        table: &Table,
+        id: u16,
+        fields: &mut RecordedFields,
+    ) -> Option<&Result<ChannelReader, String>> {
+        match self.by_id.entry(id) {
+            Entry::Occupied(known) => Some(known.into_mut()),
+            Entry::Vacant(new) => {
+                let channel = table.channels.get(&id)?;
+                Some(new.insert(make(channel, table.schema_of(channel), fields)))
+            }
+        }
+    }
+}
+
+/// How `channel` (with its schema, if any) decodes; `fields` hears which fields it has.
+fn make(
+    channel: &Channel,
+    schema: Option<&KnownSchema>,
+    fields: &mut RecordedFields,
+) -> Result<ChannelReader, String> {
+    let (carried, type_name) = Carried::of(channel, schema);
+    let as_it_is = Ok(ChannelReader {
+        carried,
+        recorded: None,
+    });
+    let Some(schema) = schema.filter(|_| carried != Carried::Other) else {
+        return as_it_is;
+    };
+    if schema.encoding != "ros2msg" || schema.data.is_empty() {
+        return as_it_is;
+    }
+    let text = String::from_utf8_lossy(&schema.data);
+    match RecordedType::new(&text, type_name) {
+        Ok(t) => {
+            fields.note(&t);
+            Ok(ChannelReader {
+                carried,
+                recorded: (!t.is_ours()).then(|| Arc::new(t)),
+            })
+        }
+        Err(e) => Err(format!(
+            "channel {} ({}) cannot be read as ours: {e}",
+            channel.topic, schema.name
+        )),
+    }
+}
+
+/// Which fields of our types a recording has: for each type, the fewest fields any of its
+/// channels recorded (our message types only grow at their end, so a count is a prefix). A type
+/// not listed has all our fields.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct RecordedFields {
+    counts: BTreeMap<String, usize>,
+}
+
+/// `pkg/Name` of our message types with trailing fields, and their fields.
+fn our_fields(type_name: &str) -> Option<Vec<&'static str>> {
+    let fields = match type_name {
+        "grasp_orient/GraspCandidate" => GraspCandidate::fields(),
+        "grasp_orient/GripRecommendation" => GripRecommendation::fields(),
+        "grasp_orient/GraspCandidateSet" => GraspCandidateSet::fields(),
+        "grasp_orient/GripRecommendationSet" => GripRecommendationSet::fields(),
+        _ => return None,
+    };
+    Some(fields.into_iter().map(|(name, _)| name).collect())
+}
+
+impl RecordedFields {
+    /// Notes the fields of every one of our types that `t` holds.
+    fn note(&mut self, t: &RecordedType) {
+        for name in [
+            "grasp_orient/GraspCandidate",
+            "grasp_orient/GripRecommendation",
+            "grasp_orient/GraspCandidateSet",
+            "grasp_orient/GripRecommendationSet",
+        ] {
+            if let Some(n) = t.field_count(name) {
+                self.limit(name, n);
+            }
+        }
+    }
+
+    fn limit(&mut self, type_name: &str, count: usize) {
+        let full = our_fields(type_name).map_or(usize::MAX, |f| f.len());
+        if count < full {
+            let entry = self.counts.entry(type_name.to_string()).or_insert(count);
+            *entry = (*entry).min(count);
+        }
+    }
+
+    /// Adds what another part of the same recording has.
+    pub fn merge(&mut self, other: &RecordedFields) {
+        for (name, count) in &other.counts {
+            self.limit(name, *count);
+        }
+    }
+
+    /// Whether the recording has field `field` of `M` wherever `M` appears.
+    pub fn has<M: RosMessage>(&self, field: &str) -> bool {
+        let Some((package, name)) = split_type_name(M::TYPE_NAME) else {
+            return true;
+        };
+        let Some(count) = self.counts.get(&format!("{package}/{name}")) else {
+            return true;
+        };
+        our_fields(&format!("{package}/{name}"))
+            .and_then(|fields| fields.iter().position(|f| *f == field))
+            .is_none_or(|index| index < *count)
+    }
+
+    /// The fields of `M` the recording lacks, in order (empty when it has them all).
+    pub fn missing<M: RosMessage>(&self) -> Vec<&'static str> {
+        M::fields()
+            .into_iter()
+            .map(|(name, _)| name)
+            .filter(|name| !self.has::<M>(name))
+            .collect()
+    }
+}

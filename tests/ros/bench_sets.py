@@ -1,0 +1,229 @@
+#!/usr/bin/env python3
+"""Benchmark of sets over ROS 2 on loopback, from rclpy (not a pytest test), in one run:
+
+    source "$(bash tests/peer/setup.sh | tail -n1)"
+    cargo build --release
+    python tests/ros/bench_sets.py --bin target/release/grasp_orient [--n 1000] [--sets 60] [--singles 300]
+
+(a) A set of --n candidates published on grasp_candidate_sets and its answer received on
+    grip_recommendation_sets, one set at a time: min, p50 and p99 of the round trip, for `grasp_orient node` and for
+    `grasp_orient node --echo`, which answers a set with as many empty recommendations (same header and id),
+    nothing solved: the same transport and sizes, the floor. Target: node p50 <= 1.5 x echo p50.
+    The set is serialized once and published as bytes, and the answer is taken as bytes (rclpy's raw
+    subscription), so that Python's own (de)serialization of half a megabyte is not counted, on either side.
+(b) One candidate: the service ~/recommend called with a set of 1 (`call_async`, the reply deserialized by
+    rclpy), against the topic round trip of one candidate on grasp_candidates -> grip_recommendations (raw), and
+    of a set of 1 on the set topics (raw): p50 and p99.
+Each variant runs in a node of its own (namespace), record:=false, publish_markers:=false, so that only the
+answering is measured; the node and the echo are interleaved over --repeat repetitions and the medians printed.
+With --large-buffers, this process (the rclpy side) uses tests/ros/fastdds_large_buffers.xml: 4 MB socket
+buffers instead of the system's 208 kB, which an answer of 240 to 320 kB overflows; lost fragments then wait
+for the writer's next heartbeat to be repaired.
+
+All traffic stays on this machine (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, one ROS_DOMAIN_ID for the run).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import random
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+if "--large-buffers" in sys.argv:
+    # Before rclpy loads Fast DDS, which reads its profiles file when it starts (2.x: FASTRTPS_, 3.x: FASTDDS_).
+    for var in ("FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_DEFAULT_PROFILES_FILE"):
+        os.environ[var] = str(HERE / "fastdds_large_buffers.xml")
+
+import conftest as C  # noqa: E402  (sets ROS_DOMAIN_ID and localhost discovery before rclpy)
+
+
+def log(*a):
+    print(*a, file=sys.stderr, flush=True)
+
+
+def percentile(xs, q):
+    xs = sorted(xs)
+    k = (len(xs) - 1) * q
+    f = int(k)
+    c = min(f + 1, len(xs) - 1)
+    return xs[f] + (xs[c] - xs[f]) * (k - f)
+
+
+def summary(lat: list[float]) -> dict:
+    return {"n": len(lat), "min_ms": 1e3 * min(lat), "p50_ms": 1e3 * percentile(lat, 0.5),
+            "p99_ms": 1e3 * percentile(lat, 0.99), "max_ms": 1e3 * max(lat)}
+
+
+def candidates(n: int, seed: int, prefix: str) -> list[dict]:
+    rng = random.Random(seed)
+    return [C.random_grasp(rng, f"{prefix}-{k}") for k in range(n)]
+
+
+def set_message(cands: list[dict], sid: str):
+    from grasp_orient.msg import GraspCandidateSet
+
+    s = GraspCandidateSet()
+    s.id = sid
+    s.candidates = [C.candidate_msg(c) for c in cands]
+    return s
+
+
+class Raw:
+    """A raw subscription: counts arrivals (bytes) with their times."""
+
+    def __init__(self, peer, msg_type, topic: str):
+        self.times: list[tuple[float, int]] = []
+        self.sub = peer.node.create_subscription(
+            msg_type, topic, lambda raw: self.times.append((time.perf_counter(), len(raw))), C.reliable_qos(100),
+            raw=True)
+
+
+def round_trips(peer, publish, raw: Raw, count: int, warmup: int, timeout: float = 10.0) -> list[float]:
+    """`count` round trips, one at a time, after `warmup` ones: publish, then wait for the next arrival."""
+    out = []
+    for k in range(count + warmup):
+        before = len(raw.times)
+        t0 = time.perf_counter()
+        publish()
+        deadline = t0 + timeout
+        while len(raw.times) == before:
+            peer.executor.spin_once(timeout_sec=0.005)
+            if time.perf_counter() > deadline:
+                raise RuntimeError(f"no answer within {timeout} s (round trip {k})")
+        if k >= warmup:
+            out.append(raw.times[before][0] - t0)
+    return out
+
+
+def service_trips(peer, client, request, count: int, warmup: int, timeout: float = 10.0) -> list[float]:
+    out = []
+    if not client.wait_for_service(timeout_sec=15):
+        raise RuntimeError(f"service {client.srv_name} not available")
+    for k in range(count + warmup):
+        t0 = time.perf_counter()
+        fut = client.call_async(request)
+        deadline = t0 + timeout
+        while not fut.done():
+            peer.executor.spin_once(timeout_sec=0.005)
+            if time.perf_counter() > deadline:
+                raise RuntimeError(f"no reply within {timeout} s (call {k})")
+        took = time.perf_counter() - t0
+        if len(fut.result().recommendation_set.recommendations) != len(request.candidate_set.candidates):
+            raise RuntimeError("the reply does not answer every candidate")
+        if k >= warmup:
+            out.append(took)
+    return out
+
+
+def measure(peer, args, name: str, extra: list[str], rep: int, workdir: Path) -> dict:
+    from rclpy.serialization import serialize_message
+    from grasp_orient.msg import GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet
+    from grasp_orient.srv import Recommend
+
+    ns = f"/bench_sets_{name}_{rep}"
+    node = C.NodeProcess([*extra, "--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false",
+                          "-p", "publish_markers:=false"], C.ros_env(C.DOMAIN_ID), workdir, f"{name} #{rep}")
+    try:
+        node.wait_ready()
+        res: dict = {}
+        set_pub = peer.node.create_publisher(GraspCandidateSet, f"{ns}/grasp_candidate_sets", C.reliable_qos(100))
+        set_raw = Raw(peer, GripRecommendationSet, f"{ns}/grip_recommendation_sets")
+        one_pub = peer.node.create_publisher(GraspCandidate, f"{ns}/grasp_candidates", C.reliable_qos(100))
+        one_raw = Raw(peer, GripRecommendation, f"{ns}/grip_recommendations")
+        client = peer.node.create_client(Recommend, f"{ns}/grasp_orient/recommend")
+        ok = peer.spin_until(lambda: set_pub.get_subscription_count() > 0 and one_pub.get_subscription_count() > 0
+                             and set_raw.sub.get_publisher_count() > 0 and one_raw.sub.get_publisher_count() > 0, 15)
+        if not ok:
+            raise RuntimeError(f"{name}: the topics did not match")
+        big = serialize_message(set_message(candidates(args.n, 5 + rep, "big"), "big"))
+        res["set_bytes"] = len(big)
+        res["set"] = summary(round_trips(peer, lambda: set_pub.publish(big), set_raw, args.sets, 5, timeout=30))
+        res["answer_bytes"] = set_raw.times[-1][1]
+        one = candidates(1, 9, "one")
+        one_msg = serialize_message(C.candidate_msg(one[0]))
+        res["topic_one"] = summary(round_trips(peer, lambda: one_pub.publish(one_msg), one_raw, args.singles, 20))
+        one_set = serialize_message(set_message(one, "one"))
+        res["topic_set_of_one"] = summary(round_trips(peer, lambda: set_pub.publish(one_set), set_raw,
+                                                      args.singles, 20))
+        req = Recommend.Request()
+        req.candidate_set = set_message(one, "svc")
+        res["service_one"] = summary(service_trips(peer, client, req, args.singles, 20))
+        for x in (set_pub, one_pub):
+            peer.node.destroy_publisher(x)
+        for x in (set_raw.sub, one_raw.sub):
+            peer.node.destroy_subscription(x)
+        peer.node.destroy_client(client)
+        return res
+    finally:
+        node.stop()
+
+
+def med(runs: list[dict], key: str, field: str) -> float:
+    return statistics.median(r[key][field] for r in runs)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--bin", help="grasp_orient binary (default: GRASP_ORIENT_BIN or target/debug)")
+    ap.add_argument("--n", type=int, default=1000, help="candidates per set (default 1000)")
+    ap.add_argument("--sets", type=int, default=60, help="set round trips per run (default 60)")
+    ap.add_argument("--singles", type=int, default=300, help="one-candidate round trips per run (default 300)")
+    ap.add_argument("--repeat", type=int, default=3, help="repetitions, echo and node interleaved (default 3)")
+    ap.add_argument("--json", help="write every measurement here")
+    ap.add_argument("--large-buffers", action="store_true",
+                    help="rclpy side with 4 MB socket buffers (tests/ros/fastdds_large_buffers.xml)")
+    args = ap.parse_args()
+    if args.bin:
+        os.environ["GRASP_ORIENT_BIN"] = str(Path(args.bin).resolve())
+    import rclpy
+
+    rclpy.init()
+    peer = C.Peer("bench_sets_peer")
+    workdir = Path(tempfile.mkdtemp(prefix="grasp_orient_bench_sets_"))
+    runs: dict[str, list[dict]] = {"echo": [], "node": []}
+    log(f"[bench_sets] ROS_DOMAIN_ID={C.DOMAIN_ID}, binary {C.binary_path()}, sets of {args.n}, "
+        f"{args.repeat} repetitions, {'4 MB' if args.large_buffers else 'default'} socket buffers on the rclpy side")
+    try:
+        for rep in range(args.repeat):
+            for name, extra in (("echo", ["--echo"]), ("node", [])):
+                r = measure(peer, args, name, extra, rep, workdir)
+                runs[name].append(r)
+                log(f"[bench_sets] #{rep} {name}: set p50 {r['set']['p50_ms']:.2f} ms p99 {r['set']['p99_ms']:.2f} ms; "
+                    f"one: topic {r['topic_one']['p50_ms']:.3f}, set of 1 {r['topic_set_of_one']['p50_ms']:.3f}, "
+                    f"service {r['service_one']['p50_ms']:.3f} ms (p50)")
+    finally:
+        peer.destroy()
+        rclpy.try_shutdown()
+    e, n = runs["echo"], runs["node"]
+    print(f"medians of {args.repeat} runs; set of {args.n} candidates: {e[0]['set_bytes'] // 1000} kB in, "
+          f"answer {n[0]['answer_bytes'] // 1000} kB (echo's {e[0]['answer_bytes'] // 1000} kB)")
+    print(f"{'':44} {'echo':>10} {'node':>10} {'ratio':>7}")
+    for label, field in (("set round trip min (ms)", "min_ms"), ("set round trip p50 (ms)", "p50_ms"),
+                         ("set round trip p99 (ms)", "p99_ms")):
+        a, b = med(e, "set", field), med(n, "set", field)
+        print(f"{label:44} {a:10.2f} {b:10.2f} {b / a:7.2f}")
+    print("per run, p50 echo / node (ms): " + ", ".join(
+        f"{x['set']['p50_ms']:.2f} / {y['set']['p50_ms']:.2f}" for x, y in zip(e, n)))
+    print(f"target: node p50 <= 1.5 x echo p50: "
+          f"{'met' if med(n, 'set', 'p50_ms') <= 1.5 * med(e, 'set', 'p50_ms') else 'NOT met'}")
+    print("one candidate, node (p50 / p99 ms):")
+    t = (med(n, "topic_one", "p50_ms"), med(n, "topic_one", "p99_ms"))
+    for label, key in (("topic grasp_candidates -> grip_recommendations", "topic_one"),
+                       ("topic, a set of 1", "topic_set_of_one"), ("service ~/recommend, a set of 1", "service_one")):
+        p50, p99 = med(n, key, "p50_ms"), med(n, key, "p99_ms")
+        print(f"  {label:46} {p50:7.3f} / {p99:7.3f}   ratio to the topic {p50 / t[0]:.2f} / {p99 / t[1]:.2f}")
+    if args.json:
+        Path(args.json).write_text(json.dumps(runs, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
