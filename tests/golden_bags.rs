@@ -52,18 +52,28 @@ fn bags_recorded_before_the_grip_force_fields_decode_and_replay() {
         let recorded = bag::read(std::path::Path::new(&path)).expect("golden bag reads");
         assert_eq!(
             recorded.fields.missing::<GripRecommendation>(),
-            ["finger_force", "finger_force_current"],
+            [
+                "finger_force",
+                "finger_force_current",
+                "rotation_axis",
+                "gripping_power_nominal"
+            ],
             "{name}"
         );
         assert_eq!(recorded.undecodable_count, 0, "{:?}", recorded.undecodable);
         assert!(recorded
             .recommendations
             .iter()
-            .all(|r| r.message.finger_force == 0.0 && r.message.finger_force_current == 0.0));
+            .all(|r| r.message.finger_force == 0.0
+                && r.message.finger_force_current == 0.0
+                && r.message.gripping_power_nominal == 0.0));
         let (ok, text) = replay(name);
         assert!(ok, "{text}");
         assert!(
-            text.contains("recorded before finger_force, finger_force_current were added"),
+            text.contains(
+                "recorded before finger_force, finger_force_current, rotation_axis, \
+                 gripping_power_nominal were added"
+            ),
             "{text}"
         );
     }

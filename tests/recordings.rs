@@ -75,6 +75,24 @@ fn write_bag(path: &Path, n: usize, config: &Config, with_settings: bool) {
     w.finish().expect("finish");
 }
 
+/// What a recovered file keeps replays with no difference. A chunk boundary may fall between a
+/// candidate and its recommendation (where depends on the messages' sizes), so the one pair
+/// split by a dropped chunk may leave one candidate without its answer or one answer without its
+/// candidate (exit 1, saying so); nothing else.
+fn replays_but_for_a_split_pair(code: Option<i32>, text: &str) {
+    assert!(text.contains(", 0 differ beyond 1e-9"), "{text}");
+    match code {
+        Some(0) => {}
+        Some(1) => assert!(
+            text.contains("grasp_orient: 1 of ")
+                && text.contains("candidates have no recorded recommendation")
+                || text.contains("grasp_orient: 1 recorded recommendations answer no recorded"),
+            "{text}"
+        ),
+        other => panic!("replay exits {other:?}: {text}"),
+    }
+}
+
 fn run(args: &[&str]) -> (Option<i32>, String) {
     let out = bin().args(args).output().expect("binary runs");
     (out.status.code(), text(&out))
@@ -189,7 +207,7 @@ fn a_cut_recording_is_refused_with_its_offset_and_recovered_with_its_losses() {
         "{text}"
     );
     let (code, text) = run(&["replay", s(&fixed)]);
-    assert_eq!(code, Some(0), "what was kept replays: {text}");
+    replays_but_for_a_split_pair(code, &text);
     // Cut exactly where the last chunk starts: nothing in the file was cut.
     std::fs::write(&cut, &bytes[..last]).expect("write");
     let (code, text) = run(&["recover", s(&cut), "-o", s(&fixed)]);
@@ -230,7 +248,7 @@ fn a_damaged_chunk_is_named_by_replay_and_dropped_and_counted_by_recover() {
         "{text}"
     );
     let (code, text) = run(&["replay", s(&fixed)]);
-    assert_eq!(code, Some(0), "{text}");
+    replays_but_for_a_split_pair(code, &text);
     assert!(
         text.contains(&format!("replayed {kept} candidates")),
         "{text}"

@@ -304,6 +304,7 @@ mod tests {
             mass: 2.0,
             gravity: vector(0.0, 0.2, -9.81),
             model: GraspCandidate::MODEL_SPATIAL,
+            ..GraspCandidate::default()
         }
     }
 

@@ -42,7 +42,7 @@ mod sinusoid;
 mod spatial;
 
 pub use analysis::{Analysis, PointValue};
-pub use frame::MAX_SAFETY_FACTOR;
+pub use frame::{MAX_COORDINATE, MAX_SAFETY_FACTOR};
 pub use paper::CandidateAngles;
 pub use robust::{
     solve_robust, BoxPoint, BoxPointKind, NoCommonOrientation, RobustRecommendation, RobustVerdict,

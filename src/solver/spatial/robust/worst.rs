@@ -354,7 +354,7 @@ fn upper_bound(
     let (terms, b) = mid;
     let mut best = 0.0f64;
     let base = 0.5 * t.s * t.s;
-    for j in 0..4 {
+    for (j, &term) in terms.iter().enumerate() {
         let tj = bd.terms[j].max0();
         // max(T, 0) has the slope of T where T > 0, none where T < 0.
         let tj_slope = if bd.terms[j].hi <= 0.0 {
@@ -365,10 +365,10 @@ fn upper_bound(
             Iv::new(bd.slopes[j].lo.min(0.0), bd.slopes[j].hi.max(0.0))
         };
         let bound = match quantity {
-            Quantity::Squeeze => tj.hi.min(terms[j].max(0.0) + tj_slope.mag() * 0.5 * w),
+            Quantity::Squeeze => tj.hi.min(term.max(0.0) + tj_slope.mag() * 0.5 * w),
             Quantity::Norm2 => {
                 let sq = |x: f64| x * x;
-                let at_mid = (2.0 * sq(terms[j].max(0.0)) + base + sq(b[0]) + sq(b[1])).sqrt();
+                let at_mid = (2.0 * sq(term.max(0.0)) + base + sq(b[0]) + sq(b[1])).sqrt();
                 let natural =
                     (2.0 * sq(tj.hi) + base + sq(bd.b[0].mag()) + sq(bd.b[1].mag())).sqrt();
                 // F' = (2 T⁺ T⁺' + B1 B1' + B2 B2') / F, with F >= sqrt(1/2) (module docs §4).
