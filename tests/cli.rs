@@ -135,6 +135,47 @@ fn tolerance_options_are_the_candidates_own_fields_where_it_gives_none() {
     assert_ne!(num(r, "wrist_rotation"), num(n, "wrist_rotation"));
 }
 
+/// `plot` with tolerances draws the box vertices' curves and their envelope, with the robust
+/// recommendation; the numbers printed are `solve`'s.
+#[test]
+fn plot_draws_the_worst_case_with_tolerances() {
+    let dir = temp_dir("plot-robust");
+    let candidate = dir.path().join("bottle.json");
+    std::fs::write(&candidate, r#"{"id":"bottle","contact_1":{"x":0.04,"y":0.16},"contact_2":{"x":-0.04,"y":0.16},"normal_1":{"x":-1,"y":0},"normal_2":{"x":1,"y":0},"friction_1":0.8,"friction_2":0.5,"center_of_mass":{"x":0,"y":0.10},"mass":1.05,"gravity":{"x":0,"y":-9.81}}"#).expect("write");
+    let svg = dir.path().join("bottle.svg");
+    let out = bin()
+        .args(["plot", candidate.to_str().expect("utf-8"), "-o"])
+        .arg(&svg)
+        .args(["--center-of-mass-tolerance", "0.02,0.02,0"])
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("worst case over 4 vertices")
+            && stdout.contains("norm2 19.773196 N (nominal object there 14.332308 N)"),
+        "{stdout}"
+    );
+    let text = std::fs::read_to_string(&svg).expect("svg written");
+    assert!(text.contains("worst case (envelope)") && text.contains("box vertices"));
+    // Across the contact line: the reason, and the nominal figure.
+    let out = bin()
+        .args(["plot", candidate.to_str().expect("utf-8"), "-o"])
+        .arg(&svg)
+        .args(["--center-of-mass-tolerance", "0.05,0.07,0"])
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && stdout.contains("either side of the line"),
+        "{stdout}"
+    );
+}
+
 #[test]
 fn bad_options_fail_with_a_readable_error() {
     let (_, stderr, ok) = run_solve(&["--objective", "norm3"], "");

@@ -125,11 +125,6 @@ impl SolveOptions {
         Ok(config)
     }
 
-    /// The solver settings of [`SolveOptions::config`].
-    pub fn settings(&self) -> anyhow::Result<Settings> {
-        Ok(self.config()?.solver_settings()?)
-    }
-
     /// [`SolveOptions::config`], its solver settings and its gripper rules.
     pub fn configured(&self) -> anyhow::Result<(Config, Settings, Rules)> {
         let config = self.config()?;

@@ -234,10 +234,15 @@ def test_golden_bag_decodes_identically_with_rosbags_and_mcap(binary, name):
 
 def test_golden_schemas_are_rosbag2s_text():
     """The mcap_ros2-written bags carry exactly the text rosbag2 (Jazzy) would write for these types with the
-    .msg files of their time: today's files cut before the fields added since (issue 12's grip forces)."""
+    .msg files of their time: today's files cut before the fields added since (issue 12's grip forces, issue 11's
+    model and rotation axis, issue 13's tolerances and nominal power)."""
     f = mu.mcap_facts(BAGS / "random_grasps.mcap")
     by_name = {s["name"]: s["data"] for s in f["schemas"].values()}
-    assert by_name[mu.CANDIDATE_TYPE] == mu.rosbag2_full_text(mu.CANDIDATE_TYPE)
+    old_candidate = by_name[mu.CANDIDATE_TYPE]
+    assert old_candidate != mu.rosbag2_full_text(mu.CANDIDATE_TYPE), "the golden bags predate the tolerances"
+    assert mu.is_rosbag2_text_of_an_older_version(mu.CANDIDATE_TYPE, old_candidate), \
+        f"{mu.CANDIDATE_TYPE}: schema text is not rosbag2's for an older version of the .msg file"
+    assert "mass_tolerance" not in old_candidate
     old = by_name[mu.RECOMMENDATION_TYPE]
     assert old != mu.rosbag2_full_text(mu.RECOMMENDATION_TYPE), "the golden bags predate the grip force fields"
     assert mu.is_rosbag2_text_of_an_older_version(mu.RECOMMENDATION_TYPE, old), \
