@@ -265,7 +265,13 @@ impl Answerer {
         }
         self.counts.answered += 1;
         let markers = (markers_on && !self.echo && reply.status == GripRecommendation::STATUS_OK)
-            .then(|| markers::build(&candidate, &reply, spatial.as_deref()));
+            .then(|| {
+                markers::build(
+                    &rules.tolerances.apply(&candidate),
+                    &reply,
+                    spatial.as_deref(),
+                )
+            });
         let recorded = Recorded {
             reply: self.recording.is_on().then(|| reply.clone()),
             markers: markers
@@ -347,7 +353,7 @@ impl Answerer {
         let best = reply.ranking.first().map(|&i| i as usize);
         let markers = best.filter(|_| markers_on && !self.echo).and_then(|i| {
             Some(markers::build(
-                set.candidates.get(i)?,
+                &rules.tolerances.apply(set.candidates.get(i)?),
                 reply.recommendations.get(i)?,
                 None,
             ))
