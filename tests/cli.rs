@@ -293,18 +293,27 @@ fn plot_draws_a_spatial_candidate_in_its_grasp_plane() {
             "{}",
             String::from_utf8_lossy(&out.stderr)
         );
-        assert!(
-            stdout.contains("grasp plane normal (1.000000, 0.000000, 0.000000)")
-                && stdout.contains("rotation 0.261799 rad about (")
-                && stdout.contains("norm2 1.000000 N"),
-            "{stdout}"
-        );
+        // The recommended gravity is (0, -sin 15°, -cos 15°) either way; the rotation turns the
+        // current gravity onto it, and the weight is mass × |gravity|.
+        let g = [gravity_x, 0.0, -1.0_f64];
+        let g_norm = g.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let cos_turn = (std::f64::consts::PI / 12.0).cos() / g_norm;
+        let expected = [
+            "grasp plane normal (1.000000, 0.000000, 0.000000)".to_string(),
+            format!("rotation {:.6} rad about (", cos_turn.acos()),
+            format!("norm2 {g_norm:.6} N"),
+        ];
+        assert!(expected.iter().all(|e| stdout.contains(e)), "{stdout}");
         assert_eq!(stdout.contains("swings"), !current, "{stdout}");
         let text = std::fs::read_to_string(&svg).expect("svg written");
         assert!(text.contains("in the grasp plane") && text.contains("recommended"));
+        // plotters writes each text on a line of its own, between `<text …>` and `</text>`; the
+        // current pose is a blue dot of radius 5 (its legend's dot has radius 4).
+        let legend = text.lines().any(|line| line.trim() == "current");
+        let dot = text.contains(r##"r="5" opacity="1" fill="#0000FF""##);
         assert_eq!(
-            text.contains(">current<"),
-            current,
+            (legend, dot),
+            (current, current),
             "the current pose is drawn only when held"
         );
     }

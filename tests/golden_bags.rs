@@ -36,12 +36,13 @@ fn paper_cases_replay_unchanged() {
     );
 }
 
-/// The golden bags were recorded before `finger_force` and `finger_force_current` were added to
-/// GripRecommendation: their shorter messages decode (by their schema text), and replay says it
-/// compares the fields they have.
+/// The golden bags were recorded before `finger_force`, `finger_force_current` (issue 12) and
+/// `rotation_axis` (issue 11) were added to GripRecommendation, and before `model` (issue 11) was
+/// added to GraspCandidate: their shorter messages decode (by their schema text), the candidates
+/// as planar ones (`model` 0), and replay says it compares the fields they have.
 #[test]
-fn bags_recorded_before_the_grip_force_fields_decode_and_replay() {
-    use grasp_orient::msg::GripRecommendation;
+fn bags_recorded_before_the_grip_force_and_spatial_fields_decode_and_replay() {
+    use grasp_orient::msg::{GraspCandidate, GripRecommendation};
     use grasp_orient::record::bag;
     for name in [
         "paper_cases.mcap",
@@ -60,13 +61,24 @@ fn bags_recorded_before_the_grip_force_fields_decode_and_replay() {
             ],
             "{name}"
         );
+        assert_eq!(
+            recorded.fields.missing::<GraspCandidate>(),
+            ["model", "center_of_mass_tolerance", "mass_tolerance"],
+            "{name}"
+        );
         assert_eq!(recorded.undecodable_count, 0, "{:?}", recorded.undecodable);
-        assert!(recorded
-            .recommendations
-            .iter()
-            .all(|r| r.message.finger_force == 0.0
+        assert!(recorded.recommendations.iter().all(|r| {
+            let axis = &r.message.rotation_axis;
+            r.message.finger_force == 0.0
                 && r.message.finger_force_current == 0.0
-                && r.message.gripping_power_nominal == 0.0));
+                && r.message.gripping_power_nominal == 0.0
+                && (axis.x, axis.y, axis.z) == (0.0, 0.0, 0.0)
+        }));
+        assert!(recorded
+            .candidates
+            .iter()
+            .all(|c| c.message.model == GraspCandidate::MODEL_PLANAR
+                && c.message.mass_tolerance == 0.0));
         let (ok, text) = replay(name);
         assert!(ok, "{text}");
         assert!(

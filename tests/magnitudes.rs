@@ -1,14 +1,17 @@
 //! Every vector and scalar field of a candidate at every magnitude from 1e-300 to 1e300: the
 //! answer is a clean refusal (status 2, naming the field when its size is at fault), or status 0
 //! or 1 without a NaN; and where scaling is exact (a power of two), the answer is the one at unit
-//! scale: unchanged for lengths and normals, forces scaled with the mass and with gravity.
+//! scale: unchanged for lengths and normals, forces scaled with the mass and with gravity. The
+//! same for spatial candidates (`model` 1, every kind of `tests/common/spatial.rs`), whose answers
+//! also carry a unit `rotation_axis` and a `wrist_rotation` in [0, π].
 
 mod common;
 
 use common::random_grasp;
+use common::spatial::{random_spatial_grasp, Kind};
 use grasp_orient::msg::{answer, GraspCandidate, GripRecommendation, Point, Vector3};
-use grasp_orient::solver::{AllowedRange, Candidate, Objective, Settings};
-use nalgebra::Vector2;
+use grasp_orient::solver::{AllowedRange, Candidate, Objective, Settings, SpatialCandidate};
+use nalgebra::{Vector2, Vector3 as V3};
 use proptest::prelude::*;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -43,6 +46,81 @@ fn message(c: &Candidate) -> GraspCandidate {
         gravity: vector(c.gravity),
         ..GraspCandidate::default()
     }
+}
+
+fn point3(v: V3<f64>) -> Point {
+    Point {
+        x: v.x,
+        y: v.y,
+        z: v.z,
+    }
+}
+
+fn vector3(v: V3<f64>) -> Vector3 {
+    Vector3 {
+        x: v.x,
+        y: v.y,
+        z: v.z,
+    }
+}
+
+/// A spatial candidate as the message carries it (`model` 1).
+fn spatial_message(c: &SpatialCandidate) -> GraspCandidate {
+    GraspCandidate {
+        id: "magnitude-spatial".into(),
+        model: GraspCandidate::MODEL_SPATIAL,
+        contact_1: point3(c.contact_1),
+        contact_2: point3(c.contact_2),
+        normal_1: vector3(c.normal_1),
+        normal_2: vector3(c.normal_2),
+        friction_1: c.friction_1,
+        friction_2: c.friction_2,
+        center_of_mass: point3(c.center_of_mass),
+        mass: c.mass,
+        gravity: vector3(c.gravity),
+        ..GraspCandidate::default()
+    }
+}
+
+/// Every kind of random spatial grasp: off, near and on the contact axis, tilted normals.
+const KINDS: [Kind; 7] = [
+    Kind::InPlane,
+    Kind::Tilted,
+    Kind::NearLimitTilt,
+    Kind::NearAxis,
+    Kind::OnAxis,
+    Kind::OnAxisSymmetric,
+    Kind::OnAxisCoplanar,
+];
+
+fn random_spatial(seed: u64, kind: usize) -> SpatialCandidate {
+    random_spatial_grasp(
+        &mut ChaCha8Rng::seed_from_u64(seed),
+        KINDS[kind % KINDS.len()],
+    )
+}
+
+/// `c` with field `field` multiplied by `k`, as [`scaled`] does for planar candidates.
+fn scaled_spatial(c: &SpatialCandidate, field: &str, k: f64) -> SpatialCandidate {
+    let mut s = *c;
+    match field {
+        "contact_1" => s.contact_1 *= k,
+        "contact_2" => s.contact_2 *= k,
+        "center_of_mass" => s.center_of_mass *= k,
+        "normal_1" => s.normal_1 *= k,
+        "normal_2" => s.normal_2 *= k,
+        "friction_1" => s.friction_1 *= k,
+        "friction_2" => s.friction_2 *= k,
+        "mass" => s.mass *= k,
+        "gravity" => s.gravity *= k,
+        "lengths" => {
+            s.contact_1 *= k;
+            s.contact_2 *= k;
+            s.center_of_mass *= k;
+        }
+        other => panic!("no field {other}"),
+    }
+    s
 }
 
 /// The fields a scale can apply to, as the message names them.
@@ -116,6 +194,11 @@ fn numbers(a: &GripRecommendation) -> Vec<(&'static str, f64)> {
         ("internal_force", a.internal_force),
         ("gripping_power_current", a.gripping_power_current),
         ("internal_force_current", a.internal_force_current),
+        ("finger_force", a.finger_force),
+        ("finger_force_current", a.finger_force_current),
+        ("rotation_axis.x", a.rotation_axis.x),
+        ("rotation_axis.y", a.rotation_axis.y),
+        ("rotation_axis.z", a.rotation_axis.z),
     ];
     out.extend(a.contact_forces.iter().map(|&f| ("contact_forces", f)));
     out.extend(a.local_minima.iter().map(|&f| ("local_minima", f)));
@@ -135,6 +218,8 @@ fn is_force(name: &str) -> bool {
             | "internal_force"
             | "gripping_power_current"
             | "internal_force_current"
+            | "finger_force"
+            | "finger_force_current"
             | "contact_forces"
             | "local_minima_power"
     )
@@ -145,7 +230,12 @@ fn is_force(name: &str) -> bool {
 fn check_clean(a: &GripRecommendation, field: &str) -> Result<(), TestCaseError> {
     prop_assert!(a.status <= 2, "status {}", a.status);
     if a.status == GripRecommendation::STATUS_OK {
-        prop_assert!(a.message.is_empty(), "{}", a.message);
+        // A spatial answer may note that the object swings or that the answer is sensitive.
+        let note = a.message.is_empty()
+            || (a.rotation_axis.z != 1.0
+                && (a.message.contains("swings") || a.message.contains("sensitive"))
+                && !a.message.contains("NaN"));
+        prop_assert!(note, "{}", a.message);
         for (name, v) in numbers(a) {
             prop_assert!(!v.is_nan(), "{name} is NaN with status 0");
             prop_assert!(
@@ -153,6 +243,14 @@ fn check_clean(a: &GripRecommendation, field: &str) -> Result<(), TestCaseError>
                 "{name} is {v} with status 0"
             );
         }
+        let k = &a.rotation_axis;
+        let norm = (k.x * k.x + k.y * k.y + k.z * k.z).sqrt();
+        prop_assert!((norm - 1.0).abs() < 1e-12, "rotation_axis of length {norm}");
+    } else if a.status == GripRecommendation::STATUS_INVALID_INPUT {
+        prop_assert!(
+            a.rotation_axis.x.is_nan(),
+            "a refusal carries a rotation_axis"
+        );
     } else {
         prop_assert!(!a.message.is_empty());
         prop_assert!(!a.message.contains("NaN"), "{}", a.message);
@@ -238,6 +336,53 @@ proptest! {
             prop_assert!(sized, "{field} × 2^{exponent}: {}", b.message);
             return Ok(());
         }
+        check_scaled(&unit, &b, force)?;
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2000))]
+
+    /// Spatial candidates of every kind, powers of ten on any field: clean answers, a unit axis,
+    /// a turn in [0, π].
+    #[test]
+    fn any_magnitude_of_a_spatial_candidate_gets_a_clean_answer(
+        seed in any::<u64>(), kind in 0usize..KINDS.len(), field in 0usize..FIELDS.len(),
+        exponent in -300i32..=300, objective in 0u8..3, range in 0u8..3, safety in safety()) {
+        let c = random_spatial(seed, kind);
+        let field = FIELDS[field];
+        let m = spatial_message(&scaled_spatial(&c, field, 10f64.powi(exponent)));
+        let a = answer(&m, &settings(objective, range, safety));
+        check_clean(&a, field)?;
+        if a.status == GripRecommendation::STATUS_OK {
+            prop_assert!((0.0..=std::f64::consts::PI).contains(&a.wrist_rotation));
+        }
+    }
+
+    /// Spatial candidates, powers of two: the answer at unit scale (forces scaled with the
+    /// weight), or a clean refusal of a size.
+    #[test]
+    fn exact_scaling_of_a_spatial_candidate_gives_the_same_answer(
+        seed in any::<u64>(), kind in 0usize..KINDS.len(), field in 0usize..FIELDS.len(),
+        exponent in -996i32..=996, objective in 0u8..3, range in 0u8..3, safety in safety()) {
+        let c = random_spatial(seed, kind);
+        let s = settings(objective, range, safety);
+        let field = FIELDS[field];
+        let k = 2f64.powi(exponent);
+        let unit = answer(&spatial_message(&c), &s);
+        let b = answer(&spatial_message(&scaled_spatial(&c, field, k)), &s);
+        check_clean(&b, field)?;
+        let force = match field {
+            "mass" | "gravity" => k,
+            "lengths" | "normal_1" | "normal_2" => 1.0,
+            _ => return Ok(()),
+        };
+        if b.status == GripRecommendation::STATUS_INVALID_INPUT {
+            let sized = ["out of range", "weight"].iter().any(|w| b.message.contains(w));
+            prop_assert!(sized, "{field} × 2^{exponent}: {}", b.message);
+            return Ok(());
+        }
+        prop_assert_eq!(&unit.message, &b.message);
         check_scaled(&unit, &b, force)?;
     }
 }

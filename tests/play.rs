@@ -5,7 +5,12 @@ mod common;
 
 use common::run::{bin, temp_dir};
 use std::process::{Command, Stdio};
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
+
+/// The tests that share `GRASP_ORIENT_TEST_DOMAIN_ID` take turns: two nodes and two players on one
+/// domain would answer and record each other's candidates.
+static TEST_DOMAIN: Mutex<()> = Mutex::new(());
 
 #[test]
 fn played_candidates_are_answered_recorded_and_replay_unchanged() {
@@ -169,6 +174,7 @@ fn play_into_a_recording_node(
 /// recording node, gives a recording whose sets (and candidates) replay unchanged.
 #[test]
 fn played_sets_are_answered_recorded_and_replay_unchanged() {
+    let _turn = TEST_DOMAIN.lock().unwrap_or_else(|e| e.into_inner());
     let dir = temp_dir("play_sets");
     let source = dir.path().join("source.mcap");
     write_candidates_and_sets(&source);
@@ -192,4 +198,106 @@ fn played_sets_are_answered_recorded_and_replay_unchanged() {
     );
     // 3 single candidates and 2 + 3 + 4 in the sets.
     assert!(summary.contains("replayed 12 candidates"), "{summary}");
+}
+
+/// The paper's cases stood up in the y-z plane of their frame (x → y, y → z, z → x), as spatial
+/// candidates; the last with its gravity tilted out of the grasp plane, so that it swings.
+fn spatial_cases() -> Vec<grasp_orient::msg::GraspCandidate> {
+    use grasp_orient::msg::GraspCandidate;
+    let mut cases: Vec<GraspCandidate> = include_str!("../examples/paper_cases.jsonl")
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("a candidate"))
+        .collect();
+    for c in &mut cases {
+        c.model = GraspCandidate::MODEL_SPATIAL;
+        c.id = format!("{}-spatial", c.id);
+        for p in [&mut c.contact_1, &mut c.contact_2, &mut c.center_of_mass] {
+            (p.x, p.y, p.z) = (p.z, p.x, p.y);
+        }
+        for v in [&mut c.normal_1, &mut c.normal_2, &mut c.gravity] {
+            (v.x, v.y, v.z) = (v.z, v.x, v.y);
+        }
+    }
+    if let Some(last) = cases.last_mut() {
+        last.gravity.x = 0.5 * last.gravity.z.abs();
+    }
+    cases
+}
+
+/// `play` republishes spatial candidates, alone and in a set, with their `model`: the node answers
+/// them in 3D, as the library does, and its recording replays unchanged.
+#[test]
+fn played_spatial_candidates_are_answered_in_3d_and_replay_unchanged() {
+    use grasp_orient::msg::{answer, GraspCandidateSet, GripRecommendation};
+    use grasp_orient::record::{BagWriter, Entry, Payload, SetTopics, Topics};
+    use grasp_orient::solver::Settings;
+
+    let _turn = TEST_DOMAIN.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = temp_dir("play_spatial");
+    let source = dir.path().join("source.mcap");
+    let cases = spatial_cases();
+    let topics = Topics {
+        candidates: "/grasp_candidates".into(),
+        recommendations: "/grip_recommendations".into(),
+        markers: None,
+        sets: Some(SetTopics::default_names()),
+    };
+    let mut w = BagWriter::create(&source, &topics, 100).expect("create");
+    let entry = |payload, at| Entry {
+        payload,
+        log_time: at,
+        publish_time: at,
+    };
+    for (k, c) in (1u64..).zip(&cases) {
+        w.write(&entry(Payload::Candidate(Box::new(c.clone())), k * 1_000))
+            .expect("write");
+    }
+    let set = GraspCandidateSet {
+        id: "spatial-set".into(),
+        candidates: cases.clone(),
+        ..GraspCandidateSet::default()
+    };
+    w.write(&entry(Payload::CandidateSet(Box::new(set)), 10_000))
+        .expect("write");
+    w.finish().expect("finish");
+
+    let domain = std::env::var("GRASP_ORIENT_TEST_DOMAIN_ID")
+        .unwrap_or_else(|_| (140 + std::process::id() % 30).to_string());
+    let (text, recording) = play_into_a_recording_node(&source, &dir.path().join("runs"), &domain);
+    assert!(text.contains("published 4 of 4 candidates"), "{text}");
+    assert!(text.contains("published 1 of 1 candidate sets"), "{text}");
+
+    let bag = grasp_orient::record::bag::read(&recording).expect("the node's recording reads");
+    assert_eq!(bag.candidates.len(), 4, "every played candidate recorded");
+    assert!(bag.candidates.iter().all(|c| c.message.model == 1));
+    let settings = Settings::default();
+    for r in &bag.recommendations {
+        let c = cases
+            .iter()
+            .find(|c| c.id == r.message.candidate_id)
+            .expect("an answer to a played candidate");
+        let mut expected = answer(c, &settings);
+        expected.header = r.message.header.clone();
+        assert_eq!(format!("{:?}", r.message), format!("{expected:?}"));
+        assert_eq!(r.message.status, GripRecommendation::STATUS_OK);
+        // stood up in the y-z plane: the turn is about ±x, not about z
+        assert!((r.message.rotation_axis.x.abs() - 1.0).abs() < 1e-12 || c.gravity.x != 0.0);
+        assert!(r.message.rotation_axis.z.abs() < 1e-12 || c.gravity.x != 0.0);
+    }
+    let swings = &bag.recommendations[3].message;
+    assert!(swings.gripping_power_current.is_infinite() && swings.message.contains("swings"));
+    let set_answer = &bag.recommendation_sets[0].message;
+    assert_eq!(set_answer.recommendations.len(), 4);
+
+    let out = bin()
+        .args(["replay", recording.to_str().expect("utf-8")])
+        .output()
+        .expect("replay runs");
+    let summary = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{summary}");
+    assert!(
+        summary.contains("8 compared with a recorded recommendation, 0 differ")
+            && summary.contains("1 compared with a recorded answer, 0 differ"),
+        "{summary}"
+    );
 }

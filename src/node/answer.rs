@@ -7,7 +7,7 @@ use super::markers;
 use super::params::Shared;
 use super::params::Version;
 use crate::msg::{
-    short_id, Answered, GraspCandidate, GraspCandidateSet, GripRecommendation,
+    answer_in_full, short_id, Answered, GraspCandidate, GraspCandidateSet, GripRecommendation,
     GripRecommendationSet, MarkerArray,
 };
 use crate::record::lifecycle::{Change, Recording, Wanted};
@@ -352,10 +352,16 @@ impl Answerer {
         self.count_set(&reply, &mut notes);
         let best = reply.ranking.first().map(|&i| i as usize);
         let markers = best.filter(|_| markers_on && !self.echo).and_then(|i| {
+            let candidate = set.candidates.get(i)?;
+            // A spatial best candidate is drawn in 3D: its 3D solution is solved again (one
+            // candidate; the set's answers keep only the message fields).
+            let spatial = (candidate.model == GraspCandidate::MODEL_SPATIAL)
+                .then(|| answer_in_full(candidate, &settings).spatial)
+                .flatten();
             Some(markers::build(
-                &rules.tolerances.apply(set.candidates.get(i)?),
+                &rules.tolerances.apply(candidate),
                 reply.recommendations.get(i)?,
-                None,
+                spatial.as_deref(),
             ))
         });
         let recorded = RecordedSet {

@@ -190,6 +190,12 @@ def jsonish(v: Any) -> Any:
     return v
 
 
+def as_message(candidate: dict) -> dict:
+    """A candidate dict as a GraspCandidate holds it: `model` 0 (planar) where the dict has none, as a JSON line,
+    an older message or a recording made before issue 11 without the field means."""
+    return candidate if "model" in candidate else {**candidate, "model": 0}
+
+
 def same(a: Any, b: Any) -> bool:
     """Exact equality, NaN equal to NaN (bit-level sign of NaN ignored), ints equal to equal floats."""
     return not differences(a, b)

@@ -256,7 +256,10 @@ def _live_candidates() -> list[dict]:
     frames = ["object", "world", "tool0", "camera_optical", "base_link"]
     rand = [mu.quantize(mu.random_grasp(rng, f"fox-random-{k}", frames[k % len(frames)],
                                         stamp=(now // 10**9, (now + k) % 10**9))) for k in range(20)]
-    return paper + rand + _refused_and_unclosed(paper[0])
+    # spatial candidates (issue 11): `model` 1 and a 3D rotation_axis, in every kind, for Foxglove to decode
+    spatial = [mu.quantize(mu.random_spatial_grasp(rng, f"fox-spatial-{k}", mu.SPATIAL_KINDS[k % 4],
+                                                   frames[k % len(frames)])) for k in range(8)]
+    return paper + rand + spatial + _refused_and_unclosed(paper[0])
 
 
 def test_live_recording_with_markers_decodes_with_foxglove(foxglove_dir, rclpy_context, start_node, tmp_path):
@@ -313,7 +316,15 @@ def test_live_recording_with_markers_decodes_with_foxglove(foxglove_dir, rclpy_c
                         f"{sorted(set(rc_ids) ^ set(answered))[:5]}")
     for r in rc:
         if r.msg["id"] in sent:
-            problems += [f"candidate {r.msg['id']}: {x}" for x in mu.differences(r.msg, sent[r.msg["id"]])[:4]]
+            problems += [f"candidate {r.msg['id']}: {x}" for x in mu.differences(r.msg, mu.as_message(sent[r.msg["id"]]))[:4]]
+    # the fields of issue 11 are decoded, not defaulted: spatial candidates' model 1 and their 3D rotation axes
+    spatial_ids = {c["id"] for c in cands if c.get("model") == 1}
+    if sorted(r.msg["id"] for r in rc if r.msg.get("model") == 1) != sorted(spatial_ids):
+        problems.append(f"Foxglove decoded model 1 on other candidates than the {len(spatial_ids)} spatial ones")
+    axes = [r.msg["rotation_axis"] for r in by_topic.get(f"{LIVE_NS}/grip_recommendations", [])
+            if r.msg["candidate_id"] in spatial_ids and r.msg["status"] == 0]
+    if len(axes) != len(spatial_ids) or any(abs(a["z"]) == 1.0 for a in axes):
+        problems.append(f"Foxglove's rotation_axis of the spatial answers: {axes[:3]}")
 
     # answers: equal to what the peer received over DDS, every field
     rr = by_topic.get(f"{LIVE_NS}/grip_recommendations", [])

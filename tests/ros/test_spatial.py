@@ -7,6 +7,9 @@
 - the bad-input catalogue of the spatial model: every case answered with status 2 naming the field (status 1
   naming the contact for a normal tilted beyond its friction angle), equal to `solve` where JSON can carry it,
   and a good spatial candidate right after it answered as `solve` answers it;
+- spatial candidates in a set, on `grasp_candidate_sets` and through `~/recommend`: both answers equal, each
+  recommendation equal to `solve`'s, the whole answer equal to `grasp_orient rank --json`'s; a set whose best
+  candidate is spatial gets 3D markers;
 - the markers of a spatial answer are drawn in 3D and obey the physics: the forces balance the weight along the
   recommended gravity, and lie in their true 3D cones;
 - a recording of spatial candidates (with markers) replays without a difference.
@@ -16,6 +19,7 @@ Nothing here skips: a missing rclpy or binary fails with the reason.
 from __future__ import annotations
 
 import copy
+import json
 import math
 import random
 import signal
@@ -155,7 +159,13 @@ def _spatial_bad_cases(base: dict):
         ("nan friction", mut(lambda c: c.update(friction_2=math.nan)), 2, ["friction_2"], False),
         ("1 MB id", mut(lambda c: c.update(id="s" * (1 << 20))), 2, ["id is 1048576 bytes"], True),
         ("2 kB frame_id", mut(lambda c: c["header"].update(frame_id="f" * 2000)), 2, ["frame_id"], True),
+        ("nan centre of mass z", mut(lambda c: c["center_of_mass"].update(z=math.nan)), 2, ["center_of_mass.z"],
+         False),
+        ("centre of mass on the contact axis, beyond contact_2",
+         mut(lambda c: c.update(center_of_mass={"x": 0.0, "y": -0.1, "z": 0.3})), 2,
+         ["center_of_mass lies outside the object"], True),
         ("model 2", mut(lambda c: c.update(model=2)), 2, ["model"], True),
+        ("model 7", mut(lambda c: c.update(model=7)), 2, ["model is 7: it must be 0", "or 1 (MODEL_SPATIAL"], True),
         ("model 255", mut(lambda c: c.update(model=255)), 2, ["model"], True),
         ("normal tilted beyond the friction angle",
          mut(lambda c: c.update(normal_1={"x": math.sin(0.7), "y": -math.cos(0.7), "z": 0.0}, friction_1=0.5)), 1,
@@ -204,6 +214,74 @@ def test_spatial_bad_input_is_answered_and_the_node_keeps_serving(client):
 
 
 # ---------------------------------------------------------------------------------------------------
+# Sets and the service
+# ---------------------------------------------------------------------------------------------------
+def test_spatial_candidates_in_a_set_and_through_the_service_equal_solve_and_rank(peer, grasp_node, tmp_path):
+    """A set mixing spatial, planar and refused spatial candidates: the topic and `~/recommend` give the same
+    answer, every recommendation equals `solve`'s line, and the answer equals `grasp_orient rank --json`'s."""
+    from test_sets import SetClient, set_msg
+
+    refused = [c for name, c, _, _, by_solve in _spatial_bad_cases(upright_square("set-bad"))
+               if by_solve and name != "1 MB id"]
+    for k, c in enumerate(refused):
+        c["id"] = f"set-bad-{k}"
+    rng = random.Random(SEED + 5)
+    planar = [mu.quantize(mu.random_grasp(rng, f"set-planar-{k}")) for k in range(3)]
+    cands = spatial_batch(60, SEED + 6, "set") + planar + refused + [upright_square("set-upright")]
+    sets = SetClient(peer)
+    msg = set_msg(cands, "spatial-set")
+    by_topic = to_plain(sets.send(msg, timeout=60))
+    by_service = to_plain(sets.call(msg, timeout=60))
+    assert by_service == by_topic, "; ".join(compare(by_service, by_topic)[:10])
+    recs = by_topic["recommendations"]
+    assert len(recs) == len(cands) and by_topic["status"] == 0, by_topic["message"]
+    statuses = [r["status"] for r in recs]
+    assert {0, 1, 2} <= set(statuses), statuses
+    problems = [f"{c['id']}: " + "; ".join(d[:4]) for c, r, ref in zip(cands, recs, run_solve(cands))
+                if (d := compare(r, ref))]
+    assert not problems, f"{len(problems)} answers in the set differ from solve's:\n" + "\n".join(problems[:10])
+    ranked = [cands[i]["id"] for i in by_topic["ranking"]]
+    assert any(cands[i].get("model") == 1 for i in by_topic["ranking"][:10]), ranked[:10]
+    # `grasp_orient rank --json` on the same JSON lines: the same set answer
+    lines = tmp_path / "set.jsonl"
+    lines.write_text("".join(json.dumps(c) + "\n" for c in cands))
+    r = subprocess.run([str(binary_path()), "rank", str(lines), "--json"], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 0, r.stderr[-2000:]
+    ranked_by_cli = json.loads(r.stdout)
+    for key in ("ranking", "ranked_by"):
+        assert ranked_by_cli[key] == by_topic[key], (key, ranked_by_cli[key][:10], by_topic[key][:10])
+    diff = [d for a, b in zip(by_topic["recommendations"], ranked_by_cli["recommendations"]) for d in compare(a, b)]
+    assert len(ranked_by_cli["recommendations"]) == len(recs) and not diff, diff[:10]
+
+
+def test_a_set_whose_best_candidate_is_spatial_gets_3d_markers(peer, grasp_node):
+    from test_sets import SetClient, set_msg
+    from visualization_msgs.msg import MarkerArray
+
+    frames = [f"spatial_best_{k}" for k in range(6)]
+    cands = spatial_batch(6, SEED + 7, "set-marker")
+    for c, f in zip(cands, frames):
+        c["header"]["frame_id"] = f
+    got: list = []
+    sub = peer.node.create_subscription(MarkerArray, "grip_markers", got.append, reliable_qos(100))
+    try:
+        assert peer.spin_until(lambda: sub.get_publisher_count() > 0, 15.0), "no publisher on /grip_markers"
+        answer = SetClient(peer).send(set_msg(cands, "spatial-markers"), timeout=30)
+        best = answer.ranking[0]
+
+        def ours():
+            return [m for m in got if m.markers and m.markers[0].header.frame_id in frames]
+
+        assert peer.spin_until(lambda: bool(ours()), 10.0), "no markers for the set"
+        arrays = ours()
+        assert len(arrays) == 1 and arrays[0].markers[0].header.frame_id == frames[best], len(arrays)
+    finally:
+        peer.node.destroy_subscription(sub)
+    check_spatial_markers({m.ns: m for m in arrays[0].markers}, cands[best], answer.recommendations[best])
+
+
+# ---------------------------------------------------------------------------------------------------
 # Markers in 3D
 # ---------------------------------------------------------------------------------------------------
 def test_spatial_markers_are_3d_and_balance_the_weight(peer, client):
@@ -231,6 +309,12 @@ def test_spatial_markers_are_3d_and_balance_the_weight(peer, client):
     finally:
         peer.node.destroy_subscription(sub)
 
+    check_spatial_markers(arr, c, answer)
+
+
+def check_spatial_markers(arr: dict, c: dict, answer) -> None:
+    """The markers of a spatial answer: contacts and centre of mass where the candidate puts them in 3D, the
+    forces balance the weight along the recommended gravity and lie in their true 3D friction cones."""
     def v(p):
         return (p.x, p.y, p.z)
 
@@ -285,7 +369,11 @@ def test_a_recording_of_spatial_candidates_replays(start_node, rclpy_context, tm
     (path,) = record_dir.glob("*.mcap")
     recs = mu.read_mcap(path)
     recorded = [r.msg for r in recs if r.topic == f"{ns}/grasp_candidates"]
-    assert sum(1 for m in recorded if m["model"] == 1) == len(cands), "the model field is recorded"
+    # the model field is recorded as sent: 1, and 2, 7 and 255 for the refused models
+    models = {m["id"]: m["model"] for m in recorded}
+    wrong = [(c["id"], c["model"], models.get(c["id"])) for c in cands if models.get(c["id"]) != c["model"]]
+    assert not wrong, f"the model field is not recorded as sent (id, sent, recorded): {wrong[:5]}"
+    assert {c["model"] for c in cands} == {1, 2, 7, 255}
     solved = [r.msg for r in recs if r.topic == f"{ns}/grip_recommendations" and r.msg["status"] == 0]
     markers = [r.msg for r in recs if r.topic == f"{ns}/grip_markers"]
     assert len(markers) == len(solved), f"{len(markers)} marker arrays for {len(solved)} solved candidates"

@@ -2,8 +2,8 @@
 //! candidate in Π and the way back to 3D (§3, §4).
 
 use super::super::frame::{
-    friction, MAX_COORDINATE, MAX_FRICTION, MAX_GRAVITY, MAX_MASS, MAX_NORMAL_COMPONENT,
-    MAX_SAFETY_FACTOR, MIN_FRICTION,
+    friction, times_pow2, MAX_COORDINATE, MAX_FRICTION, MAX_GRAVITY, MAX_MASS,
+    MAX_NORMAL_COMPONENT, MAX_SAFETY_FACTOR, MIN_FRICTION,
 };
 use super::{
     planar_outcome, v2, AxisRelation, CurrentPose, PlanarOutcome, SpatialCandidate, SpatialMiss,
@@ -85,10 +85,47 @@ fn vector(
     Ok(())
 }
 
+/// Magnitudes whose products of up to four factors neither underflow nor overflow: the squares
+/// in a norm, and the norm of a cross product of two differences of points.
+const PRODUCT_SAFE: std::ops::RangeInclusive<f64> = 1e-70..=1e70;
+
+/// The power of two `2^k` that brings `m` (> 0, finite) to about 1, as `k`; 0 when `m` already
+/// lies in [`PRODUCT_SAFE`], so that the arithmetic there is what it always was.
+///
+/// # Why
+/// Multiplying by a power of two is exact, so a scene and any power-of-two multiple of it come
+/// out bit for bit the same (`tests/magnitudes.rs`), and no length the contract admits, from the
+/// smallest subnormal up, underflows when squared: a contact distance of 1e-82 m squared twice
+/// (the norm of Π's cross product) would be 1e-328, below the smallest double.
+fn scale_exponent(m: f64) -> i32 {
+    if PRODUCT_SAFE.contains(&m) || !m.is_finite() || m == 0.0 {
+        0
+    } else {
+        -(m.log2().floor() as i32)
+    }
+}
+
+/// `v · 2^k`, component by component, exact.
+fn times_pow2_3(v: &Vector3<f64>, k: i32) -> Vector3<f64> {
+    if k == 0 {
+        *v
+    } else {
+        v.map(|x| times_pow2(x, k))
+    }
+}
+
+/// The Euclidean length of `v`, without squaring a component out of range.
+fn length(v: &Vector3<f64>) -> f64 {
+    let k = scale_exponent(v.amax());
+    times_pow2(times_pow2_3(v, k).norm(), -k)
+}
+
+/// The unit vector along `v`, scale-free; the zero vector is refused naming `field`.
 fn direction(field: &'static str, v: &Vector3<f64>) -> Result<Vector3<f64>, InvalidInput> {
-    let n = v.norm();
+    let w = times_pow2_3(v, scale_exponent(v.amax()));
+    let n = w.norm();
     if n > 0.0 {
-        Ok(v * (1.0 / n))
+        Ok(w * (1.0 / n))
     } else {
         Err(InvalidInput::ZeroVector { field })
     }
@@ -159,11 +196,12 @@ fn validate(c: &SpatialCandidate) -> Result<(), InvalidInput> {
 /// A validated spatial candidate.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Geometry {
-    /// Contact points, m.
+    /// Contact points, m (times an exact power of two when the scene is tiny: lengths here are
+    /// in a unit of their own, and only their ratios are used).
     pub p: [Vector3<f64>; 2],
-    /// Centre of mass, m.
+    /// Centre of mass, in the unit of `p`.
     pub c: Vector3<f64>,
-    /// Normals as given (for exact planar coordinates).
+    /// Normals as given (for exact planar coordinates), times an exact power of two when tiny.
     pub n_raw: [Vector3<f64>; 2],
     /// Unit inward normals.
     pub n: [Vector3<f64>; 2],
@@ -175,15 +213,16 @@ pub(super) struct Geometry {
     pub g0: Vector3<f64>,
     /// `m |g|`, N.
     pub weight: f64,
-    /// Contact distance, m.
+    /// Contact distance, in the unit of `p`.
     pub d: f64,
-    /// Largest distance of a contact from the centre of mass, m.
+    /// Largest distance of a contact from the centre of mass, in the unit of `p`.
     pub reach: f64,
     /// Unit contact axis, contact 2 → contact 1.
     pub a: Vector3<f64>,
     /// Distance of the centre of mass from the axis over the contact distance.
     pub offset: f64,
-    /// Largest magnitude among the coordinates and the reach, m: the scale of their rounding.
+    /// Largest magnitude among the coordinates and the reach, in the unit of `p`: the scale of
+    /// their rounding.
     pub magnitude: f64,
 }
 
@@ -201,8 +240,16 @@ impl Geometry {
             direction("normal_2", &c.normal_2)?,
         ];
         let g0 = direction("gravity", &c.gravity)?;
-        let p = [c.contact_1, c.contact_2];
-        let com = c.center_of_mass;
+        // Lengths do not change the answer: a scene of tiny coordinates is brought to about 1 by
+        // an exact power of two (see `scale_exponent`).
+        let k = scale_exponent(
+            c.contact_1
+                .amax()
+                .max(c.contact_2.amax())
+                .max(c.center_of_mass.amax()),
+        );
+        let p = [times_pow2_3(&c.contact_1, k), times_pow2_3(&c.contact_2, k)];
+        let com = times_pow2_3(&c.center_of_mass, k);
         let d = (p[0] - p[1]).norm();
         let to_com = [com - p[0], com - p[1]];
         let dist = [to_com[0].norm(), to_com[1].norm()];
@@ -240,12 +287,12 @@ impl Geometry {
         Ok(Self {
             p,
             c: com,
-            n_raw: [c.normal_1, c.normal_2],
+            n_raw: [&c.normal_1, &c.normal_2].map(|n| times_pow2_3(n, scale_exponent(n.amax()))),
             n,
             mu: [c.friction_1 / safety, c.friction_2 / safety],
             safety,
             g0,
-            weight: c.mass * c.gravity.norm(),
+            weight: c.mass * length(&c.gravity),
             d,
             reach,
             a,
