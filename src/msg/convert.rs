@@ -39,7 +39,7 @@ pub enum MessageLimits {
     #[error(transparent)]
     Solver(#[from] InvalidInput),
     /// Tolerances on a spatial candidate's centre of mass: not supported yet (the spatial
-    /// robust solver has no independent 3D check yet).
+    /// robust solver's optimality and allowed range are not yet checked independently).
     #[error(
         "center_of_mass_tolerance is not supported for spatial candidates (model 1) yet; \
          mass_tolerance is"
@@ -403,7 +403,7 @@ fn answer_planar(m: &GraspCandidate, settings: &Settings) -> Answered {
 /// the nominal answer by `(m + Δm) / m`: at a fixed pose every force is proportional to the mass
 /// (`src/solver/robust.rs`, section 1), so the largest mass is the worst and the pose does not
 /// change. A centre-of-mass tolerance is refused (status 2) until the spatial robust solver is
-/// checked against an independent 3D reference.
+/// checked in full (its worst case at a tilt is; its choice of tilt and allowed range are not).
 fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {
     let mut out = match spatial_tolerance(m)
         .map_err(|e| e.to_string())
