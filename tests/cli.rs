@@ -511,3 +511,51 @@ fn any_span_of_bounds_is_answered_at_once() {
         assert_eq!(wide, graspable, "{range}");
     }
 }
+
+/// The README's spatial example is what `solve` prints for `examples/spatial_cases.jsonl`.
+#[test]
+fn the_readme_spatial_example_is_solves_output() {
+    let readme = include_str!("../README.md");
+    let command = "$ grasp_orient solve examples/spatial_cases.jsonl | jq -c '{";
+    let at = readme.find(command).expect("the example in the README");
+    let block = &readme[at..readme[at..].find("```").map_or(readme.len(), |e| at + e)];
+    let mut lines = block.lines();
+    let head = lines.next().expect("the command line");
+    let fields: Vec<&str> = head
+        [head.find("'{").expect("jq filter") + 2..head.rfind("}'").expect("jq filter end")]
+        .split(", ")
+        .collect();
+    let shown: Vec<Value> = lines
+        .filter(|l| l.starts_with('{'))
+        .map(|l| serde_json::from_str(l).expect("a JSON line"))
+        .collect();
+    let input = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/spatial_cases.jsonl"
+    ))
+    .expect("the example file");
+    let (out, stderr, ok) = run_solve(&[], &input);
+    assert!(ok, "{stderr}");
+    assert_eq!(shown.len(), out.len(), "one line per candidate");
+    // jq prints 0.0 as 0: numbers compare as numbers.
+    fn same(a: &Value, b: &Value) -> bool {
+        match (a, b) {
+            (Value::Number(x), Value::Number(y)) => x.as_f64() == y.as_f64(),
+            (Value::Object(x), Value::Object(y)) => {
+                x.len() == y.len() && x.iter().all(|(k, v)| y.get(k).is_some_and(|w| same(v, w)))
+            }
+            _ => a == b,
+        }
+    }
+    for (want, got) in shown.iter().zip(&out) {
+        for f in &fields {
+            assert!(
+                same(&want[f], &got[f]),
+                "{f} of {}: {} / {}",
+                got["candidate_id"],
+                want[f],
+                got[f]
+            );
+        }
+    }
+}

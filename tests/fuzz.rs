@@ -2,7 +2,8 @@
 //! panics, zero aborts, no hang, and memory bounded by the input's size.
 //!
 //! Targets: the CDR decoding of every message the node and the recordings read
-//! (`GraspCandidate`, `GripRecommendation`, `MarkerArray`), the MCAP reader behind `replay` and
+//! (`GraspCandidate`, `GripRecommendation`, `MarkerArray`), a decoded candidate answered and
+//! drawn as the node does (planar and spatial seeds: `model`, 3D components, `rotation_axis`), the MCAP reader behind `replay` and
 //! `play` (`bag::read_bytes`, which `bag::read` calls), `recover` (`recover::recover_bytes`), and
 //! the JSON-lines reader behind `solve`. Inputs are random bytes (one in five) or valid seeds with one to eight mutations: bit
 //! flips, bytes and boundary words (0, 0xff.., 2^31, 2^63, u64::MAX) written anywhere, insertions,
@@ -32,8 +33,8 @@
 use cap::Cap;
 use grasp_orient::jsonl::answer_lines;
 use grasp_orient::msg::{
-    answer, cdr, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
-    MarkerArray,
+    answer, answer_in_full, cdr, GraspCandidate, GraspCandidateSet, GripRecommendation,
+    GripRecommendationSet, MarkerArray,
 };
 use grasp_orient::record::scan::{decompressed_limit, op, MAGIC};
 use grasp_orient::record::{bag, recover, BagWriter, Entry, Payload, SetTopics, Topics};
@@ -172,6 +173,38 @@ fn paper_cases() -> Vec<GraspCandidate> {
         .collect()
 }
 
+/// The paper's cases stood up in the y-z plane of their frame as spatial candidates (`model` 1),
+/// the last with gravity out of the grasp plane (it swings), and one more with a centre of mass on
+/// the contact axis.
+fn spatial_cases() -> Vec<GraspCandidate> {
+    let mut out = paper_cases();
+    for c in &mut out {
+        c.model = GraspCandidate::MODEL_SPATIAL;
+        c.id.push_str("-spatial");
+        for p in [&mut c.contact_1, &mut c.contact_2, &mut c.center_of_mass] {
+            (p.x, p.y, p.z) = (p.z, p.x, p.y);
+        }
+        for v in [&mut c.normal_1, &mut c.normal_2, &mut c.gravity] {
+            (v.x, v.y, v.z) = (v.z, v.x, v.y);
+        }
+    }
+    out[3].gravity.x = 0.5;
+    let mut on_axis = out[2].clone();
+    on_axis.id = "on-axis".into();
+    on_axis.center_of_mass = grasp_orient::msg::Point {
+        x: 0.5 * (on_axis.contact_1.x + on_axis.contact_2.x),
+        y: 0.5 * (on_axis.contact_1.y + on_axis.contact_2.y),
+        z: 0.5 * (on_axis.contact_1.z + on_axis.contact_2.z),
+    };
+    out.push(on_axis);
+    out
+}
+
+/// Planar and spatial candidates.
+fn all_cases() -> Vec<GraspCandidate> {
+    paper_cases().into_iter().chain(spatial_cases()).collect()
+}
+
 fn cdr_seeds<T: serde::Serialize>(messages: &[T]) -> Vec<Vec<u8>> {
     messages
         .iter()
@@ -180,7 +213,7 @@ fn cdr_seeds<T: serde::Serialize>(messages: &[T]) -> Vec<Vec<u8>> {
 }
 
 fn answers() -> Vec<GripRecommendation> {
-    let mut out: Vec<_> = paper_cases()
+    let mut out: Vec<_> = all_cases()
         .iter()
         .map(|c| answer(c, &Settings::default()))
         .collect();
@@ -199,6 +232,7 @@ fn sets() -> (Vec<GraspCandidateSet>, Vec<GripRecommendationSet>) {
         paper_cases()[..1].to_vec(),
         paper_cases(),
         vec![bad],
+        all_cases(),
     ];
     let sets: Vec<GraspCandidateSet> = lists
         .into_iter()
@@ -217,10 +251,12 @@ fn sets() -> (Vec<GraspCandidateSet>, Vec<GripRecommendationSet>) {
 }
 
 fn markers() -> Vec<MarkerArray> {
-    paper_cases()
+    all_cases()
         .iter()
-        .zip(answers())
-        .map(|(c, a)| grasp_orient::node::markers::build(c, &a, None))
+        .map(|c| {
+            let full = answer_in_full(c, &Settings::default());
+            grasp_orient::node::markers::build(c, &full.reply, full.spatial.as_deref())
+        })
         .collect()
 }
 
@@ -238,10 +274,10 @@ fn mcap_seeds() -> Vec<Vec<u8>> {
         sets: Some(SetTopics::default_names()),
     };
     let mut seeds = Vec::new();
-    for n in [1usize, 2, 4] {
+    for n in [1usize, 2, 4, 9] {
         let path = dir.join(format!("seed_{n}.mcap"));
         let mut w = BagWriter::create(&path, &topics, 100).expect("create");
-        for (i, c) in paper_cases().into_iter().take(n).enumerate() {
+        for (i, c) in all_cases().into_iter().take(n).enumerate() {
             let a = answer(&c, &Settings::default());
             let t = 1_000 + i as u64;
             let entry = |payload| Entry {
@@ -322,6 +358,12 @@ fn json_seeds() -> Vec<Vec<u8>> {
     let mut seeds: Vec<Vec<u8>> = cases.lines().map(|l| l.as_bytes().to_vec()).collect();
     seeds.push(cases.as_bytes().to_vec());
     seeds.push(b"not json\n{\"id\": \"half\", \"mass\": 1.0}\r\n\n[[[1]]]\n".to_vec());
+    for c in spatial_cases() {
+        seeds.push(serde_json::to_vec(&c).expect("JSON"));
+    }
+    let mut seven = spatial_cases()[0].clone();
+    seven.model = 7;
+    seeds.push(serde_json::to_vec(&seven).expect("JSON"));
     seeds
 }
 
@@ -414,6 +456,45 @@ fn mcap_recover_target() -> Target {
     }
 }
 
+/// A candidate as the node gets it: decoded, answered (planar or spatial), and, when held, drawn;
+/// every marker point finite.
+fn answer_target() -> Target {
+    Target {
+        name: "CDR GraspCandidate answered and drawn (node)",
+        seeds: cdr_seeds(&all_cases()),
+        budget: |n| 64 * n + 4 * MIB,
+        run: Box::new(|bytes| {
+            if let Ok(c) = cdr::decode::<GraspCandidate>(bytes) {
+                let full = answer_in_full(&c, &Settings::default());
+                prop_assert!(full.reply.status <= 2, "{}", full.reply.message);
+                if full.reply.status == GripRecommendation::STATUS_OK {
+                    let m = grasp_orient::node::markers::build(
+                        &c,
+                        &full.reply,
+                        full.spatial.as_deref(),
+                    );
+                    for marker in &m.markers {
+                        let p = &marker.pose.position;
+                        prop_assert!(
+                            marker
+                                .points
+                                .iter()
+                                .chain(std::iter::once(p))
+                                .all(|q| q.x.is_finite() && q.y.is_finite() && q.z.is_finite()),
+                            "marker {} of model {}: a point not finite: {:?} {:?}",
+                            marker.ns,
+                            c.model,
+                            c,
+                            marker.points
+                        );
+                    }
+                }
+            }
+            Ok(())
+        }),
+    }
+}
+
 fn json_target() -> Target {
     Target {
         name: "JSON lines (solve)",
@@ -440,6 +521,15 @@ fn json_target() -> Target {
                 let v: serde_json::Value =
                     serde_json::from_str(line).map_err(|e| TestCaseError::fail(e.to_string()))?;
                 prop_assert!(v["status"].as_u64().is_some_and(|s| s <= 2), "{line}");
+                if v["status"] == 0 {
+                    let k = &v["rotation_axis"];
+                    let norm = ["x", "y", "z"]
+                        .iter()
+                        .map(|a| k[a].as_f64().unwrap_or(f64::NAN).powi(2))
+                        .sum::<f64>()
+                        .sqrt();
+                    prop_assert!((norm - 1.0).abs() < 1e-12, "rotation_axis: {line}");
+                }
             }
             Ok(())
         }),
@@ -527,7 +617,8 @@ fn no_bytes_panic_abort_hang_or_take_memory_beyond_their_size() {
     let epoch = Instant::now();
     let running = watchdog(Duration::from_secs(20), epoch);
     let targets = [
-        cdr_target::<GraspCandidate>("CDR GraspCandidate", cdr_seeds(&paper_cases())),
+        cdr_target::<GraspCandidate>("CDR GraspCandidate", cdr_seeds(&all_cases())),
+        answer_target(),
         cdr_target::<GripRecommendation>("CDR GripRecommendation", cdr_seeds(&answers())),
         cdr_target::<MarkerArray>("CDR MarkerArray", cdr_seeds(&markers())),
         cdr_target::<GraspCandidateSet>("CDR GraspCandidateSet", cdr_seeds(&sets().0)),

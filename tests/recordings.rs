@@ -555,3 +555,58 @@ fn a_closed_stdout_pipe_is_success() {
     feeder.join().expect("fed");
     assert_eq!(out.status.code(), Some(0), "{}", text(&out));
 }
+
+/// A recording of spatial candidates (`examples/spatial_cases.jsonl`) with their answers replays
+/// unchanged; the same with one answer's `rotation_axis` turned differs, naming the field.
+#[test]
+fn a_recording_of_spatial_candidates_replays_and_a_turned_axis_differs() {
+    let cases: Vec<GraspCandidate> = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/spatial_cases.jsonl"
+    ))
+    .expect("examples/spatial_cases.jsonl")
+    .lines()
+    .map(|l| serde_json::from_str(l).expect("a candidate"))
+    .collect();
+    let settings = Config::default().solver_settings().expect("valid");
+    let dir = temp_dir("spatial_replay");
+    let write = |path: &Path, turn: bool| {
+        let mut w = BagWriter::create(path, &topics(), 100).expect("create");
+        for (i, c) in cases.iter().enumerate() {
+            let mut a = answer(c, &settings);
+            assert_eq!(c.model, GraspCandidate::MODEL_SPATIAL);
+            if turn && i == 0 {
+                a.rotation_axis.x = -a.rotation_axis.x;
+            }
+            let t = 1_000 + i as u64;
+            for payload in [
+                Payload::Candidate(Box::new(c.clone())),
+                Payload::Recommendation(Box::new(a)),
+            ] {
+                w.write(&Entry {
+                    payload,
+                    log_time: t,
+                    publish_time: t,
+                })
+                .expect("write");
+            }
+        }
+        w.finish().expect("finish");
+    };
+    let same = dir.path().join("same.mcap");
+    write(&same, false);
+    let (code, text) = run(&["replay", s(&same)]);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(
+        text.contains("3 compared with a recorded recommendation, 0 differ"),
+        "{text}"
+    );
+    let turned = dir.path().join("turned.mcap");
+    write(&turned, true);
+    let (code, text) = run(&["replay", s(&turned)]);
+    assert_eq!(code, Some(1), "{text}");
+    assert!(
+        text.contains("1 differ") && text.contains("rotation_axis.x") && text.contains("mug"),
+        "{text}"
+    );
+}

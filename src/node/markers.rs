@@ -136,6 +136,10 @@ impl Scene {
         let point = |p: &Point| V3::new(p.x, p.y, p.z);
         let gravity = V3::new(c.gravity.x, c.gravity.y, c.gravity.z);
         let contacts = [point(&c.contact_1), point(&c.contact_2)];
+        // Lengths by `hypot`, as in the planar model: no square underflows for tiny gravity or
+        // contact distances (a gravity of 1e-284 m/s² squared is 0).
+        let length = |v: V3<f64>| v.x.hypot(v.y).hypot(v.z);
+        let g = length(gravity);
         let edges = |i: usize| {
             let (s, cos) = r.sliced_friction[i].atan().sin_cos();
             let (u, t) = (r.normal_directions[i], r.friction_directions[i]);
@@ -146,10 +150,10 @@ impl Scene {
             center_of_mass: point(&c.center_of_mass),
             cone_edges: [edges(0), edges(1)],
             forces: r.force_vectors,
-            gravity_now: gravity.normalize(),
+            gravity_now: gravity / g,
             gravity_then: r.gravity_direction,
-            span: (contacts[0] - contacts[1]).norm(),
-            weight: c.mass * gravity.norm(),
+            span: length(contacts[0] - contacts[1]),
+            weight: c.mass * g,
         }
     }
 }

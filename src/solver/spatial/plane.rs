@@ -3,7 +3,7 @@
 
 use super::super::frame::{
     friction, times_pow2, MAX_COORDINATE, MAX_FRICTION, MAX_GRAVITY, MAX_MASS,
-    MAX_NORMAL_COMPONENT, MAX_SAFETY_FACTOR, MIN_FRICTION,
+    MAX_NORMAL_COMPONENT, MAX_SAFETY_FACTOR, MIN_FRICTION, MIN_WEIGHT,
 };
 use super::{
     planar_outcome, v2, AxisRelation, CurrentPose, PlanarOutcome, SpatialCandidate, SpatialMiss,
@@ -240,6 +240,12 @@ impl Geometry {
             direction("normal_2", &c.normal_2)?,
         ];
         let g0 = direction("gravity", &c.gravity)?;
+        // As in the planar model: below the smallest normal double the weight has lost its
+        // precision, and the forces (in units of it) cannot be given in newtons.
+        let weight = c.mass * length(&c.gravity);
+        if weight < MIN_WEIGHT {
+            return Err(InvalidInput::WeightTooSmall { weight });
+        }
         // Lengths do not change the answer: a scene of tiny coordinates is brought to about 1 by
         // an exact power of two (see `scale_exponent`).
         let k = scale_exponent(
@@ -292,7 +298,7 @@ impl Geometry {
             mu: [c.friction_1 / safety, c.friction_2 / safety],
             safety,
             g0,
-            weight: c.mass * length(&c.gravity),
+            weight,
             d,
             reach,
             a,
