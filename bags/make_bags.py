@@ -301,7 +301,9 @@ def write_rosbags(directory: Path, cands: list[dict], t0: int) -> Path:
             normal_1=Vector3(**c["normal_1"]), normal_2=Vector3(**c["normal_2"]),
             friction_1=c["friction_1"], friction_2=c["friction_2"],
             center_of_mass=Point(**c["center_of_mass"]), mass=c["mass"], gravity=Vector3(**c["gravity"]),
-            model=c.get("model", 0))
+            model=c.get("model", 0),
+            center_of_mass_tolerance=Vector3(**c.get("center_of_mass_tolerance", {"x": 0.0, "y": 0.0, "z": 0.0})),
+            mass_tolerance=c.get("mass_tolerance", 0.0))
 
     never = QosTime(sec=9223372036, nsec=854775807)
     qos = Qos(QosHistory.KEEP_LAST, QOS_DEPTH, QosReliability.RELIABLE, QosDurability.VOLATILE, never, never,

@@ -56,6 +56,7 @@ fn message(i: usize, c: &grasp_orient::solver::Candidate) -> GraspCandidate {
         mass: c.mass,
         gravity: q(c.gravity),
         model: GraspCandidate::MODEL_PLANAR,
+        ..GraspCandidate::default()
     }
 }
 

@@ -95,7 +95,7 @@ type ExactField = (
 );
 
 /// Every number compared, in report order.
-const NUMBERS: [NumberField; 22] = [
+const NUMBERS: [NumberField; 23] = [
     ("wrist_rotation", |r| r.wrist_rotation),
     ("rotation.x", |r| r.rotation.x),
     ("rotation.y", |r| r.rotation.y),
@@ -118,6 +118,7 @@ const NUMBERS: [NumberField; 22] = [
     ("rotation_axis.x", |r| r.rotation_axis.x),
     ("rotation_axis.y", |r| r.rotation_axis.y),
     ("rotation_axis.z", |r| r.rotation_axis.z),
+    ("gripping_power_nominal", |r| r.gripping_power_nominal),
 ];
 
 /// Every list of numbers compared: a different length is a gap of 1.

@@ -20,12 +20,15 @@
 //! - A set larger than `max_set_size` is refused as a whole with `STATUS_TOO_LARGE` before any
 //!   candidate is solved; a set whose own fields are bad with `STATUS_INVALID_INPUT`. A set's own
 //!   `max_grip_force` of 0 means the node's.
+//! - The node's `center_of_mass_tolerance` and `mass_tolerance` ([`DefaultTolerances`]) apply to
+//!   a candidate that leaves its own at zero; a candidate's own non-zero tolerance wins (issue 13).
 
 use crate::msg::{
     answer, answer_in_full, clip, Answered, GraspCandidate, GraspCandidateSet, GripRecommendation,
     GripRecommendationSet, MAX_TEXT_BYTES,
 };
 use crate::solver::Settings;
+use std::borrow::Cow;
 use std::cmp::Ordering;
 
 /// How the fingers of the gripper are driven: which force is the grip force.
@@ -84,8 +87,45 @@ impl RankBy {
     }
 }
 
+/// The node's tolerances, parameters `center_of_mass_tolerance` and `mass_tolerance` (issue 13):
+/// what a candidate that leaves its own at zero is answered with.
+///
+/// Per field, the candidate's own wins when it is non-zero: its `center_of_mass_tolerance` when
+/// any of its three components is non-zero (so a candidate can say "known exactly along y" with
+/// `(0.01, 0, 0)`), its `mass_tolerance` when non-zero; otherwise the node's. All zero (the
+/// default) leaves every candidate as it is, so the answers are today's bit for bit.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct DefaultTolerances {
+    /// Half-widths of the box around the centre of mass along the candidate frame's axes, m.
+    pub center_of_mass: [f64; 3],
+    /// ± kg.
+    pub mass: f64,
+}
+
+impl DefaultTolerances {
+    /// `m` with the node's tolerances where its own are zero (borrowed when nothing changes).
+    pub fn apply<'a>(&self, m: &'a GraspCandidate) -> Cow<'a, GraspCandidate> {
+        let t = &m.center_of_mass_tolerance;
+        let own_box = t.x != 0.0 || t.y != 0.0 || t.z != 0.0;
+        let fill_box = !own_box && self.center_of_mass != [0.0; 3];
+        let fill_mass = m.mass_tolerance == 0.0 && self.mass != 0.0;
+        if !fill_box && !fill_mass {
+            return Cow::Borrowed(m);
+        }
+        let mut out = m.clone();
+        if fill_box {
+            let [x, y, z] = self.center_of_mass;
+            out.center_of_mass_tolerance = crate::msg::Vector3 { x, y, z };
+        }
+        if fill_mass {
+            out.mass_tolerance = self.mass;
+        }
+        Cow::Owned(out)
+    }
+}
+
 /// The rules for answering with a gripper in mind: the node's parameters `gripper_drive`,
-/// `max_grip_force`, `rank_by` and `max_set_size`.
+/// `max_grip_force`, `rank_by` and `max_set_size`, and its default tolerances.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Rules {
     /// Which force is the grip force.
@@ -96,6 +136,8 @@ pub struct Rules {
     pub rank_by: RankBy,
     /// The most candidates a set may hold.
     pub max_set_size: usize,
+    /// The tolerances of a candidate that gives none (issue 13).
+    pub tolerances: DefaultTolerances,
 }
 
 impl Default for Rules {
@@ -105,6 +147,7 @@ impl Default for Rules {
             max_grip_force: 0.0,
             rank_by: RankBy::default(),
             max_set_size: DEFAULT_MAX_SET_SIZE,
+            tolerances: DefaultTolerances::default(),
         }
     }
 }
@@ -148,16 +191,17 @@ pub fn apply_limit(r: &mut GripRecommendation, drive: GripperDrive, max_grip_for
     }
 }
 
-/// The answer to one candidate under `rules`: [`answer`], then the gripper's limit.
+/// The answer to one candidate under `rules`: the node's tolerances where the candidate gives
+/// none, [`answer`], then the gripper's limit.
 pub fn answer_one(m: &GraspCandidate, settings: &Settings, rules: &Rules) -> GripRecommendation {
-    let mut r = answer(m, settings);
+    let mut r = answer(&rules.tolerances.apply(m), settings);
     apply_limit(&mut r, rules.drive, rules.max_grip_force);
     r
 }
 
 /// [`answer_one`], with the 3D solution of a spatial grasp (for its markers).
 pub fn answer_one_in_full(m: &GraspCandidate, settings: &Settings, rules: &Rules) -> Answered {
-    let mut out = answer_in_full(m, settings);
+    let mut out = answer_in_full(&rules.tolerances.apply(m), settings);
     apply_limit(&mut out.reply, rules.drive, rules.max_grip_force);
     out
 }
@@ -647,5 +691,45 @@ mod tests {
         assert_eq!(echo.recommendations.len(), 4);
         assert_eq!(echo.recommendations[2].candidate_id, set.candidates[2].id);
         assert!(echo.ranking.is_empty());
+    }
+
+    /// The node's tolerances fill a candidate's zero ones; a candidate's own non-zero wins, per
+    /// field; all zero leaves the candidate borrowed (bit-identical answers).
+    #[test]
+    fn default_tolerances_apply_where_the_candidate_gives_none() {
+        let c = paper_cases().swap_remove(2);
+        let none = DefaultTolerances::default();
+        assert!(matches!(none.apply(&c), Cow::Borrowed(_)));
+        let node = DefaultTolerances {
+            center_of_mass: [0.002, 0.001, 0.0],
+            mass: 0.02,
+        };
+        let filled = node.apply(&c);
+        assert_eq!(filled.center_of_mass_tolerance.x, 0.002);
+        assert_eq!(filled.center_of_mass_tolerance.y, 0.001);
+        assert_eq!(filled.mass_tolerance, 0.02);
+        let mut own = c.clone();
+        own.center_of_mass_tolerance.x = 0.003;
+        let kept = node.apply(&own);
+        assert_eq!(
+            (
+                kept.center_of_mass_tolerance.x,
+                kept.center_of_mass_tolerance.y
+            ),
+            (0.003, 0.0)
+        );
+        assert_eq!(kept.mass_tolerance, 0.02);
+        let rules = Rules {
+            tolerances: node,
+            ..Rules::default()
+        };
+        assert_eq!(
+            answer_one(&c, &Settings::default(), &rules),
+            answer(&filled, &Settings::default())
+        );
+        assert_ne!(
+            answer_one(&c, &Settings::default(), &rules).gripping_power,
+            answer(&c, &Settings::default()).gripping_power
+        );
     }
 }

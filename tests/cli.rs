@@ -95,6 +95,87 @@ fn options_change_the_answer() {
     assert!((-0.2..=0.2).contains(&theta));
 }
 
+/// The tolerance options apply to every candidate that gives none, exactly as the same values
+/// in the candidate's own JSON fields; a candidate's own wins.
+#[test]
+fn tolerance_options_are_the_candidates_own_fields_where_it_gives_none() {
+    let bottle = r#"{"id":"bottle","contact_1":{"x":0.04,"y":0.16},"contact_2":{"x":-0.04,"y":0.16},"normal_1":{"x":-1,"y":0},"normal_2":{"x":1,"y":0},"friction_1":0.8,"friction_2":0.5,"center_of_mass":{"x":0,"y":0.10},"mass":1.05,"gravity":{"x":0,"y":-9.81}}"#;
+    let own = bottle.replace(
+        r#""mass":1.05,"#,
+        r#""mass":1.05,"center_of_mass_tolerance":{"x":0.02,"y":0.02},"mass_tolerance":0.05,"#,
+    );
+    let (nominal, _, ok) = run_solve(&[], &format!("{bottle}\n"));
+    assert!(ok);
+    let (by_option, _, ok) = run_solve(
+        &[
+            "--center-of-mass-tolerance",
+            "0.02,0.02,0",
+            "--mass-tolerance",
+            "0.05",
+        ],
+        &format!("{bottle}\n"),
+    );
+    assert!(ok);
+    let (by_field, _, ok) = run_solve(&[], &format!("{own}\n"));
+    assert!(ok);
+    assert_eq!(by_option, by_field);
+    let (both, _, ok) = run_solve(
+        &["--center-of-mass-tolerance", "0.001,0.001,0"],
+        &format!("{own}\n"),
+    );
+    assert!(ok);
+    assert_eq!(both, by_field, "the candidate's own tolerance wins");
+    let num = |v: &Value, f: &str| v[f].as_f64().expect("a number");
+    let (n, r) = (&nominal[0], &by_field[0]);
+    assert_eq!(r["status"], 0, "{r}");
+    assert_eq!(num(n, "gripping_power"), num(n, "gripping_power_nominal"));
+    assert!(num(r, "gripping_power") > num(r, "gripping_power_nominal"));
+    assert!(num(r, "gripping_power") > num(n, "gripping_power"));
+    assert!(num(r, "finger_force") > num(n, "finger_force"));
+    assert_ne!(num(r, "wrist_rotation"), num(n, "wrist_rotation"));
+}
+
+/// `plot` with tolerances draws the box vertices' curves and their envelope, with the robust
+/// recommendation; the numbers printed are `solve`'s.
+#[test]
+fn plot_draws_the_worst_case_with_tolerances() {
+    let dir = temp_dir("plot-robust");
+    let candidate = dir.path().join("bottle.json");
+    std::fs::write(&candidate, r#"{"id":"bottle","contact_1":{"x":0.04,"y":0.16},"contact_2":{"x":-0.04,"y":0.16},"normal_1":{"x":-1,"y":0},"normal_2":{"x":1,"y":0},"friction_1":0.8,"friction_2":0.5,"center_of_mass":{"x":0,"y":0.10},"mass":1.05,"gravity":{"x":0,"y":-9.81}}"#).expect("write");
+    let svg = dir.path().join("bottle.svg");
+    let out = bin()
+        .args(["plot", candidate.to_str().expect("utf-8"), "-o"])
+        .arg(&svg)
+        .args(["--center-of-mass-tolerance", "0.02,0.02,0"])
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("worst case over 4 vertices")
+            && stdout.contains("norm2 19.773196 N (nominal object there 14.332308 N)"),
+        "{stdout}"
+    );
+    let text = std::fs::read_to_string(&svg).expect("svg written");
+    assert!(text.contains("worst case (envelope)") && text.contains("box vertices"));
+    // Across the contact line: the reason, and the nominal figure.
+    let out = bin()
+        .args(["plot", candidate.to_str().expect("utf-8"), "-o"])
+        .arg(&svg)
+        .args(["--center-of-mass-tolerance", "0.05,0.07,0"])
+        .output()
+        .expect("runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && stdout.contains("either side of the line"),
+        "{stdout}"
+    );
+}
+
 #[test]
 fn bad_options_fail_with_a_readable_error() {
     let (_, stderr, ok) = run_solve(&["--objective", "norm3"], "");
@@ -354,6 +435,33 @@ fn every_numeric_option_has_a_domain_and_exit_code_2() {
             "friction_safety_factor",
         ),
         (&["node", "--ros-args", "-p", "no_such:=1"], "no_such"),
+        (
+            &["solve", "--center-of-mass-tolerance", "0.01,-0.01,0"],
+            "--center-of-mass-tolerance",
+        ),
+        (
+            &["solve", "--center-of-mass-tolerance", "0.01,0.01"],
+            "--center-of-mass-tolerance",
+        ),
+        (
+            &["rank", "--center-of-mass-tolerance", "nan,0,0"],
+            "--center-of-mass-tolerance",
+        ),
+        (&["solve", "--mass-tolerance", "-0.1"], "--mass-tolerance"),
+        (&["rank", "--mass-tolerance", "inf"], "--mass-tolerance"),
+        (
+            &[
+                "node",
+                "--ros-args",
+                "-p",
+                "center_of_mass_tolerance:=[0.01, -1.0, 0.0]",
+            ],
+            "center_of_mass_tolerance",
+        ),
+        (
+            &["node", "--ros-args", "-p", "mass_tolerance:=-0.5"],
+            "mass_tolerance",
+        ),
         (&["node", "--ros-args", "--log-level", "loud"], "loud"),
         (
             &["play", bag, "--ros-args", "--log-level", "x:=loud"],

@@ -53,12 +53,17 @@ fn bags_recorded_before_the_grip_force_and_spatial_fields_decode_and_replay() {
         let recorded = bag::read(std::path::Path::new(&path)).expect("golden bag reads");
         assert_eq!(
             recorded.fields.missing::<GripRecommendation>(),
-            ["finger_force", "finger_force_current", "rotation_axis"],
+            [
+                "finger_force",
+                "finger_force_current",
+                "rotation_axis",
+                "gripping_power_nominal"
+            ],
             "{name}"
         );
         assert_eq!(
             recorded.fields.missing::<GraspCandidate>(),
-            ["model"],
+            ["model", "center_of_mass_tolerance", "mass_tolerance"],
             "{name}"
         );
         assert_eq!(recorded.undecodable_count, 0, "{:?}", recorded.undecodable);
@@ -66,17 +71,20 @@ fn bags_recorded_before_the_grip_force_and_spatial_fields_decode_and_replay() {
             let axis = &r.message.rotation_axis;
             r.message.finger_force == 0.0
                 && r.message.finger_force_current == 0.0
+                && r.message.gripping_power_nominal == 0.0
                 && (axis.x, axis.y, axis.z) == (0.0, 0.0, 0.0)
         }));
         assert!(recorded
             .candidates
             .iter()
-            .all(|c| c.message.model == GraspCandidate::MODEL_PLANAR));
+            .all(|c| c.message.model == GraspCandidate::MODEL_PLANAR
+                && c.message.mass_tolerance == 0.0));
         let (ok, text) = replay(name);
         assert!(ok, "{text}");
         assert!(
             text.contains(
-                "recorded before finger_force, finger_force_current, rotation_axis were added"
+                "recorded before finger_force, finger_force_current, rotation_axis, \
+                 gripping_power_nominal were added"
             ),
             "{text}"
         );

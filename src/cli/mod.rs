@@ -56,6 +56,17 @@ pub struct SolveOptions {
     /// independent (finger_force).
     #[arg(long, value_name = "DRIVE", value_parser = parse_name::<GripperDrive>)]
     pub gripper_drive: Option<GripperDrive>,
+    /// Half-widths of a box around the centre of mass along the candidate frame's axes, m
+    /// (each >= 0), for candidates whose own center_of_mass_tolerance is zero: the answer is the
+    /// worst case over the box.
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true,
+          value_parser = parse_center_of_mass_tolerance)]
+    pub center_of_mass_tolerance: Option<[f64; 3]>,
+    /// The mass lies in mass ± this, kg (>= 0), for candidates whose own mass_tolerance is zero:
+    /// the answer is the worst case over it.
+    #[arg(long, value_name = "KG", allow_negative_numbers = true,
+          value_parser = parameter::<f64>("mass_tolerance"))]
+    pub mass_tolerance: Option<f64>,
 }
 
 impl SolveOptions {
@@ -83,6 +94,12 @@ impl SolveOptions {
         if let Some(d) = self.gripper_drive {
             out.push(("gripper_drive".into(), Value::String(d.to_string())));
         }
+        if let Some(t) = self.center_of_mass_tolerance {
+            out.push(("center_of_mass_tolerance".into(), t.to_yaml()));
+        }
+        if let Some(t) = self.mass_tolerance {
+            out.push(("mass_tolerance".into(), Value::Number(t.into())));
+        }
         if let Some(r) = self.range {
             let text = |s: &str| Value::String(s.to_string());
             match r {
@@ -108,11 +125,6 @@ impl SolveOptions {
         Ok(config)
     }
 
-    /// The solver settings of [`SolveOptions::config`].
-    pub fn settings(&self) -> anyhow::Result<Settings> {
-        Ok(self.config()?.solver_settings()?)
-    }
-
     /// [`SolveOptions::config`], its solver settings and its gripper rules.
     pub fn configured(&self) -> anyhow::Result<(Config, Settings, Rules)> {
         let config = self.config()?;
@@ -133,6 +145,23 @@ where
     T::Err: std::fmt::Display,
 {
     text.parse::<T>().map_err(|e| e.to_string())
+}
+
+/// `X,Y,Z` in m, each in the domain of the parameter `center_of_mass_tolerance`.
+fn parse_center_of_mass_tolerance(text: &str) -> Result<[f64; 3], String> {
+    let parts: Vec<&str> = text.split(',').collect();
+    let [x, y, z] = parts.as_slice() else {
+        return Err(format!("expected X,Y,Z (three numbers), got {text:?}"));
+    };
+    let number = |s: &str| {
+        s.trim()
+            .parse::<f64>()
+            .map_err(|_| format!("{s:?} is not a number"))
+    };
+    let value = [number(x)?, number(y)?, number(z)?];
+    let domain = Parameter::find("center_of_mass_tolerance").map_or(Domain::Any, |p| p.domain);
+    value.check(&domain)?;
+    Ok(value)
 }
 
 /// `from_above`, `graspable`, or `LO:HI` bounds in rad.

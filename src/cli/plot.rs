@@ -2,14 +2,22 @@
 //! `P(θ)` over the graspable range, with the paper's candidates and the recommendation marked,
 //! like the paper's Fig. 9. A spatial candidate is drawn in its grasp plane Π: the planar problem
 //! the reduction solves there (sliced friction, gravity angles in the paper frame of Π).
+//!
+//! A planar candidate with tolerances (its own, or `--center-of-mass-tolerance` /
+//! `--mass-tolerance` where it gives none) adds, on the power chart, each vertex's curve (the
+//! object with its centre of mass at that vertex of the box cut by the object, at the largest
+//! mass) and their upper envelope, the worst case that `solve_robust` minimises (same θ for every
+//! vertex: the paper frame's axes are the contacts', `src/solver/robust.rs` section 2), with the
+//! robust recommendation on it.
 
 use super::SolveOptions;
 use anyhow::{anyhow, Context};
 use grasp_orient::msg::{GraspCandidate, MessageLimits};
 use grasp_orient::record::output::Replacement;
 use grasp_orient::solver::{
-    analyse, analyse_spatial, Analysis, AxisRelation, Candidate, CurrentPose, Recommendation,
-    Settings, SpatialCandidate, SpatialRecommendation, IN_PLANE_TOLERANCE,
+    analyse, analyse_spatial, solve_robust, Analysis, AxisRelation, Candidate, CurrentPose,
+    Recommendation, RobustVerdict, Settings, SpatialCandidate, SpatialRecommendation, Uncertainty,
+    IN_PLANE_TOLERANCE,
 };
 use plotters::prelude::*;
 use std::io::Write;
@@ -51,18 +59,30 @@ struct Figure {
     plane: &'static str,
     /// The line printed when the figure is written.
     summary: String,
+    /// With tolerances: the worst case over the region of centres of mass.
+    robust: Option<Robust>,
+}
+
+/// The worst case of a planar candidate with tolerances, for the power chart.
+struct Robust {
+    /// Each vertex's object (centre of mass there, the largest mass).
+    corners: Vec<Analysis>,
+    /// `(gravity angle, worst power)` recommended.
+    best: (f64, f64),
 }
 
 /// Draws the figure.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let settings = args.options.settings()?;
+    let (_, settings, rules) = args.options.configured()?;
     let text =
         grasp_orient::config::read_text(&args.candidate, grasp_orient::config::MAX_FILE_BYTES)
             .with_context(|| format!("cannot read {}", args.candidate.display()))?;
     let message: GraspCandidate = serde_json::from_str(&text)
         .with_context(|| format!("{} is not a GraspCandidate", args.candidate.display()))?;
     let figure = match message.model {
-        GraspCandidate::MODEL_PLANAR => planar_figure(&message, &settings)?,
+        GraspCandidate::MODEL_PLANAR => {
+            planar_figure(&rules.tolerances.apply(&message), &settings)?
+        }
         GraspCandidate::MODEL_SPATIAL => spatial_figure(&message, &settings)?,
         value => return Err(refused(MessageLimits::Model { value })),
     };
@@ -94,13 +114,74 @@ fn planar_figure(message: &GraspCandidate, settings: &Settings) -> anyhow::Resul
         best.objective.name(),
         best.gripping_power
     );
-    Ok(Figure {
+    let mut figure = Figure {
         current: Some((best.current_gravity_angle, best.gripping_power_current)),
         analysis,
         best,
         plane: "",
         summary,
-    })
+        robust: None,
+    };
+    add_worst_case(&mut figure, message, &candidate, settings)?;
+    Ok(figure)
+}
+
+/// With tolerances on a planar candidate: the vertices' curves, the robust recommendation and a
+/// summary of both (or why no orientation suits every object).
+fn add_worst_case(
+    figure: &mut Figure,
+    message: &GraspCandidate,
+    candidate: &Candidate,
+    settings: &Settings,
+) -> anyhow::Result<()> {
+    let t = &message.center_of_mass_tolerance;
+    if t.x == 0.0 && t.y == 0.0 && message.mass_tolerance == 0.0 {
+        return Ok(());
+    }
+    let uncertainty = Uncertainty {
+        center_of_mass_tolerance: nalgebra::Vector2::new(t.x, t.y),
+        mass_tolerance: message.mass_tolerance,
+    };
+    match solve_robust(candidate, &uncertainty, settings).map_err(refused)? {
+        RobustVerdict::Recommended(r) => {
+            // A vertex on a tangent line may be refused by the nominal checks; it is then left
+            // out of the drawing (its value is still in the reported worst case).
+            let corners: Vec<Analysis> = r
+                .region
+                .iter()
+                .filter_map(|v| {
+                    let corner = Candidate {
+                        center_of_mass: v.position,
+                        mass: r.mass_worst,
+                        ..*candidate
+                    };
+                    analyse(&corner, settings).ok()?.ok()
+                })
+                .collect();
+            figure.summary = format!(
+                "worst case over {} vertices of the box and mass {:.6} kg: recommended gravity \
+                 angle {:.6} rad, wrist rotation {:.6} rad, {} {:.6} N (nominal object there \
+                 {:.6} N); nominal object alone: {}",
+                r.region.len(),
+                r.mass_worst,
+                r.gravity_angle,
+                r.wrist_rotation,
+                r.objective.name(),
+                r.gripping_power,
+                r.gripping_power_nominal,
+                figure.summary
+            );
+            figure.robust = Some(Robust {
+                corners,
+                best: (r.gravity_angle, r.gripping_power),
+            });
+        }
+        RobustVerdict::NoCommonOrientation { reason, .. } => {
+            figure.summary = format!("{reason}; nominal object: {}", figure.summary);
+        }
+        RobustVerdict::Exact(_) | RobustVerdict::NoForceClosure(_) => {}
+    }
+    Ok(())
 }
 
 /// A spatial candidate: its grasp plane Π.
@@ -137,6 +218,7 @@ fn spatial_figure(message: &GraspCandidate, settings: &Settings) -> anyhow::Resu
         best: r.planar,
         plane: ", in the grasp plane",
         summary,
+        robust: None,
     })
 }
 
@@ -167,10 +249,14 @@ struct Curves {
     envelope: Vec<(f64, f64)>,
     /// The gripping power.
     power: Vec<(f64, f64)>,
+    /// Each vertex's gripping power where that vertex's object is graspable.
+    corners: Vec<Vec<(f64, f64)>>,
+    /// Their upper envelope, the worst case, where every vertex's object is graspable.
+    worst: Vec<(f64, f64)>,
 }
 
 impl Curves {
-    fn sample(analysis: &Analysis, n: usize) -> Self {
+    fn sample(analysis: &Analysis, corners: &[Analysis], n: usize) -> Self {
         let (lo, hi) = analysis.graspable_range();
         let thetas: Vec<f64> = (0..=n)
             .map(|k| lo + (hi - lo) * k as f64 / n as f64)
@@ -193,14 +279,93 @@ impl Curves {
             .iter()
             .map(|&t| (t, analysis.evaluate(t).alpha_min))
             .collect();
+        let inside = |a: &Analysis, t: f64| {
+            let (glo, ghi) = a.graspable_range();
+            (glo..=ghi).contains(&t)
+        };
+        let corner_curves: Vec<Vec<(f64, f64)>> = corners
+            .iter()
+            .map(|a| {
+                thetas
+                    .iter()
+                    .filter(|&&t| inside(a, t))
+                    .map(|&t| (t, a.evaluate(t).power))
+                    .collect()
+            })
+            .collect();
+        let worst = if corners.is_empty() {
+            Vec::new()
+        } else {
+            thetas
+                .iter()
+                .filter(|&&t| corners.iter().all(|a| inside(a, t)))
+                .map(|&t| {
+                    let top = corners
+                        .iter()
+                        .map(|a| a.evaluate(t).power)
+                        .fold(0.0, f64::max);
+                    (t, top)
+                })
+                .collect()
+        };
         Self {
             lo,
             hi,
             alphas: alpha_curves,
             envelope,
             power,
+            corners: corner_curves,
+            worst,
         }
     }
+}
+
+/// The vertices' curves (thin, coloured), their envelope (the worst case, thick red) and the
+/// robust recommendation on it.
+fn draw_worst_case<DB: DrawingBackend>(
+    chart: &mut ChartContext<
+        '_,
+        DB,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+    curves: &Curves,
+    robust: &Robust,
+    (pmin, pmax): (f64, f64),
+) -> anyhow::Result<()> {
+    let err = drawing_failed;
+    for (k, curve) in curves.corners.iter().enumerate() {
+        let colour = COLOURS[k % COLOURS.len()];
+        let series = chart
+            .draw_series(LineSeries::new(
+                curve.iter().copied().filter(|p| p.1 >= pmin && p.1 <= pmax),
+                colour.stroke_width(1),
+            ))
+            .map_err(err)?;
+        if k == 0 {
+            series
+                .label("box vertices")
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
+        }
+    }
+    let worst = RGBColor(200, 0, 0);
+    chart
+        .draw_series(LineSeries::new(
+            curves.worst.iter().copied(),
+            worst.stroke_width(3),
+        ))
+        .map_err(err)?
+        .label("worst case (envelope)")
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], worst));
+    chart
+        .draw_series(std::iter::once(Cross::new(
+            robust.best,
+            8,
+            worst.stroke_width(3),
+        )))
+        .map_err(err)?
+        .label("recommended for the worst case")
+        .legend(move |(x, y)| Cross::new((x + 10, y), 5, worst.stroke_width(2)));
+    Ok(())
 }
 
 /// The smallest and largest of `values`.
@@ -218,8 +383,10 @@ type Area<'a> = DrawingArea<SVGBackend<'a>, plotters::coord::Shift>;
 
 /// Draws into memory, then writes the SVG beside `args.output` and renames it into place.
 fn draw(figure: &Figure, args: &Args) -> anyhow::Result<()> {
+    let corners = figure.robust.as_ref().map_or(&[][..], |r| &r.corners[..]);
     let curves = Curves::sample(
         &figure.analysis,
+        corners,
         usize::try_from(args.samples).unwrap_or(10).max(10),
     );
     let mut svg = String::new();
@@ -297,7 +464,7 @@ fn draw_bounds(area: &Area<'_>, curves: &Curves) -> anyhow::Result<()> {
 fn draw_power(area: &Area<'_>, figure: &Figure, curves: &Curves) -> anyhow::Result<()> {
     let (analysis, best) = (&figure.analysis, &figure.best);
     let err = drawing_failed;
-    let (pmin, pmax) = span(curves.power.iter().map(|p| p.1));
+    let (pmin, pmax) = span(curves.power.iter().chain(&curves.worst).map(|p| p.1));
     let (pmin, pmax) = (0f64.min(pmin), pmax + 0.1 * (pmax - pmin).max(1e-9));
     let objective = best.objective.name();
     let mut chart = ChartBuilder::on(area)
@@ -336,6 +503,9 @@ fn draw_power(area: &Area<'_>, figure: &Figure, curves: &Curves) -> anyhow::Resu
             BLACK.stroke_width(2),
         ))
         .map_err(err)?;
+    if let Some(robust) = &figure.robust {
+        draw_worst_case(&mut chart, curves, robust, (pmin, pmax))?;
+    }
     for (label, theta) in analysis.paper_candidates() {
         let p = analysis.evaluate(theta).power;
         chart

@@ -18,6 +18,8 @@ pub enum RosType {
     Double,
     /// `PARAMETER_STRING`.
     String,
+    /// `PARAMETER_DOUBLE_ARRAY` (of a fixed length; the domain bounds each element).
+    DoubleArray,
 }
 
 impl RosType {
@@ -28,6 +30,7 @@ impl RosType {
             RosType::Integer => "integer",
             RosType::Double => "double",
             RosType::String => "string",
+            RosType::DoubleArray => "double_array",
         }
     }
 }
@@ -205,6 +208,25 @@ impl Setting for f64 {
             }
             _ => Ok(()),
         }
+    }
+}
+
+/// Three real numbers (a vector), each checked against the domain.
+impl Setting for [f64; 3] {
+    const ROS_TYPE: RosType = RosType::DoubleArray;
+    fn from_yaml(value: Value) -> Result<Self, String> {
+        let list: Vec<f64> = from_serde(value)?;
+        <[f64; 3]>::try_from(list.as_slice())
+            .map_err(|_| format!("expected 3 numbers [x, y, z], got {}", list.len()))
+    }
+    fn to_yaml(&self) -> Value {
+        Value::Sequence(self.iter().map(|v| Value::Number((*v).into())).collect())
+    }
+    fn check(&self, domain: &Domain) -> Result<(), String> {
+        for (axis, v) in ["x", "y", "z"].into_iter().zip(self) {
+            v.check(domain).map_err(|why| format!("{axis}: {why}"))?;
+        }
+        Ok(())
     }
 }
 

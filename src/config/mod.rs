@@ -249,14 +249,18 @@ impl Config {
         })
     }
 
-    /// The gripper and set rules: `gripper_drive`, `max_grip_force`, `rank_by`, `max_set_size`
-    /// (their domains are checked by [`Config::solver_settings`]).
+    /// The gripper and set rules: `gripper_drive`, `max_grip_force`, `rank_by`, `max_set_size`,
+    /// and the default tolerances `center_of_mass_tolerance`, `mass_tolerance` (their domains are checked by [`Config::solver_settings`]).
     pub fn rules(&self) -> Rules {
         Rules {
             drive: self.gripper_drive,
             max_grip_force: self.max_grip_force,
             rank_by: self.rank_by,
             max_set_size: usize::try_from(self.max_set_size).unwrap_or(1),
+            tolerances: crate::sets::DefaultTolerances {
+                center_of_mass: self.center_of_mass_tolerance,
+                mass: self.mass_tolerance,
+            },
         }
     }
 }
@@ -390,6 +394,9 @@ mod tests {
         c.set_from_yaml("max_grip_force", "40.0").expect("a number");
         c.set_from_yaml("rank_by", "objective").expect("a name");
         c.set_from_yaml("max_set_size", "7").expect("an integer");
+        c.set_from_yaml("center_of_mass_tolerance", "[0.01, 0.02, 0]")
+            .expect("three numbers");
+        c.set_from_yaml("mass_tolerance", "0.1").expect("a number");
         c.solver_settings().expect("valid");
         assert_eq!(
             c.rules(),
@@ -397,7 +404,11 @@ mod tests {
                 drive: GripperDrive::Independent,
                 max_grip_force: 40.0,
                 rank_by: RankBy::Objective,
-                max_set_size: 7
+                max_set_size: 7,
+                tolerances: crate::sets::DefaultTolerances {
+                    center_of_mass: [0.01, 0.02, 0.0],
+                    mass: 0.1,
+                },
             }
         );
         assert!(c.set_from_yaml("gripper_drive", "hydraulic").is_err());

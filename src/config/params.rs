@@ -11,7 +11,7 @@
 use super::choices::RangeKind;
 use super::declare::{parameters, Domain};
 use crate::sets::{GripperDrive, RankBy, DEFAULT_MAX_SET_SIZE};
-use crate::solver::{Objective, MAX_SAFETY_FACTOR};
+use crate::solver::{Objective, MAX_COORDINATE, MAX_SAFETY_FACTOR};
 use std::f64::consts::PI;
 
 parameters! {
@@ -56,4 +56,12 @@ parameters! {
     /// The most candidates a set may hold; a larger set is refused whole (STATUS_TOO_LARGE of
     /// GripRecommendationSet) rather than stalling the node.
     max_set_size: i64 = DEFAULT_MAX_SET_SIZE as i64, "candidates", in Domain::at_least_integer(1);
+    /// Half-widths [x, y, z] of a box around each candidate's centre of mass, along its frame's
+    /// axes, for a candidate whose own center_of_mass_tolerance is zero; the answer is the worst
+    /// case over every centre of mass in the box (README, "Uncertain mass and centre of mass").
+    center_of_mass_tolerance: [f64; 3] = [0.0; 3], "m",
+        in Domain::Real { min: 0.0, max: MAX_COORDINATE };
+    /// The mass of a candidate whose own mass_tolerance is zero lies in mass ± this; the answer is
+    /// the worst case over it (a candidate lighter than this is refused, status 2).
+    mass_tolerance: f64 = 0.0, "kg", in Domain::at_least(0.0);
 }

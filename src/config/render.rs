@@ -11,6 +11,11 @@ const WIDTH: usize = 100;
 
 /// A value as it is written in YAML (and on the command line after `-p name:=`).
 fn yaml(value: &Value) -> String {
+    if let Value::Sequence(items) = value {
+        // Flow style, on one line: `[0.0, 0.0, 0.0]`.
+        let items: Vec<String> = items.iter().map(yaml).collect();
+        return format!("[{}]", items.join(", "));
+    }
     serde_yaml_ng::to_string(value)
         .map(|s| s.trim_end().to_string())
         .unwrap_or_default()

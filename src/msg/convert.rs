@@ -7,11 +7,16 @@
 //! planar answer in the grasp plane Π for the rest, and in `message` what the caller must know
 //! though the grasp holds: the object swings at its current pose, the answer is sensitive to the
 //! centre of mass.
+//!
+//! A candidate with tolerances (issue 13: `center_of_mass_tolerance`, `mass_tolerance`) is
+//! answered with the worst case over every object they allow ([`solve_robust`]); with both zero
+//! the answer is the one above, bit for bit, with `gripping_power_nominal = gripping_power`.
 
 use super::{GraspCandidate, GripRecommendation, Point, Quaternion, Vector3};
 use crate::solver::{
-    solve_orientation, solve_spatial, Candidate, InvalidInput, Recommendation, Settings,
-    SpatialCandidate, SpatialRecommendation, SpatialVerdict, Verdict,
+    solve_orientation, solve_robust, solve_spatial, Candidate, InvalidInput, Recommendation,
+    RobustVerdict, Settings, SpatialCandidate, SpatialRecommendation, SpatialVerdict, Uncertainty,
+    Verdict, MAX_COORDINATE,
 };
 use nalgebra::Vector2;
 
@@ -33,6 +38,13 @@ pub enum MessageLimits {
     /// A field the solver ignores (z) is still not a number.
     #[error(transparent)]
     Solver(#[from] InvalidInput),
+    /// Tolerances on a spatial candidate's centre of mass: not supported yet (the spatial
+    /// robust solver's optimality and allowed range are not yet checked independently).
+    #[error(
+        "center_of_mass_tolerance is not supported for spatial candidates (model 1) yet; \
+         mass_tolerance is"
+    )]
+    SpatialCenterOfMassTolerance,
     /// `model` names no model.
     #[error(
         "model is {value}: it must be 0 (MODEL_PLANAR: the x-y plane) or 1 (MODEL_SPATIAL: 3D)"
@@ -184,6 +196,7 @@ fn refused(m: &GraspCandidate, status: u8, message: String) -> GripRecommendatio
             y: nan,
             z: nan,
         },
+        gripping_power_nominal: nan,
     }
 }
 
@@ -256,6 +269,7 @@ fn recommended(m: &GraspCandidate, r: &Recommendation) -> GripRecommendation {
             y: 0.0,
             z: 1.0,
         },
+        gripping_power_nominal: r.gripping_power,
     }
 }
 
@@ -318,39 +332,97 @@ pub fn answer_in_full(m: &GraspCandidate, settings: &Settings) -> Answered {
     }
 }
 
+/// The tolerances of a candidate in the planar model: x and y of the box, the mass; the box's z
+/// is ignored but must still be a number.
+fn planar_uncertainty(m: &GraspCandidate) -> Result<Uncertainty, InvalidInput> {
+    let t = &m.center_of_mass_tolerance;
+    let fields = [
+        "center_of_mass_tolerance.x",
+        "center_of_mass_tolerance.y",
+        "center_of_mass_tolerance.z",
+    ];
+    Ok(Uncertainty {
+        center_of_mass_tolerance: vector(fields, t)?,
+        mass_tolerance: m.mass_tolerance,
+    })
+}
+
+/// Whether a candidate gives no tolerance at all (every field exactly zero, either sign): then
+/// it is answered as before issue 13.
+fn is_exact(m: &GraspCandidate) -> bool {
+    let t = &m.center_of_mass_tolerance;
+    t.x == 0.0 && t.y == 0.0 && t.z == 0.0 && m.mass_tolerance == 0.0
+}
+
+/// The planar answer: the nominal solver's without tolerances, the robust solver's with them
+/// (status 1 naming the point of the box that fails, with the nominal answer in the fields, when
+/// no allowed orientation holds every object).
+fn solve_planar(m: &GraspCandidate, settings: &Settings) -> Result<GripRecommendation, String> {
+    let candidate = Candidate::try_from(m).map_err(|e| e.to_string())?;
+    if is_exact(m) {
+        return match solve_orientation(&candidate, settings) {
+            Ok(Verdict::Recommended(r)) => Ok(recommended(m, &r)),
+            Ok(Verdict::NoForceClosure(why)) => Ok(no_closure(m, &why)),
+            Err(e) => Err(e.to_string()),
+        };
+    }
+    let uncertainty = planar_uncertainty(m).map_err(|e| e.to_string())?;
+    match solve_robust(&candidate, &uncertainty, settings) {
+        Ok(RobustVerdict::Exact(Verdict::Recommended(r))) => Ok(recommended(m, &r)),
+        Ok(RobustVerdict::Exact(Verdict::NoForceClosure(why))) => Ok(no_closure(m, &why)),
+        Ok(RobustVerdict::Recommended(r)) => {
+            let mut out = recommended(m, &r.to_recommendation());
+            out.gripping_power_nominal = r.gripping_power_nominal;
+            Ok(out)
+        }
+        Ok(RobustVerdict::NoCommonOrientation { reason, nominal }) => {
+            let mut out = recommended(m, &nominal);
+            out.status = GripRecommendation::STATUS_NO_FORCE_CLOSURE;
+            out.message = reason.to_string();
+            Ok(out)
+        }
+        Ok(RobustVerdict::NoForceClosure(why)) => Ok(no_closure(m, &why)),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
 /// The answer to a candidate read in the planar model.
 fn answer_planar(m: &GraspCandidate, settings: &Settings) -> Answered {
-    let mut out = match Candidate::try_from(m) {
-        Err(e) => invalid(m, &e),
-        Ok(candidate) => match solve_orientation(&candidate, settings) {
-            Ok(Verdict::Recommended(r)) => {
-                return Answered {
-                    reply: recommended(m, &r),
-                    spatial: None,
-                }
-            }
-            Ok(Verdict::NoForceClosure(why)) => no_closure(m, &why),
-            Err(e) => invalid(m, &e),
-        },
-    };
+    let mut reply = solve_planar(m, settings).unwrap_or_else(|why| invalid(m, &why));
     // A refused answer still says which objective it was asked under.
-    out.objective = settings.objective.name().to_string();
+    if reply.objective.is_empty() {
+        reply.objective = settings.objective.name().to_string();
+    }
     Answered {
-        reply: out,
+        reply,
         spatial: None,
     }
 }
 
-/// The answer to a candidate read in the spatial model.
+/// The answer to a candidate read in the spatial model. A mass tolerance scales every force of
+/// the nominal answer by `(m + Δm) / m`: at a fixed pose every force is proportional to the mass
+/// (`src/solver/robust.rs`, section 1), so the largest mass is the worst and the pose does not
+/// change. A centre-of-mass tolerance is refused (status 2) until the spatial robust solver is
+/// checked in full (its worst case at a tilt is; its choice of tilt and allowed range are not).
 fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {
-    let mut out = match SpatialCandidate::try_from(m) {
+    let mut out = match spatial_tolerance(m)
+        .map_err(|e| e.to_string())
+        .and_then(|scale| {
+            SpatialCandidate::try_from(m)
+                .map(|c| (c, scale))
+                .map_err(|e| e.to_string())
+        }) {
         Err(e) => invalid(m, &e),
-        Ok(candidate) => match solve_spatial(&candidate, settings) {
+        Ok((candidate, scale)) => match solve_spatial(&candidate, settings) {
             Ok(SpatialVerdict::Recommended(r)) => {
-                return Answered {
-                    reply: spatial_recommended(m, &r),
-                    spatial: Some(r),
+                let mut reply = spatial_recommended(m, &r);
+                if let Some(k) = scale {
+                    scale_forces(&mut reply, k);
                 }
+                return Answered {
+                    reply,
+                    spatial: Some(r),
+                };
             }
             Ok(SpatialVerdict::NoForceClosure(why)) => no_closure(m, &why),
             Err(e) => invalid(m, &e),
@@ -360,6 +432,66 @@ fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {
     Answered {
         reply: out,
         spatial: None,
+    }
+}
+
+/// A spatial candidate's tolerances: `None` without any, `Some((m + Δm) / m)` with only a mass
+/// tolerance; an error naming the field otherwise.
+fn spatial_tolerance(m: &GraspCandidate) -> Result<Option<f64>, MessageLimits> {
+    let t = &m.center_of_mass_tolerance;
+    for (field, v) in [
+        ("center_of_mass_tolerance.x", t.x),
+        ("center_of_mass_tolerance.y", t.y),
+        ("center_of_mass_tolerance.z", t.z),
+        ("mass_tolerance", m.mass_tolerance),
+    ] {
+        if !v.is_finite() {
+            return Err(InvalidInput::NotFinite { field }.into());
+        }
+        if field != "mass_tolerance" && !(0.0..MAX_COORDINATE).contains(&v) {
+            return Err(InvalidInput::Tolerance {
+                field,
+                value: v,
+                limit: MAX_COORDINATE,
+                unit: " m",
+            }
+            .into());
+        }
+    }
+    if t.x != 0.0 || t.y != 0.0 || t.z != 0.0 {
+        return Err(MessageLimits::SpatialCenterOfMassTolerance);
+    }
+    let dm = m.mass_tolerance;
+    if dm == 0.0 {
+        return Ok(None);
+    }
+    if !(m.mass.is_finite() && m.mass > 0.0) {
+        // The solver names the mass.
+        return Ok(None);
+    }
+    if !(0.0..m.mass).contains(&dm) {
+        return Err(InvalidInput::Tolerance {
+            field: "mass_tolerance",
+            value: dm,
+            limit: m.mass,
+            unit: " kg",
+        }
+        .into());
+    }
+    Ok(Some((m.mass + dm) / m.mass))
+}
+
+/// Every force of an answer but the nominal object's (`contact_forces`,
+/// `gripping_power_nominal`) times `k`.
+fn scale_forces(r: &mut GripRecommendation, k: f64) {
+    r.gripping_power *= k;
+    r.internal_force *= k;
+    r.finger_force *= k;
+    r.gripping_power_current *= k;
+    r.internal_force_current *= k;
+    r.finger_force_current *= k;
+    for p in &mut r.local_minima_power {
+        *p *= k;
     }
 }
 
@@ -463,6 +595,8 @@ mod spatial_tests {
             mass: 1.0,
             gravity: v(0.0, 0.0, -1.0),
             model: GraspCandidate::MODEL_SPATIAL,
+            center_of_mass_tolerance: v(0.0, 0.0, 0.0),
+            mass_tolerance: 0.0,
         }
     }
 
@@ -681,5 +815,146 @@ mod spatial_tests {
             a.message
         );
         assert!(a.gripping_power_current.is_infinite() && a.gripping_power.is_nan());
+    }
+
+    fn paper_case_c() -> GraspCandidate {
+        crate::msg::paper_cases().swap_remove(2)
+    }
+
+    fn with_tolerances(mut m: GraspCandidate, t: [f64; 3], dm: f64) -> GraspCandidate {
+        let [x, y, z] = t;
+        m.center_of_mass_tolerance = Vector3 { x, y, z };
+        m.mass_tolerance = dm;
+        m
+    }
+
+    /// Zero tolerances (either sign) are today's answer, bit for bit, with the nominal power equal
+    /// to the reported one; a z tolerance alone does not matter to a planar candidate.
+    #[test]
+    fn zero_tolerances_are_todays_answer() {
+        for c in crate::msg::paper_cases() {
+            let a = answer(&c, &Settings::default());
+            assert_eq!(
+                a.gripping_power_nominal.to_bits(),
+                a.gripping_power.to_bits()
+            );
+            let signed = with_tolerances(c.clone(), [-0.0, 0.0, -0.0], -0.0);
+            let b = answer(&signed, &Settings::default());
+            assert_eq!(format!("{a:?}"), format!("{b:?}"));
+            let z_only = with_tolerances(c.clone(), [0.0, 0.0, 0.5], 0.0);
+            assert_eq!(
+                format!("{a:?}"),
+                format!("{:?}", answer(&z_only, &Settings::default()))
+            );
+        }
+    }
+
+    /// With tolerances the fields are the robust solver's: worst cases, the nominal power and
+    /// contact forces of the nominal object, at the robust pose.
+    #[test]
+    fn tolerances_give_the_robust_solvers_worst_case() {
+        let m = with_tolerances(paper_case_c(), [0.002, 0.001, 0.0], 0.02);
+        let a = answer(&m, &Settings::default());
+        assert_eq!(a.status, GripRecommendation::STATUS_OK, "{}", a.message);
+        let candidate = Candidate::try_from(&m).expect("valid");
+        let u = Uncertainty {
+            center_of_mass_tolerance: Vector2::new(0.002, 0.001),
+            mass_tolerance: 0.02,
+        };
+        let Ok(RobustVerdict::Recommended(r)) = solve_robust(&candidate, &u, &Settings::default())
+        else {
+            panic!("every object in the box can be held");
+        };
+        assert_eq!(a.gripping_power, r.gripping_power);
+        assert_eq!(a.internal_force, r.internal_force);
+        assert_eq!(a.finger_force, r.finger_force);
+        assert_eq!(a.gripping_power_current, r.gripping_power_current);
+        assert_eq!(a.finger_force_current, r.finger_force_current);
+        assert_eq!(a.wrist_rotation, r.wrist_rotation);
+        assert_eq!(a.contact_forces, r.contact_forces);
+        assert_eq!(a.gripping_power_nominal, r.gripping_power_nominal);
+        assert!(a.gripping_power > a.gripping_power_nominal);
+        let exact = answer(&paper_case_c(), &Settings::default());
+        assert!(a.gripping_power > exact.gripping_power);
+    }
+
+    /// Bad tolerances get status 2 naming the field.
+    #[test]
+    fn bad_tolerances_get_status_2_naming_the_field() {
+        for (t, dm, field) in [
+            ([-0.01, 0.0, 0.0], 0.0, "center_of_mass_tolerance.x"),
+            ([0.0, f64::NAN, 0.0], 0.0, "center_of_mass_tolerance.y"),
+            ([0.0, 0.0, f64::INFINITY], 0.0, "center_of_mass_tolerance.z"),
+            ([1e7, 0.0, 0.0], 0.0, "center_of_mass_tolerance.x"),
+            ([0.0, 0.0, 0.0], -0.1, "mass_tolerance"),
+            ([0.0, 0.0, 0.0], 1.0, "mass_tolerance"),
+            ([0.01, 0.0, 0.0], f64::NAN, "mass_tolerance"),
+        ] {
+            for model in [GraspCandidate::MODEL_PLANAR, GraspCandidate::MODEL_SPATIAL] {
+                let mut m = with_tolerances(paper_case_c(), t, dm);
+                m.model = model;
+                let a = answer(&m, &Settings::default());
+                assert_eq!(
+                    a.status,
+                    GripRecommendation::STATUS_INVALID_INPUT,
+                    "{t:?} {dm}"
+                );
+                assert!(a.message.contains(field), "{field}: {}", a.message);
+                assert_eq!(a.objective, "norm2");
+            }
+        }
+    }
+
+    /// A box reaching across the contact line: status 1 naming the point, the nominal answer in
+    /// the fields.
+    #[test]
+    fn no_common_orientation_is_status_1_with_the_nominal_answer() {
+        let m = with_tolerances(paper_case_c(), [0.0, 2.0, 0.0], 0.0);
+        let a = answer(&m, &Settings::default());
+        assert_eq!(a.status, GripRecommendation::STATUS_NO_FORCE_CLOSURE);
+        assert!(
+            a.message.contains("either side of the line"),
+            "{}",
+            a.message
+        );
+        let exact = answer(&paper_case_c(), &Settings::default());
+        assert_eq!(a.gripping_power, exact.gripping_power);
+        assert_eq!(a.wrist_rotation, exact.wrist_rotation);
+        assert_eq!(a.gripping_power_nominal, exact.gripping_power);
+    }
+
+    /// Spatial candidates: a mass tolerance scales every force but the nominal object's by
+    /// `(m + Δm) / m`; a centre-of-mass tolerance is refused, naming it.
+    #[test]
+    fn spatial_mass_tolerance_scales_and_box_is_refused() {
+        let m = upright_square();
+        let exact = answer(&m, &Settings::default());
+        let heavy = answer(
+            &with_tolerances(m.clone(), [0.0; 3], 0.25),
+            &Settings::default(),
+        );
+        assert_eq!(
+            heavy.status,
+            GripRecommendation::STATUS_OK,
+            "{}",
+            heavy.message
+        );
+        let k = 1.25;
+        assert_eq!(heavy.gripping_power, exact.gripping_power * k);
+        assert_eq!(heavy.internal_force, exact.internal_force * k);
+        assert_eq!(heavy.finger_force, exact.finger_force * k);
+        assert_eq!(heavy.gripping_power_nominal, exact.gripping_power);
+        assert_eq!(heavy.contact_forces, exact.contact_forces);
+        assert_eq!(heavy.wrist_rotation, exact.wrist_rotation);
+        let boxed = answer(
+            &with_tolerances(m, [0.01, 0.0, 0.0], 0.0),
+            &Settings::default(),
+        );
+        assert_eq!(boxed.status, GripRecommendation::STATUS_INVALID_INPUT);
+        assert!(
+            boxed.message.contains("center_of_mass_tolerance"),
+            "{}",
+            boxed.message
+        );
     }
 }

@@ -186,6 +186,13 @@ ros_message! {
         /// point and vector in 3D).
         #[serde(default)]
         model: u8,
+        /// Half-widths of a box around `center_of_mass` along the frame's axes, m, each >= 0;
+        /// zero: known exactly (issue 13).
+        #[serde(default)]
+        center_of_mass_tolerance: Vector3,
+        /// The mass lies in `mass ± mass_tolerance`, kg, in `[0, mass)`; zero: known exactly.
+        #[serde(default)]
+        mass_tolerance: f64,
     }
 }
 
@@ -252,6 +259,10 @@ ros_message! {
         /// candidate, the smallest rotation's axis for a spatial one.
         #[serde(default)]
         rotation_axis: Vector3,
+        /// The nominal object's objective value at the recommended pose, N (issue 13; equal to
+        /// `gripping_power` when the candidate's tolerances are zero).
+        #[serde(default)]
+        gripping_power_nominal: f64,
     }
 }
 

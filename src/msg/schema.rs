@@ -702,6 +702,7 @@ mod tests {
                 finger_force: 0.0,
                 finger_force_current: 0.0,
                 rotation_axis: Vector3::default(),
+                gripping_power_nominal: 0.0,
                 ..now.clone()
             };
             assert_eq!(format!("{got:?}"), format!("{want:?}"));
@@ -757,6 +758,12 @@ mod tests {
         for c in &cases {
             let spatial = GraspCandidate {
                 model: GraspCandidate::MODEL_SPATIAL,
+                center_of_mass_tolerance: crate::msg::Vector3 {
+                    x: 0.5,
+                    y: 0.25,
+                    z: 0.125,
+                },
+                mass_tolerance: 0.5,
                 ..c.clone()
             };
             let bytes = cdr::encode(&OldCandidate::from(&spatial)).expect("encodes");
@@ -829,6 +836,7 @@ mod tests {
             r.finger_force = 0.0;
             r.finger_force_current = 0.0;
             r.rotation_axis = Vector3::default();
+            r.gripping_power_nominal = 0.0;
         }
         assert_eq!(format!("{got:?}"), format!("{want:?}"));
         // Big-endian CDR too.

@@ -265,7 +265,13 @@ impl Answerer {
         }
         self.counts.answered += 1;
         let markers = (markers_on && !self.echo && reply.status == GripRecommendation::STATUS_OK)
-            .then(|| markers::build(&candidate, &reply, spatial.as_deref()));
+            .then(|| {
+                markers::build(
+                    &rules.tolerances.apply(&candidate),
+                    &reply,
+                    spatial.as_deref(),
+                )
+            });
         let recorded = Recorded {
             reply: self.recording.is_on().then(|| reply.clone()),
             markers: markers
@@ -353,7 +359,7 @@ impl Answerer {
                 .then(|| answer_in_full(candidate, &settings).spatial)
                 .flatten();
             Some(markers::build(
-                candidate,
+                &rules.tolerances.apply(candidate),
                 reply.recommendations.get(i)?,
                 spatial.as_deref(),
             ))

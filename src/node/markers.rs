@@ -7,6 +7,11 @@
 //! its slice by the grasp plane Π (the two edges at `±atan μ'` about the projected normal, the
 //! cone the planar problem in Π uses), the 3D contact forces, the current gravity and the
 //! recommended one (which lies in Π).
+//!
+//! The box of possible centres of mass (issue 13: `center_of_mass_tolerance`, the node's where the
+//! candidate gives none) is drawn as its edges around the centre of mass, in z = 0 for a planar
+//! candidate (whose model ignores z); with no box the marker is a DELETE, so that a box drawn for
+//! an earlier candidate does not stay on screen.
 
 use crate::msg::{
     ColorRgba, GraspCandidate, GripRecommendation, Marker, MarkerArray, Point, Pose, Quaternion,
@@ -16,13 +21,14 @@ use crate::solver::SpatialRecommendation;
 use nalgebra::Vector3 as V3;
 
 /// Namespaces of the markers, one marker id each.
-pub const NAMESPACES: [&str; 6] = [
+pub const NAMESPACES: [&str; 7] = [
     "contacts",
     "friction_cones",
     "contact_forces",
     "center_of_mass",
     "gravity_current",
     "gravity_recommended",
+    "center_of_mass_box",
 ];
 
 fn colour(r: f32, g: f32, b: f32) -> ColorRgba {
@@ -225,6 +231,11 @@ fn draw(candidate: &GraspCandidate, s: &Scene) -> MarkerArray {
         m.points = vec![at(&com), at(&(com + d * span))];
         m
     };
+    let box_edges = com_box_edges(candidate, &s.center_of_mass);
+    let mut com_box = line_list("center_of_mass_box", colour(0.1, 0.1, 0.1), box_edges);
+    if com_box.points.is_empty() {
+        com_box.action = Marker::DELETE;
+    }
     MarkerArray {
         markers: vec![
             contacts,
@@ -237,14 +248,73 @@ fn draw(candidate: &GraspCandidate, s: &Scene) -> MarkerArray {
                 &s.gravity_then,
                 colour(0.8, 0.1, 0.8),
             ),
+            com_box,
         ],
     }
+}
+
+/// The edges of the box of possible centres of mass around `centre`: a rectangle in z = 0 for a
+/// planar candidate, a box for a spatial one (degenerate sides drawn once); none without a
+/// tolerance or with one that is not a finite non-negative number.
+fn com_box_edges(candidate: &GraspCandidate, centre: &V3<f64>) -> Vec<(V3<f64>, V3<f64>)> {
+    let t = &candidate.center_of_mass_tolerance;
+    let planar = candidate.model == GraspCandidate::MODEL_PLANAR;
+    let half = V3::new(t.x, t.y, if planar { 0.0 } else { t.z });
+    if !half.iter().all(|h| h.is_finite() && *h >= 0.0) || half == V3::zeros() {
+        return Vec::new();
+    }
+    let corner = |i: usize| {
+        let sign = |bit: usize| if i & bit == 0 { -1.0 } else { 1.0 };
+        centre + V3::new(sign(1) * half.x, sign(2) * half.y, sign(4) * half.z)
+    };
+    let mut edges = Vec::with_capacity(12);
+    for i in 0..8usize {
+        for bit in [1usize, 2, 4] {
+            let j = i | bit;
+            if i & bit == 0 && corner(i) != corner(j) && (!planar || i & 4 == 0) {
+                edges.push((corner(i), corner(j)));
+            }
+        }
+    }
+    edges
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::solver::Settings;
+
+    /// The box around the centre of mass: a rectangle of the half-widths in z = 0 for a planar
+    /// candidate; a DELETE without a tolerance.
+    #[test]
+    fn the_centre_of_mass_box_is_drawn_with_a_tolerance_only() {
+        let mut c = crate::msg::paper_cases().remove(2);
+        let a = crate::msg::answer(&c, &Settings::default());
+        let plain = build(&c, &a, None);
+        let find = |m: &MarkerArray| {
+            m.markers
+                .iter()
+                .find(|x| x.ns == "center_of_mass_box")
+                .cloned()
+                .expect("the box marker")
+        };
+        assert_eq!(find(&plain).action, Marker::DELETE);
+        c.center_of_mass_tolerance = Vector3 {
+            x: 0.002,
+            y: 0.001,
+            z: 0.5,
+        };
+        let a = crate::msg::answer(&c, &Settings::default());
+        let boxed = find(&build(&c, &a, None));
+        assert_eq!(boxed.action, Marker::ADD);
+        assert_eq!(boxed.points.len(), 8, "four edges");
+        let com = &c.center_of_mass;
+        for p in &boxed.points {
+            assert_eq!(p.z, 0.0);
+            assert!(((p.x - com.x).abs() - 0.002).abs() < 1e-15, "{p:?}");
+            assert!(((p.y - com.y).abs() - 0.001).abs() < 1e-15, "{p:?}");
+        }
+    }
 
     #[test]
     fn markers_are_in_the_candidate_frame_and_finite() {
@@ -308,6 +378,7 @@ mod tests {
             mass: 2.0,
             gravity: vector(0.0, 0.2, -9.81),
             model: GraspCandidate::MODEL_SPATIAL,
+            ..GraspCandidate::default()
         }
     }
 

@@ -216,6 +216,9 @@ pub fn to_yaml(value: &ParameterValue) -> Option<Value> {
         ParameterValue::Integer(i) => Value::Number((*i).into()),
         ParameterValue::Double(d) => Value::Number((*d).into()),
         ParameterValue::String(s) => Value::String(s.clone()),
+        ParameterValue::DoubleArray(a) => {
+            Value::Sequence(a.iter().map(|d| Value::Number((*d).into())).collect())
+        }
         _ => return None,
     })
 }
@@ -227,6 +230,12 @@ pub fn from_yaml(value: &Value) -> Option<ParameterValue> {
         Value::Number(n) if n.is_i64() => ParameterValue::Integer(n.as_i64()?),
         Value::Number(n) => ParameterValue::Double(n.as_f64()?),
         Value::String(s) => ParameterValue::String(s.clone()),
+        Value::Sequence(items) => ParameterValue::DoubleArray(
+            items
+                .iter()
+                .map(Value::as_f64)
+                .collect::<Option<Vec<f64>>>()?,
+        ),
         _ => return None,
     })
 }
@@ -266,6 +275,7 @@ pub fn descriptor(p: &Parameter) -> raw::ParameterDescriptor {
             RosType::Integer => ParameterType::Integer,
             RosType::Double => ParameterType::Double,
             RosType::String => ParameterType::String,
+            RosType::DoubleArray => ParameterType::DoubleArray,
         },
         description,
         additional_constraints: constraints.join("; "),

@@ -126,6 +126,8 @@ mod tests {
             range_max: 1.0 / 3.0,
             friction_safety_factor: 1.5,
             record_dir: "runs: with 'quotes'".into(),
+            center_of_mass_tolerance: [0.01, 1.0 / 3.0, 0.0],
+            mass_tolerance: 0.1,
             ..Config::default()
         };
         let record = SettingsRecord {
@@ -138,7 +140,8 @@ mod tests {
         assert!(entries["parameters"].starts_with("/**:\n  ros__parameters:\n"));
         for (name, _) in record.config.parameters() {
             assert!(
-                entries["parameters"].contains(&format!("    {name}: ")),
+                // A list (center_of_mass_tolerance) follows on the next lines.
+                entries["parameters"].contains(&format!("    {name}:")),
                 "{name}"
             );
         }

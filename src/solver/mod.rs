@@ -42,16 +42,18 @@ mod sinusoid;
 mod spatial;
 
 pub use analysis::{Analysis, PointValue};
-pub use frame::MAX_SAFETY_FACTOR;
+pub use frame::{MAX_COORDINATE, MAX_SAFETY_FACTOR};
 pub use paper::CandidateAngles;
 pub use robust::{
     solve_robust, BoxPoint, BoxPointKind, NoCommonOrientation, RobustRecommendation, RobustVerdict,
     Uncertainty,
 };
 pub use spatial::{
-    analyse_spatial, sliced_friction, solve_spatial, AxisRelation, CurrentPose, SpatialCandidate,
-    SpatialMiss, SpatialNoForceClosure, SpatialRecommendation, SpatialVerdict, IN_PLANE_TOLERANCE,
-    NEAR_AXIS, ON_AXIS,
+    analyse_spatial, sliced_friction, solve_spatial, solve_spatial_robust, AxisRelation,
+    CurrentPose, RegionPoint, RegionPointKind, SpatialCandidate, SpatialMiss,
+    SpatialNoCommonOrientation, SpatialNoForceClosure, SpatialRecommendation,
+    SpatialRobustRecommendation, SpatialRobustVerdict, SpatialUncertainty, SpatialVerdict,
+    IN_PLANE_TOLERANCE, NEAR_AXIS, ON_AXIS,
 };
 
 use frame::GraspFrame;
@@ -318,6 +320,14 @@ pub enum InvalidInput {
         /// The contact.
         contact: Contact,
     },
+    /// The 1-norm objective with a centre-of-mass tolerance on a spatial candidate: each object
+    /// hangs in its own plane and the 1-norm depends on that plane's split of the forces, so the
+    /// worst case is not found on the region's edges (`src/solver/spatial/robust/mod.rs`).
+    #[error(
+        "objective norm1 with a center_of_mass_tolerance is not supported for spatial candidates; \
+         use norm2 or internal_force"
+    )]
+    Norm1SpatialTolerance,
 }
 
 fn contact_number(c: Contact) -> u8 {

@@ -632,7 +632,7 @@ impl Common {
 
 /// One piece of the worst-case curve: on `[lo, hi]` vertex `vertex` is on top with `curve`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct TopPiece {
+pub(crate) struct TopPiece {
     lo: f64,
     hi: f64,
     vertex: usize,
@@ -662,7 +662,7 @@ struct Worst {
     analyses: Vec<Analysis>,
     graspable: (f64, f64),
     allowed: Vec<(f64, f64)>,
-    envelope: Vec<TopPiece>,
+    envelope: Envelope,
     /// `m_max |g|`, N.
     weight: f64,
     /// `m_min / m_max`: a negative squeeze (the 1-norm's, module docs section 5) is largest at
@@ -735,7 +735,7 @@ impl Worst {
         };
         let tracks: Vec<Vec<(f64, f64, Curve)>> =
             analyses.iter().map(|a| a.pieces().collect()).collect();
-        let envelope = envelope(&tracks, graspable.lo, graspable.hi);
+        let envelope = Envelope::new(&tracks, graspable.lo, graspable.hi);
         Ok(Self {
             objective: settings.objective,
             nominal_frame: *frame,
@@ -758,86 +758,13 @@ impl Worst {
 
     /// The gravity angle of least worst case over the allowed range (module docs, section 6).
     fn minimiser(&self, current: f64) -> f64 {
-        let k = self.scale();
-        let rotation_to = |theta: f64| wrap_angle(current - theta).abs();
-        let mut best: Option<(f64, f64)> = None;
-        let mut consider = |theta: f64, power: f64| {
-            let better = match best {
-                None => true,
-                Some((bt, bp)) => {
-                    let tie =
-                        (power - bp).abs() <= TIE * bp.abs().max(power.abs()).max(self.weight);
-                    if tie {
-                        rotation_to(theta) < rotation_to(bt)
-                    } else {
-                        power < bp
-                    }
-                }
-            };
-            if better {
-                best = Some((theta, power));
-            }
-        };
-        let mut points = Vec::with_capacity(6);
-        for piece in &self.envelope {
-            for &(a, b) in &self.allowed {
-                let (lo, hi) = (piece.lo.max(a), piece.hi.min(b));
-                if lo > hi {
-                    continue;
-                }
-                points.clear();
-                points.extend([lo, hi]);
-                points.extend(piece.minima().iter().filter(|&&t| t > lo && t < hi));
-                if piece.curve.is_constant() {
-                    points.push(current.clamp(lo, hi));
-                }
-                for &t in &points {
-                    consider(t, piece.curve.power(&Angle::new(t), k));
-                }
-            }
-        }
-        // The allowed intervals lie inside the graspable range, which the envelope covers.
-        best.map_or(self.allowed[0].0, |(t, _)| t)
+        self.envelope
+            .least(&self.allowed, current, self.scale(), self.weight)
     }
 
     /// Every local minimum of the worst case over the region's graspable range.
     fn local_minima(&self) -> Vec<LocalMinimum> {
-        let k = self.scale();
-        let mut found: Vec<LocalMinimum> = Vec::with_capacity(8);
-        let mut push = |theta: f64, curve: &Curve| {
-            if found
-                .last()
-                .is_none_or(|m| (theta - m.gravity_angle).abs() > SAME_ANGLE)
-            {
-                found.push(LocalMinimum {
-                    gravity_angle: theta,
-                    power: curve.power(&Angle::new(theta), k),
-                    label: None,
-                });
-            }
-        };
-        let env = &self.envelope;
-        for (i, piece) in env.iter().enumerate() {
-            let start = Angle::new(piece.lo);
-            let right = piece.curve.slope(&start);
-            let left = if i == 0 {
-                f64::NEG_INFINITY
-            } else {
-                env[i - 1].curve.slope(&start)
-            };
-            if left <= 0.0 && right >= 0.0 {
-                push(piece.lo, &piece.curve);
-            }
-            for &t in piece.minima() {
-                push(t, &piece.curve);
-            }
-        }
-        if let Some(last) = env.last() {
-            if last.curve.slope(&Angle::new(last.hi)) <= 0.0 {
-                push(last.hi, &last.curve);
-            }
-        }
-        found
+        self.envelope.local_minima(self.scale())
     }
 
     /// A force proportional to the mass at `m_max`, made the largest over the mass interval: at
@@ -971,6 +898,118 @@ impl Worst {
     }
 }
 
+/// The upper envelope of finitely many objects' curves over an interval of gravity angles, piece
+/// by piece (module docs, section 6), and its exact minimum.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Envelope {
+    /// The pieces in increasing angle, tiling the interval.
+    pub(crate) pieces: Vec<TopPiece>,
+}
+
+impl Envelope {
+    /// The envelope over `[lo, hi]` of the curves `tracks[k]`, each given piece by piece and
+    /// covering `[lo, hi]`.
+    pub(crate) fn new(tracks: &[Vec<(f64, f64, Curve)>], lo: f64, hi: f64) -> Self {
+        Self {
+            pieces: envelope(tracks, lo, hi),
+        }
+    }
+
+    /// The value on top at `theta` (inside the interval), N, for curves scaled by `k`.
+    pub(crate) fn value(&self, theta: f64, k: f64) -> f64 {
+        let piece = self
+            .pieces
+            .iter()
+            .find(|p| theta <= p.hi)
+            .or(self.pieces.last());
+        piece.map_or(f64::NAN, |p| p.curve.power(&Angle::new(theta), k))
+    }
+
+    /// The gravity angle of least value over the closed intervals `allowed` (inside the
+    /// envelope's interval), for curves scaled by `k` (objective = `k sqrt(Q)` or `k S`); ties
+    /// within `TIE` (relative to the values or to `weight`) go to the angle nearer `current`
+    /// (module docs, section 6).
+    pub(crate) fn least(&self, allowed: &[(f64, f64)], current: f64, k: f64, weight: f64) -> f64 {
+        let rotation_to = |theta: f64| wrap_angle(current - theta).abs();
+        let mut best: Option<(f64, f64)> = None;
+        let mut consider = |theta: f64, power: f64| {
+            let better = match best {
+                None => true,
+                Some((bt, bp)) => {
+                    let tie = (power - bp).abs() <= TIE * bp.abs().max(power.abs()).max(weight);
+                    if tie {
+                        rotation_to(theta) < rotation_to(bt)
+                    } else {
+                        power < bp
+                    }
+                }
+            };
+            if better {
+                best = Some((theta, power));
+            }
+        };
+        let mut points = Vec::with_capacity(6);
+        for piece in &self.pieces {
+            for &(a, b) in allowed {
+                let (lo, hi) = (piece.lo.max(a), piece.hi.min(b));
+                if lo > hi {
+                    continue;
+                }
+                points.clear();
+                points.extend([lo, hi]);
+                points.extend(piece.minima().iter().filter(|&&t| t > lo && t < hi));
+                if piece.curve.is_constant() {
+                    points.push(current.clamp(lo, hi));
+                }
+                for &t in &points {
+                    consider(t, piece.curve.power(&Angle::new(t), k));
+                }
+            }
+        }
+        // The allowed intervals lie inside the graspable range, which the envelope covers.
+        best.map_or(allowed[0].0, |(t, _)| t)
+    }
+
+    /// Every local minimum of the envelope over its whole interval, for curves scaled by `k`.
+    pub(crate) fn local_minima(&self, k: f64) -> Vec<LocalMinimum> {
+        let mut found: Vec<LocalMinimum> = Vec::with_capacity(8);
+        let mut push = |theta: f64, curve: &Curve| {
+            if found
+                .last()
+                .is_none_or(|m| (theta - m.gravity_angle).abs() > SAME_ANGLE)
+            {
+                found.push(LocalMinimum {
+                    gravity_angle: theta,
+                    power: curve.power(&Angle::new(theta), k),
+                    label: None,
+                });
+            }
+        };
+        let env = &self.pieces;
+        for (i, piece) in env.iter().enumerate() {
+            let start = Angle::new(piece.lo);
+            let right = piece.curve.slope(&start);
+            let left = if i == 0 {
+                f64::NEG_INFINITY
+            } else {
+                env[i - 1].curve.slope(&start)
+            };
+            if left <= 0.0 && right >= 0.0 {
+                push(piece.lo, &piece.curve);
+            }
+            for &t in piece.minima() {
+                push(t, &piece.curve);
+            }
+        }
+        if let Some(last) = env.last() {
+            if last.curve.slope(&Angle::new(last.hi)) <= 0.0 {
+                push(last.hi, &last.curve);
+            }
+        }
+        found
+    }
+}
+
 /// The frame of the object with its centre of mass moved from `from` to `to` (candidate frame)
 /// and weight `weight`, with `frame`'s axes and labelling (module docs, section 2). `y` may come
 /// out negative: the point lies across the contact line.
@@ -1003,7 +1042,7 @@ fn candidate_labelling(f: &GraspFrame, forces: [f64; 4]) -> [f64; 4] {
 }
 
 /// `[lo, hi]` shifted by every multiple of 2π, met with `[glo, ghi]`.
-fn periodic_meet(lo: f64, hi: f64, glo: f64, ghi: f64) -> Vec<(f64, f64)> {
+pub(crate) fn periodic_meet(lo: f64, hi: f64, glo: f64, ghi: f64) -> Vec<(f64, f64)> {
     let mut out = Vec::with_capacity(3);
     let first = ((glo - hi) / TAU).floor() as i64;
     let last = ((ghi - lo) / TAU).ceil() as i64;
@@ -1558,7 +1597,7 @@ mod tests {
             Ok(w) => w,
             Err(_) => panic!("the box is on one side of the contact line"),
         };
-        let env = &w.envelope;
+        let env = &w.envelope.pieces;
         assert_eq!(env[0].lo, w.graspable.0);
         assert_eq!(env.last().map(|p| p.hi), Some(w.graspable.1));
         for pair in env.windows(2) {

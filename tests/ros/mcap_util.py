@@ -192,8 +192,10 @@ def jsonish(v: Any) -> Any:
 
 def as_message(candidate: dict) -> dict:
     """A candidate dict as a GraspCandidate holds it: `model` 0 (planar) where the dict has none, as a JSON line,
-    an older message or a recording made before issue 11 without the field means."""
-    return candidate if "model" in candidate else {**candidate, "model": 0}
+    an older message or a recording made before issue 11 without the field means; the tolerances (issue 13) 0
+    (known exactly) where it has none."""
+    defaults = {"model": 0, "center_of_mass_tolerance": {"x": 0.0, "y": 0.0, "z": 0.0}, "mass_tolerance": 0.0}
+    return {**defaults, **candidate}
 
 
 def same(a: Any, b: Any) -> bool:

@@ -235,11 +235,11 @@ def test_golden_bag_decodes_identically_with_rosbags_and_mcap(binary, name):
 def test_golden_schemas_are_rosbag2s_text():
     """The mcap_ros2-written bags carry exactly the text rosbag2 (Jazzy) would write for these types with the
     .msg files of their time: today's files cut before the fields added since (issue 11's `model` and
-    `rotation_axis`, issue 12's grip forces)."""
+    `rotation_axis`, issue 12's grip forces, issue 13's tolerances and `gripping_power_nominal`)."""
     f = mu.mcap_facts(BAGS / "random_grasps.mcap")
     by_name = {s["name"]: s["data"] for s in f["schemas"].values()}
-    for type_name, added in ((mu.CANDIDATE_TYPE, ["MODEL_PLANAR", "uint8 model"]),
-                             (mu.RECOMMENDATION_TYPE, ["finger_force", "rotation_axis"])):
+    for type_name, added in ((mu.CANDIDATE_TYPE, ["MODEL_PLANAR", "uint8 model", "mass_tolerance"]),
+                             (mu.RECOMMENDATION_TYPE, ["finger_force", "rotation_axis", "gripping_power_nominal"])):
         old = by_name[type_name]
         assert old != mu.rosbag2_full_text(type_name), f"the golden bags predate {added} of {type_name}"
         assert mu.is_rosbag2_text_of_an_older_version(type_name, old), \

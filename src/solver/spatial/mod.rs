@@ -118,6 +118,7 @@
 
 pub mod on_axis;
 mod plane;
+mod robust;
 
 use super::analysis::Analysis;
 use super::frame::GraspFrame;
@@ -127,6 +128,10 @@ use plane::{Basis, Geometry, PlaneSolve};
 use std::fmt;
 
 pub use plane::sliced_friction;
+pub use robust::{
+    solve_spatial_robust, RegionPoint, RegionPointKind, SpatialNoCommonOrientation,
+    SpatialRobustRecommendation, SpatialRobustVerdict, SpatialUncertainty,
+};
 
 /// The centre of mass counts as on the contact axis when its distance from the axis is at most
 /// this fraction of the contact distance. It is the fraction below which the planar model calls
