@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::run::{bin, temp_dir};
+use common::run::{bin, paper_lines, temp_dir};
 use serde_json::Value;
 use std::io::Write;
 use std::process::Stdio;
@@ -35,22 +35,14 @@ fn run_solve(args: &[&str], input: &str) -> (Vec<Value>, String, bool) {
     )
 }
 
-fn paper_cases() -> String {
-    std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/examples/paper_cases.jsonl"
-    ))
-    .expect("examples/paper_cases.jsonl")
-}
-
 #[test]
 fn solve_answers_every_line_and_survives_bad_ones() {
-    let mut input = paper_cases();
+    let mut input = paper_lines();
     input.push_str("not json at all\n");
     input.push_str("{\"id\": \"half\", \"mass\": 1.0}\n");
     input.push('\n');
     input.push_str(
-        &paper_cases()
+        &paper_lines()
             .lines()
             .next()
             .expect("a line")
@@ -82,7 +74,7 @@ fn solve_answers_every_line_and_survives_bad_ones() {
 
 #[test]
 fn options_change_the_answer() {
-    let input = paper_cases();
+    let input = paper_lines();
     let (base, _, _) = run_solve(&[], &input);
     let (graspable, _, _) = run_solve(&["--range", "graspable"], &input);
     let (norm1, _, _) = run_solve(&["--objective", "norm1"], &input);
@@ -197,7 +189,7 @@ fn bad_options_fail_with_a_readable_error() {
 fn plot_writes_an_svg() {
     let dir = temp_dir("plot");
     let candidate = dir.path().join("case.json");
-    std::fs::write(&candidate, paper_cases().lines().nth(1).expect("case b")).expect("write");
+    std::fs::write(&candidate, paper_lines().lines().nth(1).expect("case b")).expect("write");
     let svg = dir.path().join("case.svg");
     let out = bin()
         .args([
@@ -226,7 +218,7 @@ fn upright_square(id: &str, gravity_x: f64) -> String {
 
 #[test]
 fn solve_reads_the_model_absent_as_planar() {
-    let case_c = paper_cases().lines().nth(2).expect("case c").to_string();
+    let case_c = paper_lines().lines().nth(2).expect("case c").to_string();
     let explicit = case_c.replacen('{', "{\"model\": 0, ", 1);
     let unknown = case_c.replacen('{', "{\"model\": 7, ", 1);
     let input = [
@@ -335,7 +327,7 @@ fn plot_draws_a_spatial_candidate_in_its_grasp_plane() {
 
 #[test]
 fn a_line_of_invalid_utf8_is_answered_and_the_run_goes_on() {
-    let cases = paper_cases();
+    let cases = paper_lines();
     let mut input = cases.lines().next().expect("case a").as_bytes().to_vec();
     input.extend_from_slice(b"\n{\"id\": \"caf\xe9\"}\n");
     input.extend_from_slice(cases.lines().nth(1).expect("case b").as_bytes());
@@ -499,7 +491,7 @@ fn a_config_for_another_node_is_an_error_naming_the_sections() {
 
 #[test]
 fn any_span_of_bounds_is_answered_at_once() {
-    let input = paper_cases();
+    let input = paper_lines();
     let (graspable, _, _) = run_solve(&["--range", "graspable"], &input);
     for range in [
         "--range=-1e308:1e308",

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::run::{bin, temp_dir};
+use common::run::{bin, paper_messages, temp_dir};
 use grasp_orient::config::{Config, RangeKind};
 use grasp_orient::msg::{answer, GraspCandidate};
 use grasp_orient::record::settings::SettingsRecord;
@@ -14,18 +14,6 @@ use std::path::{Path, PathBuf};
 use std::process::{Output, Stdio};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
-
-fn paper_cases() -> Vec<GraspCandidate> {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/examples/paper_cases.jsonl"
-    ))
-    .expect("examples/paper_cases.jsonl");
-    text.lines()
-        .filter(|l| !l.trim().is_empty())
-        .map(|l| serde_json::from_str(l).expect("a candidate"))
-        .collect()
-}
 
 fn topics() -> Topics {
     Topics {
@@ -40,7 +28,7 @@ fn topics() -> Topics {
 /// carrying `config` as its settings when `with_settings`.
 fn write_bag(path: &Path, n: usize, config: &Config, with_settings: bool) {
     let settings = config.solver_settings().expect("valid");
-    let cases = paper_cases();
+    let cases = paper_messages();
     let mut w = BagWriter::create(path, &topics(), 100).expect("create");
     if with_settings {
         w.write(&Entry {
@@ -434,7 +422,7 @@ fn no_command_writes_over_its_own_input() {
         assert_eq!(std::fs::read(&bag).expect("read"), before, "{args:?}");
     }
     let json = dir.path().join("case.json");
-    let case = serde_json::to_string(&paper_cases()[1]).expect("json");
+    let case = serde_json::to_string(&paper_messages()[1]).expect("json");
     std::fs::write(&json, &case).expect("write");
     let (code, text) = run(&["plot", s(&json), "-o", s(&json)]);
     assert_eq!(code, Some(2), "{text}");
@@ -541,7 +529,7 @@ fn a_closed_stdout_pipe_is_success() {
     let mut stdin = child.stdin.take().expect("stdin");
     let mut stdout = child.stdout.take().expect("stdout");
     let feeder = std::thread::spawn(move || {
-        let line = serde_json::to_string(&paper_cases()[0]).expect("json") + "\n";
+        let line = serde_json::to_string(&paper_messages()[0]).expect("json") + "\n";
         for _ in 0..50_000 {
             if std::io::Write::write_all(&mut stdin, line.as_bytes()).is_err() {
                 break;

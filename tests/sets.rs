@@ -3,8 +3,8 @@
 
 mod common;
 
-use common::run::{bin, temp_dir};
-use grasp_orient::msg::{GraspCandidate, GraspCandidateSet, GripRecommendation};
+use common::run::{bin, paper_lines, paper_messages, temp_dir};
+use grasp_orient::msg::{GraspCandidateSet, GripRecommendation};
 use grasp_orient::record::{bag, BagWriter, Entry, Payload, SetTopics, Topics};
 use grasp_orient::sets::{answer_set, Rules};
 use grasp_orient::solver::Settings;
@@ -12,21 +12,6 @@ use serde_json::Value;
 use std::io::Write;
 use std::path::Path;
 use std::process::{Output, Stdio};
-
-fn paper_lines() -> String {
-    std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/examples/paper_cases.jsonl"
-    ))
-    .expect("examples/paper_cases.jsonl")
-}
-
-fn paper_cases() -> Vec<GraspCandidate> {
-    paper_lines()
-        .lines()
-        .map(|l| serde_json::from_str(l).expect("a candidate"))
-        .collect()
-}
 
 /// Runs the binary with `input` on standard input.
 fn run(args: &[&str], input: &str) -> Output {
@@ -207,12 +192,12 @@ fn topics() -> Topics {
 /// A recording of three sets and their answers, `edit` applied to the answers first.
 fn write_sets(path: &Path, edit: impl Fn(usize, &mut grasp_orient::msg::GripRecommendationSet)) {
     let mut w = BagWriter::create(path, &topics(), 100).expect("create");
-    let mut cases = paper_cases();
+    let mut cases = paper_messages();
     cases[1].mass = f64::NAN;
     let sets = [
         GraspCandidateSet {
             id: "all".into(),
-            candidates: paper_cases(),
+            candidates: paper_messages(),
             ..GraspCandidateSet::default()
         },
         GraspCandidateSet {
