@@ -101,15 +101,11 @@ impl SolveOptions {
             out.push(("mass_tolerance".into(), Value::Number(t.into())));
         }
         if let Some(r) = self.range {
-            let text = |s: &str| Value::String(s.to_string());
-            match r {
-                AllowedRange::FromAbove => out.push(("range".into(), text("from_above"))),
-                AllowedRange::Graspable => out.push(("range".into(), text("graspable"))),
-                AllowedRange::Bounds { lo, hi } => {
-                    out.push(("range".into(), text("bounds")));
-                    out.push(("range_min".into(), Value::Number(lo.into())));
-                    out.push(("range_max".into(), Value::Number(hi.into())));
-                }
+            let kind = RangeKind::of(&r).to_string();
+            out.push(("range".into(), Value::String(kind)));
+            if let AllowedRange::Bounds { lo, hi } = r {
+                out.push(("range_min".into(), Value::Number(lo.into())));
+                out.push(("range_max".into(), Value::Number(hi.into())));
             }
         }
         Ok(out)

@@ -65,6 +65,15 @@ pub enum RangeKind {
 }
 
 impl RangeKind {
+    /// The kind of an allowed range (its bounds aside).
+    pub fn of(range: &AllowedRange) -> Self {
+        match range {
+            AllowedRange::FromAbove => RangeKind::FromAbove,
+            AllowedRange::Graspable => RangeKind::Graspable,
+            AllowedRange::Bounds { .. } => RangeKind::Bounds,
+        }
+    }
+
     /// The name in params files and on the command line.
     pub fn name(&self) -> &'static str {
         match self {
