@@ -15,8 +15,8 @@
 //!
 //! - the choice of tilt (`no_scanned_tilt_beats_the_recommended_one`): over tilts scanned across
 //!   the allowed range, the reference's worst case over samples of the region's edges (box
-//!   corners and edges, the cut faces' vertices, edges and diagonals, the axis segment with every
-//!   plane through it, and the solver's own worst point at that tilt, valued by the reference
+//!   corners and edges, the cut faces' vertices, edges and diagonals, the axis segment with the
+//!   worst plane through it (48 planes, then golden section), and the solver's own worst point at that tilt, valued by the reference
 //!   alone) is never below the reported least worst case (beyond 1e-7 relative); every sample is
 //!   held at every scanned tilt, and, from above, hangs from above by the 3D definition; the
 //!   range's bounds exceed no dense sample's own bounds (bisection on the 3D definition). An
@@ -375,35 +375,62 @@ fn scan_tilts(
                 };
                 let reference = SpatialReference::new(&object, 1.0);
                 // Off the axis the object hangs in its own plane; on it, it does not swing and
-                // the roll of the gripper, left free, sets its plane: every plane is taken.
-                let planes: Vec<Vector3<f64>> = match hang(&c, q, theta) {
-                    Some(g) => vec![g],
-                    None => (0..AXIS_PLANES)
-                        .map(|i| {
-                            let psi = std::f64::consts::TAU * i as f64 / AXIS_PLANES as f64;
-                            a * theta.sin() + (e1 * psi.cos() + e2 * psi.sin()) * theta.cos()
-                        })
-                        .collect(),
-                };
-                for g in planes {
-                    scan.socps += 1;
-                    let Some(p) = reference.at(&g).power() else {
+                // the roll of the gripper, left free, sets its plane: every plane is taken, the
+                // worst found by a scan of the planes refined by golden section.
+                let held = |g: &Vector3<f64>| {
+                    reference.at(g).power().unwrap_or_else(|| {
                         panic!(
                             "grasp {k}: at the allowed tilt {theta} the reference cannot hold \
                              {q:?} under {g:?}"
                         )
-                    };
-                    worst = worst.max(p);
-                }
+                    })
+                };
+                let p = match hang(&c, q, theta) {
+                    Some(g) => {
+                        scan.socps += 1;
+                        held(&g)
+                    }
+                    None => {
+                        let mut at_plane = |psi: f64| {
+                            scan.socps += 1;
+                            held(
+                                &(a * theta.sin()
+                                    + (e1 * psi.cos() + e2 * psi.sin()) * theta.cos()),
+                            )
+                        };
+                        let step = std::f64::consts::TAU / AXIS_PLANES as f64;
+                        let (mut best, mut best_psi) = (f64::NEG_INFINITY, 0.0);
+                        for i in 0..AXIS_PLANES {
+                            let psi = step * i as f64;
+                            let p = at_plane(psi);
+                            if p > best {
+                                (best, best_psi) = (p, psi);
+                            }
+                        }
+                        let r = 0.5 * (5f64.sqrt() - 1.0);
+                        let (mut lo, mut hi) = (best_psi - step, best_psi + step);
+                        for _ in 0..60 {
+                            let (x1, x2) = (hi - r * (hi - lo), lo + r * (hi - lo));
+                            if at_plane(x1) >= at_plane(x2) {
+                                hi = x2;
+                            } else {
+                                lo = x1;
+                            }
+                        }
+                        best.max(at_plane(0.5 * (lo + hi)))
+                    }
+                };
+                worst = worst.max(p);
             }
             let margin = (worst - r.gripping_power) / r.gripping_power;
             scan.least_margin = scan.least_margin.min(margin);
             assert!(
                 margin >= -1e-7,
                 "grasp {k}: at the allowed tilt {theta} the sampled worst case is {worst} N, \
-                 below the reported least worst case {} N at {}",
+                 below the reported least worst case {} N at {}, attained at {}",
                 r.gripping_power,
-                r.gravity_angle
+                r.gravity_angle,
+                r.gripping_power_at
             );
             if range == AllowedRange::FromAbove {
                 for q in &dense {
@@ -462,7 +489,9 @@ fn no_scanned_tilt_beats_the_recommended_one() {
     }
 }
 
-/// The heavier scan: `cargo test --test spatial_robust -- --ignored --nocapture`.
+/// The heavier scan: `cargo test --test spatial_robust -- --ignored --nocapture` (about 3 min;
+/// measured: 40 + 20 grasps, 1.75 million reference SOCPs, least margin −4.8e-14, range bounds
+/// within 6.8e-9 rad of the dense samples').
 #[test]
 #[ignore]
 fn no_scanned_tilt_beats_the_recommended_one_dense() {
