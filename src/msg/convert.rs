@@ -1083,4 +1083,36 @@ mod spatial_tests {
                 < 1e-6 * exact.gripping_power
         );
     }
+
+    /// A spatial box reaching past both contacts along the axis (the normals lean down, so the
+    /// object is wider below them): the objects beyond contact 1 need the axis tilted one way,
+    /// those beyond contact 2 the other; status 1 names them, with the nominal answer.
+    #[test]
+    fn spatial_box_without_a_common_tilt_is_status_1_with_the_nominal_answer() {
+        let m = GraspCandidate {
+            normal_1: v(0.0, -1.0, -0.3),
+            normal_2: v(0.0, 1.0, -0.3),
+            ..upright_square()
+        };
+        let exact = answer(&m, &Settings::default());
+        assert_eq!(
+            exact.status,
+            GripRecommendation::STATUS_OK,
+            "{}",
+            exact.message
+        );
+        let wide = answer(
+            &with_tolerances(m, [0.0, 1.2, 0.0], 0.0),
+            &Settings::default(),
+        );
+        assert_eq!(wide.status, GripRecommendation::STATUS_NO_FORCE_CLOSURE);
+        assert!(
+            wide.message
+                .contains("no tilt of the contact axis suits every object"),
+            "{}",
+            wide.message
+        );
+        assert_eq!(wide.gripping_power, exact.gripping_power);
+        assert_eq!(wide.wrist_rotation, exact.wrist_rotation);
+    }
 }
