@@ -267,6 +267,90 @@ fn solve_reads_the_model_absent_as_planar() {
     assert!(why.contains("swings about the contact axis"), "{why}");
 }
 
+/// A spatial candidate with a centre-of-mass box is answered by the spatial robust solver: the
+/// tilt of least worst case, its worst values, the nominal object's at rest there; `solve` prints
+/// the library's numbers.
+#[test]
+fn solve_answers_a_spatial_box_with_the_spatial_robust_solver() {
+    use grasp_orient::solver::{
+        solve_spatial_robust, Settings, SpatialCandidate, SpatialRobustVerdict, SpatialUncertainty,
+    };
+    use nalgebra::Vector3;
+    let boxed = |id: &str, gravity_x: f64, t: [f64; 3], dm: f64| {
+        upright_square(id, gravity_x).replacen(
+            '{',
+            &format!(
+                r#"{{"center_of_mass_tolerance": {{"x": {}, "y": {}, "z": {}}}, "mass_tolerance": {dm}, "#,
+                t[0], t[1], t[2]
+            ),
+            1,
+        )
+    };
+    let cases = [
+        ("in-plane", 0.0, [0.0, 0.1, 0.05], 0.0),
+        ("out-of-plane", 0.0, [0.1, 0.1, 0.0], 0.1),
+        ("swinging", 0.5, [0.05, 0.02, 0.1], 0.2),
+    ];
+    let input: Vec<String> = cases
+        .iter()
+        .map(|(id, gx, t, dm)| boxed(id, *gx, *t, *dm))
+        .collect();
+    let (out, stderr, ok) = run_solve(&[], &input.join("\n"));
+    assert!(ok, "{stderr}");
+    let num = |v: &Value| v.as_f64().expect("a number");
+    for ((id, gx, t, dm), a) in cases.iter().zip(&out) {
+        let grasp = SpatialCandidate {
+            contact_1: Vector3::new(0.0, 1.0, 1.0),
+            contact_2: Vector3::new(0.0, -1.0, 1.0),
+            normal_1: Vector3::new(0.0, -1.0, 0.0),
+            normal_2: Vector3::new(0.0, 1.0, 0.0),
+            friction_1: 1.7320508075688772,
+            friction_2: 0.5773502691896258,
+            center_of_mass: Vector3::zeros(),
+            mass: 1.0,
+            gravity: Vector3::new(*gx, 0.0, -1.0),
+        };
+        let u = SpatialUncertainty {
+            center_of_mass_tolerance: Vector3::new(t[0], t[1], t[2]),
+            mass_tolerance: *dm,
+        };
+        let Ok(SpatialRobustVerdict::Recommended(r)) =
+            solve_spatial_robust(&grasp, &u, &Settings::default())
+        else {
+            panic!("{id}: every object in the box can be held");
+        };
+        assert_eq!(a["status"], 0, "{id}: {a}");
+        for (field, value) in [
+            ("gravity_angle", r.gravity_angle),
+            ("wrist_rotation", r.rotation_angle),
+            ("gripping_power", r.gripping_power),
+            ("internal_force", r.internal_force),
+            ("finger_force", r.finger_force),
+            ("gripping_power_current", r.gripping_power_current),
+            ("internal_force_current", r.internal_force_current),
+            ("finger_force_current", r.finger_force_current),
+            ("gripping_power_nominal", r.gripping_power_nominal),
+        ] {
+            assert_eq!(num(&a[field]), value, "{id}: {field}");
+        }
+        for (i, f) in r.contact_forces.iter().enumerate() {
+            assert_eq!(
+                num(&a["contact_forces"][i]),
+                *f,
+                "{id}: contact_forces[{i}]"
+            );
+        }
+        let g = &a["gravity_direction"];
+        let d = r.gravity_direction;
+        assert_eq!(
+            [num(&g["x"]), num(&g["y"]), num(&g["z"])],
+            [d.x, d.y, d.z],
+            "{id}"
+        );
+        assert!(r.gripping_power > r.gripping_power_nominal, "{id}");
+    }
+}
+
 #[test]
 fn plot_draws_a_spatial_candidate_in_its_grasp_plane() {
     let dir = temp_dir("plot-spatial");

@@ -9,14 +9,17 @@
 //! centre of mass.
 //!
 //! A candidate with tolerances (issue 13: `center_of_mass_tolerance`, `mass_tolerance`) is
-//! answered with the worst case over every object they allow ([`solve_robust`]); with both zero
-//! the answer is the one above, bit for bit, with `gripping_power_nominal = gripping_power`.
+//! answered with the worst case over every object they allow ([`solve_robust`]; for a spatial
+//! one with a centre-of-mass box [`solve_spatial_robust`], whose answer fixes the tilt of the
+//! contact axis, the object swinging to hang in its own plane); with both zero the answer is the
+//! one above, bit for bit, with `gripping_power_nominal = gripping_power`.
 
 use super::{GraspCandidate, GripRecommendation, Point, Quaternion, Vector3};
 use crate::solver::{
-    solve_orientation, solve_robust, solve_spatial, Candidate, InvalidInput, Recommendation,
-    RobustVerdict, Settings, SpatialCandidate, SpatialRecommendation, SpatialVerdict, Uncertainty,
-    Verdict, MAX_COORDINATE,
+    solve_orientation, solve_robust, solve_spatial, solve_spatial_robust, Candidate, InvalidInput,
+    Recommendation, RobustVerdict, Settings, SpatialCandidate, SpatialRecommendation,
+    SpatialRobustRecommendation, SpatialRobustVerdict, SpatialUncertainty, SpatialVerdict,
+    Uncertainty, Verdict, MAX_COORDINATE,
 };
 use nalgebra::Vector2;
 
@@ -38,13 +41,6 @@ pub enum MessageLimits {
     /// A field the solver ignores (z) is still not a number.
     #[error(transparent)]
     Solver(#[from] InvalidInput),
-    /// Tolerances on a spatial candidate's centre of mass: not supported yet (the spatial
-    /// robust solver's optimality and allowed range are not yet checked independently).
-    #[error(
-        "center_of_mass_tolerance is not supported for spatial candidates (model 1) yet; \
-         mass_tolerance is"
-    )]
-    SpatialCenterOfMassTolerance,
     /// `model` names no model.
     #[error(
         "model is {value}: it must be 0 (MODEL_PLANAR: the x-y plane) or 1 (MODEL_SPATIAL: 3D)"
@@ -399,24 +395,54 @@ fn answer_planar(m: &GraspCandidate, settings: &Settings) -> Answered {
     }
 }
 
-/// The answer to a candidate read in the spatial model. A mass tolerance scales every force of
-/// the nominal answer by `(m + Δm) / m`: at a fixed pose every force is proportional to the mass
-/// (`src/solver/robust.rs`, section 1), so the largest mass is the worst and the pose does not
-/// change. A centre-of-mass tolerance is refused (status 2) until the spatial robust solver is
-/// checked in full (its worst case at a tilt is; its choice of tilt and allowed range are not).
+/// The answer to a candidate read in the spatial model. A mass tolerance alone scales every
+/// force of the nominal answer by `(m + Δm) / m`: at a fixed pose every force is proportional to
+/// the mass (`src/solver/robust.rs`, section 1), so the largest mass is the worst and the pose
+/// does not change. A centre-of-mass box is answered by [`solve_spatial_robust`]: every object
+/// swings about the contact axis to hang in its own plane, and the answer fixes the tilt of the
+/// axis whose worst case is least ([`spatial_robust_recommended`]).
 fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {
     let mut out = match spatial_tolerance(m)
         .map_err(|e| e.to_string())
-        .and_then(|scale| {
+        .and_then(|tolerance| {
             SpatialCandidate::try_from(m)
-                .map(|c| (c, scale))
+                .map(|c| (c, tolerance))
                 .map_err(|e| e.to_string())
         }) {
         Err(e) => invalid(m, &e),
-        Ok((candidate, scale)) => match solve_spatial(&candidate, settings) {
+        Ok((candidate, SpatialTolerance::Box(u))) => {
+            match solve_spatial_robust(&candidate, &u, settings) {
+                Ok(SpatialRobustVerdict::Recommended(r)) => {
+                    let (reply, nominal_hang) = spatial_robust_recommended(m, &r);
+                    return Answered {
+                        reply,
+                        spatial: Some(Box::new(nominal_hang)),
+                    };
+                }
+                Ok(SpatialRobustVerdict::NoCommonOrientation { reason, nominal }) => {
+                    let mut reply = spatial_recommended(m, &nominal);
+                    reply.status = GripRecommendation::STATUS_NO_FORCE_CLOSURE;
+                    reply.message = reason.to_string();
+                    reply
+                }
+                Ok(SpatialRobustVerdict::NoForceClosure(why)) => no_closure(m, &why),
+                // Not reached: a box of zero size is not a `Box`.
+                Ok(SpatialRobustVerdict::Exact(SpatialVerdict::Recommended(r))) => {
+                    return Answered {
+                        reply: spatial_recommended(m, &r),
+                        spatial: Some(r),
+                    };
+                }
+                Ok(SpatialRobustVerdict::Exact(SpatialVerdict::NoForceClosure(why))) => {
+                    no_closure(m, &why)
+                }
+                Err(e) => invalid(m, &e),
+            }
+        }
+        Ok((candidate, tolerance)) => match solve_spatial(&candidate, settings) {
             Ok(SpatialVerdict::Recommended(r)) => {
                 let mut reply = spatial_recommended(m, &r);
-                if let Some(k) = scale {
+                if let SpatialTolerance::Mass(k) = tolerance {
                     scale_forces(&mut reply, k);
                 }
                 return Answered {
@@ -435,9 +461,54 @@ fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {
     }
 }
 
-/// A spatial candidate's tolerances: `None` without any, `Some((m + Δm) / m)` with only a mass
-/// tolerance; an error naming the field otherwise.
-fn spatial_tolerance(m: &GraspCandidate) -> Result<Option<f64>, MessageLimits> {
+/// The answer to a spatial candidate with a centre-of-mass box that every object in it can be
+/// held at: the worst cases (objective, squeeze, finger force, at the recommended tilt and after
+/// the swing at the current pose), the nominal object's objective and contact forces at rest at
+/// that tilt, and the pose as the nominal object's hang (`gravity_direction`, the rotation to
+/// it); `gravity_angle` is the tilt `θ*` of the contact axis, in the nominal object's plane.
+/// Also the nominal solution with that hang, from which the markers are drawn.
+fn spatial_robust_recommended(
+    m: &GraspCandidate,
+    r: &SpatialRobustRecommendation,
+) -> (GripRecommendation, SpatialRecommendation) {
+    let mut hang = r.nominal.clone();
+    hang.planar = Recommendation {
+        objective: r.objective,
+        gravity_angle: r.gravity_angle,
+        gripping_power: r.gripping_power,
+        internal_force: r.internal_force,
+        contact_forces: r.contact_forces,
+        gripping_power_current: r.gripping_power_current,
+        internal_force_current: r.internal_force_current,
+        current_gravity_angle: r.current_gravity_angle,
+        local_minima: r.local_minima.clone(),
+        recommended_label: None,
+        finger_force: r.finger_force,
+        finger_force_current: r.finger_force_current,
+        ..r.nominal.planar.clone()
+    };
+    hang.gravity_direction = r.gravity_direction;
+    hang.rotation_axis = r.rotation_axis;
+    hang.rotation_angle = r.rotation_angle;
+    hang.force_vectors = r.force_vectors;
+    let mut out = spatial_recommended(m, &hang);
+    out.gripping_power_nominal = r.gripping_power_nominal;
+    (out, hang)
+}
+
+/// What a spatial candidate's tolerances ask for.
+enum SpatialTolerance {
+    /// None: the nominal answer.
+    Exact,
+    /// A mass tolerance alone: the nominal answer's forces times `(m + Δm) / m`.
+    Mass(f64),
+    /// A centre-of-mass box (and perhaps a mass tolerance): the spatial robust solver.
+    Box(SpatialUncertainty),
+}
+
+/// A spatial candidate's tolerances, or an error naming the field at fault (the robust solver
+/// checks a box's mass tolerance itself).
+fn spatial_tolerance(m: &GraspCandidate) -> Result<SpatialTolerance, MessageLimits> {
     let t = &m.center_of_mass_tolerance;
     for (field, v) in [
         ("center_of_mass_tolerance.x", t.x),
@@ -459,15 +530,18 @@ fn spatial_tolerance(m: &GraspCandidate) -> Result<Option<f64>, MessageLimits> {
         }
     }
     if t.x != 0.0 || t.y != 0.0 || t.z != 0.0 {
-        return Err(MessageLimits::SpatialCenterOfMassTolerance);
+        return Ok(SpatialTolerance::Box(SpatialUncertainty {
+            center_of_mass_tolerance: nalgebra::Vector3::new(t.x, t.y, t.z),
+            mass_tolerance: m.mass_tolerance,
+        }));
     }
     let dm = m.mass_tolerance;
     if dm == 0.0 {
-        return Ok(None);
+        return Ok(SpatialTolerance::Exact);
     }
     if !(m.mass.is_finite() && m.mass > 0.0) {
         // The solver names the mass.
-        return Ok(None);
+        return Ok(SpatialTolerance::Exact);
     }
     if !(0.0..m.mass).contains(&dm) {
         return Err(InvalidInput::Tolerance {
@@ -478,7 +552,7 @@ fn spatial_tolerance(m: &GraspCandidate) -> Result<Option<f64>, MessageLimits> {
         }
         .into());
     }
-    Ok(Some((m.mass + dm) / m.mass))
+    Ok(SpatialTolerance::Mass((m.mass + dm) / m.mass))
 }
 
 /// Every force of an answer but the nominal object's (`contact_forces`,
@@ -924,9 +998,9 @@ mod spatial_tests {
     }
 
     /// Spatial candidates: a mass tolerance scales every force but the nominal object's by
-    /// `(m + Δm) / m`; a centre-of-mass tolerance is refused, naming it.
+    /// `(m + Δm) / m`; a centre-of-mass box is the spatial robust solver's answer.
     #[test]
-    fn spatial_mass_tolerance_scales_and_box_is_refused() {
+    fn spatial_mass_tolerance_scales_and_box_is_the_robust_answer() {
         let m = upright_square();
         let exact = answer(&m, &Settings::default());
         let heavy = answer(
@@ -946,15 +1020,99 @@ mod spatial_tests {
         assert_eq!(heavy.gripping_power_nominal, exact.gripping_power);
         assert_eq!(heavy.contact_forces, exact.contact_forces);
         assert_eq!(heavy.wrist_rotation, exact.wrist_rotation);
-        let boxed = answer(
-            &with_tolerances(m, [0.01, 0.0, 0.0], 0.0),
-            &Settings::default(),
-        );
-        assert_eq!(boxed.status, GripRecommendation::STATUS_INVALID_INPUT);
-        assert!(
-            boxed.message.contains("center_of_mass_tolerance"),
+        let boxed_in = with_tolerances(m, [0.01, 0.02, 0.0], 0.1);
+        let boxed = answer(&boxed_in, &Settings::default());
+        assert_eq!(
+            boxed.status,
+            GripRecommendation::STATUS_OK,
             "{}",
             boxed.message
         );
+        let candidate = SpatialCandidate::try_from(&boxed_in).expect("a valid candidate");
+        let u = SpatialUncertainty {
+            center_of_mass_tolerance: nalgebra::Vector3::new(0.01, 0.02, 0.0),
+            mass_tolerance: 0.1,
+        };
+        let Ok(SpatialRobustVerdict::Recommended(r)) =
+            solve_spatial_robust(&candidate, &u, &Settings::default())
+        else {
+            panic!("the box can be held");
+        };
+        assert_eq!(boxed.gravity_angle, r.gravity_angle);
+        assert_eq!(boxed.gripping_power, r.gripping_power);
+        assert_eq!(boxed.internal_force, r.internal_force);
+        assert_eq!(boxed.finger_force, r.finger_force);
+        assert_eq!(boxed.gripping_power_current, r.gripping_power_current);
+        assert_eq!(boxed.finger_force_current, r.finger_force_current);
+        assert_eq!(boxed.gripping_power_nominal, r.gripping_power_nominal);
+        assert_eq!(boxed.contact_forces, r.contact_forces);
+        assert_eq!(boxed.wrist_rotation, r.rotation_angle);
+        let g = &boxed.gravity_direction;
+        assert_eq!(
+            [g.x, g.y, g.z],
+            [
+                r.gravity_direction.x,
+                r.gravity_direction.y,
+                r.gravity_direction.z
+            ]
+        );
+        assert!(boxed.gripping_power > boxed.gripping_power_nominal);
+        // The tilt is the nominal answer's gravity angle in the same frame: a tiny box moves it
+        // (and the hang) only a little.
+        let tiny = answer(
+            &with_tolerances(upright_square(), [1e-9, 1e-9, 1e-9], 0.0),
+            &Settings::default(),
+        );
+        assert_eq!(
+            tiny.status,
+            GripRecommendation::STATUS_OK,
+            "{}",
+            tiny.message
+        );
+        assert!((tiny.gravity_angle - exact.gravity_angle).abs() < 1e-6);
+        assert!((tiny.wrist_rotation - exact.wrist_rotation).abs() < 1e-6);
+        let (a, b) = (&tiny.gravity_direction, &exact.gravity_direction);
+        assert!((a.x - b.x).abs() + (a.y - b.y).abs() + (a.z - b.z).abs() < 1e-6);
+        assert!((tiny.gripping_power - exact.gripping_power).abs() < 1e-6 * exact.gripping_power);
+        for (t, e) in tiny.contact_forces.iter().zip(&exact.contact_forces) {
+            assert!((t - e).abs() < 1e-6 * exact.gripping_power, "{t} vs {e}");
+        }
+        assert!((tiny.finger_force - exact.finger_force).abs() < 1e-6 * exact.gripping_power);
+        assert!(
+            (tiny.gripping_power_current - exact.gripping_power_current).abs()
+                < 1e-6 * exact.gripping_power
+        );
+    }
+
+    /// A spatial box reaching past both contacts along the axis (the normals lean down, so the
+    /// object is wider below them): the objects beyond contact 1 need the axis tilted one way,
+    /// those beyond contact 2 the other; status 1 names them, with the nominal answer.
+    #[test]
+    fn spatial_box_without_a_common_tilt_is_status_1_with_the_nominal_answer() {
+        let m = GraspCandidate {
+            normal_1: v(0.0, -1.0, -0.3),
+            normal_2: v(0.0, 1.0, -0.3),
+            ..upright_square()
+        };
+        let exact = answer(&m, &Settings::default());
+        assert_eq!(
+            exact.status,
+            GripRecommendation::STATUS_OK,
+            "{}",
+            exact.message
+        );
+        let wide = answer(
+            &with_tolerances(m, [0.0, 1.2, 0.0], 0.0),
+            &Settings::default(),
+        );
+        assert_eq!(wide.status, GripRecommendation::STATUS_NO_FORCE_CLOSURE);
+        assert!(
+            wide.message
+                .contains("no tilt of the contact axis suits every object"),
+            "{}",
+            wide.message
+        );
+        assert_eq!(wide.gripping_power, exact.gripping_power);
+        assert_eq!(wide.wrist_rotation, exact.wrist_rotation);
     }
 }
