@@ -22,13 +22,23 @@ fn run(args: &[&str], input: &str) -> Output {
         .stderr(Stdio::piped())
         .spawn()
         .expect("binary runs");
-    child
+    // A binary that exits before reading its input (a refused argument, a crash) closes the pipe:
+    // the write then fails, and what the binary said is the better report, so it is returned.
+    let written = child
         .stdin
         .take()
         .expect("stdin")
-        .write_all(input.as_bytes())
-        .expect("write stdin");
-    child.wait_with_output().expect("binary exits")
+        .write_all(input.as_bytes());
+    let out = child.wait_with_output().expect("binary exits");
+    if let Err(e) = written {
+        panic!(
+            "writing to `grasp_orient {}` failed ({e}); it exited with {:?}: {}",
+            args.join(" "),
+            out.status,
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    out
 }
 
 fn stdout(out: &Output) -> String {
