@@ -511,43 +511,12 @@ mod tests {
         assert!(text.contains("grasp_orient recover"), "{text}");
     }
 
-    /// A whole, valid MCAP file of about 2 kB whose one zstd chunk holds 64 MiB of zeros.
-    pub(crate) fn zstd_bomb() -> Vec<u8> {
-        use std::io::Write;
-        let record = |opcode: u8, body: &[u8]| {
-            let mut out = vec![opcode];
-            out.extend_from_slice(&(body.len() as u64).to_le_bytes());
-            out.extend_from_slice(body);
-            out
-        };
-        let string = |s: &str| {
-            let mut out = (s.len() as u32).to_le_bytes().to_vec();
-            out.extend_from_slice(s.as_bytes());
-            out
-        };
-        let size = 64u64 << 20;
-        let mut zstd = zstd::stream::write::Encoder::new(Vec::new(), 3).expect("an encoder");
-        for _ in 0..size >> 16 {
-            zstd.write_all(&[0; 1 << 16]).expect("compress");
-        }
-        let packed = zstd.finish().expect("compressed");
-        let mut chunk = [0u8; 16].to_vec();
-        chunk.extend_from_slice(&size.to_le_bytes());
-        chunk.extend_from_slice(&0u32.to_le_bytes());
-        chunk.extend(string("zstd"));
-        chunk.extend_from_slice(&(packed.len() as u64).to_le_bytes());
-        chunk.extend(packed);
-        let mut bytes = scan::MAGIC.to_vec();
-        bytes.extend(record(
-            scan::op::HEADER,
-            &[string("ros2"), string("")].concat(),
-        ));
-        bytes.extend(record(scan::op::CHUNK, &chunk));
-        bytes.extend(record(scan::op::DATA_END, &0u32.to_le_bytes()));
-        bytes.extend(record(scan::op::FOOTER, &[0; 20]));
-        bytes.extend_from_slice(scan::MAGIC);
-        bytes
+    /// The decompression bomb, shared with the fuzz test's seeds.
+    mod bomb {
+        use crate::record::scan::{op, MAGIC};
+        include!("../../tests/common/zstd_bomb.rs");
     }
+    use bomb::zstd_bomb;
 
     #[test]
     fn a_decompression_bomb_is_damage_never_decompressed() {
