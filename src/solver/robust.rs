@@ -204,24 +204,32 @@ impl Uncertainty {
 
     /// Checks the tolerances against the candidate's mass, naming the field at fault.
     fn validate(&self, mass: f64) -> Result<(), InvalidInput> {
-        let check = |field: &'static str, value: f64, limit: f64, unit: &'static str| {
-            if !value.is_finite() {
-                Err(InvalidInput::NotFinite { field })
-            } else if !(0.0..limit).contains(&value) {
-                Err(InvalidInput::Tolerance {
-                    field,
-                    value,
-                    limit,
-                    unit,
-                })
-            } else {
-                Ok(())
-            }
-        };
         let t = &self.center_of_mass_tolerance;
-        check("center_of_mass_tolerance.x", t.x, MAX_COORDINATE, " m")?;
-        check("center_of_mass_tolerance.y", t.y, MAX_COORDINATE, " m")?;
-        check("mass_tolerance", self.mass_tolerance, mass, " kg")
+        check_tolerance("center_of_mass_tolerance.x", t.x, MAX_COORDINATE, " m")?;
+        check_tolerance("center_of_mass_tolerance.y", t.y, MAX_COORDINATE, " m")?;
+        check_tolerance("mass_tolerance", self.mass_tolerance, mass, " kg")
+    }
+}
+
+/// One tolerance: finite and in `[0, limit)` (`unit` names the limit's unit in the message), or
+/// the error naming `field`. The planar and the spatial tolerances are checked with it.
+pub(crate) fn check_tolerance(
+    field: &'static str,
+    value: f64,
+    limit: f64,
+    unit: &'static str,
+) -> Result<(), InvalidInput> {
+    if !value.is_finite() {
+        Err(InvalidInput::NotFinite { field })
+    } else if !(0.0..limit).contains(&value) {
+        Err(InvalidInput::Tolerance {
+            field,
+            value,
+            limit,
+            unit,
+        })
+    } else {
+        Ok(())
     }
 }
 

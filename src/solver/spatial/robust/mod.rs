@@ -171,7 +171,7 @@ use super::{
 use crate::solver::analysis::Analysis;
 use crate::solver::frame::{GraspFrame, MAX_COORDINATE};
 use crate::solver::paper::FORCE_SCALE;
-use crate::solver::robust::{periodic_meet, Envelope};
+use crate::solver::robust::{check_tolerance, periodic_meet, Envelope};
 use crate::solver::{AllowedRange, Contact, InvalidInput, LocalMinimum, Objective, Settings};
 use nalgebra::{Vector2, Vector3};
 use region::Region;
@@ -208,25 +208,11 @@ impl SpatialUncertainty {
 
     /// Checks the tolerances against the candidate's mass, naming the field at fault.
     fn validate(&self, mass: f64) -> Result<(), InvalidInput> {
-        let check = |field: &'static str, value: f64, limit: f64, unit: &'static str| {
-            if !value.is_finite() {
-                Err(InvalidInput::NotFinite { field })
-            } else if !(0.0..limit).contains(&value) {
-                Err(InvalidInput::Tolerance {
-                    field,
-                    value,
-                    limit,
-                    unit,
-                })
-            } else {
-                Ok(())
-            }
-        };
         let t = &self.center_of_mass_tolerance;
-        check("center_of_mass_tolerance.x", t.x, MAX_COORDINATE, " m")?;
-        check("center_of_mass_tolerance.y", t.y, MAX_COORDINATE, " m")?;
-        check("center_of_mass_tolerance.z", t.z, MAX_COORDINATE, " m")?;
-        check("mass_tolerance", self.mass_tolerance, mass, " kg")
+        check_tolerance("center_of_mass_tolerance.x", t.x, MAX_COORDINATE, " m")?;
+        check_tolerance("center_of_mass_tolerance.y", t.y, MAX_COORDINATE, " m")?;
+        check_tolerance("center_of_mass_tolerance.z", t.z, MAX_COORDINATE, " m")?;
+        check_tolerance("mass_tolerance", self.mass_tolerance, mass, " kg")
     }
 }
 
