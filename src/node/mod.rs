@@ -18,7 +18,7 @@ pub mod session;
 pub mod sets;
 
 use crate::config::Config;
-use crate::msg::{GraspCandidate, GripRecommendation, MarkerArray};
+use crate::msg::{short_id, GraspCandidate, GripRecommendation, MarkerArray};
 use crate::record::{now_ns, OnStop, Topics};
 use answer::{Answerer, Note};
 use anyhow::Context as _;
@@ -296,6 +296,18 @@ async fn serve(
     }
 }
 
+/// When a message was received and when it was sent, ns since the epoch: the DDS timestamps
+/// when present (received: now otherwise; sent: when received otherwise).
+fn message_times(info: &MessageInfo) -> (u64, u64) {
+    let received = info
+        .received_timestamp()
+        .map_or_else(now_ns, |t| u64::try_from(t.to_nanos()).unwrap_or(0));
+    let sent = info.source_timestamp().map_or(received, |t| {
+        u64::try_from(t.to_nanos()).unwrap_or(received)
+    });
+    (received, sent)
+}
+
 /// Answers one candidate: the answer goes out first; markers and the recording follow it.
 async fn answer_one(
     node: &Node,
@@ -304,21 +316,11 @@ async fn answer_one(
     candidate: GraspCandidate,
     info: &MessageInfo,
 ) {
-    let received = info
-        .received_timestamp()
-        .map_or_else(now_ns, |t| u64::try_from(t.to_nanos()).unwrap_or(0));
-    let sent = info.source_timestamp().map_or(received, |t| {
-        u64::try_from(t.to_nanos()).unwrap_or(received)
-    });
+    let (received, sent) = message_times(info);
     let outcome = answerer.handle(candidate, received, sent);
     log::debug!(
         "candidate {:?}: status {}, gravity angle {}, {} {} N",
-        outcome
-            .reply
-            .candidate_id
-            .chars()
-            .take(64)
-            .collect::<String>(),
+        short_id(&outcome.reply.candidate_id),
         outcome.reply.status,
         outcome.reply.gravity_angle,
         outcome.reply.objective,

@@ -6,7 +6,8 @@
 use super::answer::{Answerer, SetOutcome};
 use super::session::{create_topic, qos, say, Session};
 use crate::msg::{
-    GraspCandidateSet, GripRecommendationSet, MarkerArray, RecommendRequest, RecommendResponse,
+    short_id, GraspCandidateSet, GripRecommendationSet, MarkerArray, RecommendRequest,
+    RecommendResponse,
 };
 use crate::record::{now_ns, SetTopics};
 use anyhow::Context as _;
@@ -81,12 +82,7 @@ pub async fn answer_topic(
     set: GraspCandidateSet,
     info: &MessageInfo,
 ) {
-    let received = info
-        .received_timestamp()
-        .map_or_else(now_ns, |t| u64::try_from(t.to_nanos()).unwrap_or(0));
-    let sent = info.source_timestamp().map_or(received, |t| {
-        u64::try_from(t.to_nanos()).unwrap_or(received)
-    });
+    let (received, sent) = super::message_times(info);
     let outcome = answerer.handle_set(set, received, sent);
     let SetOutcome {
         reply,
@@ -141,7 +137,7 @@ pub async fn answer_call(
 fn log_answer(reply: &GripRecommendationSet, via: &str) {
     log::debug!(
         "set {:?} ({via}): {} candidates, {} ranked by {}, status {}",
-        reply.set_id.chars().take(64).collect::<String>(),
+        short_id(&reply.set_id),
         reply.recommendations.len(),
         reply.ranking.len(),
         reply.ranked_by,
