@@ -119,7 +119,17 @@ pub fn local_interface_table() -> Vec<IfAddr> {
 ///
 /// An overestimate is a soft failure (IP fragmentation), never data loss, so
 /// this errs toward the safe default when unsure.
+///
+/// A peer at one of this host's own addresses (a participant on the same host
+/// that announced its Ethernet address, as Fast DDS does) is not reached over
+/// that interface: the kernel delivers datagrams to a local address through the
+/// loopback device, so its MTU applies, when the table knows it.
 pub fn path_mtu_payload_for_peer(ifaces: &[IfAddr], peer_ip: IpAddr) -> usize {
+  if ifaces.iter().any(|ifa| ifa.ip == peer_ip) {
+    if let Some(mtu) = ifaces.iter().filter(|ifa| ifa.is_loopback).find_map(|ifa| ifa.mtu) {
+      return payload_budget_for_mtu(mtu);
+    }
+  }
   if let IpAddr::V4(peer) = peer_ip {
     for ifa in ifaces {
       let (IpAddr::V4(local), Some(mask)) = (ifa.ip, ifa.netmask) else {
@@ -492,6 +502,28 @@ mod tests {
       path_mtu_payload_for_peer(&ifaces, v4(127, 0, 0, 1)),
       16384 - 48
     );
+  }
+
+  // A peer at this host's own Ethernet address is reached through the loopback
+  // device: the loopback MTU, not the Ethernet one (its subnet also matches).
+  #[test]
+  fn path_mtu_own_address_uses_loopback_mtu() {
+    let ifaces = vec![
+      iface_v4(192, 0, 2, 2, 24, 1400, false),
+      iface_v4(127, 0, 0, 1, 8, 65536, true),
+    ];
+    assert_eq!(
+      path_mtu_payload_for_peer(&ifaces, v4(192, 0, 2, 2)),
+      65536 - 48
+    );
+    // Another host on that subnet still gets the Ethernet MTU.
+    assert_eq!(
+      path_mtu_payload_for_peer(&ifaces, v4(192, 0, 2, 3)),
+      1400 - 48
+    );
+    // Without a loopback MTU in the table, the old rule stands.
+    let no_lo = vec![iface_v4(192, 0, 2, 2, 24, 1400, false)];
+    assert_eq!(path_mtu_payload_for_peer(&no_lo, v4(192, 0, 2, 2)), 1400 - 48);
   }
 
   // A peer not in any local subnet is assumed to be behind a router: use the
