@@ -91,31 +91,40 @@ impl Extend<f64> for AtMostTwo {
 }
 
 /// One interval of θ on which the objective is a single [`Shape`].
+///
+/// Its ends and minima are kept as [`Angle`]s, sine and cosine included: the walk that finds
+/// them, the local minima and the recommendation all evaluate shapes there, and each angle's
+/// `sin_cos` is computed once (the same value each time, so the answers are what they were when
+/// each use computed its own).
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Segment {
-    lo: f64,
-    hi: f64,
+    lo: Angle,
+    hi: Angle,
     shape: Shape,
     /// Stationary minima of the shape strictly inside `(lo, hi)` (at most two).
-    minima: [f64; 2],
+    minima: [Angle; 2],
     /// How many of `minima` are set.
     n_minima: usize,
 }
 
 impl Segment {
-    fn new(lo: f64, hi: f64, shape: Shape) -> Self {
+    fn new(lo: Angle, hi: Angle, shape: Shape) -> Self {
         let mut found = AtMostTwo::default();
-        shape.minima_between(lo, hi, &mut found);
+        shape.minima_between(lo.theta, hi.theta, &mut found);
+        let mut minima = [lo; 2];
+        for (m, &t) in minima.iter_mut().zip(&found.values[..found.len]) {
+            *m = Angle::new(t);
+        }
         Self {
             lo,
             hi,
             shape,
-            minima: found.values,
+            minima,
             n_minima: found.len,
         }
     }
 
-    fn minima(&self) -> &[f64] {
+    fn minima(&self) -> &[Angle] {
         &self.minima[..self.n_minima]
     }
 }
@@ -235,7 +244,8 @@ impl Analysis {
             .fold(0.0, f64::max);
         let tol = ENVELOPE_TIE * scale.max(f64::MIN_POSITIVE);
         // Where `funcs[j]` rises through `funcs[i]`, for every pair: one atan2 per pair, since
-        // `funcs[i]` rises through `funcs[j]` half a turn later.
+        // `funcs[i]` rises through `funcs[j]` half a turn later. (Computing them only when the
+        // walk asks saved 1.5 of the 10 per grasp and cost as much in bookkeeping.)
         let mut rise = [[None::<f64>; 5]; 5];
         for i in 0..n {
             for j in (i + 1)..n {
@@ -248,30 +258,30 @@ impl Analysis {
         // funcs = [α3, α4, α5, α6, 0]: B, C, D are where α3 rises through α6, α4 through α3,
         // α5 through α4.
         self.crossings = [rise[3][0], rise[0][1], rise[1][2]];
-        let mut t = lo;
-        let mut active = top_at(funcs, t, tol);
+        let mut t = Angle::new(lo);
+        let mut active = top_at(funcs, &t, tol);
         // Each step moves to a crossing of the active bound; there are at most two crossings per
         // pair in a range shorter than 2π, so this bound is never reached on real input.
         for _ in 0..64 {
             let next = rise[active][..n]
                 .iter()
                 .flatten()
-                .map(|&r| next_periodic(r, TAU, t))
+                .map(|&r| next_periodic(r, TAU, t.theta))
                 .fold(f64::INFINITY, f64::min);
-            let end = next.min(hi);
-            if end > t {
+            let end = Angle::new(next.min(hi));
+            if end.theta > t.theta {
                 self.push_piece(t, end, &funcs[active]);
             }
             if next >= hi {
                 break;
             }
-            t = next;
-            active = top_at(funcs, t, tol);
+            t = end;
+            active = top_at(funcs, &t, tol);
         }
     }
 
     /// Adds the objective's segments for one envelope piece `[lo, hi]` with active bound `f`.
-    fn push_piece(&mut self, lo: f64, hi: f64, f: &Sinusoid) {
+    fn push_piece(&mut self, lo: Angle, hi: Angle, f: &Sinusoid) {
         let t = &self.particular;
         let w = &self.internal;
         match self.objective {
@@ -287,22 +297,23 @@ impl Analysis {
             Objective::Norm1 => {
                 // Breakpoints inside the piece: where a friction force at α = f changes sign,
                 // and where the two friction zeros cross (r1 = r2 ⇔ c2 T_F1 - c1 T_F2 = 0).
+                let (l, h) = (lo.theta, hi.theta);
                 let mut cuts = Vec::with_capacity(8);
-                cuts.push(lo);
-                t[1].plus_scaled(w[1], f).zeros_between(lo, hi, &mut cuts);
-                t[3].plus_scaled(w[3], f).zeros_between(lo, hi, &mut cuts);
+                t[1].plus_scaled(w[1], f).zeros_between(l, h, &mut cuts);
+                t[3].plus_scaled(w[3], f).zeros_between(l, h, &mut cuts);
                 if w[1] != 0.0 && w[3] != 0.0 {
                     t[1].scaled(w[3])
                         .minus(&t[3].scaled(w[1]))
-                        .zeros_between(lo, hi, &mut cuts);
+                        .zeros_between(l, h, &mut cuts);
                 }
-                cuts.push(hi);
                 cuts.sort_by(f64::total_cmp);
-                for pair in cuts.windows(2) {
-                    let (a, b) = (pair[0], pair[1]);
-                    if b > a {
-                        let shape = Shape::Sin(self.norm1_piece(f, 0.5 * (a + b)));
+                let inner = cuts.iter().map(|&c| Angle::new(c));
+                let mut a = lo;
+                for b in inner.chain(std::iter::once(hi)) {
+                    if b.theta > a.theta {
+                        let shape = Shape::Sin(self.norm1_piece(f, 0.5 * (a.theta + b.theta)));
                         self.segments.push(Segment::new(a, b, shape));
+                        a = b;
                     }
                 }
             }
@@ -361,7 +372,12 @@ impl Analysis {
 
     /// The objective and the forces at any gravity angle, computed point-wise.
     pub fn evaluate(&self, theta: f64) -> PointValue {
-        let at = Angle::new(theta);
+        self.evaluate_at(&Angle::new(theta))
+    }
+
+    /// [`Analysis::evaluate`] at an angle whose sine and cosine are known.
+    fn evaluate_at(&self, at: &Angle) -> PointValue {
+        let at = *at;
         let [_, _, a3, a4, a5, a6] = self.alphas;
         let alpha_min = [a3, a4, a5, a6]
             .iter()
@@ -456,38 +472,41 @@ impl Analysis {
             })
     }
 
-    /// Every local minimum of the objective over the closed graspable range.
-    fn local_minima(&self) -> Vec<(f64, f64)> {
-        let mut found: Vec<(f64, f64)> = Vec::with_capacity(8);
-        let mut push = |theta: f64, shape: &Shape| {
-            let at = Angle::new(theta);
-            let p = self.power_from_raw(shape, shape.raw(&at));
+    /// Every local minimum of the objective over the closed graspable range, with its label
+    /// among `labels` (the paper's candidates).
+    fn local_minima(&self, labels: &[Option<(PaperCandidate, f64)>]) -> Vec<LocalMinimum> {
+        let mut found: Vec<LocalMinimum> = Vec::with_capacity(8);
+        let mut push = |at: &Angle, shape: &Shape| {
+            let theta = at.theta;
             if found
                 .last()
-                .is_none_or(|(t, _)| (theta - t).abs() > SAME_ANGLE)
+                .is_none_or(|m| (theta - m.gravity_angle).abs() > SAME_ANGLE)
             {
-                found.push((theta, p));
+                found.push(LocalMinimum {
+                    gravity_angle: theta,
+                    power: self.power_from_raw(shape, shape.raw(at)),
+                    label: self.label_of(labels, theta),
+                });
             }
         };
         let segs = &self.segments;
         for (k, seg) in segs.iter().enumerate() {
-            let start = Angle::new(seg.lo);
-            let right = seg.shape.slope(&start);
+            let right = seg.shape.slope(&seg.lo);
             let left = if k == 0 {
                 f64::NEG_INFINITY
             } else {
-                segs[k - 1].shape.slope(&start)
+                segs[k - 1].shape.slope(&seg.lo)
             };
             if left <= 0.0 && right >= 0.0 {
-                push(seg.lo, &seg.shape);
+                push(&seg.lo, &seg.shape);
             }
-            for &t in seg.minima() {
+            for t in seg.minima() {
                 push(t, &seg.shape);
             }
         }
         if let Some(last) = segs.last() {
-            if last.shape.slope(&Angle::new(last.hi)) <= 0.0 {
-                push(last.hi, &last.shape);
+            if last.shape.slope(&last.hi) <= 0.0 {
+                push(&last.hi, &last.shape);
             }
         }
         found
@@ -549,64 +568,68 @@ impl Analysis {
         let current = self.representative(self.frame.current_theta);
         let rotation_to = |theta: f64| wrap_angle(current - theta).abs();
         let weight = self.frame.weight;
-        // (θ, objective) of the best point so far.
-        let mut best: Option<(f64, f64)> = None;
-        let mut consider = |theta: f64, power: f64| {
+        // (angle, objective) of the best point so far.
+        let mut best: Option<(Angle, f64)> = None;
+        let mut consider = |at: Angle, power: f64| {
             let better = match best {
                 None => true,
                 Some((bt, bp)) => {
                     // Relative to the weight too: a plateau at zero must tie with rounding residue.
                     let tie = (power - bp).abs() <= TIE * bp.abs().max(power.abs()).max(weight);
                     if tie {
-                        rotation_to(theta) < rotation_to(bt)
+                        rotation_to(at.theta) < rotation_to(bt.theta)
                     } else {
                         power < bp
                     }
                 }
             };
             if better {
-                best = Some((theta, power));
+                best = Some((at, power));
             }
         };
-        let mut interior = Vec::with_capacity(4);
+        // An end of a segment that an allowed interval cuts is a new angle; the others are known.
+        let clipped = |theta: f64, end: &Angle| {
+            if theta == end.theta {
+                *end
+            } else {
+                Angle::new(theta)
+            }
+        };
         for seg in &self.segments {
             for &(a, b) in &allowed {
-                let (lo, hi) = (seg.lo.max(a), seg.hi.min(b));
+                let (lo, hi) = (seg.lo.theta.max(a), seg.hi.theta.min(b));
                 if lo > hi {
                     continue;
                 }
-                interior.clear();
-                interior.extend([lo, hi]);
-                interior.extend(seg.minima().iter().filter(|&&t| t > lo && t < hi));
-                if seg.shape.is_constant() {
-                    interior.push(current.clamp(lo, hi));
-                }
-                for &t in &interior {
-                    let p = self.power_from_raw(&seg.shape, seg.shape.raw(&Angle::new(t)));
-                    consider(t, p);
+                let (lo_at, hi_at) = (clipped(lo, &seg.lo), clipped(hi, &seg.hi));
+                let inside = seg.minima().iter().filter(|t| t.theta > lo && t.theta < hi);
+                let plateau = seg
+                    .shape
+                    .is_constant()
+                    .then(|| Angle::new(current.clamp(lo, hi)));
+                for at in [lo_at, hi_at]
+                    .into_iter()
+                    .chain(inside.copied())
+                    .chain(plateau)
+                {
+                    let p = self.power_from_raw(&seg.shape, seg.shape.raw(&at));
+                    consider(at, p);
                 }
             }
         }
         // The allowed intervals lie inside the graspable range, which the segments cover.
-        let (theta, _) = best.unwrap_or((allowed[0].0, f64::NAN));
-        Ok(self.report(theta, current, &allowed))
+        let (at, _) = best.unwrap_or((Angle::new(allowed[0].0), f64::NAN));
+        Ok(self.report(&at, current, &allowed))
     }
 
-    /// Everything the answer reports for the recommended angle `theta`.
-    fn report(&self, theta: f64, current: f64, allowed: &[(f64, f64)]) -> Recommendation {
+    /// Everything the answer reports for the recommended angle `best`.
+    fn report(&self, best: &Angle, current: f64, allowed: &[(f64, f64)]) -> Recommendation {
         let f = &self.frame;
-        let at_best = self.evaluate(theta);
+        let theta = best.theta;
+        let at_best = self.evaluate_at(best);
         let at_current = self.evaluate(current);
         let labels = self.labelled_angles();
-        let minima: Vec<LocalMinimum> = self
-            .local_minima()
-            .into_iter()
-            .map(|(t, p)| LocalMinimum {
-                gravity_angle: t,
-                power: p,
-                label: self.label_of(&labels, t),
-            })
-            .collect();
+        let minima = self.local_minima(&labels);
         let recommended_label = self.label_of(&labels, theta);
         let c_angle = labels[2].map(|(_, t)| t);
         let candidate_c = match c_angle {
@@ -652,7 +675,7 @@ impl Analysis {
             objective: self.objective,
             gravity_angle: theta,
             wrist_rotation: wrap_angle(current - theta),
-            gravity_direction: f.gravity_direction(theta),
+            gravity_direction: f.gravity_direction_at(best.sin, best.cos),
             gripping_power: at_best.power,
             internal_force: at_best.internal_force,
             contact_forces,
@@ -689,14 +712,14 @@ impl Analysis {
                 Shape::Quad(q) => Curve::Quad(q),
                 Shape::Sin(f) => Curve::Sin(f),
             };
-            (s.lo, s.hi, curve)
+            (s.lo.theta, s.hi.theta, curve)
         })
     }
 }
 
-/// Index of the largest function at `t`; near-ties go to the steeper one (it stays on top).
-fn top_at(funcs: &[Sinusoid], t: f64, tol: f64) -> usize {
-    let at = Angle::new(t);
+/// Index of the largest function at `at`; near-ties go to the steeper one (it stays on top).
+fn top_at(funcs: &[Sinusoid], at: &Angle, tol: f64) -> usize {
+    let at = *at;
     let top = funcs
         .iter()
         .map(|f| f.value(&at))
@@ -734,14 +757,19 @@ mod tests {
         for objective in [Objective::Norm2, Objective::Norm1, Objective::InternalForce] {
             let a = analysis(&c, objective);
             let (lo, hi) = a.graspable_range();
-            assert_eq!(a.segments[0].lo, lo);
-            assert_eq!(a.segments.last().map(|s| s.hi), Some(hi));
+            assert_eq!(a.segments[0].lo.theta, lo);
+            assert_eq!(a.segments.last().map(|s| s.hi.theta), Some(hi));
             for w in a.segments.windows(2) {
                 assert_eq!(w[0].hi, w[1].lo);
             }
             for seg in &a.segments {
+                // Each end and minimum carries its own sine and cosine.
+                for at in [seg.lo, seg.hi].iter().chain(seg.minima()) {
+                    assert_eq!(*at, Angle::new(at.theta));
+                }
+                let (lo, hi) = (seg.lo.theta, seg.hi.theta);
                 for k in 1..10 {
-                    let t = seg.lo + (seg.hi - seg.lo) * k as f64 / 10.0;
+                    let t = lo + (hi - lo) * k as f64 / 10.0;
                     let shape = a.power_from_raw(&seg.shape, seg.shape.raw(&Angle::new(t)));
                     let point = a.evaluate(t).power;
                     assert!(

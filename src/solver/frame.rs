@@ -330,7 +330,12 @@ impl GraspFrame {
     /// Gravity direction in the candidate frame for gravity angle `theta`.
     pub fn gravity_direction(&self, theta: f64) -> Vector2<f64> {
         let (s, c) = theta.sin_cos();
-        self.e_x * s - self.e_y * c
+        self.gravity_direction_at(s, c)
+    }
+
+    /// [`GraspFrame::gravity_direction`] from the angle's sine and cosine.
+    pub(crate) fn gravity_direction_at(&self, sin: f64, cos: f64) -> Vector2<f64> {
+        self.e_x * sin - self.e_y * cos
     }
 }
 
