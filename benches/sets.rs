@@ -19,7 +19,7 @@ static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 use common::random_grasp;
 use grasp_orient::msg::{GraspCandidate, GraspCandidateSet, Point, Vector3};
-use grasp_orient::sets::{answer_one, answer_set, Rules};
+use grasp_orient::sets::{answer_one, answer_set, answer_set_on, Rules};
 use grasp_orient::solver::Settings;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -108,12 +108,26 @@ fn main() {
     }
     let (single, kept, whole) = (singles[2], kept[2], sets[2]);
     let answers = answer_set(&set, &settings, &rules);
+    // The node's pool (`sets::solver_pool`), here with every core: what more cores buy.
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let pooled = grasp_orient::sets::solver_pool(cores).ok().map(|pool| {
+        median_secs(runs, || {
+            black_box(answer_set_on(black_box(&set), &settings, &rules, Some(&pool)));
+        })
+    });
     let ranking = median_secs(runs, || {
         black_box(grasp_orient::sets::rank(
             black_box(&answers.recommendations),
             &rules,
         ));
     });
+    if let Some(t) = pooled {
+        println!(
+            "on a pool of {cores} threads (not one core): {:.3} ms, {:.2} times one core",
+            t * 1e3,
+            whole / t
+        );
+    }
     println!(
         "{n} candidates ({} ranked), one core, medians of 5 x {runs} runs:\n  \
          {n} singles answered one by one:  {:.3} ms ({:.2} us each)\n  \

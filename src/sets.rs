@@ -285,21 +285,23 @@ pub fn answer_set(
     settings: &Settings,
     rules: &Rules,
 ) -> GripRecommendationSet {
-    answer_set_on(set, settings, rules, 1)
+    answer_set_on(set, settings, rules, None)
 }
 
-/// Sets smaller than this are answered in the calling thread whatever the threads offered:
-/// starting a thread costs about what solving a few dozen candidates does.
+/// Sets smaller than this are answered in the calling thread whatever the pool: handing work to
+/// another thread and waking it costs about what solving a few dozen candidates does.
 pub const PARALLEL_FROM: usize = 128;
 
-/// [`answer_set`] with the candidates shared among up to `threads` threads (the calling one
-/// included): the same answer, sooner on a machine with idle cores. The node uses it; the
-/// library's [`answer_set`] stays on one thread.
+/// [`answer_set`] with the candidates shared among the threads of `pool` when there is one: the
+/// same answer, sooner on a machine with idle cores. The node keeps one pool for its life
+/// ([`solver_pool`]) on machines of more than two cores; a thread started for each set would
+/// begin with an empty heap, and the pages it faulted in cost more than its share of the solving. The library's [`answer_set`] stays on
+/// the calling thread.
 pub fn answer_set_on(
     set: &GraspCandidateSet,
     settings: &Settings,
     rules: &Rules,
-    threads: usize,
+    pool: Option<&rayon::ThreadPool>,
 ) -> GripRecommendationSet {
     let mut out = empty_answer(set, rules);
     if let Some((status, message)) = refusal(set, rules) {
@@ -315,45 +317,43 @@ pub fn answer_set_on(
         },
         ..*rules
     };
-    out.recommendations = answer_all(&set.candidates, settings, &rules, threads);
+    out.recommendations = answer_all(&set.candidates, settings, &rules, pool);
     out.ranking = rank(&out.recommendations, &rules);
     out
 }
 
-/// Every candidate answered in order, on up to `threads` threads.
+/// Every candidate answered in order, on the threads of `pool` for a large set.
 fn answer_all(
     candidates: &[GraspCandidate],
     settings: &Settings,
     rules: &Rules,
-    threads: usize,
+    pool: Option<&rayon::ThreadPool>,
 ) -> Vec<GripRecommendation> {
-    let solve = |part: &[GraspCandidate]| -> Vec<GripRecommendation> {
-        part.iter()
-            .map(|c| answer_one(c, settings, rules))
-            .collect()
-    };
-    if threads <= 1 || candidates.len() < PARALLEL_FROM {
-        return solve(candidates);
-    }
-    let per = candidates.len().div_ceil(threads);
-    let mut parts = candidates.chunks(per);
-    let Some(first) = parts.next() else {
-        return Vec::new();
-    };
-    std::thread::scope(|scope| {
-        let others: Vec<_> = parts.map(|part| scope.spawn(move || solve(part))).collect();
-        let mut out = Vec::with_capacity(candidates.len());
-        out.extend(solve(first));
-        for handle in others {
-            // The solver does not panic; if it ever did, the panic goes on as in one thread.
-            out.extend(
-                handle
-                    .join()
-                    .unwrap_or_else(|e| std::panic::resume_unwind(e)),
-            );
+    let one = |c: &GraspCandidate| answer_one(c, settings, rules);
+    match pool {
+        Some(pool) if pool.current_num_threads() > 1 && candidates.len() >= PARALLEL_FROM => {
+            use rayon::prelude::*;
+            // An indexed collect writes each answer in its place, in order.
+            pool.install(|| {
+                candidates
+                    .par_iter()
+                    .with_min_len(PARALLEL_FROM / 2)
+                    .map(one)
+                    .collect()
+            })
         }
-        out
-    })
+        _ => candidates.iter().map(one).collect(),
+    }
+}
+
+/// A pool of `threads` threads to answer large sets on, named `solver-N`, started once; the
+/// reason when the system refuses the threads.
+pub fn solver_pool(threads: usize) -> Result<rayon::ThreadPool, String> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .thread_name(|i| format!("solver-{i}"))
+        .build()
+        .map_err(|e| format!("cannot start {threads} solver threads: {e}"))
 }
 
 /// The benchmark floor's answer to a set: as many empty recommendations as candidates (each with
@@ -598,8 +598,9 @@ mod tests {
             .collect();
         let set = set_of(many);
         let one = answer_set(&set, &Settings::default(), &Rules::default());
-        for threads in [2, 3, 8] {
-            let on = answer_set_on(&set, &Settings::default(), &Rules::default(), threads);
+        for threads in [1, 2, 3, 8] {
+            let pool = solver_pool(threads).expect("threads");
+            let on = answer_set_on(&set, &Settings::default(), &Rules::default(), Some(&pool));
             assert_eq!(format!("{on:?}"), format!("{one:?}"), "{threads} threads");
         }
     }

@@ -13,7 +13,7 @@ use crate::msg::{
 use crate::record::lifecycle::{Change, Recording, Wanted};
 use crate::record::settings::SettingsRecord;
 use crate::record::{Entry, OnStop, Payload, RecordError, Topics};
-use crate::sets::{answer_one_in_full, answer_set_on, echo_set};
+use crate::sets::{answer_one_in_full, answer_set_on, echo_set, solver_pool};
 use log::Level;
 use std::path::Path;
 
@@ -98,6 +98,22 @@ pub struct Answerer {
     seen_version: u64,
     /// Sets of the recording parameters acted on.
     seen_recording_sets: u64,
+    /// The threads large sets are answered on (none in echo mode, or when they cannot start).
+    pool: Option<rayon::ThreadPool>,
+}
+
+/// The threads a large set is answered on: one per core but one, which the DDS threads need
+/// while a set is solved. With two cores that is none: measured here from rclpy, a second solver
+/// thread made a set of 1,000 no sooner (the DDS threads had the other core) and its publication
+/// slower (the answers' memory was the other thread's).
+fn set_pool() -> Option<rayon::ThreadPool> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    if cores <= 2 {
+        return None;
+    }
+    solver_pool(cores - 1)
+        .map_err(|e| log::warn!("{e}; sets are answered on one thread"))
+        .ok()
 }
 
 impl Answerer {
@@ -121,6 +137,7 @@ impl Answerer {
             recording: Recording::new(node, topics, qos_depth, on_stop),
             seen_version: 0,
             seen_recording_sets: 0,
+            pool: if echo { None } else { set_pool() },
         }
     }
 
@@ -346,8 +363,7 @@ impl Answerer {
         let reply = if self.echo {
             echo_set(&set)
         } else {
-            let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-            answer_set_on(&set, &settings, &rules, threads)
+            answer_set_on(&set, &settings, &rules, self.pool.as_ref())
         };
         self.count_set(&reply, &mut notes);
         let best = reply.ranking.first().map(|&i| i as usize);
