@@ -15,6 +15,7 @@ use ros2_client::{
     MessageInfo, Name, Node, Publisher, RmwRequestId, Server, ServiceMapping, ServiceTypeName,
     Subscription,
 };
+use std::time::{Duration, Instant};
 
 /// The service's name under the node (`~/recommend`).
 pub const SERVICE: &str = "recommend";
@@ -83,7 +84,9 @@ pub async fn answer_topic(
     info: &MessageInfo,
 ) {
     let (received, sent) = super::message_times(info);
+    let started = Instant::now();
     let outcome = answerer.handle_set(set, received, sent);
+    let took = started.elapsed();
     let SetOutcome {
         reply,
         markers: array,
@@ -91,7 +94,7 @@ pub async fn answer_topic(
         recorded,
     } = outcome;
     super::tell(node, notes);
-    log_answer(&reply, "topic");
+    log_answer(&reply, "topic", took);
     if let Err(e) = endpoints.answers.async_publish(reply).await {
         say(
             node,
@@ -115,9 +118,11 @@ pub async fn answer_call(
     request: RecommendRequest,
 ) {
     let received = now_ns();
+    let started = Instant::now();
     let outcome = answerer.handle_set(request.candidate_set, received, received);
+    let took = started.elapsed();
     super::tell(node, outcome.notes);
-    log_answer(&outcome.reply, "service");
+    log_answer(&outcome.reply, "service", took);
     let response = RecommendResponse {
         recommendation_set: outcome.reply,
     };
@@ -133,15 +138,17 @@ pub async fn answer_call(
     super::tell(node, answerer.record_set(outcome.recorded, answered));
 }
 
-/// One line at debug per set answered, as for single candidates.
-fn log_answer(reply: &GripRecommendationSet, via: &str) {
+/// One line at debug per set answered, as for single candidates, with the time its answer took
+/// (solving and ranking, before it is published).
+fn log_answer(reply: &GripRecommendationSet, via: &str, took: Duration) {
     log::debug!(
-        "set {:?} ({via}): {} candidates, {} ranked by {}, status {}",
+        "set {:?} ({via}): {} candidates, {} ranked by {}, status {}, answered in {:.3} ms",
         short_id(&reply.set_id),
         reply.recommendations.len(),
         reply.ranking.len(),
         reply.ranked_by,
-        reply.status
+        reply.status,
+        took.as_secs_f64() * 1e3
     );
 }
 
