@@ -338,7 +338,11 @@ impl Writer {
       heartbeat_period_fast,
       cache_cleaning_period,
       nack_response_delay: NACK_RESPONSE_DELAY, // default value from dp_event_loop
-      nackfrag_response_delay: NACK_RESPONSE_DELAY, // default value from dp_event_loop
+      // A NACK_FRAG is answered at once: Fast DDS sends one only after its own
+      // heartbeat response delay, and repeats it every ~5 ms until the fragments
+      // arrive, so waiting another NACK_RESPONSE_DELAY here only added 5 ms to
+      // every round of a lost fragment's repair.
+      nackfrag_response_delay: std::time::Duration::ZERO,
       nack_suppression_duration: NACK_SUPPRESSION_DURATION,
       // Conservative fallback for any discovery advertisement of max sample size.
       data_max_size_serialized: FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE,
@@ -3099,6 +3103,36 @@ mod tests {
       };
       round((2..=256).step_by(2).map(FragmentNumber::new).collect(), 1);
       round((100..356).map(FragmentNumber::new).collect(), 2);
+    }
+
+    // A new writer answers a NACK_FRAG at once, not after NACK_RESPONSE_DELAY.
+    #[test]
+    fn nack_frag_is_answered_at_once() {
+      use crate::{
+        messages::submessages::submessages::NackFrag,
+        structure::sequence_number::{FragmentNumber, FragmentNumberSet},
+      };
+      let mut f = Fixture::user(1, 100_000, None);
+      let requested: BTreeSet<FragmentNumber> = (2..=20).map(FragmentNumber::new).collect();
+      let nack_frag = NackFrag {
+        reader_id: f.reader_guid.entity_id,
+        writer_id: f.writer.my_guid.entity_id,
+        writer_sn: SequenceNumber::new(1),
+        fragment_number_state: FragmentNumberSet::from_base_and_set(
+          FragmentNumber::new(2),
+          &requested,
+        ),
+        count: 1,
+      };
+      f.writer
+        .handle_ack_nack(f.reader_guid.prefix, &AckSubmessage::NackFrag(nack_frag));
+      let events = f.reader_events(StdDuration::from_millis(2));
+      assert!(
+        events
+          .iter()
+          .any(|e| matches!(e, TimedEvent::SendRepairFrags { .. })),
+        "no repair round within 2 ms of the NACK_FRAG"
+      );
     }
 
     // While the reader's send socket has queued control datagrams, a round
