@@ -557,7 +557,9 @@ pub fn solve_orientation(
     candidate: &Candidate,
     settings: &Settings,
 ) -> Result<Verdict, InvalidInput> {
-    match analyse(candidate, settings)? {
+    // `analyse`, without the Result around its Result: the analysis is not moved once more.
+    let frame = GraspFrame::new(candidate, settings.friction_safety_factor)?;
+    match Analysis::new(&frame, settings.objective) {
         Ok(analysis) => Ok(Verdict::Recommended(Box::new(
             analysis.recommend(&settings.range)?,
         ))),
