@@ -588,8 +588,9 @@ impl Analysis {
             }
         };
         // An end of a segment that an allowed interval cuts is a new angle; the others are known.
+        // Bits, not `==`: a cut at -0.0 of an end at +0.0 is evaluated at the -0.0 it names.
         let clipped = |theta: f64, end: &Angle| {
-            if theta == end.theta {
+            if theta.to_bits() == end.theta.to_bits() {
                 *end
             } else {
                 Angle::new(theta)
