@@ -13,7 +13,7 @@ use crate::msg::{
 use crate::record::lifecycle::{Change, Recording, Wanted};
 use crate::record::settings::SettingsRecord;
 use crate::record::{Entry, OnStop, Payload, RecordError, Topics};
-use crate::sets::{answer_one_in_full, answer_set_on, echo_set, solver_pool};
+use crate::sets::{answer_one_in_full, answer_set_on, echo_set, solver_pool, PARALLEL_FROM};
 use log::Level;
 use std::path::Path;
 
@@ -98,8 +98,9 @@ pub struct Answerer {
     seen_version: u64,
     /// Sets of the recording parameters acted on.
     seen_recording_sets: u64,
-    /// The threads large sets are answered on (none in echo mode, or when they cannot start).
-    pool: Option<rayon::ThreadPool>,
+    /// The threads large sets are answered on, started with the first large set (none in echo
+    /// mode, on two cores, or when they cannot start).
+    pool: std::cell::OnceCell<Option<rayon::ThreadPool>>,
 }
 
 /// The threads a large set is answered on: one per core but one, which the DDS threads need
@@ -137,7 +138,7 @@ impl Answerer {
             recording: Recording::new(node, topics, qos_depth, on_stop),
             seen_version: 0,
             seen_recording_sets: 0,
-            pool: if echo { None } else { set_pool() },
+            pool: std::cell::OnceCell::new(),
         }
     }
 
@@ -348,7 +349,8 @@ impl Answerer {
     /// The answer to one set, received at `received` and sent at `sent` (ns since the epoch), by
     /// the same rules as [`Answerer::handle`]: the settings in force when it was received,
     /// markers for the best candidate, one log line for the set when some of its candidates or
-    /// the set itself are refused. A large set is shared among the cores.
+    /// the set itself are refused. A large set is shared among all cores but one on machines of
+    /// more than two (`set_pool`).
     pub fn handle_set(&mut self, set: GraspCandidateSet, received: u64, sent: u64) -> SetOutcome {
         let mut notes = Vec::new();
         let (settings, markers_on, rules) = {
@@ -363,7 +365,12 @@ impl Answerer {
         let reply = if self.echo {
             echo_set(&set)
         } else {
-            answer_set_on(&set, &settings, &rules, self.pool.as_ref())
+            let pool = if set.candidates.len() >= PARALLEL_FROM {
+                self.pool.get_or_init(set_pool).as_ref()
+            } else {
+                None
+            };
+            answer_set_on(&set, &settings, &rules, pool)
         };
         self.count_set(&reply, &mut notes);
         let best = reply.ranking.first().map(|&i| i as usize);

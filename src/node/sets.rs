@@ -139,7 +139,8 @@ pub async fn answer_call(
 }
 
 /// One line at debug per set answered, as for single candidates, with the time its answer took
-/// (solving and ranking, before it is published).
+/// (solving, ranking, the best candidate's markers and the recording's copy: everything before
+/// it is published).
 fn log_answer(reply: &GripRecommendationSet, via: &str, took: Duration) {
     log::debug!(
         "set {:?} ({via}): {} candidates, {} ranked by {}, status {}, answered in {:.3} ms",
