@@ -126,7 +126,9 @@ pub fn local_interface_table() -> Vec<IfAddr> {
 /// loopback device, so its MTU applies, when the table knows it.
 pub fn path_mtu_payload_for_peer(ifaces: &[IfAddr], peer_ip: IpAddr) -> usize {
   if ifaces.iter().any(|ifa| ifa.ip == peer_ip) {
-    if let Some(mtu) = ifaces.iter().filter(|ifa| ifa.is_loopback).find_map(|ifa| ifa.mtu) {
+    // The smallest, should there be several loopback interfaces.
+    let loopback = ifaces.iter().filter(|ifa| ifa.is_loopback).filter_map(|ifa| ifa.mtu).min();
+    if let Some(mtu) = loopback {
       return payload_budget_for_mtu(mtu);
     }
   }
