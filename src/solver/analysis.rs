@@ -377,24 +377,23 @@ impl Analysis {
 
     /// [`Analysis::evaluate`] at an angle whose sine and cosine are known.
     fn evaluate_at(&self, at: &Angle) -> PointValue {
-        let at = *at;
         let [_, _, a3, a4, a5, a6] = self.alphas;
         let alpha_min = [a3, a4, a5, a6]
             .iter()
-            .map(|a| a.value(&at))
+            .map(|a| a.value(at))
             .fold(f64::NEG_INFINITY, f64::max);
         let alpha = match self.objective {
             Objective::Norm2 | Objective::InternalForce => alpha_min.max(0.0),
             Objective::Norm1 => {
                 let f = Sinusoid::new(alpha_min * at.sin, alpha_min * at.cos);
-                self.norm1_alpha(&f, &at).0
+                self.norm1_alpha(&f, at).0
             }
         };
         let scale = self.frame.weight * FORCE_SCALE;
         // In units of the weight first, then in newtons: squares of newtons would underflow
         // for a weight near the smallest double.
         let unit_forces: [f64; 4] =
-            std::array::from_fn(|i| self.particular[i].value(&at) + alpha * self.internal[i]);
+            std::array::from_fn(|i| self.particular[i].value(at) + alpha * self.internal[i]);
         let forces = unit_forces.map(|v| scale * v);
         let power = scale
             * match self.objective {
@@ -720,16 +719,15 @@ impl Analysis {
 
 /// Index of the largest function at `at`; near-ties go to the steeper one (it stays on top).
 fn top_at(funcs: &[Sinusoid], at: &Angle, tol: f64) -> usize {
-    let at = *at;
     let top = funcs
         .iter()
-        .map(|f| f.value(&at))
+        .map(|f| f.value(at))
         .fold(f64::NEG_INFINITY, f64::max);
     let mut best = 0;
     let mut best_slope = f64::NEG_INFINITY;
     for (i, f) in funcs.iter().enumerate() {
-        if f.value(&at) >= top - tol {
-            let s = f.slope(&at);
+        if f.value(at) >= top - tol {
+            let s = f.slope(at);
             if s > best_slope {
                 best = i;
                 best_slope = s;
