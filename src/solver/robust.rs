@@ -154,7 +154,7 @@
 //! not depend on `c`. So the worst finger force is the worst internal force plus `m_max|g| |sin θ| / 2`.
 
 use super::analysis::{Analysis, Curve};
-use super::frame::{GraspFrame, MAX_COORDINATE};
+use super::frame::{length, unit, GraspFrame, MAX_COORDINATE};
 use super::paper::{self, FORCE_SCALE};
 use super::sinusoid::{next_periodic, wrap_angle, Angle, QuadForm};
 use super::{
@@ -566,7 +566,9 @@ fn region(c: &Candidate, u: &Uncertainty, contact_distance: f64) -> Vec<BoxPoint
         (Contact::First, c.contact_1, c.normal_1),
         (Contact::Second, c.contact_2, c.normal_2),
     ] {
-        let n = n / n.norm();
+        // Scale-free: a normal whose square underflows still has its direction (`validate`
+        // accepted it, so it is not zero).
+        let n = unit(&n).unwrap_or_else(Vector2::zeros);
         let limit = n.dot(&(c.center_of_mass - p)).min(0.0);
         let side = |q: &Vector2<f64>| n.dot(&(q - p)) - limit;
         let mut cut = Vec::with_capacity(poly.len() + 1);
@@ -598,6 +600,15 @@ fn region(c: &Candidate, u: &Uncertainty, contact_distance: f64) -> Vec<BoxPoint
     }
     while out.len() > 1 && (out[0].position - out[out.len() - 1].position).norm() <= eps {
         out.pop();
+    }
+    if out.is_empty() {
+        // Each cut keeps the nominal centre of mass (its bound gives way to it), so only
+        // rounding can leave nothing, when the box is within rounding of a tangent: the region
+        // is then the nominal point.
+        out.push(BoxPoint {
+            position: c.center_of_mass,
+            kind: BoxPointKind::Corner { x: 0, y: 0 },
+        });
     }
     out
 }
@@ -688,7 +699,7 @@ impl Worst {
         (mass_least, mass_worst): (f64, f64),
         settings: &Settings,
     ) -> Result<Self, Refusal> {
-        let weight = mass_worst * candidate.gravity.norm();
+        let weight = mass_worst * length(&candidate.gravity);
         let mut frames = Vec::with_capacity(region.len());
         for p in region {
             let f = vertex_frame(frame, candidate.center_of_mass, p.position, weight);
@@ -1366,6 +1377,33 @@ mod tests {
         assert!((r.gravity_angle - r.nominal.gravity_angle).abs() < 1e-12);
         assert!((r.gripping_power - 1.25 * r.nominal.gripping_power).abs() < 1e-12);
         assert!((r.gripping_power_nominal - r.nominal.gripping_power).abs() < 1e-12);
+    }
+
+    /// Found by `tests/fuzz.rs`: normals and gravity of any length the validation accepts, down to
+    /// 1e-200 whose squares underflow, give the same answer as unit ones (the region's tangents
+    /// and the weight are computed scale-free), and never an empty region.
+    #[test]
+    fn tiny_normals_and_gravity_give_the_answer_of_unit_ones() {
+        let c = square_case_c();
+        let u = tolerance(0.1, 0.2, 0.1);
+        let want = recommended(&c, &u, &Settings::default());
+        for k in [1e-200, 1e-160, 1e-100, 1e3] {
+            // Forces scale with the weight, so with the gravity's length; the angle does not.
+            let scaled = Candidate {
+                normal_1: c.normal_1 * k,
+                normal_2: c.normal_2 * k,
+                gravity: c.gravity * k,
+                ..c
+            };
+            let got = recommended(&scaled, &u, &Settings::default());
+            assert_eq!(got.gravity_angle, want.gravity_angle, "scale {k:e}");
+            let power = got.gripping_power / k;
+            assert!(
+                (power - want.gripping_power).abs() <= 1e-12 * want.gripping_power,
+                "scale {k:e}: {power} against {}",
+                want.gripping_power
+            );
+        }
     }
 
     #[test]

@@ -115,7 +115,7 @@ fn times_pow2_3(v: &Vector3<f64>, k: i32) -> Vector3<f64> {
 }
 
 /// The Euclidean length of `v`, without squaring a component out of range.
-fn length(v: &Vector3<f64>) -> f64 {
+pub(super) fn length(v: &Vector3<f64>) -> f64 {
     let k = scale_exponent(v.amax());
     times_pow2(times_pow2_3(v, k).norm(), -k)
 }

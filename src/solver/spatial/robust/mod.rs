@@ -583,7 +583,8 @@ impl Problem {
             }
         };
         let mass_worst = candidate.mass + uncertainty.mass_tolerance;
-        let g_norm = candidate.gravity.norm();
+        // Scale-free: a gravity whose square underflows still has its length.
+        let g_norm = super::plane::length(&candidate.gravity);
         Self {
             center: view.coordinates(&g.c),
             point_region: uncertainty.center_of_mass_tolerance == Vector3::zeros(),
@@ -954,6 +955,45 @@ mod tests {
             mass_tolerance: 0.0,
         };
         Some(Problem::new(c, &u, settings, &g, &axis, &nominal))
+    }
+
+    /// As the planar `tiny_normals_and_gravity_give_the_answer_of_unit_ones`: normals and
+    /// gravity of lengths whose squares underflow give the answer of unit ones, never a panic.
+    #[test]
+    fn tiny_normals_and_gravity_give_the_answer_of_unit_ones() {
+        let u = SpatialUncertainty {
+            center_of_mass_tolerance: Vector3::new(0.02, 0.05, 0.05),
+            mass_tolerance: 0.1,
+        };
+        let mut compared = 0;
+        for k in 0..20 {
+            let c = grasp(k);
+            let Ok(SpatialRobustVerdict::Recommended(want)) =
+                solve_spatial_robust(&c, &u, &Settings::default())
+            else {
+                continue;
+            };
+            for scale in [1e-200, 1e-160, 1e3] {
+                let scaled = SpatialCandidate {
+                    normal_1: c.normal_1 * scale,
+                    normal_2: c.normal_2 * scale,
+                    gravity: c.gravity * scale,
+                    ..c
+                };
+                let got = solve_spatial_robust(&scaled, &u, &Settings::default());
+                let Ok(SpatialRobustVerdict::Recommended(got)) = got else {
+                    panic!("grasp {k} at scale {scale:e}: {got:?}");
+                };
+                let power = got.gripping_power / scale;
+                assert!(
+                    (power - want.gripping_power).abs() <= 1e-9 * want.gripping_power,
+                    "grasp {k} at scale {scale:e}: {power} against {}",
+                    want.gripping_power
+                );
+            }
+            compared += 1;
+        }
+        assert!(compared >= 5, "only {compared} grasps held");
     }
 
     /// Module docs §2: the closed form is the planar problem of each object's own plane with the
