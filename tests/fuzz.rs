@@ -205,7 +205,28 @@ fn spatial_cases() -> Vec<GraspCandidate> {
 
 /// Planar and spatial candidates.
 fn all_cases() -> Vec<GraspCandidate> {
-    paper_cases().into_iter().chain(spatial_cases()).collect()
+    let exact: Vec<_> = paper_cases().into_iter().chain(spatial_cases()).collect();
+    exact
+        .iter()
+        .cloned()
+        .chain(with_tolerances(&exact))
+        .collect()
+}
+
+/// The same candidates with a centre-of-mass box and a mass tolerance, so that mutations reach
+/// the robust solvers (planar and spatial) as often as the nominal ones.
+fn with_tolerances(cases: &[GraspCandidate]) -> Vec<GraspCandidate> {
+    cases
+        .iter()
+        .map(|c| {
+            let mut c = c.clone();
+            c.id.push_str("-tolerances");
+            let v = 0.05;
+            c.center_of_mass_tolerance = grasp_orient::msg::Vector3 { x: v, y: v, z: v };
+            c.mass_tolerance = 0.1 * c.mass;
+            c
+        })
+        .collect()
 }
 
 fn cdr_seeds<T: serde::Serialize>(messages: &[T]) -> Vec<Vec<u8>> {
@@ -588,6 +609,17 @@ fn no_bytes_panic_abort_hang_or_take_memory_beyond_their_size() {
             .map_or(0, |d| d.as_nanos() as u64)
     });
     println!("fuzz seed {seed} (GRASP_ORIENT_FUZZ_SEED={seed} repeats this run)");
+    // A panicking case prints its message, and with RUST_BACKTRACE a backtrace, whose symbols
+    // are read with allocations, before proptest catches it. The case's memory limit must not
+    // apply to that: a failed allocation inside the hook waits forever on the backtrace lock its
+    // own thread holds, and the run hung (the watchdog's message waited on the output lock)
+    // instead of failing with the case that panicked. Installed before proptest's own hook, which
+    // calls it.
+    let previous = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        ALLOCATOR.set_limit(usize::MAX).ok();
+        previous(info);
+    }));
     let epoch = Instant::now();
     let running = watchdog(Duration::from_secs(20), epoch);
     let targets = [
