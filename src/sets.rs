@@ -294,8 +294,8 @@ pub const PARALLEL_FROM: usize = 128;
 
 /// [`answer_set`] with the candidates shared among the threads of `pool` when there is one: the
 /// same answer, sooner on a machine with idle cores. The node keeps one pool for its life
-/// ([`solver_pool`]) on machines of more than two cores; a thread started for each set would
-/// begin with an empty heap, and the pages it faulted in cost more than its share of the solving.
+/// ([`solver_pool`], parameter `solver_threads`); a thread started for each set would begin with
+/// an empty heap, and the pages it faulted in cost more than its share of the solving.
 /// The library's [`answer_set`] stays on the calling thread.
 pub fn answer_set_on(
     set: &GraspCandidateSet,

@@ -99,20 +99,24 @@ pub struct Answerer {
     /// Sets of the recording parameters acted on.
     seen_recording_sets: u64,
     /// The threads large sets are answered on, started with the first large set (none in echo
-    /// mode, on two cores, or when they cannot start).
+    /// mode, with `solver_threads` 1, or when they cannot start).
     pool: std::cell::OnceCell<Option<rayon::ThreadPool>>,
 }
 
-/// The threads a large set is answered on: one per core but one, which the DDS threads need
-/// while a set is solved. With two cores that is none: measured here from rclpy, a second solver
-/// thread made a set of 1,000 no sooner (the DDS threads had the other core) and its publication
-/// slower (the answers' memory was the other thread's).
-fn set_pool() -> Option<rayon::ThreadPool> {
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    if cores <= 2 {
+/// The threads a large set is answered on: `threads` of them (parameter `solver_threads`), or one
+/// per core for 0; none for 1, or when the system refuses them (then the node's own thread answers).
+/// While a set is solved the DDS threads have little to do (the set has arrived and its answer is
+/// not yet written): measured from rclpy on two cores by `tests/ros/bench_sets.py`, two solver
+/// threads answered a set of 1,000 sooner than one (README "Speed").
+fn set_pool(threads: i64) -> Option<rayon::ThreadPool> {
+    let threads = match usize::try_from(threads) {
+        Ok(0) | Err(_) => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        Ok(n) => n,
+    };
+    if threads <= 1 {
         return None;
     }
-    solver_pool(cores - 1)
+    solver_pool(threads)
         .map_err(|e| log::warn!("{e}; sets are answered on one thread"))
         .ok()
 }
@@ -349,24 +353,26 @@ impl Answerer {
     /// The answer to one set, received at `received` and sent at `sent` (ns since the epoch), by
     /// the same rules as [`Answerer::handle`]: the settings in force when it was received,
     /// markers for the best candidate, one log line for the set when some of its candidates or
-    /// the set itself are refused. A large set is shared among all cores but one on machines of
-    /// more than two (`set_pool`).
+    /// the set itself are refused. A large set is shared among `solver_threads` threads
+    /// (`set_pool`).
     pub fn handle_set(&mut self, set: GraspCandidateSet, received: u64, sent: u64) -> SetOutcome {
         let mut notes = Vec::new();
-        let (settings, markers_on, rules) = {
+        let (settings, markers_on, rules, threads) = {
             let live = self.shared.lock();
             let version = live.version_at(received);
             (
                 version.settings,
                 version.config.publish_markers,
                 version.config.rules(),
+                version.config.solver_threads,
             )
         };
         let reply = if self.echo {
             echo_set(&set)
         } else {
             let pool = if set.candidates.len() >= PARALLEL_FROM {
-                self.pool.get_or_init(set_pool).as_ref()
+                // `solver_threads` is fixed: the pool is started once, with the first large set.
+                self.pool.get_or_init(|| set_pool(threads)).as_ref()
             } else {
                 None
             };
@@ -634,6 +640,15 @@ mod tests {
         let out = a.handle(paper_case_a(), before, before);
         assert_eq!(out.reply.objective, "norm2");
         assert!(out.markers.is_some());
+    }
+
+    #[test]
+    fn solver_threads_pick_the_pool() {
+        assert!(set_pool(1).is_none(), "1: the node's own thread");
+        let threads = |n| set_pool(n).map_or(1, |p| p.current_num_threads());
+        assert_eq!(threads(3), 3);
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        assert_eq!(threads(0), cores, "0: one per core");
     }
 
     #[test]

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import random
 import re
 import signal
@@ -262,6 +263,45 @@ def test_gripper_parameters_apply_to_sets_and_single_candidates(start_node, peer
     ans = to_plain(s.send(set_msg(cands, "params-after")))
     check_ranking(ans, "internal_force")
     assert [r["status"] for r in ans["recommendations"]].count(3) == 0
+
+
+def solver_thread_names(pid: int) -> list[str]:
+    """The names of the pool's threads (solver-N) in process `pid`, as the kernel lists them."""
+    names = []
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        try:
+            names.append(Path(task, "comm").read_text().strip())
+        except FileNotFoundError:  # a thread that ended while we looked
+            pass
+    return sorted(n for n in names if n.startswith("solver-"))
+
+
+def test_solver_threads_change_nothing_in_the_answer(start_node, grasp_node, peer, sets):
+    # The default node (solver_threads 0) solves a large set on one thread per core; solver_threads 1 on the
+    # node's own thread, 3 on three. Every answer must be the same.
+    cands = batch(1000, SEED + 9, "thr") + bad_ones("thr")
+    want = to_plain(sets.send(set_msg(cands, "threads"), timeout=60))
+    assert want["status"] == 0 and len(want["ranking"]) > 500, (want["status"], len(want["ranking"]))
+    cores = len(os.sched_getaffinity(grasp_node.proc.pid))
+    default = solver_thread_names(grasp_node.proc.pid)
+    assert len(default) == (0 if cores == 1 else cores), f"solver_threads 0 on {cores} cores: {default}"
+    for threads in (1, 3):
+        ns = f"/sets_threads_{threads}"
+        node = start_node("--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false",
+                          "-p", f"solver_threads:={threads}", name=f"grasp_orient node (solver_threads {threads})")
+        s = SetClient(peer, ns)
+        for how in (s.send, s.call):
+            got = to_plain(how(set_msg(cands, "threads"), timeout=60))
+            assert got == want, f"solver_threads {threads}: " + "; ".join(compare(got, want)[:10])
+        # The pool starts with the first large set; its threads are named solver-N.
+        solvers = solver_thread_names(node.proc.pid)
+        assert len(solvers) == (0 if threads == 1 else threads), f"solver_threads {threads}: {solvers}"
+        params = TN.Params(peer, f"{ns}/grasp_orient")
+        assert params.get("solver_threads") == [threads]
+        (r,) = params.set(solver_threads=2)
+        assert not r.successful and r.reason.strip(), "solver_threads was changed while running"
+        assert params.get("solver_threads") == [threads]
+        node.stop_and_check()
 
 
 # ---------------------------------------------------------------------------------------------------
