@@ -15,7 +15,8 @@
     rclpy), against the topic round trip of one candidate on grasp_candidates -> grip_recommendations (raw), and
     of a set of 1 on the set topics (raw): p50 and p99.
 Each variant runs in a node of its own (namespace), record:=false, publish_markers:=false, so that only the
-answering is measured; the node and the echo are interleaved over --repeat repetitions and the medians printed.
+answering is measured; the echo, the node, and the node with solver_threads:=1 (one solver thread: what the
+threads buy) are interleaved over --repeat repetitions and the medians printed.
 With --large-buffers, this process (the rclpy side) uses tests/ros/fastdds_large_buffers.xml: 4 MB socket
 buffers instead of the system's 208 kB, which an answer of 240 to 320 kB overflows; lost fragments then wait
 for the writer's next heartbeat to be repaired.
@@ -123,14 +124,15 @@ def service_trips(peer, client, request, count: int, warmup: int, timeout: float
     return out
 
 
-def measure(peer, args, name: str, extra: list[str], rep: int, workdir: Path) -> dict:
+def measure(peer, args, name: str, extra: list[str], params: list[str], rep: int, workdir: Path) -> dict:
     from rclpy.serialization import serialize_message
     from grasp_orient.msg import GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet
     from grasp_orient.srv import Recommend
 
     ns = f"/bench_sets_{name}_{rep}"
     node = C.NodeProcess([*extra, "--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false",
-                          "-p", "publish_markers:=false"], C.ros_env(C.DOMAIN_ID), workdir, f"{name} #{rep}")
+                          "-p", "publish_markers:=false", *params], C.ros_env(C.DOMAIN_ID), workdir,
+                         f"{name} #{rep}")
     try:
         node.wait_ready()
         res: dict = {}
@@ -176,7 +178,7 @@ def main() -> int:
     ap.add_argument("--n", type=int, default=1000, help="candidates per set (default 1000)")
     ap.add_argument("--sets", type=int, default=60, help="set round trips per run (default 60)")
     ap.add_argument("--singles", type=int, default=300, help="one-candidate round trips per run (default 300)")
-    ap.add_argument("--repeat", type=int, default=3, help="repetitions, echo and node interleaved (default 3)")
+    ap.add_argument("--repeat", type=int, default=3, help="repetitions, echo, node and node_1 interleaved (default 3)")
     ap.add_argument("--json", help="write every measurement here")
     ap.add_argument("--large-buffers", action="store_true",
                     help="rclpy side with 4 MB socket buffers (tests/ros/fastdds_large_buffers.xml)")
@@ -188,13 +190,16 @@ def main() -> int:
     rclpy.init()
     peer = C.Peer("bench_sets_peer")
     workdir = Path(tempfile.mkdtemp(prefix="grasp_orient_bench_sets_"))
-    runs: dict[str, list[dict]] = {"echo": [], "node": []}
+    # (name, arguments before --ros-args, parameters): the floor, the node as shipped (solver_threads 0:
+    # one per core), and the node solving on its own thread alone, which shows what the threads buy.
+    variants = (("echo", ["--echo"], []), ("node", [], []), ("node_1", [], ["-p", "solver_threads:=1"]))
+    runs: dict[str, list[dict]] = {name: [] for name, _, _ in variants}
     log(f"[bench_sets] ROS_DOMAIN_ID={C.DOMAIN_ID}, binary {C.binary_path()}, sets of {args.n}, "
         f"{args.repeat} repetitions, {'4 MB' if args.large_buffers else 'default'} socket buffers on the rclpy side")
     try:
         for rep in range(args.repeat):
-            for name, extra in (("echo", ["--echo"]), ("node", [])):
-                r = measure(peer, args, name, extra, rep, workdir)
+            for name, extra, params in variants:
+                r = measure(peer, args, name, extra, params, rep, workdir)
                 runs[name].append(r)
                 log(f"[bench_sets] #{rep} {name}: set p50 {r['set']['p50_ms']:.2f} ms p99 {r['set']['p99_ms']:.2f} ms; "
                     f"one: topic {r['topic_one']['p50_ms']:.3f}, set of 1 {r['topic_set_of_one']['p50_ms']:.3f}, "
@@ -202,16 +207,18 @@ def main() -> int:
     finally:
         peer.destroy()
         rclpy.try_shutdown()
-    e, n = runs["echo"], runs["node"]
+    e, n, n1 = runs["echo"], runs["node"], runs["node_1"]
+    cores = len(os.sched_getaffinity(0))  # what the node counts as its cores, affinity included
     print(f"medians of {args.repeat} runs; set of {args.n} candidates: {e[0]['set_bytes'] // 1000} kB in, "
-          f"answer {n[0]['answer_bytes'] // 1000} kB (echo's {e[0]['answer_bytes'] // 1000} kB)")
-    print(f"{'':44} {'echo':>10} {'node':>10} {'ratio':>7}")
+          f"answer {n[0]['answer_bytes'] // 1000} kB (echo's {e[0]['answer_bytes'] // 1000} kB); "
+          f"node: solver_threads 0 ({cores} cores), node_1: solver_threads 1")
+    print(f"{'':34} {'echo':>8} {'node':>8} {'ratio':>7} {'node_1':>8} {'ratio':>7}")
     for label, field in (("set round trip min (ms)", "min_ms"), ("set round trip p50 (ms)", "p50_ms"),
                          ("set round trip p99 (ms)", "p99_ms")):
-        a, b = med(e, "set", field), med(n, "set", field)
-        print(f"{label:44} {a:10.2f} {b:10.2f} {b / a:7.2f}")
-    print("per run, p50 echo / node (ms): " + ", ".join(
-        f"{x['set']['p50_ms']:.2f} / {y['set']['p50_ms']:.2f}" for x, y in zip(e, n)))
+        a, b, c = med(e, "set", field), med(n, "set", field), med(n1, "set", field)
+        print(f"{label:34} {a:8.2f} {b:8.2f} {b / a:7.2f} {c:8.2f} {c / a:7.2f}")
+    print("per run, p50 echo / node / node_1 (ms): " + ", ".join(
+        f"{x['set']['p50_ms']:.2f} / {y['set']['p50_ms']:.2f} / {z['set']['p50_ms']:.2f}" for x, y, z in zip(e, n, n1)))
     print(f"target: node p50 <= 1.5 x echo p50: "
           f"{'met' if med(n, 'set', 'p50_ms') <= 1.5 * med(e, 'set', 'p50_ms') else 'NOT met'}")
     print("one candidate, node (p50 / p99 ms):")
