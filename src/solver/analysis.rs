@@ -13,7 +13,7 @@
 use super::finger;
 use super::frame::GraspFrame;
 use super::paper::{self, FORCE_SCALE};
-use super::sinusoid::{next_periodic, wrap_angle, Angle, QuadForm, Sinusoid};
+use super::sinusoid::{next_periodic, rising_zeros, wrap_angle, Angle, QuadForm, Sinusoid};
 use super::{
     AllowedRange, CandidateC, ConeMiss, GraspCase, InvalidInput, LocalMinimum, NoForceClosure,
     Objective, PaperCandidate, Recommendation,
@@ -193,7 +193,9 @@ impl Analysis {
             graspable,
             from_above,
             crossings: [None; 3],
-            segments: Vec::with_capacity(16),
+            // Two to four pieces on most grasps; a larger reservation (16: 2 kB) took mimalloc's
+            // slower path for blocks over 1 kB on every grasp.
+            segments: Vec::with_capacity(4),
         };
         analysis.build_segments();
         Ok(analysis)
@@ -246,13 +248,22 @@ impl Analysis {
         // Where `funcs[j]` rises through `funcs[i]`, for every pair: one atan2 per pair, since
         // `funcs[i]` rises through `funcs[j]` half a turn later. (Computing them only when the
         // walk asks saved 1.5 of the 10 per grasp and cost as much in bookkeeping.)
-        let mut rise = [[None::<f64>; 5]; 5];
+        let mut pairs = [(0, 0); 10];
+        let mut differences = [Sinusoid::ZERO; 10];
+        let mut m = 0;
         for i in 0..n {
             for j in (i + 1)..n {
-                if let Some(r) = funcs[j].minus(&funcs[i]).rising_zero() {
-                    rise[i][j] = Some(r);
-                    rise[j][i] = Some(r + std::f64::consts::PI);
-                }
+                (pairs[m], differences[m]) = ((i, j), funcs[j].minus(&funcs[i]));
+                m += 1;
+            }
+        }
+        let mut zeros = [None; 10];
+        rising_zeros(&differences[..m], &mut zeros[..m]);
+        let mut rise = [[None::<f64>; 5]; 5];
+        for (&(i, j), zero) in pairs[..m].iter().zip(zeros) {
+            if let Some(r) = zero {
+                rise[i][j] = Some(r);
+                rise[j][i] = Some(r + std::f64::consts::PI);
             }
         }
         // funcs = [α3, α4, α5, α6, 0]: B, C, D are where α3 rises through α6, α4 through α3,

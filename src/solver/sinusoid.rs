@@ -113,15 +113,55 @@ impl Sinusoid {
     }
 }
 
+/// [`Sinusoid::rising_zero`] of every sinusoid in `fs`, into `out` (as long), four at a time in
+/// one SIMD `atan2` (the `wide` crate's, after Agner Fog's vector class library: a rational
+/// approximation on three reduced ranges). Its angles are within 4.4e-16 rad of the system's
+/// `atan2` over 100,000 directions and magnitudes from 1e-300 to 1e300
+/// (`rising_zeros_agree_with_the_scalar_ones`). Ten scalar calls per grasp were a sixth of a
+/// set's time.
+pub fn rising_zeros(fs: &[Sinusoid], out: &mut [Option<f64>]) {
+    for (chunk, zeros) in fs.chunks(4).zip(out.chunks_mut(4)) {
+        // Unused lanes get (a, b) = (1, 0), whose atan2 is 0.
+        let (mut a, mut b) = ([1.0; 4], [0.0; 4]);
+        for (k, f) in chunk.iter().enumerate() {
+            (a[k], b[k]) = (f.a, f.b);
+        }
+        let gamma: [f64; 4] = wide::f64x4::from(b).atan2(wide::f64x4::from(a)).into();
+        for ((zero, f), g) in zeros.iter_mut().zip(chunk).zip(gamma) {
+            *zero = (f.a != 0.0 || f.b != 0.0).then_some(-g);
+        }
+    }
+}
+
 /// The least `t0 + k·period` strictly greater than `after` (k any integer).
 pub fn next_periodic(t0: f64, period: f64, after: f64) -> f64 {
-    let k = ((after - t0) / period).floor() + 1.0;
+    let k = floor((after - t0) / period) + 1.0;
     let mut t = t0 + k * period;
     // Guard the rounding of `floor`; a point within rounding of `after` counts as `after`.
     if t <= after {
         t += period;
     }
     t
+}
+
+/// `x.floor()`, the same value, without the library call it is on x86-64's baseline (no SSE4.1
+/// `roundsd`): it was called seven times a grasp. Below 2^52 in magnitude the truncation to an
+/// integer is exact, and one step down makes it the floor (an integer, -0.0 among them, is kept
+/// as it is); larger values are integers already, and NaN goes to `f64::floor` as before.
+#[inline]
+fn floor(x: f64) -> f64 {
+    if x.abs() < 4_503_599_627_370_496.0 {
+        let t = x as i64 as f64;
+        if t > x {
+            t - 1.0
+        } else if t == x {
+            x // an integer already, -0.0 included
+        } else {
+            t
+        }
+    } else {
+        x.floor()
+    }
 }
 
 /// `p sin²θ + q cos²θ + r sin θ cos θ`.
@@ -212,6 +252,77 @@ mod tests {
             assert_abs_diff_eq!(f.value(&at), 0.0, epsilon = 1e-12);
             assert!(f.slope(&at) > 0.0);
         }
+    }
+
+    #[test]
+    fn rising_zeros_agree_with_the_scalar_ones() {
+        // Every quadrant, both axes, signed zeros, and magnitudes from 1e-300 to 1e300.
+        let mut fs = vec![
+            Sinusoid::new(1.0, 0.0),
+            Sinusoid::new(0.0, 1.0),
+            Sinusoid::new(-1.0, 0.0),
+            Sinusoid::new(0.0, -1.0),
+            Sinusoid::new(-1.0, -0.0),
+            Sinusoid::new(-0.0, -1.0),
+            Sinusoid::ZERO,
+            Sinusoid::new(1e-300, -3e-300),
+            Sinusoid::new(-2e300, 1e300),
+        ];
+        let mut x = 0.123_456_789f64;
+        for _ in 0..100_000 {
+            // A deterministic walk over angles and magnitudes.
+            x = (x * 3.987_654_321 + 0.314_159).fract();
+            let (s, c) = (TAU * x).sin_cos();
+            let r = 10f64.powf(12.0 * (x * 7.0).fract() - 6.0);
+            fs.push(Sinusoid::new(r * c, r * s));
+        }
+        let mut out = vec![None; fs.len()];
+        rising_zeros(&fs, &mut out);
+        let mut worst = 0.0f64;
+        for (f, z) in fs.iter().zip(&out) {
+            match (f.rising_zero(), z) {
+                (None, None) => {}
+                (Some(want), Some(got)) => {
+                    // The same direction; ±π may come out as ∓π.
+                    let gap = wrap_angle(got - want).abs();
+                    worst = worst.max(gap);
+                    // Measured: at most 4.4e-16 rad (2 eps) over these.
+                    assert!(gap <= 4.0 * f64::EPSILON, "{f:?}: {got} against {want}");
+                }
+                other => panic!("{f:?}: {other:?}"),
+            }
+        }
+        assert!(worst > 0.0, "a test that cannot tell the two apart");
+    }
+
+    #[test]
+    fn floor_is_the_library_floor() {
+        let special = [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            -1e-300,
+            4_503_599_627_370_495.5,
+            -4_503_599_627_370_495.5,
+            4_503_599_627_370_496.0,
+            -4_503_599_627_370_497.0,
+            1e300,
+            -1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        let mut x = 0.777f64;
+        let walk = (0..100_000).map(|_| {
+            x = (x * 3.3 + 0.1).fract();
+            (x - 0.5) * 10f64.powf(20.0 * x - 4.0)
+        });
+        for v in special.into_iter().chain(walk) {
+            assert_eq!(floor(v).to_bits(), v.floor().to_bits(), "{v:e}");
+        }
+        assert!(floor(f64::NAN).is_nan());
     }
 
     #[test]
