@@ -66,7 +66,7 @@ impl Shape {
     fn is_constant(&self) -> bool {
         match self {
             Shape::Quad(q) => q.is_constant(),
-            Shape::Sin(s) => s.a == 0.0 && s.b == 0.0,
+            Shape::Sin(s) => s.is_zero(),
         }
     }
 }

@@ -1111,7 +1111,7 @@ impl Curve {
     fn is_constant(&self) -> bool {
         match self {
             Curve::Quad(q) => q.is_constant(),
-            Curve::Sin(s) => s.a == 0.0 && s.b == 0.0,
+            Curve::Sin(s) => s.is_zero(),
         }
     }
 

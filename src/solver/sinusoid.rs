@@ -55,6 +55,11 @@ impl Sinusoid {
         self.a * at.cos - self.b * at.sin
     }
 
+    /// Whether this is the function that is zero everywhere.
+    pub fn is_zero(&self) -> bool {
+        self.a == 0.0 && self.b == 0.0
+    }
+
     /// `self - other`.
     pub fn minus(&self, other: &Sinusoid) -> Sinusoid {
         Sinusoid::new(self.a - other.a, self.b - other.b)
@@ -78,7 +83,7 @@ impl Sinusoid {
     ///
     /// Returns `None` for the zero function.
     pub fn rising_zero(&self) -> Option<f64> {
-        if self.a == 0.0 && self.b == 0.0 {
+        if self.is_zero() {
             None
         } else {
             Some(-self.b.atan2(self.a))
@@ -128,7 +133,7 @@ pub fn rising_zeros(fs: &[Sinusoid], out: &mut [Option<f64>]) {
         }
         let gamma: [f64; 4] = wide::f64x4::from(b).atan2(wide::f64x4::from(a)).into();
         for ((zero, f), g) in zeros.iter_mut().zip(chunk).zip(gamma) {
-            *zero = (f.a != 0.0 || f.b != 0.0).then_some(-g);
+            *zero = (!f.is_zero()).then_some(-g);
         }
     }
 }
