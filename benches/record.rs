@@ -45,7 +45,7 @@ fn message(i: usize, c: &grasp_orient::solver::Candidate) -> GraspCandidate {
             },
             frame_id: "tool0".into(),
         },
-        id: format!("g{i}"),
+        id: format!("g{i}").into(),
         contact_1: p(c.contact_1),
         contact_2: p(c.contact_2),
         normal_1: q(c.normal_1),
@@ -128,7 +128,7 @@ fn main() {
     let mut writer = BagWriter::create(&path, &topics(), 100).expect("create");
     for i in 0..n {
         let mut c = pool[i % pool.len()].clone();
-        c.id = format!("g{i}");
+        c.id = format!("g{i}").into();
         let a = answer(&c, &settings);
         let time = 1_000_000_000 + i as u64 * 1000;
         writer

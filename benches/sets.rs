@@ -39,7 +39,7 @@ fn message(i: usize, c: &grasp_orient::solver::Candidate) -> GraspCandidate {
         z: 0.0,
     };
     GraspCandidate {
-        id: format!("bench-{i}"),
+        id: format!("bench-{i}").into(),
         contact_1: p(c.contact_1),
         contact_2: p(c.contact_2),
         normal_1: v(c.normal_1),

@@ -58,7 +58,7 @@ pub fn answer_line(
         },
     };
     if reply.status == GripRecommendation::STATUS_INVALID_INPUT {
-        reply.message = format!("line {number}: {}", reply.message);
+        reply.message = compact_str::format_compact!("line {number}: {}", reply.message);
     }
     reply
 }
@@ -94,7 +94,7 @@ pub fn answer_lines(
                 &GraspCandidate::default(),
                 &format_args!("longer than {MAX_LINE_BYTES} bytes"),
             );
-            r.message = format!("line {number}: {}", r.message);
+            r.message = compact_str::format_compact!("line {number}: {}", r.message);
             r
         } else {
             let text = line.strip_suffix(b"\n").unwrap_or(&line);
@@ -148,7 +148,7 @@ pub fn partial(line: &str) -> GraspCandidate {
     let mut out = GraspCandidate::default();
     if let Ok(value) = serde_json::from_str::<serde_json::Value>(line) {
         if let Some(id) = value.get("id").and_then(|v| v.as_str()) {
-            out.id = id.to_string();
+            out.id = id.into();
         }
         if let Some(header) = value
             .get("header")

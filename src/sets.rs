@@ -24,8 +24,8 @@
 //!   a candidate that leaves its own at zero; a candidate's own non-zero tolerance wins (issue 13).
 
 use crate::msg::{
-    answer, answer_in_full, clip, Answered, GraspCandidate, GraspCandidateSet, GripRecommendation,
-    GripRecommendationSet, MAX_TEXT_BYTES,
+    answer, answer_in_full, clip, Answered, CompactString, GraspCandidate, GraspCandidateSet,
+    GripRecommendation, GripRecommendationSet, MAX_TEXT_BYTES,
 };
 use crate::solver::Settings;
 use std::borrow::Cow;
@@ -182,7 +182,7 @@ pub fn apply_limit(r: &mut GripRecommendation, drive: GripperDrive, max_grip_for
     let grip = drive.grip_force(r);
     if grip > max_grip_force {
         r.status = GripRecommendation::STATUS_EXCEEDS_GRIPPER;
-        r.message = format!(
+        r.message = compact_str::format_compact!(
             "exceeds the gripper: needs {grip:.3} N of grip force ({} with gripper_drive {}), \
              more than max_grip_force {max_grip_force} N",
             drive.field(),
@@ -265,15 +265,15 @@ fn refusal(set: &GraspCandidateSet, rules: &Rules) -> Option<(u8, String)> {
 /// no recommendations.
 fn empty_answer(set: &GraspCandidateSet, rules: &Rules) -> GripRecommendationSet {
     let mut header = set.header.clone();
-    header.frame_id = clip(&header.frame_id).to_string();
+    header.frame_id = clip(&header.frame_id).into();
     GripRecommendationSet {
         header,
-        set_id: clip(&set.id).to_string(),
+        set_id: clip(&set.id).into(),
         recommendations: Vec::new(),
         ranking: Vec::new(),
-        ranked_by: rules.ranked_by().to_string(),
+        ranked_by: CompactString::const_new(rules.ranked_by()),
         status: GripRecommendationSet::STATUS_OK,
-        message: String::new(),
+        message: CompactString::default(),
     }
 }
 
@@ -306,7 +306,7 @@ pub fn answer_set_on(
     let mut out = empty_answer(set, rules);
     if let Some((status, message)) = refusal(set, rules) {
         out.status = status;
-        out.message = message;
+        out.message = message.into();
         return out;
     }
     let rules = Rules {
@@ -592,7 +592,7 @@ mod tests {
         let many: Vec<GraspCandidate> = (0..3 * PARALLEL_FROM + 7)
             .map(|i| {
                 let mut c = cases[i % 4].clone();
-                c.id = format!("c{i}");
+                c.id = format!("c{i}").into();
                 c
             })
             .collect();
@@ -664,7 +664,7 @@ mod tests {
             assert!(out.message.contains("max_grip_force"), "{}", out.message);
         }
         let mut set = set_of(paper_cases());
-        set.id = "x".repeat(2000);
+        set.id = "x".repeat(2000).into();
         let out = answer_set(&set, &Settings::default(), &Rules::default());
         assert_eq!(out.status, GripRecommendationSet::STATUS_INVALID_INPUT);
         assert_eq!(out.set_id.len(), MAX_TEXT_BYTES);

@@ -262,7 +262,7 @@ fn sets() -> (Vec<GraspCandidateSet>, Vec<GripRecommendationSet>) {
         .into_iter()
         .enumerate()
         .map(|(i, candidates)| GraspCandidateSet {
-            id: format!("set-{i}"),
+            id: format!("set-{i}").into(),
             candidates,
             ..GraspCandidateSet::default()
         })

@@ -94,7 +94,7 @@ fn write_candidates_and_sets(path: &std::path::Path) {
     let mut w = BagWriter::create(path, &topics, 100).expect("create");
     for k in 0..3usize {
         let set = GraspCandidateSet {
-            id: format!("set-{k}"),
+            id: format!("set-{k}").into(),
             candidates: cases[..=k + 1].to_vec(),
             max_grip_force: if k == 2 { 1.0 } else { 0.0 },
             ..GraspCandidateSet::default()
@@ -210,7 +210,7 @@ fn spatial_cases() -> Vec<grasp_orient::msg::GraspCandidate> {
         .collect();
     for c in &mut cases {
         c.model = GraspCandidate::MODEL_SPATIAL;
-        c.id = format!("{}-spatial", c.id);
+        c.id = format!("{}-spatial", c.id).into();
         for p in [&mut c.contact_1, &mut c.contact_2, &mut c.center_of_mass] {
             (p.x, p.y, p.z) = (p.z, p.x, p.y);
         }

@@ -45,7 +45,7 @@ fn write_bag(path: &Path, n: usize, config: &Config, with_settings: bool) {
     }
     for i in 0..n {
         let mut c = cases[i % cases.len()].clone();
-        c.id = format!("{}-{i}", c.id);
+        c.id = format!("{}-{i}", c.id).into();
         let a = answer(&c, &settings);
         let t = 1_000_000_000 + i as u64 * 1000;
         for payload in [

@@ -51,7 +51,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         if let Some(r) = reply.recommendations.get_mut(index) {
             // As `solve` answers a line that is no candidate.
             *r = invalid(&grasp_orient::jsonl::partial(&line), &reason);
-            r.message = format!("line {number}: {}", r.message);
+            r.message = compact_str::format_compact!("line {number}: {}", r.message);
         }
     }
     let stdout = std::io::stdout();
@@ -86,7 +86,7 @@ fn read_set(args: &Args) -> anyhow::Result<(GraspCandidateSet, Vec<BadLine>)> {
         _ => (Box::new(std::io::stdin().lock()), "stdin".to_string()),
     };
     let mut set = GraspCandidateSet {
-        id: name,
+        id: name.into(),
         ..GraspCandidateSet::default()
     };
     let mut bad = Vec::new();
@@ -190,7 +190,7 @@ fn table(set: &GraspCandidateSet, reply: &GripRecommendationSet, rules: &Rules) 
             number(r.gripping_power, 3),
             rotation(r),
             status_name(r.status).into(),
-            r.message.clone(),
+            r.message.to_string(),
         ]);
     }
     let widths: Vec<usize> = (0..7)

@@ -28,6 +28,7 @@ primitive_names! {
     i64 => "int64",
     bool => "bool",
     String => "string",
+    compact_str::CompactString => "string",
 }
 
 impl<T: RosType, const N: usize> RosType for [T; N] {

@@ -14,13 +14,14 @@
 //! contact axis, the object swinging to hang in its own plane); with both zero the answer is the
 //! one above, bit for bit, with `gripping_power_nominal = gripping_power`.
 
-use super::{GraspCandidate, GripRecommendation, Point, Quaternion, Vector3};
+use super::{CompactString, GraspCandidate, GripRecommendation, Point, Quaternion, Vector3};
 use crate::solver::{
-    solve_orientation, solve_robust, solve_spatial, solve_spatial_robust, Candidate, InvalidInput,
+    analyse, solve_robust, solve_spatial, solve_spatial_robust, Candidate, InvalidInput,
     Recommendation, RobustVerdict, Settings, SpatialCandidate, SpatialRecommendation,
     SpatialRobustRecommendation, SpatialRobustVerdict, SpatialUncertainty, SpatialVerdict,
     Uncertainty, Verdict, MAX_COORDINATE,
 };
+use compact_str::ToCompactString as _;
 use nalgebra::Vector2;
 
 /// Longest accepted `id` and `header.frame_id`, bytes.
@@ -151,13 +152,13 @@ pub fn short_id(id: &str) -> &str {
 }
 
 /// A recommendation whose numbers all say "no answer" (NaN), for a refused candidate.
-fn refused(m: &GraspCandidate, status: u8, message: String) -> GripRecommendation {
+fn refused(m: &GraspCandidate, status: u8, message: CompactString) -> GripRecommendation {
     let nan = f64::NAN;
     let mut header = m.header.clone();
-    header.frame_id = clip(&header.frame_id).to_string();
+    header.frame_id = clip(&header.frame_id).into();
     GripRecommendation {
         header,
-        candidate_id: clip(&m.id).to_string(),
+        candidate_id: clip(&m.id).into(),
         status,
         message,
         wrist_rotation: nan,
@@ -178,12 +179,12 @@ fn refused(m: &GraspCandidate, status: u8, message: String) -> GripRecommendatio
         contact_forces: [nan; 4],
         gripping_power_current: nan,
         internal_force_current: nan,
-        grasp_case: String::new(),
+        grasp_case: CompactString::default(),
         local_minima: Vec::new(),
         local_minima_power: Vec::new(),
         local_minima_labels: Vec::new(),
-        objective: String::new(),
-        recommended_label: String::new(),
+        objective: CompactString::default(),
+        recommended_label: CompactString::default(),
         candidate_c: GripRecommendation::CANDIDATE_C_OUT_OF_RANGE,
         finger_force: nan,
         finger_force_current: nan,
@@ -201,7 +202,7 @@ pub fn invalid(m: &GraspCandidate, why: &dyn std::fmt::Display) -> GripRecommend
     refused(
         m,
         GripRecommendation::STATUS_INVALID_INPUT,
-        format!("invalid input: {why}"),
+        compact_str::format_compact!("invalid input: {why}"),
     )
 }
 
@@ -211,7 +212,7 @@ fn no_closure(m: &GraspCandidate, why: &dyn std::fmt::Display) -> GripRecommenda
     let mut out = refused(
         m,
         GripRecommendation::STATUS_NO_FORCE_CLOSURE,
-        why.to_string(),
+        why.to_compact_string(),
     );
     out.gripping_power_current = f64::INFINITY;
     out.internal_force_current = f64::INFINITY;
@@ -225,7 +226,7 @@ fn recommended(m: &GraspCandidate, r: &Recommendation) -> GripRecommendation {
         header: m.header.clone(),
         candidate_id: m.id.clone(),
         status: GripRecommendation::STATUS_OK,
-        message: String::new(),
+        message: CompactString::default(),
         wrist_rotation: r.wrist_rotation,
         rotation: Quaternion {
             x: 0.0,
@@ -244,18 +245,12 @@ fn recommended(m: &GraspCandidate, r: &Recommendation) -> GripRecommendation {
         contact_forces: r.contact_forces,
         gripping_power_current: r.gripping_power_current,
         internal_force_current: r.internal_force_current,
-        grasp_case: r.grasp_case.name().to_string(),
+        grasp_case: CompactString::const_new(r.grasp_case.name()),
         local_minima: r.local_minima.iter().map(|l| l.gravity_angle).collect(),
         local_minima_power: r.local_minima.iter().map(|l| l.power).collect(),
-        local_minima_labels: r
-            .local_minima
-            .iter()
-            .map(|l| l.label.map_or(String::new(), |x| x.name().to_string()))
-            .collect(),
-        objective: r.objective.name().to_string(),
-        recommended_label: r
-            .recommended_label
-            .map_or(String::new(), |x| x.name().to_string()),
+        local_minima_labels: r.local_minima.iter().map(|l| label(l.label)).collect(),
+        objective: CompactString::const_new(r.objective.name()),
+        recommended_label: label(r.recommended_label),
         candidate_c: r.candidate_c as u8,
         finger_force: r.finger_force,
         finger_force_current: r.finger_force_current,
@@ -267,6 +262,13 @@ fn recommended(m: &GraspCandidate, r: &Recommendation) -> GripRecommendation {
         },
         gripping_power_nominal: r.gripping_power,
     }
+}
+
+/// A paper candidate's name, `""` for none; inline, without a heap block.
+fn label(l: Option<crate::solver::PaperCandidate>) -> CompactString {
+    l.map_or(CompactString::default(), |x| {
+        CompactString::const_new(x.name())
+    })
 }
 
 /// The answer to a spatial grasp that holds: the planar answer in Π, with the 3D rotation, the
@@ -292,7 +294,7 @@ fn spatial_recommended(m: &GraspCandidate, r: &SpatialRecommendation) -> GripRec
         .into_iter()
         .flatten()
         .collect();
-    out.message = notes.join("; ");
+    out.message = notes.join("; ").into();
     out
 }
 
@@ -324,7 +326,7 @@ pub fn answer_in_full(m: &GraspCandidate, settings: &Settings) -> Answered {
         GraspCandidate::MODEL_SPATIAL => answer_spatial(m, settings),
         value => {
             let mut reply = invalid(m, &MessageLimits::Model { value });
-            reply.objective = settings.objective.name().to_string();
+            reply.objective = CompactString::const_new(settings.objective.name());
             Answered {
                 reply,
                 spatial: None,
@@ -361,9 +363,14 @@ fn is_exact(m: &GraspCandidate) -> bool {
 fn solve_planar(m: &GraspCandidate, settings: &Settings) -> Result<GripRecommendation, String> {
     let candidate = Candidate::try_from(m).map_err(|e| e.to_string())?;
     if is_exact(m) {
-        return match solve_orientation(&candidate, settings) {
-            Ok(Verdict::Recommended(r)) => Ok(recommended(m, &r)),
-            Ok(Verdict::NoForceClosure(why)) => Ok(no_closure(m, &why)),
+        // `solve_orientation` without its `Box`: the answer is built from the recommendation at
+        // once, and one heap block fewer is one of a handful per candidate.
+        return match analyse(&candidate, settings) {
+            Ok(Ok(analysis)) => analysis
+                .recommend(&settings.range)
+                .map(|r| recommended(m, &r))
+                .map_err(|e| e.to_string()),
+            Ok(Err(why)) => Ok(no_closure(m, &why)),
             Err(e) => Err(e.to_string()),
         };
     }
@@ -379,7 +386,7 @@ fn solve_planar(m: &GraspCandidate, settings: &Settings) -> Result<GripRecommend
         Ok(RobustVerdict::NoCommonOrientation { reason, nominal }) => {
             let mut out = recommended(m, &nominal);
             out.status = GripRecommendation::STATUS_NO_FORCE_CLOSURE;
-            out.message = reason.to_string();
+            out.message = reason.to_compact_string();
             Ok(out)
         }
         Ok(RobustVerdict::NoForceClosure(why)) => Ok(no_closure(m, &why)),
@@ -400,7 +407,7 @@ fn planar_reply(m: &GraspCandidate, settings: &Settings) -> GripRecommendation {
     let mut reply = solve_planar(m, settings).unwrap_or_else(|why| invalid(m, &why));
     // A refused answer still says which objective it was asked under.
     if reply.objective.is_empty() {
-        reply.objective = settings.objective.name().to_string();
+        reply.objective = CompactString::const_new(settings.objective.name());
     }
     reply
 }
@@ -432,7 +439,7 @@ fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {
                 Ok(SpatialRobustVerdict::NoCommonOrientation { reason, nominal }) => {
                     let mut reply = spatial_recommended(m, &nominal);
                     reply.status = GripRecommendation::STATUS_NO_FORCE_CLOSURE;
-                    reply.message = reason.to_string();
+                    reply.message = reason.to_compact_string();
                     reply
                 }
                 Ok(SpatialRobustVerdict::NoForceClosure(why)) => no_closure(m, &why),
@@ -464,7 +471,7 @@ fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {
             Err(e) => invalid(m, &e),
         },
     };
-    out.objective = settings.objective.name().to_string();
+    out.objective = CompactString::const_new(settings.objective.name());
     Answered {
         reply: out,
         spatial: None,
@@ -619,7 +626,7 @@ mod tests {
             .message
             .contains("center_of_mass.x"));
         let mut m = paper_case_c();
-        m.id = "x".repeat(1 << 20);
+        m.id = "x".repeat(1 << 20).into();
         let a = answer(&m, &Settings::default());
         assert_eq!(a.status, GripRecommendation::STATUS_INVALID_INPUT);
         assert!(a.message.contains("id is 1048576 bytes"), "{}", a.message);
@@ -870,7 +877,7 @@ mod spatial_tests {
                 &|m| m.center_of_mass = p(0.0, 1.0, 1.0),
                 "center_of_mass coincides with contact_1",
             ),
-            (&|m| m.id = "x".repeat(2000), "id is 2000 bytes long"),
+            (&|m| m.id = "x".repeat(2000).into(), "id is 2000 bytes long"),
             (&|m| m.model = 2, "model is 2: it must be 0 (MODEL_PLANAR"),
             (&|m| m.model = 255, "model is 255"),
         ];

@@ -18,6 +18,7 @@ pub use convert::{
     SHORT_ID_CHARS,
 };
 
+pub use compact_str::CompactString;
 use serde::{Deserialize, Serialize};
 
 /// Declares a wire struct, its constants, and its [`RosMessage`] description; the ROS name is
@@ -107,7 +108,7 @@ ros_message! {
         stamp: Time,
         /// Frame the data is expressed in.
         #[serde(default)]
-        frame_id: String,
+        frame_id: CompactString,
     }
 }
 
@@ -163,7 +164,7 @@ ros_message! {
         header: Header,
         /// Caller's name for this candidate.
         #[serde(default)]
-        id: String,
+        id: CompactString,
         /// Contact point 1, m.
         contact_1: Point,
         /// Contact point 2, m.
@@ -211,11 +212,11 @@ ros_message! {
         /// Stamp and frame of the candidate.
         header: Header,
         /// Id of the candidate answered.
-        candidate_id: String,
+        candidate_id: CompactString,
         /// `STATUS_*`.
         status: u8,
         /// Why, when status is not OK; empty otherwise.
-        message: String,
+        message: CompactString,
         /// Rotation of the object about +z of the frame, rad in (-π, π].
         wrist_rotation: f64,
         /// The same rotation.
@@ -235,17 +236,17 @@ ros_message! {
         /// Squeeze force needed at the current pose, N (inf where it cannot be held).
         internal_force_current: f64,
         /// `"a"` .. `"d"` of Theorem 1.
-        grasp_case: String,
+        grasp_case: CompactString,
         /// Local minima over the graspable range, rad.
         local_minima: Vec<f64>,
         /// Objective at each local minimum, N.
         local_minima_power: Vec<f64>,
         /// `"A"` .. `"E"` where a minimum is a paper candidate, `""` otherwise.
-        local_minima_labels: Vec<String>,
+        local_minima_labels: Vec<CompactString>,
         /// Objective minimised.
-        objective: String,
+        objective: CompactString,
         /// The paper candidate the recommendation is, or `""`.
-        recommended_label: String,
+        recommended_label: CompactString,
         /// `CANDIDATE_C_*`.
         candidate_c: u8,
         /// The larger push along the contact line that either finger gives at the recommendation,
@@ -274,7 +275,7 @@ ros_message! {
         header: Header,
         /// Caller's name for this set.
         #[serde(default)]
-        id: String,
+        id: CompactString,
         /// The candidates, answered in order.
         #[serde(default)]
         candidates: Vec<GraspCandidate>,
@@ -294,19 +295,19 @@ ros_message! {
         /// Stamp and frame of the set.
         header: Header,
         /// Id of the set answered.
-        set_id: String,
+        set_id: CompactString,
         /// One per candidate, in order.
         recommendations: Vec<GripRecommendation>,
         /// Indices of the candidates with status 0, least force first.
         ranking: Vec<u32>,
         /// The field of [`GripRecommendation`] the ranking sorts by.
-        ranked_by: String,
+        ranked_by: CompactString,
         /// `STATUS_*` of the set as a whole.
         #[serde(default)]
         status: u8,
         /// Why, when status is not OK; empty otherwise.
         #[serde(default)]
-        message: String,
+        message: CompactString,
     }
 }
 

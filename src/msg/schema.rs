@@ -549,9 +549,9 @@ mod tests {
     #[derive(Debug, Clone, Serialize)]
     struct OldRecommendation {
         header: crate::msg::Header,
-        candidate_id: String,
+        candidate_id: crate::msg::CompactString,
         status: u8,
-        message: String,
+        message: crate::msg::CompactString,
         wrist_rotation: f64,
         rotation: crate::msg::Quaternion,
         gravity_direction: crate::msg::Vector3,
@@ -561,12 +561,12 @@ mod tests {
         contact_forces: [f64; 4],
         gripping_power_current: f64,
         internal_force_current: f64,
-        grasp_case: String,
+        grasp_case: crate::msg::CompactString,
         local_minima: Vec<f64>,
         local_minima_power: Vec<f64>,
-        local_minima_labels: Vec<String>,
-        objective: String,
-        recommended_label: String,
+        local_minima_labels: Vec<crate::msg::CompactString>,
+        objective: crate::msg::CompactString,
+        recommended_label: crate::msg::CompactString,
         candidate_c: u8,
     }
 
@@ -601,10 +601,10 @@ mod tests {
     #[derive(Debug, Clone, Serialize)]
     struct OldSet {
         header: crate::msg::Header,
-        set_id: String,
+        set_id: crate::msg::CompactString,
         recommendations: Vec<OldRecommendation>,
         ranking: Vec<u32>,
-        ranked_by: String,
+        ranked_by: crate::msg::CompactString,
     }
 
     /// Our schema text of `type_name` with, for each `(section, last)` of `cuts`, the lines after
@@ -713,7 +713,7 @@ mod tests {
     #[derive(Debug, Clone, Serialize)]
     struct OldCandidate {
         header: crate::msg::Header,
-        id: String,
+        id: crate::msg::CompactString,
         contact_1: crate::msg::Point,
         contact_2: crate::msg::Point,
         normal_1: crate::msg::Vector3,
@@ -774,7 +774,7 @@ mod tests {
         #[derive(Serialize)]
         struct OldSet {
             header: crate::msg::Header,
-            id: String,
+            id: crate::msg::CompactString,
             candidates: Vec<OldCandidate>,
             max_grip_force: f64,
         }

@@ -586,7 +586,7 @@ mod tests {
 
         let bad = GraspCandidate {
             mass: f64::NAN,
-            id: "x".repeat(100),
+            id: "x".repeat(100).into(),
             ..case.clone()
         };
         let out = a.handle(bad, 11, 6);

@@ -18,6 +18,7 @@ use super::{
     AllowedRange, CandidateC, ConeMiss, GraspCase, InvalidInput, LocalMinimum, NoForceClosure,
     Objective, PaperCandidate, Recommendation,
 };
+use smallvec::{smallvec, SmallVec};
 use std::f64::consts::TAU;
 
 /// Two angles closer than this (rad) are the same point, for labels and duplicates.
@@ -29,6 +30,10 @@ const TIE: f64 = 1e-12;
 const FAR_BOUND: f64 = 1e3;
 /// Bounds larger than this many times the scale are ignored in tie-breaks of the envelope.
 const ENVELOPE_TIE: f64 = 1e-12;
+
+/// The allowed range's intervals inside the graspable range: one for the named ranges, at most
+/// five for explicit bounds (kept inline, not on the heap, up to three).
+type Intervals = SmallVec<[(f64, f64); 3]>;
 
 /// The objective on one interval of θ.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -523,11 +528,11 @@ impl Analysis {
     }
 
     /// The allowed range as intervals inside the graspable range.
-    fn allowed_intervals(&self, range: &AllowedRange) -> Result<Vec<(f64, f64)>, InvalidInput> {
+    fn allowed_intervals(&self, range: &AllowedRange) -> Result<Intervals, InvalidInput> {
         let (glo, ghi) = self.graspable;
         match *range {
-            AllowedRange::FromAbove => Ok(vec![self.from_above_range()]),
-            AllowedRange::Graspable => Ok(vec![(glo, ghi)]),
+            AllowedRange::FromAbove => Ok(smallvec![self.from_above_range()]),
+            AllowedRange::Graspable => Ok(smallvec![(glo, ghi)]),
             AllowedRange::Bounds { lo, hi } => {
                 let (given_lo, given_hi) = (lo, hi);
                 if !(lo.is_finite() && hi.is_finite() && lo < hi) {
@@ -535,7 +540,7 @@ impl Analysis {
                 }
                 // A full turn or more allows every angle (`hi - lo` may overflow to +inf).
                 if hi - lo >= TAU {
-                    return Ok(vec![(glo, ghi)]);
+                    return Ok(smallvec![(glo, ghi)]);
                 }
                 // Far bounds are first brought within a turn of the range; the reduction is
                 // exact modulo the double nearest 2π, so the bounds keep the precision they had.
@@ -547,7 +552,7 @@ impl Analysis {
                 };
                 // Angles are periodic: meet every 2π shift of the bounds with the range. Both
                 // spans are at most a turn, so this is at most five shifts.
-                let mut out = Vec::with_capacity(3);
+                let mut out = Intervals::new();
                 let first = ((glo - hi) / TAU).floor() as i64;
                 let last = ((ghi - lo) / TAU).ceil() as i64;
                 for k in first..=last.min(first + 4) {
@@ -806,7 +811,7 @@ mod tests {
             (0.0, TAU),
         ] {
             let got = a.allowed_intervals(&AllowedRange::Bounds { lo, hi });
-            assert_eq!(got, Ok(vec![(glo, ghi)]), "[{lo}, {hi}]");
+            assert_eq!(got, Ok(smallvec![(glo, ghi)]), "[{lo}, {hi}]");
         }
         for (lo, hi) in [(-0.5, 0.5), (2.0, 3.5), (-3.0, 2.9)] {
             let near = a
