@@ -5,7 +5,8 @@
 //! wire answers, as the node publishes them. Also printed, to show where a set's extra time goes:
 //! the singles' answers kept in a list (as a set keeps them until it is published), and the
 //! ranking alone; and, to show what more cores buy, the set on a pool of every core
-//! (`sets::solver_pool`, what the node answers large sets on when it has more than two).
+//! (`sets::solver_pool`, what the node answers large sets on), against a pool of as many started
+//! threads that the calling thread waits on (the node's pool before 2026-12-01, night).
 //!
 //! The allocator is the binary's (mimalloc, `src/main.rs`): with glibc's, keeping 1,000 answers
 //! cost 1.2 times the singles (1.39 ms against 1.67 ms), with mimalloc nothing measurable.
@@ -109,17 +110,38 @@ fn main() {
     }
     let (single, kept, whole) = (singles[2], kept[2], sets[2]);
     let answers = answer_set(&set, &settings, &rules);
-    // The node's pool (`sets::solver_pool`), here with every core: what more cores buy.
+    // The node's pool (`sets::solver_pool`: this thread and cores - 1 started), here with every
+    // core: what more cores buy. Against it, a pool of as many started threads, which this thread
+    // waits on (how the node's pool was built before). The two take turns set by set, so that each
+    // pool's threads have gone idle when a set comes, as between the sets a node is sent.
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let started = rayon::ThreadPoolBuilder::new()
+        .num_threads(cores)
+        .build()
+        .ok();
     let pooled = grasp_orient::sets::solver_pool(cores).ok().map(|pool| {
-        median_secs(runs, || {
+        let time = |pool: &rayon::ThreadPool| {
+            let t = Instant::now();
             black_box(answer_set_on(
                 black_box(&set),
                 &settings,
                 &rules,
-                Some(&pool),
+                Some(pool),
             ));
-        })
+            t.elapsed().as_secs_f64()
+        };
+        let (mut ours, mut theirs) = (Vec::new(), Vec::new());
+        for _ in 0..5 * runs {
+            ours.push(time(&pool));
+            if let Some(p) = &started {
+                theirs.push(time(p));
+            }
+        }
+        let median = |mut v: Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            v.get(v.len() / 2).copied()
+        };
+        (median(ours).unwrap_or(f64::NAN), median(theirs))
     });
     let ranking = median_secs(runs, || {
         black_box(grasp_orient::sets::rank(
@@ -127,11 +149,17 @@ fn main() {
             &rules,
         ));
     });
-    if let Some(t) = pooled {
+    if let Some((t, waited)) = pooled {
         println!(
-            "on a pool of {cores} threads (not one core): {:.3} ms, {:.2} times one core",
+            "on a pool of {cores} threads, this one among them (not one core): {:.3} ms, {:.2} \
+             times one core{}",
             t * 1e3,
-            whole / t
+            whole / t,
+            waited.map_or(String::new(), |w| format!(
+                "; on {cores} started threads, this one waiting: {:.3} ms ({:.2} times the pool)",
+                w * 1e3,
+                w / t
+            ))
         );
     }
     println!(

@@ -346,11 +346,25 @@ fn answer_all(
     }
 }
 
-/// A pool of `threads` threads to answer large sets on, named `solver-N`, started once; the
-/// reason when the system refuses the threads.
+/// A pool of `threads` threads to answer large sets on: the calling thread and `threads - 1`
+/// started once, named `solver-1` and on; the reason when the system refuses them.
+///
+/// The calling thread is the pool's first worker (rayon's `use_current_thread`): when it asks the
+/// pool for a set ([`answer_set_on`]) it solves its share instead of sleeping until the others are
+/// done, and the answers it makes are freed on the thread that made them. So a pool of two on two
+/// cores is one more thread, not two, and no thread waits to be woken at the end of a set.
+/// Measured in one process on two cores (`cargo bench --bench sets`, the two kinds of pool taking
+/// turns set by set): a set of 1,000 took 0.71 ms this way against 0.77 ms on two started threads;
+/// with a set solved on one thread between the turns, so that the started threads slept longer,
+/// 0.69 to 0.73 ms against 0.81 to 1.12 ms (eight rounds of 200).
+///
+/// A thread can be the first worker of one pool only, for its life: a second pool asked for on the
+/// same thread is refused with that reason (the node asks once). Another thread may still use the
+/// pool; its sets are then solved by the started threads alone.
 pub fn solver_pool(threads: usize) -> Result<rayon::ThreadPool, String> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
+        .use_current_thread()
         .thread_name(|i| format!("solver-{i}"))
         .build()
         .map_err(|e| format!("cannot start {threads} solver threads: {e}"))
@@ -599,10 +613,34 @@ mod tests {
         let set = set_of(many);
         let one = answer_set(&set, &Settings::default(), &Rules::default());
         for threads in [1, 2, 3, 8] {
-            let pool = solver_pool(threads).expect("threads");
-            let on = answer_set_on(&set, &Settings::default(), &Rules::default(), Some(&pool));
+            // Each pool takes its own thread as its first worker (`solver_pool`).
+            let on = std::thread::scope(|s| {
+                s.spawn(|| {
+                    let pool = solver_pool(threads).expect("threads");
+                    answer_set_on(&set, &Settings::default(), &Rules::default(), Some(&pool))
+                })
+                .join()
+                .expect("no panic")
+            });
             assert_eq!(format!("{on:?}"), format!("{one:?}"), "{threads} threads");
         }
+        // The same pool from another thread: solved by the started threads alone, the same answer.
+        let pool = std::thread::scope(|s| s.spawn(|| solver_pool(3)).join().expect("no panic"));
+        let on = answer_set_on(
+            &set,
+            &Settings::default(),
+            &Rules::default(),
+            pool.ok().as_ref(),
+        );
+        assert_eq!(format!("{on:?}"), format!("{one:?}"), "from another thread");
+        // A thread is the first worker of one pool only.
+        std::thread::scope(|s| {
+            s.spawn(|| {
+                let _first = solver_pool(2).expect("threads");
+                let second = solver_pool(2).expect_err("a second pool on the same thread");
+                assert!(second.contains("cannot start 2 solver threads"), "{second}");
+            });
+        });
     }
 
     #[test]

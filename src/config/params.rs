@@ -56,8 +56,9 @@ parameters! {
     /// The most candidates a set may hold; a larger set is refused whole (STATUS_TOO_LARGE of
     /// GripRecommendationSet) rather than stalling the node.
     max_set_size: i64 = DEFAULT_MAX_SET_SIZE as i64, "candidates", in Domain::at_least_integer(1);
-    /// Threads a set of 128 candidates or more is solved on: 0 (the default) one per core, 1
-    /// only the node's own thread. Every number gives the same answer.
+    /// Threads a set of 128 candidates or more is solved on, the node's own thread among them: 0
+    /// (the default) one per core, 1 only the node's own thread. Every number gives the same
+    /// answer.
     solver_threads (fixed): i64 = 0, "threads", in Domain::Integer { min: 0, max: 1024 };
     /// Half-widths [x, y, z] of a box around each candidate's centre of mass, along its frame's
     /// axes, for a candidate whose own center_of_mass_tolerance is zero; the answer is the worst

@@ -104,7 +104,9 @@ pub struct Answerer {
 }
 
 /// The threads a large set is answered on: `threads` of them (parameter `solver_threads`), or one
-/// per core for 0; none for 1, or when the system refuses them (then the node's own thread answers).
+/// per core for 0, counting the node's own thread, which asks for the pool with its first large
+/// set and solves its share of each (`sets::solver_pool`); none for 1, or when the system refuses
+/// them (then the node's own thread answers alone).
 /// While a set is solved the DDS threads have little to do (the set has arrived and its answer is
 /// not yet written): measured from rclpy on two cores by `tests/ros/bench_sets.py`, two solver
 /// threads answered a set of 1,000 sooner than one (README "Speed").
@@ -645,7 +647,12 @@ mod tests {
     #[test]
     fn solver_threads_pick_the_pool() {
         assert!(set_pool(1).is_none(), "1: the node's own thread");
-        let threads = |n| set_pool(n).map_or(1, |p| p.current_num_threads());
+        // Each pool on its own thread: the thread that asks is the pool's first worker.
+        let threads = |n| {
+            std::thread::spawn(move || set_pool(n).map_or(1, |p| p.current_num_threads()))
+                .join()
+                .expect("no panic")
+        };
         assert_eq!(threads(3), 3);
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
         assert_eq!(threads(0), cores, "0: one per core");

@@ -634,7 +634,7 @@ impl Analysis {
             }
         }
         // The allowed intervals lie inside the graspable range, which the segments cover.
-        let (at, _) = best.unwrap_or((Angle::new(allowed[0].0), f64::NAN));
+        let (at, _) = best.unwrap_or_else(|| (Angle::new(allowed[0].0), f64::NAN));
         Ok(self.report(&at, current, &allowed))
     }
 
