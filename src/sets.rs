@@ -209,18 +209,30 @@ pub fn answer_one_in_full(m: &GraspCandidate, settings: &Settings, rules: &Rules
 /// The indices of the answers with status 0, least [`Rules::ranked_by`] first; ties go to the
 /// smaller `|wrist_rotation|`, then to the lower index.
 pub fn rank(recommendations: &[GripRecommendation], rules: &Rules) -> Vec<u32> {
-    let mut keyed: Vec<(f64, f64, u32)> = recommendations
+    // Each float as the integer `f64::total_cmp` compares, computed once per answer rather than
+    // twice per comparison: the same order, and the sort of 1,000 took 3.7 % of a set's
+    // instructions with the floats.
+    let mut keyed: Vec<(i64, i64, u32)> = recommendations
         .iter()
         .zip(0u32..)
         .filter(|(r, _)| r.status == GripRecommendation::STATUS_OK)
-        .map(|(r, i)| (rules.rank_key(r), r.wrist_rotation.abs(), i))
+        .map(|(r, i)| {
+            (
+                total_order(rules.rank_key(r)),
+                total_order(r.wrist_rotation.abs()),
+                i,
+            )
+        })
         .collect();
-    keyed.sort_unstable_by(|a, b| {
-        a.0.total_cmp(&b.0)
-            .then(a.1.total_cmp(&b.1))
-            .then(a.2.cmp(&b.2))
-    });
+    keyed.sort_unstable();
     keyed.into_iter().map(|(_, _, i)| i).collect()
+}
+
+/// The integer whose order is `f64::total_cmp`'s (its documented definition): negative floats'
+/// magnitude bits flipped, so that the two's-complement order of the bits is the total order.
+fn total_order(x: f64) -> i64 {
+    let bits = x.to_bits() as i64;
+    bits ^ (((bits >> 63) as u64) >> 1) as i64
 }
 
 /// Why a set is refused as a whole, if it is: its status and message.
@@ -641,6 +653,34 @@ mod tests {
                 assert!(second.contains("cannot start 2 solver threads"), "{second}");
             });
         });
+    }
+
+    #[test]
+    fn total_order_is_total_cmp() {
+        let xs = [
+            f64::NEG_INFINITY,
+            -1e300,
+            -1.0,
+            -f64::MIN_POSITIVE,
+            -5e-324,
+            -0.0,
+            0.0,
+            5e-324,
+            1.0,
+            1e300,
+            f64::INFINITY,
+            f64::NAN,
+            -f64::NAN,
+        ];
+        for a in xs {
+            for b in xs {
+                assert_eq!(
+                    total_order(a).cmp(&total_order(b)),
+                    a.total_cmp(&b),
+                    "{a} against {b}"
+                );
+            }
+        }
     }
 
     #[test]

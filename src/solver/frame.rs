@@ -170,8 +170,37 @@ fn unit_in_plane(field: &'static str, v: &Vector2<f64>) -> Result<Vector2<f64>, 
     unit(v).ok_or(InvalidInput::ZeroInPlane { field })
 }
 
-/// Checks every field of a candidate, naming the first one at fault.
-pub fn validate(c: &Candidate) -> Result<(), InvalidInput> {
+/// What [`validate`] measures on its way and the map into the paper frame needs again, each
+/// computed once: the unit normals and gravity, the weight, the contact distance and the unit
+/// vector from contact 2 to contact 1.
+struct Measured {
+    n1: Vector2<f64>,
+    n2: Vector2<f64>,
+    gravity: Vector2<f64>,
+    weight: f64,
+    d: f64,
+    e_x: Vector2<f64>,
+}
+
+impl Measured {
+    /// The same measures for a candidate known to be valid, unchecked (the zero vector where
+    /// validation would have refused one).
+    fn of_valid(c: &Candidate) -> Self {
+        let unit_or_zero = |v: &Vector2<f64>| unit(v).unwrap_or_else(Vector2::zeros);
+        Self {
+            n1: unit_or_zero(&c.normal_1),
+            n2: unit_or_zero(&c.normal_2),
+            gravity: unit_or_zero(&c.gravity),
+            weight: c.mass * length(&c.gravity),
+            d: length(&(c.contact_1 - c.contact_2)),
+            e_x: unit_or_zero(&(c.contact_1 - c.contact_2)),
+        }
+    }
+}
+
+/// Checks every field of a candidate, naming the first one at fault, and keeps what it measured
+/// for the map into the paper frame.
+fn validate(c: &Candidate) -> Result<Measured, InvalidInput> {
     vector(
         ["contact_1.x", "contact_1.y"],
         &c.contact_1,
@@ -213,7 +242,7 @@ pub fn validate(c: &Candidate) -> Result<(), InvalidInput> {
     )?;
     let n1 = unit_in_plane("normal_1", &c.normal_1)?;
     let n2 = unit_in_plane("normal_2", &c.normal_2)?;
-    unit_in_plane("gravity", &c.gravity)?;
+    let gravity = unit_in_plane("gravity", &c.gravity)?;
     let weight = c.mass * length(&c.gravity);
     if weight < MIN_WEIGHT {
         return Err(InvalidInput::WeightTooSmall { weight });
@@ -224,21 +253,32 @@ pub fn validate(c: &Candidate) -> Result<(), InvalidInput> {
     if d == 0.0 || d <= COINCIDENT_FRACTION * reach {
         return Err(InvalidInput::CoincidentContacts);
     }
-    for (contact, p, q, n) in [
-        (Contact::First, c.contact_1, c.contact_2, n1),
-        (Contact::Second, c.contact_2, c.contact_1, n2),
+    // From each contact towards the other (`unit(-v)` is `-unit(v)` bit for bit, but the two are
+    // taken as written).
+    let to_second = unit(&(c.contact_2 - c.contact_1));
+    let to_first = unit(&(c.contact_1 - c.contact_2));
+    for (contact, p, towards_other, n) in [
+        (Contact::First, c.contact_1, to_second, n1),
+        (Contact::Second, c.contact_2, to_first, n2),
     ] {
         // A convex object lies in the half-plane its inward normal points into, so the other
         // contact and the centre of mass must lie there too. Unit vectors: the signs do not
         // depend on the lengths' scale.
-        if unit(&(q - p)).is_some_and(|u| n.dot(&u) < 0.0) {
+        if towards_other.is_some_and(|u| n.dot(&u) < 0.0) {
             return Err(InvalidInput::NormalOutward { contact });
         }
         if unit(&(c.center_of_mass - p)).is_some_and(|u| n.dot(&u) < -1e-12) {
             return Err(InvalidInput::CenterOfMassOutside { contact });
         }
     }
-    Ok(())
+    Ok(Measured {
+        n1,
+        n2,
+        gravity,
+        weight,
+        d,
+        e_x: to_first.unwrap_or_else(Vector2::zeros),
+    })
 }
 
 /// A friction coefficient in `[MIN_FRICTION, MAX_FRICTION]` (the spatial model's too).
@@ -261,19 +301,24 @@ impl GraspFrame {
         if !(1.0..=MAX_SAFETY_FACTOR).contains(&safety) {
             return Err(InvalidInput::SafetyFactor { value: safety });
         }
-        validate(c)?;
-        Ok(Self::from_valid(c, safety))
+        let measured = validate(c)?;
+        Ok(Self::from_measured(c, &measured, safety))
     }
 
     /// The map of [`GraspFrame::new`] for a candidate [`validate`] accepts and a safety factor
     /// in `[1, MAX_SAFETY_FACTOR]`, without checking them again (the spatial reduction has checked the 3D input).
     pub(crate) fn from_valid(c: &Candidate, safety: f64) -> Self {
-        let (mut p1, mut p2, mut n1, mut n2) = (c.contact_1, c.contact_2, c.normal_1, c.normal_2);
+        Self::from_measured(c, &Measured::of_valid(c), safety)
+    }
+
+    /// The map itself, from the measures of `c`.
+    fn from_measured(c: &Candidate, m: &Measured, safety: f64) -> Self {
+        let (mut p1, mut p2, mut n1, mut n2) = (c.contact_1, c.contact_2, m.n1, m.n2);
         let (mut mu1, mut mu2) = (c.friction_1 / safety, c.friction_2 / safety);
         let com = c.center_of_mass;
         // `validate` has checked that the contacts do not coincide, so `d > 0`.
-        let d = length(&(p1 - p2));
-        let mut e_x = unit(&(p1 - p2)).unwrap_or_else(Vector2::zeros);
+        let d = m.d;
+        let mut e_x = m.e_x;
         let mut e_y = Vector2::new(-e_x.y, e_x.x);
         // Height of the contact line above the centre of mass, averaged over both contacts.
         let height = |e_y: &Vector2<f64>, p1: &Vector2<f64>, p2: &Vector2<f64>| {
@@ -291,14 +336,11 @@ impl GraspFrame {
         }
         let x1 = (p1 - com).dot(&e_x) / d;
         let x2 = -(p2 - com).dot(&e_x) / d;
-        // `validate` has checked that none of the three is zero.
-        let to_paper = |v: &Vector2<f64>| {
-            let u = unit(v).unwrap_or_else(Vector2::zeros);
-            Vector2::new(u.dot(&e_x), u.dot(&e_y))
-        };
+        // Unit vectors (`Measured`): `validate` has checked that none of the three is zero.
+        let to_paper = |u: &Vector2<f64>| Vector2::new(u.dot(&e_x), u.dot(&e_y));
         let n1p = to_paper(&n1);
         let n2p = to_paper(&n2);
-        let gp = to_paper(&c.gravity);
+        let gp = to_paper(&m.gravity);
         Self {
             x1,
             x2,
@@ -311,7 +353,7 @@ impl GraspFrame {
             mu2,
             friction_safety_factor: safety,
             current_theta: gp.x.atan2(-gp.y),
-            weight: c.mass * length(&c.gravity),
+            weight: m.weight,
             contact_distance: d,
             swapped,
             e_x,
