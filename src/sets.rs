@@ -366,9 +366,9 @@ fn answer_all(
 /// done, and the answers it makes are freed on the thread that made them. So a pool of two on two
 /// cores is one more thread, not two, and no thread waits to be woken at the end of a set.
 /// Measured in one process on two cores (`cargo bench --bench sets`, the two kinds of pool taking
-/// turns set by set): a set of 1,000 took 0.71 ms this way against 0.77 ms on two started threads;
-/// with a set solved on one thread between the turns, so that the started threads slept longer,
-/// 0.69 to 0.73 ms against 0.81 to 1.12 ms (eight rounds of 200).
+/// turns set by set): a set of 1,000 took 0.66 to 0.72 ms this way against 0.70 to 0.77 ms on two
+/// started threads (four runs); with a set solved on one thread between the turns, so that the
+/// started threads slept longer, 0.69 to 0.73 ms against 0.81 to 1.12 ms (eight rounds of 200).
 ///
 /// A thread can be the first worker of one pool only, for its life: a second pool asked for on the
 /// same thread is refused with that reason (the node asks once). Another thread may still use the
