@@ -17,6 +17,9 @@
 Each variant runs in a node of its own (namespace), record:=false, publish_markers:=false, so that only the
 answering is measured; the echo, the node, and the node with solver_threads:=1 (one solver thread: what the
 threads buy) are interleaved over --repeat repetitions and the medians printed.
+(c) The set round trip of (a) again in turns: the three nodes running at once, one set sent to each in turn
+    (--sets x --repeat rounds, the order turned each round), so that all three are measured over the same
+    minutes; its p50s, and the median over rounds of the node's round trip over the echo's.
 With --large-buffers, this process (the rclpy side) uses tests/ros/fastdds_large_buffers.xml: 4 MB socket
 buffers instead of the system's 208 kB, which an answer of 240 to 320 kB overflows; lost fragments then wait
 for the writer's next heartbeat to be repaired.
@@ -168,6 +171,54 @@ def measure(peer, args, name: str, extra: list[str], params: list[str], rep: int
         node.stop()
 
 
+def measure_interleaved(peer, args, variants, workdir: Path) -> dict:
+    """(c) Every variant's node running at once, and one set sent to each in turn, the order turned round
+    by round: the echo and the node are then measured over the same minutes, so that a machine whose
+    speed drifts from one minute to the next (a shared VM) moves both alike. Returns each variant's round
+    trips and, per round, the node's and node_1's over the echo's."""
+    from rclpy.serialization import serialize_message
+    from grasp_orient.msg import GraspCandidateSet, GripRecommendationSet
+
+    nodes, pubs, raws = {}, {}, {}
+    try:
+        for name, extra, params in variants:
+            ns = f"/bench_sets_{name}_turns"
+            nodes[name] = C.NodeProcess([*extra, "--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false",
+                                         "-p", "publish_markers:=false", *params], C.ros_env(C.DOMAIN_ID), workdir,
+                                        f"{name} (turns)")
+        for name, _, _ in variants:
+            nodes[name].wait_ready()
+            ns = f"/bench_sets_{name}_turns"
+            pubs[name] = peer.node.create_publisher(GraspCandidateSet, f"{ns}/grasp_candidate_sets",
+                                                    C.reliable_qos(100))
+            raws[name] = Raw(peer, GripRecommendationSet, f"{ns}/grip_recommendation_sets")
+        ok = peer.spin_until(lambda: all(pubs[n].get_subscription_count() > 0 and raws[n].sub.get_publisher_count() > 0
+                                         for n in pubs), 15)
+        if not ok:
+            raise RuntimeError("interleaved: the topics did not match")
+        big = serialize_message(set_message(candidates(args.n, 77, "turns"), "turns"))
+        names = [name for name, _, _ in variants]
+        lat: dict[str, list[float]] = {name: [] for name in names}
+        rounds = args.sets * args.repeat
+        for k in range(rounds + 5):
+            order = names[k % len(names):] + names[:k % len(names)]
+            for name in order:
+                (t,) = round_trips(peer, lambda: pubs[name].publish(big), raws[name], 1, 0, timeout=30)
+                if k >= 5:
+                    lat[name].append(t)
+        for name in names:
+            peer.node.destroy_publisher(pubs[name])
+            peer.node.destroy_subscription(raws[name].sub)
+        out = {name: summary(lat[name]) for name in names}
+        for name in names[1:]:
+            out[f"{name}_over_echo_per_round"] = statistics.median(
+                a / b for a, b in zip(lat[name], lat[names[0]]))
+        return out
+    finally:
+        for node in nodes.values():
+            node.stop()
+
+
 def med(runs: list[dict], key: str, field: str) -> float:
     return statistics.median(r[key][field] for r in runs)
 
@@ -204,6 +255,7 @@ def main() -> int:
                 log(f"[bench_sets] #{rep} {name}: set p50 {r['set']['p50_ms']:.2f} ms p99 {r['set']['p99_ms']:.2f} ms; "
                     f"one: topic {r['topic_one']['p50_ms']:.3f}, set of 1 {r['topic_set_of_one']['p50_ms']:.3f}, "
                     f"service {r['service_one']['p50_ms']:.3f} ms (p50)")
+        turns = measure_interleaved(peer, args, variants, workdir)
     finally:
         peer.destroy()
         rclpy.try_shutdown()
@@ -221,6 +273,16 @@ def main() -> int:
         f"{x['set']['p50_ms']:.2f} / {y['set']['p50_ms']:.2f} / {z['set']['p50_ms']:.2f}" for x, y, z in zip(e, n, n1)))
     print(f"target: node p50 <= 1.5 x echo p50: "
           f"{'met' if med(n, 'set', 'p50_ms') <= 1.5 * med(e, 'set', 'p50_ms') else 'NOT met'}")
+    te, tn, tn1 = turns["echo"], turns["node"], turns["node_1"]
+    print(f"in turns, the three nodes running at once and one set to each in turn, {te['n']} rounds:")
+    print(f"  set round trip p50 (ms)          {te['p50_ms']:8.2f} {tn['p50_ms']:8.2f} {tn['p50_ms'] / te['p50_ms']:7.2f} "
+          f"{tn1['p50_ms']:8.2f} {tn1['p50_ms'] / te['p50_ms']:7.2f}")
+    print(f"  set round trip p99 (ms)          {te['p99_ms']:8.2f} {tn['p99_ms']:8.2f} {tn['p99_ms'] / te['p99_ms']:7.2f} "
+          f"{tn1['p99_ms']:8.2f} {tn1['p99_ms'] / te['p99_ms']:7.2f}")
+    print(f"  median over rounds of node / echo: {turns['node_over_echo_per_round']:.2f}, "
+          f"node_1 / echo: {turns['node_1_over_echo_per_round']:.2f}")
+    print(f"target in turns: node p50 <= 1.5 x echo p50: "
+          f"{'met' if tn['p50_ms'] <= 1.5 * te['p50_ms'] else 'NOT met'}")
     print("one candidate, node (p50 / p99 ms):")
     t = (med(n, "topic_one", "p50_ms"), med(n, "topic_one", "p99_ms"))
     for label, key in (("topic grasp_candidates -> grip_recommendations", "topic_one"),
@@ -228,7 +290,7 @@ def main() -> int:
         p50, p99 = med(n, key, "p50_ms"), med(n, key, "p99_ms")
         print(f"  {label:46} {p50:7.3f} / {p99:7.3f}   ratio to the topic {p50 / t[0]:.2f} / {p99 / t[1]:.2f}")
     if args.json:
-        Path(args.json).write_text(json.dumps(runs, indent=1))
+        Path(args.json).write_text(json.dumps({"runs": runs, "turns": turns}, indent=1))
     return 0
 
 
