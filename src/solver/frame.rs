@@ -253,10 +253,10 @@ fn validate(c: &Candidate) -> Result<Measured, InvalidInput> {
     if d == 0.0 || d <= COINCIDENT_FRACTION * reach {
         return Err(InvalidInput::CoincidentContacts);
     }
-    // From each contact towards the other (`unit(-v)` is `-unit(v)` bit for bit, but the two are
-    // taken as written).
-    let to_second = unit(&(c.contact_2 - c.contact_1));
+    // From each contact towards the other: one unit vector, negated (`unit(-v)` is `-unit(v)` bit
+    // for bit: the scaling by a power of two, the norm and the division all keep the sign apart).
     let to_first = unit(&(c.contact_1 - c.contact_2));
+    let to_second = to_first.map(|u| -u);
     for (contact, p, towards_other, n) in [
         (Contact::First, c.contact_1, to_second, n1),
         (Contact::Second, c.contact_2, to_first, n2),
@@ -417,6 +417,15 @@ mod tests {
             let w = v * s;
             assert_eq!(length(&w), 5.0 * s, "2^{k}");
             assert_eq!(unit(&w), unit(&v), "2^{k}");
+            // `validate` takes the way back as the negated unit vector: the same bits.
+            assert_eq!(unit(&-w), unit(&w).map(|u| -u), "2^{k}");
+        }
+        for w in [
+            Vector2::new(0.1, 0.7),
+            Vector2::new(-1e-310, 3e-305),
+            Vector2::new(7e200, -1.0),
+        ] {
+            assert_eq!(unit(&-w), unit(&w).map(|u| -u), "{w:?}");
         }
         // The smallest subnormals: 3 and -4 of them, exact.
         let tiny = f64::from_bits(1);
