@@ -127,15 +127,20 @@ def service_trips(peer, client, request, count: int, warmup: int, timeout: float
     return out
 
 
+def start_variant(ns: str, extra: list[str], params: list[str], workdir: Path, label: str):
+    """One variant's node in namespace `ns`, recording and markers off, so that only the answering is
+    measured."""
+    return C.NodeProcess([*extra, "--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false",
+                          "-p", "publish_markers:=false", *params], C.ros_env(C.DOMAIN_ID), workdir, label)
+
+
 def measure(peer, args, name: str, extra: list[str], params: list[str], rep: int, workdir: Path) -> dict:
     from rclpy.serialization import serialize_message
     from grasp_orient.msg import GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet
     from grasp_orient.srv import Recommend
 
     ns = f"/bench_sets_{name}_{rep}"
-    node = C.NodeProcess([*extra, "--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false",
-                          "-p", "publish_markers:=false", *params], C.ros_env(C.DOMAIN_ID), workdir,
-                         f"{name} #{rep}")
+    node = start_variant(ns, extra, params, workdir, f"{name} #{rep}")
     try:
         node.wait_ready()
         res: dict = {}
@@ -180,15 +185,12 @@ def measure_interleaved(peer, args, variants, workdir: Path) -> dict:
     from grasp_orient.msg import GraspCandidateSet, GripRecommendationSet
 
     nodes, pubs, raws = {}, {}, {}
+    spaces = {name: f"/bench_sets_{name}_turns" for name, _, _ in variants}
     try:
         for name, extra, params in variants:
-            ns = f"/bench_sets_{name}_turns"
-            nodes[name] = C.NodeProcess([*extra, "--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false",
-                                         "-p", "publish_markers:=false", *params], C.ros_env(C.DOMAIN_ID), workdir,
-                                        f"{name} (turns)")
-        for name, _, _ in variants:
+            nodes[name] = start_variant(spaces[name], extra, params, workdir, f"{name} (turns)")
+        for name, ns in spaces.items():
             nodes[name].wait_ready()
-            ns = f"/bench_sets_{name}_turns"
             pubs[name] = peer.node.create_publisher(GraspCandidateSet, f"{ns}/grasp_candidate_sets",
                                                     C.reliable_qos(100))
             raws[name] = Raw(peer, GripRecommendationSet, f"{ns}/grip_recommendation_sets")
