@@ -18,6 +18,7 @@ import re
 import signal
 import statistics
 import subprocess
+import sys
 import threading
 import time
 from pathlib import Path
@@ -334,6 +335,28 @@ def test_a_set_over_max_set_size_is_refused_at_once_and_the_node_keeps_serving(s
     assert s.send(set_msg(cands, "fifty-one-again")).status == 0
     (r,) = params.set(max_set_size=0)
     assert not r.successful and "max_set_size" in r.reason, r
+
+
+def test_sets_in_quick_succession_are_never_held_back(start_node):
+    """200 sets of 1,000 one after the other, each sent once the previous one is answered, from an rclpy
+    process with 4 MB socket buffers (tests/ros/sets_in_succession.py): every one is answered within seconds.
+    A set of 1,000 is 248 kB, four DDS fragments, and Fast DDS sends some of them twice; RustDDS kept an
+    assembly buffer for each such late fragment for 10 s, and from the 129th on it evicted the set it was
+    waiting for, which then arrived 11 s late (patches/rustdds-0.15.1/0006-datafrag-of-received-sample.patch)."""
+    ns = "/sets_in_succession"
+    start_node("--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false", "-p", "publish_markers:=false",
+               name="grasp_orient node (sets in succession)")
+    script = Path(__file__).resolve().parent / "sets_in_succession.py"
+    out = subprocess.run([sys.executable, str(script), ns, "--sets", "200"], env=ros_env(DOMAIN_ID),
+                         capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, f"{script.name} failed ({out.returncode}):\n{out.stdout}\n{out.stderr[-3000:]}"
+    res = json.loads(out.stdout.strip().splitlines()[-1])
+    trips = res["trips_s"]
+    assert len(trips) == 200, f"set {len(trips) + 1} of 200 was not answered within 30 s"
+    worst = max(range(200), key=lambda k: trips[k])
+    print(f"200 sets of 1,000 ({res['bytes'] // 1000} kB) in succession: round trip median "
+          f"{1e3 * statistics.median(trips):.1f} ms, longest {1e3 * trips[worst]:.1f} ms (set {worst + 1})")
+    assert trips[worst] < 3.0, f"set {worst + 1} of 200 took {trips[worst]:.1f} s"
 
 
 # ---------------------------------------------------------------------------------------------------

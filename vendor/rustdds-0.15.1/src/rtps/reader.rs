@@ -654,6 +654,20 @@ impl Reader {
       write_options_b = write_options_b.related_sample_identity(related_sample_identity);
     }
 
+    // A fragment of a sample already received (a writer re-sends the fragments of a sample
+    // it was asked for while they were on their way) would open a new assembly buffer that
+    // never completes. Such buffers linger until the assembly timeout, and a reliable reader
+    // that holds more than MAX_ASSEMBLY_BUFFERS of them evicts the newest one, which is the
+    // sample it waits for: no sample could be assembled until the stale ones timed out.
+    if !self.like_stateless {
+      if let Some(writer_proxy) = self.matched_writer(writer_guid) {
+        if writer_proxy.should_ignore_change(seq_num) {
+          trace!("handle_datafrag_msg already have this seq={seq_num:?}");
+          return;
+        }
+      }
+    }
+
     // Feed to fragment assembler ...
     let writer_seq_num = datafrag.writer_sn; // for borrow checker
     let completed_dds_data = self
@@ -1806,6 +1820,103 @@ mod tests {
       DDSData::Data { serialized_payload } => assert!(serialized_payload.value.is_empty()),
       other => panic!("expected an empty sample, got {other:?}"),
     }
+  }
+
+  #[test]
+  fn fragments_of_a_received_sample_leave_no_assembly_behind() {
+    // A reliable user topic's reader, as in reader_sends_data_to_topic_cache.
+    let dds_cache = Arc::new(RwLock::new(DDSCache::new()));
+    let topic_name = "test_name";
+    let qos_policy = QosPolicyBuilder::new()
+      .reliability(Reliability::Reliable {
+        max_blocking_time: Duration::from_millis(100),
+      })
+      .build();
+    let topic_cache_handle = dds_cache.write().unwrap().add_new_topic(
+      topic_name.to_string(),
+      TypeDesc::new("test_type".to_string()),
+      &qos_policy,
+    );
+    let (notification_sender, _notification_receiver) =
+      crate::mio_source::notification_channel(100);
+    let (_notification_event_source, notification_event_sender) =
+      mio_source::make_poll_channel().unwrap();
+    let (status_sender, _status_receiver) = sync_status_channel::<DataReaderStatus>(4).unwrap();
+    let (participant_status_sender, _participant_status_receiver) =
+      sync_status_channel(16).unwrap();
+    let (_reader_command_sender, reader_command_receiver) =
+      wake_channel::<ReaderCommand>(10, &LoopWaker::new());
+    let reader_guid = GUID::dummy_test_guid(EntityKind::READER_NO_KEY_USER_DEFINED);
+    let mut reader = Reader::new(
+      ReaderIngredients {
+        guid: reader_guid,
+        notification_sender,
+        status_sender,
+        topic_name: topic_name.to_string(),
+        topic_cache_handle,
+        like_stateless: false,
+        qos_policy: qos_policy.clone(),
+        data_reader_command_receiver: reader_command_receiver,
+        data_reader_waker: Arc::new(Mutex::new(None)),
+        poll_event_sender: notification_event_sender,
+        security_plugins: None,
+        discovery_notify: None,
+      },
+      Rc::new(UDPSender::new(0).unwrap()),
+      new_shared_timer(),
+      participant_status_sender,
+    );
+    let writer_guid = GUID::dummy_test_guid(EntityKind::WRITER_NO_KEY_USER_DEFINED);
+    let mr_state = MessageReceiverState {
+      source_guid_prefix: writer_guid.prefix,
+      ..Default::default()
+    };
+    reader.matched_writer_add(
+      writer_guid,
+      EntityId::UNKNOWN,
+      mr_state.unicast_reply_locator_list.to_vec(),
+      mr_state.multicast_reply_locator_list.to_vec(),
+      &qos_policy,
+    );
+
+    // Each sample: 8 bytes (encapsulation header and 4 of data) in two fragments of 4.
+    let fragment = |sn: i64, number: u32| DataFrag {
+      reader_id: reader_guid.entity_id,
+      writer_id: writer_guid.entity_id,
+      writer_sn: SequenceNumber::new(sn),
+      fragment_starting_num: FragmentNumber::new(number),
+      fragments_in_submessage: 1,
+      data_size: 8,
+      fragment_size: 4,
+      inline_qos: None,
+      serialized_payload: if number == 1 {
+        bytes::Bytes::from_static(&[0x00, 0x01, 0x00, 0x00])
+      } else {
+        bytes::Bytes::from_static(&[1, 2, 3, 4])
+      },
+    };
+    let flags = BitFlags::<DATAFRAG_Flags>::from_flag(DATAFRAG_Flags::Endianness);
+    // Every sample arrives whole, and then its last fragment once more (a writer answering a
+    // request that crossed the fragments): more samples than MAX_ASSEMBLY_BUFFERS.
+    let samples = 200;
+    for sn in 1..=samples {
+      reader.handle_datafrag_msg(&fragment(sn, 1), flags, &mr_state);
+      reader.handle_datafrag_msg(&fragment(sn, 2), flags, &mr_state);
+      reader.handle_datafrag_msg(&fragment(sn, 2), flags, &mr_state);
+      assert!(
+        !reader.is_frag_partially_received(writer_guid, SequenceNumber::new(sn)),
+        "a fragment of received sample {sn} opened an assembly buffer"
+      );
+    }
+    // Every sample was assembled and stored, the last ones too.
+    assert_eq!(
+      reader
+        .matched_writer(writer_guid)
+        .expect("the writer is matched")
+        .all_ackable_before(),
+      SequenceNumber::new(samples + 1),
+      "a sample was never assembled"
+    );
   }
 
   #[test]

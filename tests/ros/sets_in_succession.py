@@ -1,0 +1,74 @@
+#!/usr/bin/env python3
+"""Sends sets of candidates to a running node one after the other, each once the previous one is answered,
+from an rclpy process with 4 MB socket buffers (tests/ros/fastdds_large_buffers.xml, as a user who receives
+answers of hundreds of kB sets them), and prints the round trips as JSON on stdout:
+
+    python tests/ros/sets_in_succession.py NAMESPACE [--sets 200] [--n 1000]
+
+Run by tests/ros/test_sets.py::test_sets_in_quick_succession_are_never_held_back (the process's rclpy must load
+the profile before it starts, so it cannot be the test session's own). The set is serialized once and
+published as bytes; the answers are taken raw (only their arrival is timed).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+for var in ("FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_DEFAULT_PROFILES_FILE"):
+    os.environ[var] = str(HERE / "fastdds_large_buffers.xml")
+sys.path.insert(0, str(HERE))
+
+import conftest as C  # noqa: E402  (ROS_DOMAIN_ID and localhost discovery, as the tests use them)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("namespace")
+    ap.add_argument("--sets", type=int, default=200)
+    ap.add_argument("--n", type=int, default=1000, help="candidates per set")
+    ap.add_argument("--timeout", type=float, default=30.0, help="s to wait for each answer")
+    args = ap.parse_args()
+    import random
+
+    import rclpy
+    from rclpy.serialization import serialize_message
+    from grasp_orient.msg import GraspCandidateSet, GripRecommendationSet
+
+    rclpy.init()
+    peer = C.Peer("sets_in_succession")
+    ns = args.namespace.rstrip("/")
+    try:
+        pub = peer.node.create_publisher(GraspCandidateSet, f"{ns}/grasp_candidate_sets", C.reliable_qos(10))
+        arrivals: list[float] = []
+        sub = peer.node.create_subscription(GripRecommendationSet, f"{ns}/grip_recommendation_sets",
+                                            lambda raw: arrivals.append(time.monotonic()), C.reliable_qos(10),
+                                            raw=True)
+        if not peer.spin_until(lambda: pub.get_subscription_count() > 0 and sub.get_publisher_count() > 0, 15):
+            print(json.dumps({"error": "no match on the set topics"}))
+            return 1
+        rng = random.Random(120624)
+        msg = GraspCandidateSet()
+        msg.id = "succession"
+        msg.candidates = [C.candidate_msg(C.random_grasp(rng, f"succession-{k}")) for k in range(args.n)]
+        raw = serialize_message(msg)
+        trips: list[float] = []
+        for k in range(args.sets):
+            t0 = time.monotonic()
+            pub.publish(raw)
+            if not peer.spin_until(lambda: len(arrivals) > k, args.timeout):
+                break
+            trips.append(arrivals[k] - t0)
+        print(json.dumps({"bytes": len(raw), "trips_s": trips}))
+        return 0
+    finally:
+        peer.destroy()
+        rclpy.try_shutdown()
+
+
+if __name__ == "__main__":
+    sys.exit(main())
