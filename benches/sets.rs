@@ -6,7 +6,10 @@
 //! the singles' answers kept in a list (as a set keeps them until it is published), and the
 //! ranking alone; and, to show what more cores buy, the set on a pool of every core
 //! (`sets::solver_pool`, what the node answers large sets on), against a pool of as many started
-//! threads that the calling thread waits on (the node's pool before 2026-12-01, night).
+//! threads that the calling thread waits on (the node's pool before 2026-12-01, night); and the
+//! set on one thread and on the pool right after the process idled 0, 2 and 10 ms, as a node's
+//! sets come, which on a virtual machine whose cores slow down when idle is slower, and gains
+//! little from the second core (README, "Speed").
 //!
 //! The allocator is the binary's (mimalloc, `src/main.rs`): with glibc's, keeping 1,000 answers
 //! cost 1.2 times the singles (1.39 ms against 1.67 ms), with mimalloc nothing measurable.
@@ -119,7 +122,8 @@ fn main() {
         .num_threads(cores)
         .build()
         .ok();
-    let pooled = grasp_orient::sets::solver_pool(cores).ok().map(|pool| {
+    let node_pool = grasp_orient::sets::solver_pool(cores).ok();
+    let pooled = node_pool.as_ref().map(|pool| {
         let time = |pool: &rayon::ThreadPool| {
             let t = Instant::now();
             black_box(answer_set_on(
@@ -132,7 +136,7 @@ fn main() {
         };
         let (mut ours, mut theirs) = (Vec::new(), Vec::new());
         for _ in 0..5 * runs {
-            ours.push(time(&pool));
+            ours.push(time(pool));
             if let Some(p) = &started {
                 theirs.push(time(p));
             }
@@ -142,6 +146,12 @@ fn main() {
             v.get(v.len() / 2).copied()
         };
         (median(ours).unwrap_or(f64::NAN), median(theirs))
+    });
+    let idled: Vec<(u64, Idled)> = node_pool.as_ref().map_or_else(Vec::new, |pool| {
+        [0, 2, 10]
+            .into_iter()
+            .map(|ms| (ms, after_idle(&set, &settings, &rules, pool, ms, 100)))
+            .collect()
     });
     let ranking = median_secs(runs, || {
         black_box(grasp_orient::sets::rank(
@@ -161,6 +171,19 @@ fn main() {
                 w / t
             ))
         );
+    }
+    if !idled.is_empty() {
+        println!(
+            "a set right after the machine idled, as a node's sets come (medians of 100; one thread / \
+             the pool of {cores}):"
+        );
+        for (ms, t) in &idled {
+            println!(
+                "  {ms:2} ms idle before each set: {:.3} / {:.3} ms",
+                t.one * 1e3,
+                t.pool * 1e3
+            );
+        }
     }
     println!(
         "{n} candidates ({} ranked), one core, medians of 5 x {runs} runs:\n  \
@@ -187,4 +210,46 @@ fn main() {
             ": the ratio is not met"
         }
     );
+}
+
+/// Medians, s, of a set answered right after the process slept.
+struct Idled {
+    /// On the calling thread.
+    one: f64,
+    /// On the pool.
+    pool: f64,
+}
+
+/// A set answered `rounds` times on this thread and on `pool`, each right after this process
+/// slept `idle_ms` (0: back to back). A node idles between the sets it is sent; on a virtual
+/// machine whose cores slow down when idle, this shows how much slower a set is then, and how
+/// little a second core helps within the millisecond the set takes (README, "Speed").
+fn after_idle(
+    set: &GraspCandidateSet,
+    settings: &Settings,
+    rules: &Rules,
+    pool: &rayon::ThreadPool,
+    idle_ms: u64,
+    rounds: usize,
+) -> Idled {
+    let idle = std::time::Duration::from_millis(idle_ms);
+    let (mut one, mut on_pool) = (Vec::new(), Vec::new());
+    for _ in 0..rounds {
+        std::thread::sleep(idle);
+        let t = Instant::now();
+        black_box(answer_set(black_box(set), settings, rules));
+        one.push(t.elapsed().as_secs_f64());
+        std::thread::sleep(idle);
+        let t = Instant::now();
+        black_box(answer_set_on(black_box(set), settings, rules, Some(pool)));
+        on_pool.push(t.elapsed().as_secs_f64());
+    }
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    Idled {
+        one: median(one),
+        pool: median(on_pool),
+    }
 }

@@ -84,6 +84,9 @@ pub async fn answer_topic(
     info: &MessageInfo,
 ) {
     let (received, sent) = super::message_times(info);
+    // From the sample's arrival in the DDS reader (the last fragment) to here: the node's
+    // thread waking, and the set decoded.
+    let taken = Duration::from_nanos(now_ns().saturating_sub(received));
     let started = Instant::now();
     let outcome = answerer.handle_set(set, received, sent);
     let took = started.elapsed();
@@ -94,7 +97,8 @@ pub async fn answer_topic(
         recorded,
     } = outcome;
     super::tell(node, notes);
-    log_answer(&reply, "topic", took);
+    let line = AnswerLine::new(&reply, "topic", Some(taken), took);
+    let publishing = Instant::now();
     if let Err(e) = endpoints.answers.async_publish(reply).await {
         say(
             node,
@@ -102,6 +106,7 @@ pub async fn answer_topic(
             &format!("cannot publish a set answer: {e:?}"),
         );
     }
+    line.log(publishing.elapsed());
     let answered = now_ns();
     publish_markers(markers, array).await;
     super::tell(node, answerer.record_set(recorded, answered));
@@ -122,10 +127,11 @@ pub async fn answer_call(
     let outcome = answerer.handle_set(request.candidate_set, received, received);
     let took = started.elapsed();
     super::tell(node, outcome.notes);
-    log_answer(&outcome.reply, "service", took);
+    let line = AnswerLine::new(&outcome.reply, "service", None, took);
     let response = RecommendResponse {
         recommendation_set: outcome.reply,
     };
+    let sending = Instant::now();
     if let Err(e) = endpoints.service.async_send_response(id, response).await {
         say(
             node,
@@ -133,24 +139,56 @@ pub async fn answer_call(
             &format!("cannot send a {SERVICE} response: {e:?}"),
         );
     }
+    line.log(sending.elapsed());
     let answered = now_ns();
     publish_markers(markers, outcome.markers).await;
     super::tell(node, answerer.record_set(outcome.recorded, answered));
 }
 
-/// One line at debug per set answered, as for single candidates, with the time its answer took
-/// (solving, ranking, the best candidate's markers and the recording's copy: everything before
-/// it is published).
-fn log_answer(reply: &GripRecommendationSet, via: &str, took: Duration) {
-    log::debug!(
-        "set {:?} ({via}): {} candidates, {} ranked by {}, status {}, answered in {:.3} ms",
-        short_id(&reply.set_id),
-        reply.recommendations.len(),
-        reply.ranking.len(),
-        reply.ranked_by,
-        reply.status,
-        took.as_secs_f64() * 1e3
-    );
+/// One line at debug per set answered, as for single candidates, written once the answer is out:
+/// where the set's time in the node went. `taken`: from the set's arrival in the DDS reader to
+/// the start of its answer (the node's thread waking, and the set decoded; topic only);
+/// `answered in`: solving, ranking, the best candidate's markers and the recording's copy;
+/// `published in`: serializing the answer and handing it to DDS, and freeing it.
+/// `tests/ros/bench_sets.py` reads these lines.
+struct AnswerLine {
+    /// The line up to the publishing time; none when debug lines are off.
+    text: Option<String>,
+}
+
+impl AnswerLine {
+    fn new(
+        reply: &GripRecommendationSet,
+        via: &str,
+        taken: Option<Duration>,
+        took: Duration,
+    ) -> Self {
+        if !log::log_enabled!(log::Level::Debug) {
+            return Self { text: None };
+        }
+        let ms = |d: Duration| d.as_secs_f64() * 1e3;
+        let taken = taken.map_or(String::new(), |t| {
+            format!(", taken {:.3} ms after it arrived", ms(t))
+        });
+        Self {
+            text: Some(format!(
+                "set {:?} ({via}): {} candidates, {} ranked by {}, status {}{taken}, answered in \
+                 {:.3} ms",
+                short_id(&reply.set_id),
+                reply.recommendations.len(),
+                reply.ranking.len(),
+                reply.ranked_by,
+                reply.status,
+                ms(took)
+            )),
+        }
+    }
+
+    fn log(self, sent: Duration) {
+        if let Some(text) = self.text {
+            log::debug!("{text}, published in {:.3} ms", sent.as_secs_f64() * 1e3);
+        }
+    }
 }
 
 async fn publish_markers(markers: &Publisher<MarkerArray>, array: Option<MarkerArray>) {

@@ -19,7 +19,9 @@ answering is measured; the echo, the node, and the node with solver_threads:=1 (
 threads buy) are interleaved over --repeat repetitions and the medians printed.
 (c) The set round trip of (a) again in turns: the three nodes running at once, one set sent to each in turn
     (--sets x --repeat rounds, the order turned each round), so that all three are measured over the same
-    minutes; its p50s, and the median over rounds of the node's round trip over the echo's.
+    minutes; its p50s, and the median over rounds of the node's round trip over the echo's and minus it. And
+    where each set's time in each node went, from the node's debug line per set (src/node/sets.rs): from the
+    set's arrival in its DDS reader to the start of its answer, the answer, the publishing.
 With --large-buffers, this process (the rclpy side) uses tests/ros/fastdds_large_buffers.xml: 4 MB socket
 buffers instead of the system's 208 kB, which an answer of 240 to 320 kB overflows; lost fragments then wait
 for the writer's next heartbeat to be repaired.
@@ -32,6 +34,7 @@ import argparse
 import json
 import os
 import random
+import re
 import statistics
 import sys
 import tempfile
@@ -134,6 +137,23 @@ def start_variant(ns: str, extra: list[str], params: list[str], workdir: Path, l
                           "-p", "publish_markers:=false", *params], C.ros_env(C.DOMAIN_ID), workdir, label)
 
 
+# The node's line at debug for each set answered on the topic (src/node/sets.rs, AnswerLine).
+SET_LINE = re.compile(r'\(topic\): (\d+) candidates.*taken ([0-9.]+) ms after it arrived, answered in ([0-9.]+) ms, '
+                      r'published in ([0-9.]+) ms')
+
+
+def node_times(node, n: int) -> dict | None:
+    """Medians over the sets of `n` candidates a node answered (its debug lines): from the set's arrival in
+    its DDS reader to the start of its answer (the thread waking, the set decoded), the answer, the
+    publishing."""
+    rows = [tuple(map(float, m.groups()[1:])) for line in node.all_lines()
+            for m in [SET_LINE.search(line)] if m and int(m.group(1)) == n]
+    if not rows:
+        return None
+    return {key: statistics.median(r[i] for r in rows) for i, key in
+            enumerate(("taken_ms", "answered_ms", "published_ms"))}
+
+
 def measure(peer, args, name: str, extra: list[str], params: list[str], rep: int, workdir: Path) -> dict:
     from rclpy.serialization import serialize_message
     from grasp_orient.msg import GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet
@@ -188,9 +208,12 @@ def measure_interleaved(peer, args, variants, workdir: Path) -> dict:
     spaces = {name: f"/bench_sets_{name}_turns" for name, _, _ in variants}
     try:
         for name, extra, params in variants:
-            nodes[name] = start_variant(spaces[name], extra, params, workdir, f"{name} (turns)")
-        for name, ns in spaces.items():
+            # Debug lines: where each set's time in the node goes (node_times). One node at a time:
+            # three participants started in the same instant did not always discover the peer.
+            debug = ["--log-level", "grasp_orient.node.sets:=debug"]
+            nodes[name] = start_variant(spaces[name], extra, [*params, *debug], workdir, f"{name} (turns)")
             nodes[name].wait_ready()
+        for name, ns in spaces.items():
             pubs[name] = peer.node.create_publisher(GraspCandidateSet, f"{ns}/grasp_candidate_sets",
                                                     C.reliable_qos(100))
             raws[name] = Raw(peer, GripRecommendationSet, f"{ns}/grip_recommendation_sets")
@@ -215,6 +238,10 @@ def measure_interleaved(peer, args, variants, workdir: Path) -> dict:
         for name in names[1:]:
             out[f"{name}_over_echo_per_round"] = statistics.median(
                 a / b for a, b in zip(lat[name], lat[names[0]]))
+            out[f"{name}_minus_echo_per_round_ms"] = 1e3 * statistics.median(
+                a - b for a, b in zip(lat[name], lat[names[0]]))
+        for name in names:
+            out[f"{name}_in_node"] = node_times(nodes[name], args.n)
         return out
     finally:
         for node in nodes.values():
@@ -283,8 +310,16 @@ def main() -> int:
           f"{tn1['p99_ms']:8.2f} {tn1['p99_ms'] / te['p99_ms']:7.2f}")
     print(f"  median over rounds of node / echo: {turns['node_over_echo_per_round']:.2f}, "
           f"node_1 / echo: {turns['node_1_over_echo_per_round']:.2f}")
+    print(f"  median over rounds of node - echo: {turns['node_minus_echo_per_round_ms']:.2f} ms (the target allows "
+          f"{0.5 * te['p50_ms']:.2f}), node_1 - echo: {turns['node_1_minus_echo_per_round_ms']:.2f} ms")
     print(f"target in turns: node p50 <= 1.5 x echo p50: "
           f"{'met' if tn['p50_ms'] <= 1.5 * te['p50_ms'] else 'NOT met'}")
+    print("  in the node, medians over the sets (its debug lines): set arrived -> answer started (thread woken, set "
+          "decoded) / answered / published (ms):")
+    for name, _, _ in variants:
+        t = turns[f"{name}_in_node"]
+        print(f"    {name:8} " + ("no debug lines" if t is None else
+                                  f"{t['taken_ms']:.3f} / {t['answered_ms']:.3f} / {t['published_ms']:.3f}"))
     print("one candidate, node (p50 / p99 ms):")
     t = (med(n, "topic_one", "p50_ms"), med(n, "topic_one", "p99_ms"))
     for label, key in (("topic grasp_candidates -> grip_recommendations", "topic_one"),
