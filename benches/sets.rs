@@ -233,17 +233,18 @@ fn after_idle(
     rounds: usize,
 ) -> Idled {
     let idle = std::time::Duration::from_millis(idle_ms);
-    let (mut one, mut on_pool) = (Vec::new(), Vec::new());
-    for _ in 0..rounds {
-        std::thread::sleep(idle);
-        let t = Instant::now();
-        black_box(answer_set(black_box(set), settings, rules));
-        one.push(t.elapsed().as_secs_f64());
-        std::thread::sleep(idle);
-        let t = Instant::now();
-        black_box(answer_set_on(black_box(set), settings, rules, Some(pool)));
-        on_pool.push(t.elapsed().as_secs_f64());
-    }
+    // One loop each, so that the pool's threads idle only `idle_ms` before each of its sets.
+    let times = |on: Option<&rayon::ThreadPool>| -> Vec<f64> {
+        (0..rounds)
+            .map(|_| {
+                std::thread::sleep(idle);
+                let t = Instant::now();
+                black_box(answer_set_on(black_box(set), settings, rules, on));
+                t.elapsed().as_secs_f64()
+            })
+            .collect()
+    };
+    let (one, on_pool) = (times(None), times(Some(pool)));
     let median = |mut v: Vec<f64>| {
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]

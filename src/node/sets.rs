@@ -99,14 +99,15 @@ pub async fn answer_topic(
     super::tell(node, notes);
     let line = AnswerLine::new(&reply, "topic", Some(taken), took);
     let publishing = Instant::now();
-    if let Err(e) = endpoints.answers.async_publish(reply).await {
+    let published = endpoints.answers.async_publish(reply).await;
+    line.log(publishing.elapsed(), published.is_ok());
+    if let Err(e) = published {
         say(
             node,
             log::Level::Error,
             &format!("cannot publish a set answer: {e:?}"),
         );
     }
-    line.log(publishing.elapsed());
     let answered = now_ns();
     publish_markers(markers, array).await;
     super::tell(node, answerer.record_set(recorded, answered));
@@ -132,14 +133,15 @@ pub async fn answer_call(
         recommendation_set: outcome.reply,
     };
     let sending = Instant::now();
-    if let Err(e) = endpoints.service.async_send_response(id, response).await {
+    let sent = endpoints.service.async_send_response(id, response).await;
+    line.log(sending.elapsed(), sent.is_ok());
+    if let Err(e) = sent {
         say(
             node,
             log::Level::Error,
             &format!("cannot send a {SERVICE} response: {e:?}"),
         );
     }
-    line.log(sending.elapsed());
     let answered = now_ns();
     publish_markers(markers, outcome.markers).await;
     super::tell(node, answerer.record_set(outcome.recorded, answered));
@@ -149,7 +151,9 @@ pub async fn answer_call(
 /// where the set's time in the node went. `taken`: from the set's arrival in the DDS reader to
 /// the start of its answer (the node's thread waking, and the set decoded; topic only);
 /// `answered in`: solving, ranking, the best candidate's markers and the recording's copy;
-/// `published in`: serializing the answer and handing it to DDS, and freeing it.
+/// `published in`: serializing the answer and handing it to DDS, and freeing it. `taken` also
+/// holds any wait behind the previous message's markers and recording, and is 0 when DDS gave
+/// no arrival time.
 /// `tests/ros/bench_sets.py` reads these lines.
 struct AnswerLine {
     /// The line up to the publishing time; none when debug lines are off.
@@ -184,9 +188,14 @@ impl AnswerLine {
         }
     }
 
-    fn log(self, sent: Duration) {
+    fn log(self, sending: Duration, sent: bool) {
         if let Some(text) = self.text {
-            log::debug!("{text}, published in {:.3} ms", sent.as_secs_f64() * 1e3);
+            let how = if sent {
+                "published in"
+            } else {
+                "not published, after"
+            };
+            log::debug!("{text}, {how} {:.3} ms", sending.as_secs_f64() * 1e3);
         }
     }
 }

@@ -6,8 +6,9 @@ answers of hundreds of kB sets them), and prints the round trips as JSON on stdo
     python tests/ros/sets_in_succession.py NAMESPACE [--sets 200] [--n 1000]
 
 Run by tests/ros/test_sets.py::test_sets_in_quick_succession_are_never_held_back (the process's rclpy must load
-the profile before it starts, so it cannot be the test session's own). The set is serialized once and
-published as bytes; the answers are taken raw (only their arrival is timed).
+the profile before it starts, so it cannot be the test session's own). By hand, give it the node's domain as
+conftest.py takes it: GRASP_ORIENT_TEST_DOMAIN_ID=N (else it picks a domain of its own and matches nothing).
+The set is serialized once and published as bytes; the answers are taken raw (only their arrival is timed).
 """
 from __future__ import annotations
 

@@ -342,7 +342,7 @@ def test_sets_in_quick_succession_are_never_held_back(start_node):
     process with 4 MB socket buffers (tests/ros/sets_in_succession.py): every one is answered within seconds.
     A set of 1,000 is 248 kB, four DDS fragments, and Fast DDS sends some of them twice; RustDDS kept an
     assembly buffer for each such late fragment for 10 s, and from the 129th on it evicted the set it was
-    waiting for, which then arrived 11 s late (patches/rustdds-0.15.1/0006-datafrag-of-received-sample.patch)."""
+    waiting for, which then arrived 11.5 s late (patches/rustdds-0.15.1/0006-datafrag-of-received-sample.patch)."""
     ns = "/sets_in_succession"
     start_node("--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false", "-p", "publish_markers:=false",
                name="grasp_orient node (sets in succession)")
@@ -350,13 +350,15 @@ def test_sets_in_quick_succession_are_never_held_back(start_node):
     out = subprocess.run([sys.executable, str(script), ns, "--sets", "200"], env=ros_env(DOMAIN_ID),
                          capture_output=True, text=True, timeout=600)
     assert out.returncode == 0, f"{script.name} failed ({out.returncode}):\n{out.stdout}\n{out.stderr[-3000:]}"
-    res = json.loads(out.stdout.strip().splitlines()[-1])
+    # The last line that is JSON: Fast DDS may print its own errors to standard output.
+    res = json.loads([line for line in out.stdout.splitlines() if line.startswith("{")][-1])
     trips = res["trips_s"]
     assert len(trips) == 200, f"set {len(trips) + 1} of 200 was not answered within 30 s"
     worst = max(range(200), key=lambda k: trips[k])
     print(f"200 sets of 1,000 ({res['bytes'] // 1000} kB) in succession: round trip median "
           f"{1e3 * statistics.median(trips):.1f} ms, longest {1e3 * trips[worst]:.1f} ms (set {worst + 1})")
-    assert trips[worst] < 3.0, f"set {worst + 1} of 200 took {trips[worst]:.1f} s"
+    # 5 s: far above a repair through Fast DDS's heartbeat (3 s at worst), far below the 10 s stall.
+    assert trips[worst] < 5.0, f"set {worst + 1} of 200 took {trips[worst]:.1f} s"
 
 
 # ---------------------------------------------------------------------------------------------------

@@ -314,6 +314,11 @@ impl FragmentAssembler {
   // AssemblyBuffers   self.assembly_buffers.keys()
   // }
 
+  /// Drops what was assembled of sample `sn`, if anything.
+  pub fn discard(&mut self, sn: SequenceNumber) {
+    self.assembly_buffers.remove(&sn);
+  }
+
   pub fn is_partially_received(&self, sn: SequenceNumber) -> bool {
     self.assembly_buffers.contains_key(&sn)
     // assembly buffers map contains a key (SN) if and only if we have some

@@ -654,18 +654,25 @@ impl Reader {
       write_options_b = write_options_b.related_sample_identity(related_sample_identity);
     }
 
-    // A fragment of a sample already received (a writer re-sends the fragments of a sample
-    // it was asked for while they were on their way) would open a new assembly buffer that
-    // never completes. Such buffers linger until the assembly timeout, and a reliable reader
-    // that holds more than MAX_ASSEMBLY_BUFFERS of them evicts the newest one, which is the
-    // sample it waits for: no sample could be assembled until the stale ones timed out.
-    if !self.like_stateless {
-      if let Some(writer_proxy) = self.matched_writer(writer_guid) {
-        if writer_proxy.should_ignore_change(seq_num) {
-          trace!("handle_datafrag_msg already have this seq={seq_num:?}");
-          return;
-        }
+    // A fragment of a sample already received (a writer re-sends fragments the reader asked
+    // for while they were on their way) would open a new assembly buffer that never
+    // completes. Such buffers linger until the assembly timeout, and a reliable reader that
+    // holds more than MAX_ASSEMBLY_BUFFERS of them evicts the newest one, which is the sample
+    // it waits for: no sample could be assembled until the stale ones timed out. So such a
+    // fragment is dropped, and with it what was assembled of a sample that became irrelevant
+    // (a GAP, a HEARTBEAT's first_sn) while it was being assembled. The participant reader
+    // keeps taking duplicates, as handle_data_msg does.
+    let already_have = !self.like_stateless
+      && self.my_guid.entity_id != EntityId::SPDP_BUILTIN_PARTICIPANT_READER
+      && self
+        .matched_writer(writer_guid)
+        .is_some_and(|writer_proxy| writer_proxy.should_ignore_change(seq_num));
+    if already_have {
+      trace!("handle_datafrag_msg already have this seq={seq_num:?}");
+      if let Some(assembler) = self.fragment_assemblers.get_mut(&writer_guid) {
+        assembler.discard(seq_num);
       }
+      return;
     }
 
     // Feed to fragment assembler ...
@@ -1916,6 +1923,21 @@ mod tests {
         .all_ackable_before(),
       SequenceNumber::new(samples + 1),
       "a sample was never assembled"
+    );
+
+    // A sample that became irrelevant while it was assembled (a HEARTBEAT's first_sn passed
+    // it): its next fragment takes what was assembled with it.
+    let next = SequenceNumber::new(samples + 1);
+    reader.handle_datafrag_msg(&fragment(samples + 1, 1), flags, &mr_state);
+    assert!(reader.is_frag_partially_received(writer_guid, next));
+    reader
+      .matched_writer_mut(writer_guid)
+      .expect("the writer is matched")
+      .irrelevant_changes_up_to(SequenceNumber::new(samples + 2));
+    reader.handle_datafrag_msg(&fragment(samples + 1, 2), flags, &mr_state);
+    assert!(
+      !reader.is_frag_partially_received(writer_guid, next),
+      "the assembly of a sample that became irrelevant was kept"
     );
   }
 
