@@ -59,15 +59,22 @@ fn message(i: usize, c: &grasp_orient::solver::Candidate) -> GraspCandidate {
 
 /// Median of `runs` timings of `f`, seconds.
 fn median_secs(runs: usize, mut f: impl FnMut()) -> f64 {
-    let mut times: Vec<f64> = (0..runs)
-        .map(|_| {
-            let t = Instant::now();
-            f();
-            t.elapsed().as_secs_f64()
-        })
-        .collect();
+    median(
+        (0..runs)
+            .map(|_| {
+                let t = Instant::now();
+                f();
+                t.elapsed().as_secs_f64()
+            })
+            .collect(),
+    )
+    .unwrap_or(f64::NAN)
+}
+
+/// The median of `times` (the upper one of an even count); none of none.
+fn median(mut times: Vec<f64>) -> Option<f64> {
     times.sort_by(f64::total_cmp);
-    times[runs / 2]
+    times.get(times.len() / 2).copied()
 }
 
 fn main() {
@@ -141,10 +148,6 @@ fn main() {
                 theirs.push(time(p));
             }
         }
-        let median = |mut v: Vec<f64>| {
-            v.sort_by(f64::total_cmp);
-            v.get(v.len() / 2).copied()
-        };
         (median(ours).unwrap_or(f64::NAN), median(theirs))
     });
     let idled: Vec<(u64, Idled)> = node_pool.as_ref().map_or_else(Vec::new, |pool| {
@@ -244,13 +247,8 @@ fn after_idle(
             })
             .collect()
     };
-    let (one, on_pool) = (times(None), times(Some(pool)));
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
     Idled {
-        one: median(one),
-        pool: median(on_pool),
+        one: median(times(None)).unwrap_or(f64::NAN),
+        pool: median(times(Some(pool))).unwrap_or(f64::NAN),
     }
 }

@@ -16,7 +16,6 @@ import argparse
 import json
 import os
 import sys
-import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -24,7 +23,7 @@ for var in ("FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_DEFAULT_PROFILES_FILE"):
     os.environ[var] = str(HERE / "fastdds_large_buffers.xml")
 sys.path.insert(0, str(HERE))
 
-import conftest as C  # noqa: E402  (ROS_DOMAIN_ID and localhost discovery, as the tests use them)
+import bench_sets as B  # noqa: E402  (its set, raw subscription and round trips; conftest's domain)
 
 
 def main() -> int:
@@ -34,37 +33,24 @@ def main() -> int:
     ap.add_argument("--n", type=int, default=1000, help="candidates per set")
     ap.add_argument("--timeout", type=float, default=30.0, help="s to wait for each answer")
     args = ap.parse_args()
-    import random
-
     import rclpy
     from rclpy.serialization import serialize_message
     from grasp_orient.msg import GraspCandidateSet, GripRecommendationSet
 
+    C = B.C
     rclpy.init()
     peer = C.Peer("sets_in_succession")
     ns = args.namespace.rstrip("/")
     try:
         pub = peer.node.create_publisher(GraspCandidateSet, f"{ns}/grasp_candidate_sets", C.reliable_qos(10))
-        arrivals: list[float] = []
-        sub = peer.node.create_subscription(GripRecommendationSet, f"{ns}/grip_recommendation_sets",
-                                            lambda raw: arrivals.append(time.monotonic()), C.reliable_qos(10),
-                                            raw=True)
-        if not peer.spin_until(lambda: pub.get_subscription_count() > 0 and sub.get_publisher_count() > 0, 15):
+        raw = B.Raw(peer, GripRecommendationSet, f"{ns}/grip_recommendation_sets")
+        if not peer.spin_until(lambda: pub.get_subscription_count() > 0 and raw.sub.get_publisher_count() > 0, 15):
             print(json.dumps({"error": "no match on the set topics"}))
             return 1
-        rng = random.Random(120624)
-        msg = GraspCandidateSet()
-        msg.id = "succession"
-        msg.candidates = [C.candidate_msg(C.random_grasp(rng, f"succession-{k}")) for k in range(args.n)]
-        raw = serialize_message(msg)
-        trips: list[float] = []
-        for k in range(args.sets):
-            t0 = time.monotonic()
-            pub.publish(raw)
-            if not peer.spin_until(lambda: len(arrivals) > k, args.timeout):
-                break
-            trips.append(arrivals[k] - t0)
-        print(json.dumps({"bytes": len(raw), "trips_s": trips}))
+        msg = serialize_message(B.set_message(B.candidates(args.n, 120624, "succession"), "succession"))
+        # Raises, naming the set, when one is not answered within the timeout.
+        trips = B.round_trips(peer, lambda: pub.publish(msg), raw, args.sets, 0, timeout=args.timeout)
+        print(json.dumps({"bytes": len(msg), "trips_s": trips}))
         return 0
     finally:
         peer.destroy()
