@@ -18,9 +18,10 @@
 # to PyPI on the first run.
 set -euo pipefail
 
-log() { printf '[colcon-setup] %s\n' "$*" >&2; }
-die() { printf '[colcon-setup] ERROR: %s\n' "$*" >&2; exit 1; }
-trap 'rc=$?; printf "[colcon-setup] ERROR: command failed (exit %s) at %s line %s: %s\n" "$rc" "${BASH_SOURCE[0]}" "$LINENO" "$BASH_COMMAND" >&2' ERR
+# log (on stderr), die, the ERR trap, setup_lock, run_logged
+# shellcheck source=SCRIPTDIR/../setup-lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/../setup-lib.sh"
+setup_init colcon-setup stderr
 
 SCRIPT_DIR="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 REQUIREMENTS="$SCRIPT_DIR/requirements.txt"
@@ -51,21 +52,9 @@ STAMP="$VENV/.grasp_orient_colcon.sha256"
 COLCON="$VENV/bin/colcon"
 mkdir -p "$DIR"
 
-if command -v flock >/dev/null 2>&1; then
-    exec 9>"$DIR/.lock"
-    flock 9 || die "cannot lock $DIR/.lock"
-fi
-
-# run_logged NAME CMD...: run CMD with output in $DIR/NAME.log; on failure show its tail on stderr.
-run_logged() {
-    local name="$1"; shift
-    local logf="$DIR/$name.log"
-    if ! "$@" >"$logf" 2>&1; then
-        printf '[colcon-setup] ERROR: %s failed; last lines of %s:\n' "$name" "$logf" >&2
-        tail -n 40 "$logf" >&2
-        exit 1
-    fi
-}
+# One setup at a time per colcon-<hash>/ (parallel CI jobs sharing the cache).
+setup_lock "$DIR/.lock"
+setup_logs "$DIR" 40   # run_logged NAME CMD...: output in $DIR/NAME.log, its last 40 lines on stderr on failure
 
 if [ -x "$COLCON" ] && [ -f "$STAMP" ] && [ "$(cat "$STAMP")" = "$HASH" ]; then
     log "colcon up to date: $VENV"

@@ -17,9 +17,10 @@
 # Node.js 18.20.4; it installs and decode.mjs prints the same messages there as on Node.js 20 (checked).
 set -euo pipefail
 
-log() { printf '[foxglove-setup] %s\n' "$*" >&2; }
-die() { printf '[foxglove-setup] ERROR: %s\n' "$*" >&2; exit 1; }
-trap 'rc=$?; printf "[foxglove-setup] ERROR: command failed (exit %s) at %s line %s: %s\n" "$rc" "${BASH_SOURCE[0]}" "$LINENO" "$BASH_COMMAND" >&2' ERR
+# log (on stderr), die, the ERR trap, setup_lock, run_logged, apt_install_missing
+# shellcheck source=SCRIPTDIR/../setup-lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/../setup-lib.sh"
+setup_init foxglove-setup stderr
 
 SCRIPT_DIR="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 CACHE="${GRASP_ORIENT_FOXGLOVE_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/grasp_orient}"
@@ -32,23 +33,10 @@ mkdir -p "$CACHE"
 CACHE="$(cd "$CACHE" && pwd)"
 LOGS="$CACHE/foxglove-logs"
 mkdir -p "$LOGS"
+setup_logs "$LOGS"   # run_logged NAME CMD...: output in $LOGS/NAME.log, its last 60 lines on stderr on failure
 
 # One setup at a time per cache (parallel CI jobs sharing it).
-if command -v flock >/dev/null 2>&1; then
-    exec 9>"$CACHE/.foxglove.lock"
-    flock 9 || die "cannot lock $CACHE/.foxglove.lock"
-fi
-
-# run_logged NAME CMD...: run CMD with output in $LOGS/NAME.log; on failure show its tail on stderr.
-run_logged() {
-    local name="$1"; shift
-    local logf="$LOGS/$name.log"
-    if ! "$@" >"$logf" 2>&1; then
-        printf '[foxglove-setup] ERROR: %s failed; last lines of %s:\n' "$name" "$logf" >&2
-        tail -n 60 "$logf" >&2
-        exit 1
-    fi
-}
+setup_lock "$CACHE/.foxglove.lock"
 
 # ---------------------------------------------------------------------------------------------------
 # 1. Node.js and npm from Debian (only when missing)
@@ -56,20 +44,9 @@ run_logged() {
 APT_PKGS=()
 command -v node >/dev/null 2>&1 || APT_PKGS+=(nodejs)
 command -v npm >/dev/null 2>&1 || APT_PKGS+=(npm)
-if [ "${#APT_PKGS[@]}" -gt 0 ]; then
-    [ -f /etc/ssl/certs/ca-certificates.crt ] || APT_PKGS+=(ca-certificates)
-    command -v apt-get >/dev/null 2>&1 \
-        || die "missing ${APT_PKGS[*]} and no apt-get to install them (install Node.js >= 18 and npm)"
-    SUDO=()
-    if [ "$(id -u)" -ne 0 ]; then
-        command -v sudo >/dev/null 2>&1 || die "need root (or sudo) to apt-get install ${APT_PKGS[*]}"
-        SUDO=(sudo)
-    fi
-    log "apt-get install ${APT_PKGS[*]}"
-    export DEBIAN_FRONTEND=noninteractive
-    run_logged apt-get-update "${SUDO[@]}" apt-get update
-    run_logged apt-get-install "${SUDO[@]}" apt-get install -y "${APT_PKGS[@]}"
-fi
+# nothing when none is missing; else (and ca-certificates when there is no CA bundle: npm needs one for https)
+# apt-get update, apt-get install -y, with sudo when not root
+apt_install_missing "install Node.js >= 18 and npm" "${APT_PKGS[@]}"
 command -v node >/dev/null 2>&1 || die "'node' still missing after apt-get install nodejs"
 command -v npm >/dev/null 2>&1 || die "'npm' still missing after apt-get install npm"
 NODE_MAJOR="$(node -p 'process.versions.node.split(".")[0]')" || die "'node' does not run"

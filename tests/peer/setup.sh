@@ -15,9 +15,10 @@
 # headers), network access to PyPI (and to the Debian mirror when packages are missing).
 set -euo pipefail
 
-log() { printf '[peer-setup] %s\n' "$*"; }
-die() { printf '[peer-setup] ERROR: %s\n' "$*" >&2; exit 1; }
-trap 'rc=$?; printf "[peer-setup] ERROR: command failed (exit %s) at %s line %s: %s\n" "$rc" "${BASH_SOURCE[0]}" "$LINENO" "$BASH_COMMAND" >&2' ERR
+# log (on stdout here), die, the ERR trap, setup_lock, run_logged, apt_install_missing
+# shellcheck source=SCRIPTDIR/../setup-lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/../setup-lib.sh"
+setup_init peer-setup stdout
 
 SCRIPT_DIR="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 REPO_ROOT="$(cd "$SCRIPT_DIR/../.." && pwd)"
@@ -37,23 +38,10 @@ VENV="$PEER_DIR/venv"
 # branches and clones with different messages can share the venv without rebuilding each other's.
 LOGS="$PEER_DIR/logs"
 mkdir -p "$LOGS"
+setup_logs "$LOGS"   # run_logged NAME CMD...: output in $LOGS/NAME.log, its last 60 lines on stderr on failure
 
 # One setup at a time per peer dir (parallel CI jobs sharing a cache).
-if command -v flock >/dev/null 2>&1; then
-    exec 9>"$PEER_DIR/.lock"
-    flock 9 || die "cannot lock $PEER_DIR/.lock"
-fi
-
-# run_logged NAME CMD...: run CMD with output in $LOGS/NAME.log; on failure show its tail on stderr.
-run_logged() {
-    local name="$1"; shift
-    local logf="$LOGS/$name.log"
-    if ! "$@" >"$logf" 2>&1; then
-        printf '[peer-setup] ERROR: %s failed; last lines of %s:\n' "$name" "$logf" >&2
-        tail -n 60 "$logf" >&2
-        exit 1
-    fi
-}
+setup_lock "$PEER_DIR/.lock"
 
 # ---------------------------------------------------------------------------------------------------
 # 1. Debian packages (only when missing)
@@ -88,21 +76,10 @@ else
         || APT_PKGS+=(python3.11-dev)
 fi
 
-if [ "${#APT_PKGS[@]}" -gt 0 ]; then
-    # pip itself needs a CA bundle for https (minimal images may lack it)
-    [ -f /etc/ssl/certs/ca-certificates.crt ] || APT_PKGS+=(ca-certificates)
-    command -v apt-get >/dev/null 2>&1 \
-        || die "missing ${APT_PKGS[*]} and no apt-get to install them (install a C/C++ compiler, make, CPython 3.11 with venv and headers)"
-    SUDO=()
-    if [ "$(id -u)" -ne 0 ]; then
-        command -v sudo >/dev/null 2>&1 || die "need root (or sudo) to apt-get install ${APT_PKGS[*]}"
-        SUDO=(sudo)
-    fi
-    log "apt-get install ${APT_PKGS[*]}"
-    export DEBIAN_FRONTEND=noninteractive
-    run_logged apt-get-update "${SUDO[@]}" apt-get update
-    run_logged apt-get-install "${SUDO[@]}" apt-get install -y --no-install-recommends "${APT_PKGS[@]}"
-fi
+# nothing when none is missing; else (and ca-certificates when there is no CA bundle: pip needs one for https)
+# apt-get update, apt-get install -y --no-install-recommends, with sudo when not root
+apt_install_missing --no-install-recommends "install a C/C++ compiler, make, CPython 3.11 with venv and headers" \
+    "${APT_PKGS[@]}"
 
 [ -n "$BASE_PY" ] || BASE_PY="$(find_python)" || die "no CPython 3.11 found even after apt-get install"
 BASE_PY="$("$BASE_PY" -c 'import os, sys; print(os.path.realpath(sys.executable))')"

@@ -21,7 +21,9 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 for var in ("FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_DEFAULT_PROFILES_FILE"):
     os.environ[var] = str(HERE / "fastdds_large_buffers.xml")
-sys.path.insert(0, str(HERE))
+REPO_ROOT = HERE.parent.parent
+# benches/bench_sets.py puts tests/ros (conftest) on sys.path itself.
+sys.path.insert(0, str(REPO_ROOT / "benches"))
 
 import bench_sets as B  # noqa: E402  (its set, raw subscription and round trips; conftest's domain)
 

@@ -3,7 +3,7 @@
 
     source "$(bash tests/peer/setup.sh | tail -n1)"
     cargo build --release     # or debug; pick the binary with --bin / GRASP_ORIENT_BIN
-    python tests/ros/bench_node.py --bin target/release/grasp_orient [--rates 1000,10000,20000] [--json out.json]
+    python benches/bench_node.py --bin target/release/grasp_orient [--rates 1000,10000,20000] [--json out.json]
 
 In one run, for each of
     echo   `grasp_orient node --echo`: answers every candidate with an empty GripRecommendation (same header and
@@ -45,7 +45,9 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
+# The pytest suite's helpers live in tests/ros: conftest (node, domain, messages) and rcl_peer.
+ROS_TESTS = HERE.parent / "tests" / "ros"
+sys.path.insert(0, str(ROS_TESTS))
 
 # conftest sets ROS_DOMAIN_ID (GRASP_ORIENT_TEST_DOMAIN_ID or 1 + pid % 100) and localhost discovery before rclpy.
 import conftest as C  # noqa: E402
@@ -319,7 +321,7 @@ def run(args) -> int:
         log(f"[bench] #{rep} rclpy->rclpy burst {r['per_s']:.0f}/s, lost {r['lost']}")
         for name, extra in variants:
             # (c) starts a fresh node for every rate: in one node, each publisher/collector pair that has come
-            # and gone leaves the next run a higher p99 lag (see the README), which would mix the rates up.
+            # and gone leaves the next run a higher p99 lag (docs/performance.md, "Known limit: peers that leave"), which would mix the rates up.
             for phase in ["latency+windowed", "burst", *(f"offered{rate}" for rate in args.rates)]:
                 ns = f"/bench_{name}_{phase.split('+')[0]}_{rep}"
                 ros_args = ["-r", f"__ns:={ns}"]

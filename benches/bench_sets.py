@@ -3,7 +3,7 @@
 
     source "$(bash tests/peer/setup.sh | tail -n1)"
     cargo build --release
-    python tests/ros/bench_sets.py --bin target/release/grasp_orient [--n 1000] [--sets 60] [--singles 300]
+    python benches/bench_sets.py --bin target/release/grasp_orient [--n 1000] [--sets 60] [--singles 300]
 
 (a) A set of --n candidates published on grasp_candidate_sets and its answer received on
     grip_recommendation_sets, one set at a time: min, p50 and p99 of the round trip, for `grasp_orient node` and for
@@ -42,12 +42,14 @@ import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))
+# The pytest suite's helpers live in tests/ros: conftest (node, domain, messages) and the Fast DDS profile.
+ROS_TESTS = HERE.parent / "tests" / "ros"
+sys.path.insert(0, str(ROS_TESTS))
 
 if "--large-buffers" in sys.argv:
     # Before rclpy loads Fast DDS, which reads its profiles file when it starts (2.x: FASTRTPS_, 3.x: FASTDDS_).
     for var in ("FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_DEFAULT_PROFILES_FILE"):
-        os.environ[var] = str(HERE / "fastdds_large_buffers.xml")
+        os.environ[var] = str(ROS_TESTS / "fastdds_large_buffers.xml")
 
 import conftest as C  # noqa: E402  (sets ROS_DOMAIN_ID and localhost discovery before rclpy)
 
