@@ -1,12 +1,13 @@
 //! The exact solver against a numerical baseline, on the same grasps, in one process:
 //! the baseline scans the gravity angle at 1e-3 rad over the from-above range and solves the
 //! 2-norm problem at each angle as a second-order cone program with Clarabel. Both are scored
-//! against the independent reference of `tests/common` (dense scan with analytic slopes,
+//! against the independent reference of `tests/it/util` (dense scan with analytic slopes,
 //! bisected to rounding). Prints ns per grasp, errors, and the ratios.
 //!
 //! `cargo bench --bench compare` (add `-- N` for N baseline grasps; default 40).
 
-#[path = "../tests/common/mod.rs"]
+#[path = "../tests/it/util/mod.rs"]
+#[allow(dead_code, unused_imports)] // a benchmark uses a part of the tests' helpers
 mod common;
 
 use clarabel::algebra::CscMatrix;

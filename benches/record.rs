@@ -5,10 +5,12 @@
 //!
 //! `cargo bench --bench record` (add `-- N` for another bag size).
 
-#[path = "../tests/common/mod.rs"]
+#[path = "../tests/it/util/mod.rs"]
+#[allow(dead_code, unused_imports)] // a benchmark uses a part of the tests' helpers
 mod common;
 
-use grasp_orient::msg::{answer, GraspCandidate, Header, Point, Time, Vector3};
+use grasp_orient::answer::answer;
+use grasp_orient::msg::{GraspCandidate, Header, Point, Time, Vector3};
 use grasp_orient::record::{bag, BagWriter, Entry, Payload, Recorder, Topics};
 use grasp_orient::replay::{replay, Plan};
 use grasp_orient::solver::Settings;

@@ -1,17 +1,18 @@
-//! The robust planar solve (a box around the centre of mass plus a mass tolerance, issue 13)
+//! The robust planar solve (a box around the centre of mass plus a mass tolerance)
 //! against today's nominal solve, on the same grasps, in one process. Prints ns per grasp for
 //! both and their ratio, per objective and range. Target: the robust solve within 10× the
 //! nominal one.
 //!
 //! `cargo bench --bench robust`
 //!
-//! The grasps are random force-closure grasps (`tests/common`) with box half-widths between 5 %
+//! The grasps are random force-closure grasps (`tests/it/util`) with box half-widths between 5 %
 //! and 30 % of the contact distance along both axes and a mass tolerance between 5 % and 50 %.
 //! Only those whose robust answer is a recommendation are timed (the full path: every vertex
 //! analysed, the envelope walked, the answer evaluated); the share refused because the box
 //! reaches across the contact line, which answer sooner, is printed too.
 
-#[path = "../tests/common/mod.rs"]
+#[path = "../tests/it/util/mod.rs"]
+#[allow(dead_code, unused_imports)] // a benchmark uses a part of the tests' helpers
 mod common;
 
 use common::random_grasp;

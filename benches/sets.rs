@@ -9,22 +9,23 @@
 //! threads that the calling thread waits on (the node's pool before 2026-12-01, night); and the
 //! set on one thread and on the pool right after the process idled 0, 2 and 10 ms, as a node's
 //! sets come, which on a virtual machine whose cores slow down when idle is slower, and gains
-//! little from the second core (README, "Speed").
+//! little from the second core (`docs/performance.md`).
 //!
 //! The allocator is the binary's (mimalloc, `src/main.rs`): with glibc's, keeping 1,000 answers
 //! cost 1.2 times the singles (1.39 ms against 1.67 ms), with mimalloc nothing measurable.
 //!
 //! `cargo bench --bench sets` (add `-- N` for sets of N candidates; default 1000).
 
-#[path = "../tests/common/mod.rs"]
+#[path = "../tests/it/util/mod.rs"]
+#[allow(dead_code, unused_imports)] // a benchmark uses a part of the tests' helpers
 mod common;
 
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 use common::random_grasp;
+use grasp_orient::answer::{answer_one, answer_set, answer_set_on, Rules};
 use grasp_orient::msg::{GraspCandidate, GraspCandidateSet, Point, Vector3};
-use grasp_orient::sets::{answer_one, answer_set, answer_set_on, Rules};
 use grasp_orient::solver::Settings;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -129,7 +130,7 @@ fn main() {
         .num_threads(cores)
         .build()
         .ok();
-    let node_pool = grasp_orient::sets::solver_pool(cores).ok();
+    let node_pool = grasp_orient::answer::solver_pool(cores).ok();
     let pooled = node_pool.as_ref().map(|pool| {
         let time = |pool: &rayon::ThreadPool| {
             let t = Instant::now();
@@ -157,7 +158,7 @@ fn main() {
             .collect()
     });
     let ranking = median_secs(runs, || {
-        black_box(grasp_orient::sets::rank(
+        black_box(grasp_orient::answer::rank(
             black_box(&answers.recommendations),
             &rules,
         ));
@@ -226,7 +227,7 @@ struct Idled {
 /// A set answered `rounds` times on this thread and on `pool`, each right after this process
 /// slept `idle_ms` (0: back to back). A node idles between the sets it is sent; on a virtual
 /// machine whose cores slow down when idle, this shows how much slower a set is then, and how
-/// little a second core helps within the millisecond the set takes (README, "Speed").
+/// little a second core helps within the millisecond the set takes (`docs/performance.md`).
 fn after_idle(
     set: &GraspCandidateSet,
     settings: &Settings,

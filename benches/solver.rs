@@ -1,6 +1,7 @@
 //! Criterion benchmark of the exact solver on a fixed set of random force-closure grasps.
 
-#[path = "../tests/common/mod.rs"]
+#[path = "../tests/it/util/mod.rs"]
+#[allow(dead_code, unused_imports)] // a benchmark uses a part of the tests' helpers
 mod common;
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};

@@ -8,7 +8,8 @@
 //!
 //! `cargo bench --bench spatial`
 
-#[path = "../tests/common/mod.rs"]
+#[path = "../tests/it/util/mod.rs"]
+#[allow(dead_code, unused_imports)] // a benchmark uses a part of the tests' helpers
 mod common;
 
 use common::random_grasp;

@@ -1,4 +1,4 @@
-//! The README's worked example of issue 13: a bottle whose centre of mass is known to ±2 cm.
+//! The worked example of `docs/uncertainty.md`: a bottle whose centre of mass is known to ±2 cm.
 //!
 //! `cargo run --example robust_bottle`
 

@@ -3,8 +3,8 @@
 //! UTF-8, not JSON or not a candidate gets status 2 with its line number, and the lines after it
 //! are answered as usual. Memory is bounded by the longest line.
 
+use crate::answer::{answer_one, Rules};
 use crate::msg::{invalid, GraspCandidate, GripRecommendation};
-use crate::sets::{answer_one, Rules};
 use crate::solver::Settings;
 use std::io::{BufRead, Read, Write};
 

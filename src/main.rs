@@ -2,10 +2,14 @@
 //! exit code.
 
 mod cli;
+mod node;
+
+// The library's layers, under the names the node and the commands use (`crate::msg`, ...).
+use grasp_orient::{answer, config, msg, record, solver};
 
 use clap::{Parser, Subcommand};
-use grasp_orient::node::ros_args::{LogLevel, RosArgs};
 use log::LevelFilter;
+use node::ros_args::{LogLevel, RosArgs};
 use std::process::ExitCode;
 
 /// mimalloc, not the system allocator: a set's answers are kept until it is published, and with

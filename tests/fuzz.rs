@@ -34,14 +34,14 @@
 //! FILE before running it, to keep the one that aborted.
 
 use cap::Cap;
+use grasp_orient::answer::{answer, answer_in_full};
+use grasp_orient::answer::{answer_set, Rules};
 use grasp_orient::jsonl::answer_lines;
 use grasp_orient::msg::{
-    answer, answer_in_full, cdr, GraspCandidate, GraspCandidateSet, GripRecommendation,
-    GripRecommendationSet, MarkerArray,
+    cdr, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet, MarkerArray,
 };
 use grasp_orient::record::scan::decompressed_limit;
 use grasp_orient::record::{bag, recover, BagWriter, Entry, Payload, SetTopics, Topics};
-use grasp_orient::sets::{answer_set, Rules};
 use grasp_orient::solver::Settings;
 use proptest::prelude::*;
 use proptest::sample::Index;
@@ -279,7 +279,7 @@ fn markers() -> Vec<MarkerArray> {
         .iter()
         .map(|c| {
             let full = answer_in_full(c, &Settings::default());
-            grasp_orient::node::markers::build(c, &full.reply, full.spatial.as_deref())
+            grasp_orient::answer::markers::build(c, &full.reply, full.spatial.as_deref())
         })
         .collect()
 }
@@ -341,11 +341,9 @@ fn mcap_seeds() -> Vec<Vec<u8>> {
     seeds
 }
 
-/// The decompression bomb, shared with the reader's unit tests.
-mod bomb {
-    use grasp_orient::record::scan::{op, MAGIC};
-    include!("common/zstd_bomb.rs");
-}
+/// The decompression bomb, shared with the reader's tests.
+#[path = "it/util/zstd_bomb.rs"]
+mod bomb;
 use bomb::zstd_bomb;
 
 fn json_seeds() -> Vec<Vec<u8>> {
@@ -463,7 +461,7 @@ fn answer_target() -> Target {
                 let full = answer_in_full(&c, &Settings::default());
                 prop_assert!(full.reply.status <= 2, "{}", full.reply.message);
                 if full.reply.status == GripRecommendation::STATUS_OK {
-                    let m = grasp_orient::node::markers::build(
+                    let m = grasp_orient::answer::markers::build(
                         &c,
                         &full.reply,
                         full.spatial.as_deref(),

@@ -24,10 +24,13 @@ echo "== colcon (for the workspace build in tests/ros/test_colcon.py)"
 GRASP_ORIENT_COLCON=$(bash tests/colcon/setup.sh | tail -n 1)
 export GRASP_ORIENT_COLCON
 echo "== cargo test (clippy above already compiled the benches)"
-# tests/msg_contract.rs holds the embedded message definitions to the peer's Jazzy .msg files,
-# found through the ament index as rosbag2 finds them.
+cargo test
+echo "== the message contract against the peer's Jazzy .msg files (cargo test --test it peer_ -- --ignored)"
+# tests/it/msg_contract.rs holds the embedded message definitions to the peer's Jazzy .msg files,
+# found through the ament index as rosbag2 finds them; plain `cargo test` lists these as ignored.
 # shellcheck disable=SC1090
-AMENT_PREFIX_PATH=$(source "$ENV_SH" && printf '%s' "$AMENT_PREFIX_PATH") cargo test
+AMENT_PREFIX_PATH=$(source "$ENV_SH" && printf '%s' "$AMENT_PREFIX_PATH") \
+    cargo test --test it peer_ -- --ignored
 # The node under test is the binary `cargo test` built, copied aside: tests/ros/test_colcon.py
 # builds the repository in a colcon workspace with cargo in the same target folder (test profile,
 # so only the crate compiles), which relinks target/debug/grasp_orient with other features.

@@ -9,10 +9,10 @@ pub mod replay;
 pub mod solve;
 
 use anyhow::bail;
+use grasp_orient::answer::{GripperDrive, Rules};
 use grasp_orient::config::declare::Setting;
 use grasp_orient::config::{bounds, params_in_file, Config, Domain, Parameter, RangeKind};
 use grasp_orient::replay::Override;
-use grasp_orient::sets::{GripperDrive, Rules};
 use grasp_orient::solver::{AllowedRange, Objective, Settings};
 use serde_yaml_ng::Value;
 use std::path::PathBuf;

@@ -1,7 +1,7 @@
 //! `grasp_orient node [--demo] [--echo] [--ros-args ...]`: the ROS 2 node.
 
+use crate::node::{self, Options};
 use grasp_orient::config::render;
-use grasp_orient::node::{self, Options};
 
 /// Arguments of `node` (ROS arguments come separately, after `--ros-args`).
 #[derive(Debug, Clone, Default, clap::Args)]

@@ -1,10 +1,10 @@
 //! `grasp_orient play BAG`: republishes recorded candidates to the live graph at the recorded
 //! pace (or `--rate` times it), like `ros2 bag play`.
 
+use crate::node::play::{publish, Pace};
+use crate::node::session::Start;
 use anyhow::bail;
 use grasp_orient::config::declare::Real;
-use grasp_orient::node::play::{publish, Pace};
-use grasp_orient::node::session::Start;
 use grasp_orient::record::bag;
 use ros2_client::NodeOptions;
 use std::io::Write;

@@ -3,10 +3,10 @@
 
 use super::SolveOptions;
 use anyhow::{bail, Context};
+use grasp_orient::answer::{answer_set, RankBy, Rules};
 use grasp_orient::msg::{
     invalid, short_id, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
 };
-use grasp_orient::sets::{answer_set, RankBy, Rules};
 use std::fmt::Write as _;
 use std::io::{BufRead, BufReader, Write};
 use std::path::PathBuf;

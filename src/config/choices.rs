@@ -1,14 +1,14 @@
 //! The settings that take one of a few names, each as a type that parses ([`FromStr`]) and prints
-//! ([`Display`]) itself. The solver's [`Objective`] gets its text form here, so that the solver
-//! stays free of parsing; its names are the solver's own ([`Objective::name`]).
+//! ([`Display`]) itself. The solver's [`Objective`] has its text form in the solver crate
+//! ([`Objective::name`], [`Objective::NAMES`]).
 
-use crate::sets::{GripperDrive, RankBy};
+use crate::answer::{GripperDrive, RankBy};
 use crate::solver::{AllowedRange, Objective};
 use std::fmt::{self, Display};
 use std::str::FromStr;
 
 /// A setting whose value is one of a fixed list of names.
-pub trait Choice: Copy + FromStr<Err = UnknownName> + Display + 'static {
+pub trait Choice: Copy + FromStr<Err: Display> + Display + 'static {
     /// Every name, in the order the documentation lists them.
     const NAMES: &'static [&'static str];
 }
@@ -34,21 +34,7 @@ impl UnknownName {
 }
 
 impl Choice for Objective {
-    const NAMES: &'static [&'static str] = &["norm2", "norm1", "internal_force"];
-}
-
-impl FromStr for Objective {
-    type Err = UnknownName;
-
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        Objective::from_name(s).ok_or_else(|| UnknownName::new::<Self>(s))
-    }
-}
-
-impl Display for Objective {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
+    const NAMES: &'static [&'static str] = &Objective::NAMES;
 }
 
 /// Which gravity angles the recommendation may take (the `range` parameter); with `Bounds`, the

@@ -235,8 +235,8 @@ impl<T: Choice> Setting for T {
     const DOMAIN: Domain = Domain::Choices(T::NAMES);
     fn from_yaml(value: Value) -> Result<Self, String> {
         from_serde::<String>(value)?
-            .parse()
-            .map_err(|e: super::choices::UnknownName| e.to_string())
+            .parse::<T>()
+            .map_err(|e| e.to_string())
     }
     fn to_yaml(&self) -> Value {
         Value::String(self.to_string())

@@ -12,7 +12,7 @@ pub use choices::{bounds, Choice, InvalidBounds, RangeKind, UnknownName};
 pub use declare::{Domain, Parameter, RosType};
 pub use params::{Config, PARAMETERS};
 
-use crate::sets::Rules;
+use crate::answer::Rules;
 use crate::solver::Settings;
 use std::path::Path;
 
@@ -257,7 +257,7 @@ impl Config {
             max_grip_force: self.max_grip_force,
             rank_by: self.rank_by,
             max_set_size: usize::try_from(self.max_set_size).unwrap_or(1),
-            tolerances: crate::sets::DefaultTolerances {
+            tolerances: crate::answer::DefaultTolerances {
                 center_of_mass: self.center_of_mass_tolerance,
                 mass: self.mass_tolerance,
             },
@@ -385,7 +385,7 @@ mod tests {
 
     #[test]
     fn gripper_and_set_parameters_are_checked_and_give_the_rules() {
-        use crate::sets::{GripperDrive, RankBy, Rules};
+        use crate::answer::{GripperDrive, RankBy, Rules};
         let c = Config::default();
         assert_eq!(c.rules(), Rules::default());
         let mut c = Config::default();
@@ -405,7 +405,7 @@ mod tests {
                 max_grip_force: 40.0,
                 rank_by: RankBy::Objective,
                 max_set_size: 7,
-                tolerances: crate::sets::DefaultTolerances {
+                tolerances: crate::answer::DefaultTolerances {
                     center_of_mass: [0.01, 0.02, 0.0],
                     mass: 0.1,
                 },

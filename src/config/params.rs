@@ -2,15 +2,15 @@
 //! line, the name, the type, the default, the unit and, where narrower than the type's, the
 //! domain; `(fixed)` marks what cannot change while the node runs. From this table come
 //! [`Config`], the params file `config/grasp_orient.yaml`, the node's `--help`, the ROS parameter
-//! descriptors and the README's parameter table.
+//! descriptors and the parameter table of `docs/node.md`.
 //!
 //! To add a parameter: add its doc comment and its line here, run
-//! `GRASP_ORIENT_REGENERATE=1 cargo test --lib config` to rewrite the params file and the README
-//! table, and use the new field.
+//! `GRASP_ORIENT_REGENERATE=1 cargo test --lib config` to rewrite the params file and the table
+//! in `docs/node.md`, and use the new field.
 
 use super::choices::RangeKind;
 use super::declare::{parameters, Domain};
-use crate::sets::{GripperDrive, RankBy, DEFAULT_MAX_SET_SIZE};
+use crate::answer::{GripperDrive, RankBy, DEFAULT_MAX_SET_SIZE};
 use crate::solver::{Objective, MAX_COORDINATE, MAX_SAFETY_FACTOR};
 use std::f64::consts::PI;
 
@@ -62,7 +62,7 @@ parameters! {
     solver_threads (fixed): i64 = 0, "threads", in Domain::Integer { min: 0, max: 1024 };
     /// Half-widths [x, y, z] of a box around each candidate's centre of mass, along its frame's
     /// axes, for a candidate whose own center_of_mass_tolerance is zero; the answer is the worst
-    /// case over every centre of mass in the box (README, "Uncertain mass and centre of mass").
+    /// case over every centre of mass in the box (docs/uncertainty.md).
     center_of_mass_tolerance: [f64; 3] = [0.0; 3], "m",
         in Domain::Real { min: 0.0, max: MAX_COORDINATE };
     /// The mass of a candidate whose own mass_tolerance is zero lies in mass ± this; the answer is

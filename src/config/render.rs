@@ -1,6 +1,6 @@
 //! What is written from the parameter table ([`PARAMETERS`]): the params file
-//! `config/grasp_orient.yaml`, the parameter list of `node --help`, and the README's table.
-//! Tests keep the shipped file and the README equal to what is generated here;
+//! `config/grasp_orient.yaml`, the parameter list of `node --help`, and the parameter table of
+//! `docs/node.md`. Tests keep the shipped file and that table equal to what is generated here;
 //! `GRASP_ORIENT_REGENERATE=1 cargo test --lib config` rewrites both.
 
 use super::{Config, Domain, Parameter, PARAMETERS};
@@ -106,7 +106,7 @@ pub fn help() -> String {
     out
 }
 
-/// The README's parameter table, in Markdown.
+/// The parameter table of `docs/node.md`, in Markdown.
 pub fn markdown_table() -> String {
     let mut out = String::from(
         "| parameter | type | default | unit | domain | what it does |\n|---|---|---|---|---|---|\n",
@@ -143,10 +143,10 @@ mod tests {
     use super::*;
     use std::path::Path;
 
-    /// The first line of the README's generated table, and the line after it.
-    const README_START: &str =
+    /// The first line of the generated table in `docs/node.md`, and the line after it.
+    const TABLE_START: &str =
         "<!-- parameters: generated from src/config/params.rs (GRASP_ORIENT_REGENERATE=1 cargo test --lib config) -->\n";
-    const README_END: &str = "<!-- end of parameters -->";
+    const TABLE_END: &str = "<!-- end of parameters -->";
 
     fn regenerate() -> bool {
         std::env::var("GRASP_ORIENT_REGENERATE").is_ok_and(|v| v == "1")
@@ -172,15 +172,17 @@ mod tests {
     }
 
     #[test]
-    fn readme_table_is_the_generated_one() {
-        let path = repo("README.md");
-        let text = std::fs::read_to_string(&path).expect("README.md");
-        let start =
-            text.find(README_START).expect("the README marks its table") + README_START.len();
+    fn node_doc_table_is_the_generated_one() {
+        let path = repo("docs/node.md");
+        let text = std::fs::read_to_string(&path).expect("docs/node.md");
+        let start = text
+            .find(TABLE_START)
+            .expect("docs/node.md marks its table")
+            + TABLE_START.len();
         let end = start
             + text[start..]
-                .find(README_END)
-                .expect("the README ends its table");
+                .find(TABLE_END)
+                .expect("docs/node.md ends its table");
         let generated = markdown_table();
         if regenerate() && text[start..end] != generated {
             let new = format!("{}{generated}{}", &text[..start], &text[end..]);
@@ -190,7 +192,7 @@ mod tests {
         assert_eq!(
             text[start..end],
             generated,
-            "README's parameter table differs from src/config/params.rs; rewrite it with \
+            "docs/node.md's parameter table differs from src/config/params.rs; rewrite it with \
              GRASP_ORIENT_REGENERATE=1 cargo test --lib config"
         );
     }

@@ -52,7 +52,7 @@ mod tests {
         let bytes = encode(&c).expect("encodes");
         assert_eq!(&bytes[..4], &HEADER_LE);
         assert_eq!(decode::<GraspCandidate>(&bytes).expect("decodes"), c);
-        let a = crate::msg::answer(&c, &crate::solver::Settings::default());
+        let a = crate::answer::answer(&c, &crate::solver::Settings::default());
         let back: GripRecommendation = decode(&encode(&a).expect("encodes")).expect("decodes");
         assert_eq!(back, a);
         assert!(decode::<GraspCandidate>(&[1, 2]).is_err());

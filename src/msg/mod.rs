@@ -3,20 +3,17 @@
 //! `.msg` texts ([`definitions`]).
 //!
 //! Each struct is declared through `ros_message!`, which also gives its ROS name and derives its
-//! ROS field list from the Rust field types, so `tests/msg_contract.rs` can check it against the
+//! ROS field list from the Rust field types, so `tests/it/msg_contract.rs` can check it against the
 //! `.msg` file.
 
 pub mod cdr;
 mod contract;
-mod convert;
+pub(crate) mod convert;
 pub mod definitions;
 pub mod schema;
 
 pub use contract::{message_type_name, RosMessage, RosType};
-pub use convert::{
-    answer, answer_in_full, clip, invalid, short_id, Answered, MessageLimits, MAX_TEXT_BYTES,
-    SHORT_ID_CHARS,
-};
+pub use convert::{clip, invalid, short_id, MessageLimits, MAX_TEXT_BYTES, SHORT_ID_CHARS};
 
 pub use compact_str::CompactString;
 use serde::{Deserialize, Serialize};
@@ -188,7 +185,7 @@ ros_message! {
         #[serde(default)]
         model: u8,
         /// Half-widths of a box around `center_of_mass` along the frame's axes, m, each >= 0;
-        /// zero: known exactly (issue 13).
+        /// zero: known exactly.
         #[serde(default)]
         center_of_mass_tolerance: Vector3,
         /// The mass lies in `mass ± mass_tolerance`, kg, in `[0, mass)`; zero: known exactly.
@@ -260,7 +257,7 @@ ros_message! {
         /// candidate, the smallest rotation's axis for a spatial one.
         #[serde(default)]
         rotation_axis: Vector3,
-        /// The nominal object's objective value at the recommended pose, N (issue 13; equal to
+        /// The nominal object's objective value at the recommended pose, N (equal to
         /// `gripping_power` when the candidate's tolerances are zero).
         #[serde(default)]
         gripping_power_nominal: f64,

@@ -537,15 +537,15 @@ impl Copy<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::answer::{answer_set, Rules};
     use crate::msg::{
         cdr, paper_cases, GraspCandidate, GraspCandidateSet, GripRecommendation,
         GripRecommendationSet, RosMessage, Vector3,
     };
-    use crate::sets::{answer_set, Rules};
     use crate::solver::Settings;
     use serde::Serialize;
 
-    /// `GripRecommendation` as it was before issue 12, field for field.
+    /// `GripRecommendation` as it was before the grip-force fields, field for field.
     #[derive(Debug, Clone, Serialize)]
     struct OldRecommendation {
         header: crate::msg::Header,
@@ -686,7 +686,7 @@ mod tests {
     fn an_older_recommendation_decodes_with_its_trailing_fields_at_zero() {
         let settings = Settings::default();
         for c in paper_cases() {
-            let now = crate::msg::answer(&c, &settings);
+            let now = crate::answer::answer(&c, &settings);
             let bytes = cdr::encode(&OldRecommendation::from(&now)).expect("encodes");
             assert!(
                 cdr::decode::<GripRecommendation>(&bytes).is_err(),
@@ -709,7 +709,7 @@ mod tests {
         }
     }
 
-    /// `GraspCandidate` as it was before issue 11 (no `model`), field for field.
+    /// `GraspCandidate` as it was before spatial candidates (no `model`), field for field.
     #[derive(Debug, Clone, Serialize)]
     struct OldCandidate {
         header: crate::msg::Header,
@@ -743,7 +743,7 @@ mod tests {
         }
     }
 
-    /// Candidates recorded before `model` existed (issue 11) decode as planar ones (`model` 0),
+    /// Candidates recorded before `model` existed decode as planar ones (`model` 0),
     /// alone and inside a set recorded then, where each candidate is one byte shorter.
     #[test]
     fn an_older_candidate_decodes_as_a_planar_one() {

@@ -3,17 +3,18 @@
 //! receives, publishes what [`Answerer::handle`] returns, and then hands it back to
 //! [`Answerer::record`]; unit tests drive it directly.
 
-use super::markers;
 use super::params::Shared;
 use super::params::Version;
+use crate::answer::markers;
+use crate::answer::{answer_in_full, Answered};
+use crate::answer::{answer_one_in_full, answer_set_on, echo_set, solver_pool, PARALLEL_FROM};
 use crate::msg::{
-    answer_in_full, short_id, Answered, GraspCandidate, GraspCandidateSet, GripRecommendation,
-    GripRecommendationSet, MarkerArray,
+    short_id, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
+    MarkerArray,
 };
 use crate::record::lifecycle::{Change, Recording, Wanted};
 use crate::record::settings::SettingsRecord;
 use crate::record::{Entry, OnStop, Payload, RecordError, Topics};
-use crate::sets::{answer_one_in_full, answer_set_on, echo_set, solver_pool, PARALLEL_FROM};
 use log::Level;
 use std::path::Path;
 
@@ -108,8 +109,8 @@ pub struct Answerer {
 /// set and solves its share of each (`sets::solver_pool`); none for 1, or when the system refuses
 /// them (then the node's own thread answers alone).
 /// While a set is solved the DDS threads have little to do (the set has arrived and its answer is
-/// not yet written): measured from rclpy on two cores by `tests/ros/bench_sets.py`, two solver
-/// threads answered a set of 1,000 sooner than one (README "Speed").
+/// not yet written): measured from rclpy on two cores by `benches/bench_sets.py`, two solver
+/// threads answered a set of 1,000 sooner than one (`docs/performance.md`).
 fn set_pool(threads: i64) -> Option<rayon::ThreadPool> {
     let threads = match usize::try_from(threads) {
         Ok(0) | Err(_) => std::thread::available_parallelism().map_or(1, |n| n.get()),
@@ -149,6 +150,7 @@ impl Answerer {
     }
 
     /// What has been done so far.
+    #[cfg(test)]
     pub fn counts(&self) -> Counts {
         self.counts
     }
@@ -542,7 +544,10 @@ mod tests {
     use crate::config::Config;
 
     fn paper_case_a() -> GraspCandidate {
-        crate::msg::paper_cases().remove(0)
+        let line = include_str!("../../examples/paper_cases.jsonl")
+            .lines()
+            .next();
+        serde_json::from_str(line.expect("a case")).expect("a GraspCandidate")
     }
 
     fn answerer(config: Config, echo: bool) -> Answerer {

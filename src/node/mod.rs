@@ -9,7 +9,7 @@
 
 pub mod answer;
 pub mod demo;
-pub mod markers;
+
 mod param_services;
 mod params;
 pub mod play;

@@ -41,7 +41,8 @@ pub enum LogLevel {
 }
 
 impl LogLevel {
-    /// The level names rcl accepts.
+    /// The level names rcl accepts (the tests parse each).
+    #[cfg(test)]
     pub const NAMES: [&'static str; 6] = ["debug", "info", "warn", "error", "fatal", "unset"];
 
     /// The Rust log filter it stands for; `None` for `unset`.

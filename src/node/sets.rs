@@ -154,7 +154,7 @@ pub async fn answer_call(
 /// `published in`: serializing the answer and handing it to DDS, and freeing it. `taken` also
 /// holds any wait behind the previous message's markers and recording, and is 0 when DDS gave
 /// no arrival time.
-/// `tests/ros/bench_sets.py` reads these lines.
+/// `benches/bench_sets.py` reads these lines.
 struct AnswerLine {
     /// The line up to the publishing time; none when debug lines are off.
     text: Option<String>,

@@ -466,7 +466,7 @@ mod tests {
         })
         .expect("settings");
         for (i, c) in crate::msg::paper_cases().into_iter().enumerate() {
-            let a = crate::msg::answer(&c, &crate::solver::Settings::default());
+            let a = crate::answer::answer(&c, &crate::solver::Settings::default());
             let t = 1_000 + i as u64;
             for payload in [
                 Payload::Candidate(Box::new(c.clone())),

@@ -13,9 +13,9 @@
 //! agrees to rounding may swap places.
 
 use super::{compare_one, key, objective_like, Key, Plan, Summary, TOLERANCE};
+use crate::answer::{answer_set, is_sorted_by, GripperDrive, RankBy, Rules};
 use crate::msg::{short_id, GraspCandidateSet, GripRecommendation, GripRecommendationSet};
 use crate::record::bag::{keep_example, Bag, Recorded};
-use crate::sets::{answer_set, is_sorted_by, GripperDrive, RankBy, Rules};
 use std::collections::{HashMap, VecDeque};
 
 /// For each recorded set, the index of its recorded answer (matched by id and header, in order),

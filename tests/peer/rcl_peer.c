@@ -2,7 +2,7 @@
  * grasp_orient_rcl_peer: a load generator and a collector for the node benchmark, written on rcl,
  * the C client library under rclpy and rclcpp, over rmw_fastrtps_cpp (Fast DDS): the same stack as a
  * ROS 2 Jazzy robot, without Python's cost per message, so that the peer is not what limits the
- * measurement on a small machine. Built by tests/peer/setup.sh; driven by tests/ros/bench_node.py.
+ * measurement on a small machine. Built by tests/peer/setup.sh; driven by benches/bench_node.py.
  *
  *   grasp_orient_rcl_peer pub TOPIC POOL RATE COUNT TAG DEPTH
  *       POOL: serialized GraspCandidate messages (CDR with encapsulation), each as a little-endian u32

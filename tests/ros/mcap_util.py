@@ -192,7 +192,7 @@ def jsonish(v: Any) -> Any:
 
 def as_message(candidate: dict) -> dict:
     """A candidate dict as a GraspCandidate holds it: `model` 0 (planar) where the dict has none, as a JSON line,
-    an older message or a recording made before issue 11 without the field means; the tolerances (issue 13) 0
+    an older message or a recording made before spatial candidates without the field means; the tolerances 0
     (known exactly) where it has none."""
     defaults = {"model": 0, "center_of_mass_tolerance": {"x": 0.0, "y": 0.0, "z": 0.0}, "mass_tolerance": 0.0}
     return {**defaults, **candidate}
@@ -445,7 +445,7 @@ def random_spatial_grasp(rng: random.Random, cid: str, kind: str, frame_id: str 
         along = ((p2[0] - p1[0]) / d, (p2[1] - p1[1]) / d)
         n2d = (_rot(along, u(-1.4, 1.4)), _rot((-along[0], -along[1]), u(-1.4, 1.4)))
         betas = [0.0, 0.0] if kind == "in_plane" else [u(-0.5, 0.5) * math.atan(m) for m in mu]
-        # The cone sliced by the plane: mu' = sqrt(mu^2 cos^2 b - sin^2 b) (README, "Spatial candidates").
+        # The cone sliced by the plane: mu' = sqrt(mu^2 cos^2 b - sin^2 b) (docs/theory.md, "A friction cone sliced by the plane").
         sliced = [math.sqrt(m * m * math.cos(b) ** 2 - math.sin(b) ** 2) for m, b in zip(mu, betas)]
         if not _cone_contains(p1, n2d[0], sliced[0], p2) or not _cone_contains(p2, n2d[1], sliced[1], p1):
             continue

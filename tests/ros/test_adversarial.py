@@ -1,5 +1,5 @@
 """The adversarial catalogue: everything odd that can reach the live node, one case each, and after every
-one a good candidate answered exactly as `grasp_orient solve` answers it (issue 9).
+one a good candidate answered exactly as `grasp_orient solve` answers it.
 
 - Candidates the solver refuses (the 15 kinds of test_node.py, and the sizes the contract refuses): status 2
   naming the field. Grasps at extreme but admitted magnitudes: status 0 without a NaN, as `solve` answers.

@@ -1,4 +1,4 @@
-"""Recordings decoded with Foxglove's own decoders, the code path of Foxglove's MCAP player (issue 8).
+"""Recordings decoded with Foxglove's own decoders, the code path of Foxglove's MCAP player.
 
 tests/foxglove/decode.mjs runs under Node.js with the npm packages that tests/foxglove/setup.sh installs
 (@mcap/core with @mcap/support's lz4 and zstd decompressors, @foxglove/rosmsg `parse(text, { ros2: true })`,
@@ -186,7 +186,7 @@ def test_golden_bag_decodes_with_foxglove(foxglove_dir, tmp_path, name):
 
 def _with_dependency_headers_as_pkg_msg_name(src: Path, dst: Path):
     """A copy of `src` whose schema texts name each dependency `pkg/msg/Name` ("MSG: std_msgs/msg/Header")
-    where the fields say `pkg/Name`: the form the node wrote before issue 8. Messages untouched."""
+    where the fields say `pkg/Name`: the form the node wrote before it followed rosbag2. Messages untouched."""
     from mcap.reader import make_reader
     from mcap.writer import CompressionType, Writer
 
@@ -218,7 +218,7 @@ def test_foxglove_check_fails_on_the_schema_text_of_issue_8(foxglove_dir, tmp_pa
     for c in s["channels"]:
         e = c["error"]
         assert e is not None and e["stage"] == "parse" and e["failures"] == c["messages"] == 4, c
-        # the error of issue 8, verbatim (the root's first field is `std_msgs/Header header`)
+        # Foxglove's error on the old schema text, verbatim (the root's first field is `std_msgs/Header header`)
         assert e["message"] == "Expected 1 top level type definition for 'std_msgs/Header' but found 0", e
     assert len(mu.read_mcap(bad)) == 8, "mcap_ros2 should still read the file: it accepts both forms"
 
@@ -256,7 +256,7 @@ def _live_candidates() -> list[dict]:
     frames = ["object", "world", "tool0", "camera_optical", "base_link"]
     rand = [mu.quantize(mu.random_grasp(rng, f"fox-random-{k}", frames[k % len(frames)],
                                         stamp=(now // 10**9, (now + k) % 10**9))) for k in range(20)]
-    # spatial candidates (issue 11): `model` 1 and a 3D rotation_axis, in every kind, for Foxglove to decode
+    # spatial candidates: `model` 1 and a 3D rotation_axis, in every kind, for Foxglove to decode
     spatial = [mu.quantize(mu.random_spatial_grasp(rng, f"fox-spatial-{k}", mu.SPATIAL_KINDS[k % 4],
                                                    frames[k % len(frames)])) for k in range(8)]
     return paper + rand + spatial + _refused_and_unclosed(paper[0])
@@ -317,7 +317,7 @@ def test_live_recording_with_markers_decodes_with_foxglove(foxglove_dir, rclpy_c
     for r in rc:
         if r.msg["id"] in sent:
             problems += [f"candidate {r.msg['id']}: {x}" for x in mu.differences(r.msg, mu.as_message(sent[r.msg["id"]]))[:4]]
-    # the fields of issue 11 are decoded, not defaulted: spatial candidates' model 1 and their 3D rotation axes
+    # the spatial fields are decoded, not defaulted: spatial candidates' model 1 and their 3D rotation axes
     spatial_ids = {c["id"] for c in cands if c.get("model") == 1}
     if sorted(r.msg["id"] for r in rc if r.msg.get("model") == 1) != sorted(spatial_ids):
         problems.append(f"Foxglove decoded model 1 on other candidates than the {len(spatial_ids)} spatial ones")

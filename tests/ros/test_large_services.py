@@ -2,8 +2,8 @@
 
 A reply that does not fit one datagram (about 1.3 kB here) goes out as RTPS DATA_FRAGs, and a service reply
 carries the request's identity as inline QoS. RustDDS 0.15.1 wrote that inline QoS with a stray byte in front,
-so no such reply ever reached an rclpy client, and in a debug build the node's DDS thread died on the way
-(issue 9). These tests drive the parameter services, which ros2-client answers like any other service, with
+so no such reply ever reached an rclpy client, and in a debug build the node's DDS thread died on the way.
+These tests drive the parameter services, which ros2-client answers like any other service, with
 requests and replies from 10 kB to 1 MB, and check that the same clients are answered afterwards.
 """
 from __future__ import annotations

@@ -234,8 +234,8 @@ def test_golden_bag_decodes_identically_with_rosbags_and_mcap(binary, name):
 
 def test_golden_schemas_are_rosbag2s_text():
     """The mcap_ros2-written bags carry exactly the text rosbag2 (Jazzy) would write for these types with the
-    .msg files of their time: today's files cut before the fields added since (issue 11's `model` and
-    `rotation_axis`, issue 12's grip forces, issue 13's tolerances and `gripping_power_nominal`)."""
+    .msg files of their time: today's files cut before the fields added since (the spatial candidates'
+    `model` and `rotation_axis`, the grip forces of sets, the tolerances and `gripping_power_nominal`)."""
     f = mu.mcap_facts(BAGS / "random_grasps.mcap")
     by_name = {s["name"]: s["data"] for s in f["schemas"].values()}
     for type_name, added in ((mu.CANDIDATE_TYPE, ["MODEL_PLANAR", "uint8 model", "mass_tolerance"]),
@@ -295,7 +295,7 @@ def test_golden_bag_recorded_by_the_node(binary):
                              f"{ns}/grip_recommendations": mu.RECOMMENDATION_TYPE,
                              f"{ns}/grip_markers": mu.MARKER_ARRAY_TYPE},
                       {mu.CANDIDATE_TYPE: CANDIDATE_DEPS, mu.RECOMMENDATION_TYPE: RECOMMENDATION_DEPS},
-                      older=True)  # recorded before issue 12's grip force fields
+                      older=True)  # recorded before the grip force fields
     recs = both_readers(path)
     spec = importlib.util.spec_from_file_location("record_node_bag", BAGS / "record_node_bag.py")
     script = importlib.util.module_from_spec(spec)

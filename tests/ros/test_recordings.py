@@ -1,4 +1,4 @@
-"""The node's recordings: nothing lost, shared or overwritten, settings carried along (issue 8). Each test
+"""The node's recordings: nothing lost, shared or overwritten, settings carried along. Each test
 runs its own node(s) in a namespace of its own on the session's domain, driven from rclpy:
 
 - two nodes in different namespaces started together with one record_dir write two files, each holding its

@@ -1,10 +1,10 @@
-"""Uncertain mass and centre of mass (issue 13) through the live node, from rclpy over Fast DDS:
+"""Uncertain mass and centre of mass through the live node, from rclpy over Fast DDS:
 
 - the trailing fields are in the messages: `center_of_mass_tolerance`, `mass_tolerance` on GraspCandidate,
   `gripping_power_nominal` on GripRecommendation;
 - random planar grasps with random tolerances (a box up to a fifth of the contact distance per axis, a mass
   tolerance up to 30 %): every answer equals what `grasp_orient solve` prints for the same JSON line, bit for
-  bit, worst cases never below the nominal object's; the README's bottle gives the README's numbers;
+  bit, worst cases never below the nominal object's; the bottle of docs/uncertainty.md gives its numbers;
 - the node's parameters `center_of_mass_tolerance` and `mass_tolerance` apply to candidates that give none,
   exactly as `solve --center-of-mass-tolerance X,Y,Z --mass-tolerance M`; a candidate's own wins; bad values
   are refused naming the parameter, keeping the old value;
@@ -112,7 +112,7 @@ def test_candidates_with_tolerances_equal_solve(client):
     assert held >= len(cands) // 2, f"only {held} of {len(cands)} toleranced grasps held: the test is too weak"
     b = answers["bottle"]
     assert b.status == 0, b.message
-    # The README's numbers (section "Uncertain mass and centre of mass").
+    # The numbers of docs/uncertainty.md, "Worked example".
     assert abs(math.degrees(b.wrist_rotation) - 8.88) < 0.01, math.degrees(b.wrist_rotation)
     assert abs(b.gripping_power - 19.773) < 1e-3 and abs(b.gripping_power_nominal - 14.332) < 1e-3, b
 

@@ -1,4 +1,4 @@
-"""Sets of candidates (issue 12) from a real rclpy peer over Fast DDS: the topic `grasp_candidate_sets` ->
+"""Sets of candidates from a real rclpy peer over Fast DDS: the topic `grasp_candidate_sets` ->
 `grip_recommendation_sets`, the service `~/recommend` called with `call_async`, the gripper parameters,
 refusals, markers, and a live recording of sets (rosbag2's schema text, both Python readers, Foxglove's
 decoders, replay). See conftest.py for how to run.

@@ -1,4 +1,4 @@
-"""Spatial candidates (`model` 1, issue 11) through the live node, from rclpy over Fast DDS:
+"""Spatial candidates (`model` 1) through the live node, from rclpy over Fast DDS:
 
 - random spatial grasps of every kind (in the plane, tilted normals, centre of mass near and on the contact
   axis), in random 3D frames and units: every answer equals what `grasp_orient solve` prints for the same JSON

@@ -1,0 +1,23 @@
+//! The answer layer: the policy that turns a candidate or a set into its answer, between the wire
+//! types (`crate::msg`) and the mathematics (`crate::solver`), below the node, the command line
+//! and replay, which all answer through it.
+//!
+//! - [`answer`] and [`answer_in_full`] (`candidate.rs`): which solver answers one candidate
+//!   (planar or spatial, nominal or robust), with which tolerances, and the refusals.
+//! - [`answer_one`], [`answer_set`] and [`rank`] (`sets.rs`): the grip force a gripper is set to,
+//!   the gripper's limit, the node's default tolerances, and sets answered and ranked.
+//! - [`markers`]: an answer drawn for RViz and Foxglove.
+//!
+//! To add an output field: fill it here (or in the solver), declare it in `msg/*.msg` and the wire
+//! struct (`crate::msg`), and map it in `msg/convert.rs`.
+
+mod candidate;
+pub mod markers;
+mod sets;
+
+pub use candidate::{answer, answer_in_full, Answered};
+pub use sets::{
+    answer_one, answer_one_in_full, answer_set, answer_set_on, apply_limit, echo_set, is_sorted_by,
+    rank, solver_pool, DefaultTolerances, GripperDrive, RankBy, Rules, DEFAULT_MAX_SET_SIZE,
+    PARALLEL_FROM,
+};

@@ -1,0 +1,186 @@
+//! Every golden recording in `bags/` replays without a difference: a change in any answer the
+//! solver gives fails here. (`bags/make_bags.py` and `bags/record_node_bag.py` regenerate them;
+//! see `bags/README.md`.)
+
+use crate::util::run::{bin, temp_dir};
+
+fn replay(bag: &str) -> (bool, String) {
+    let (code, text) = replay_with(bag, &[]);
+    (code == Some(0), text)
+}
+
+/// `replay BAG ARGS`: the exit code and what it printed.
+fn replay_with(bag: &str, args: &[&str]) -> (Option<i32>, String) {
+    let path = format!("{}/bags/{bag}", env!("CARGO_MANIFEST_DIR"));
+    let out = bin()
+        .arg("replay")
+        .arg(&path)
+        .args(args)
+        .output()
+        .expect("binary runs");
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr),
+    )
+}
+
+#[test]
+fn paper_cases_replay_unchanged() {
+    let (ok, text) = replay("paper_cases.mcap");
+    assert!(ok, "{text}");
+    assert!(
+        text.contains("4 compared with a recorded recommendation, 0 differ"),
+        "{text}"
+    );
+}
+
+/// The golden bags were recorded before `finger_force`, `finger_force_current` and
+/// `rotation_axis` were added to GripRecommendation, and before `model` was
+/// added to GraspCandidate: their shorter messages decode (by their schema text), the candidates
+/// as planar ones (`model` 0), and replay says it compares the fields they have.
+#[test]
+fn bags_recorded_before_the_grip_force_and_spatial_fields_decode_and_replay() {
+    use grasp_orient::msg::{GraspCandidate, GripRecommendation};
+    use grasp_orient::record::bag;
+    for name in [
+        "paper_cases.mcap",
+        "random_grasps.mcap",
+        "node_recorded.mcap",
+    ] {
+        let path = format!("{}/bags/{name}", env!("CARGO_MANIFEST_DIR"));
+        let recorded = bag::read(std::path::Path::new(&path)).expect("golden bag reads");
+        assert_eq!(
+            recorded.fields.missing::<GripRecommendation>(),
+            [
+                "finger_force",
+                "finger_force_current",
+                "rotation_axis",
+                "gripping_power_nominal"
+            ],
+            "{name}"
+        );
+        assert_eq!(
+            recorded.fields.missing::<GraspCandidate>(),
+            ["model", "center_of_mass_tolerance", "mass_tolerance"],
+            "{name}"
+        );
+        assert_eq!(recorded.undecodable_count, 0, "{:?}", recorded.undecodable);
+        assert!(recorded.recommendations.iter().all(|r| {
+            let axis = &r.message.rotation_axis;
+            r.message.finger_force == 0.0
+                && r.message.finger_force_current == 0.0
+                && r.message.gripping_power_nominal == 0.0
+                && (axis.x, axis.y, axis.z) == (0.0, 0.0, 0.0)
+        }));
+        assert!(recorded
+            .candidates
+            .iter()
+            .all(|c| c.message.model == GraspCandidate::MODEL_PLANAR
+                && c.message.mass_tolerance == 0.0));
+        let (ok, text) = replay(name);
+        assert!(ok, "{text}");
+        assert!(
+            text.contains(
+                "recorded before finger_force, finger_force_current, rotation_axis, \
+                 gripping_power_nominal were added"
+            ),
+            "{text}"
+        );
+    }
+}
+
+#[test]
+fn random_grasps_with_refused_ones_replay_unchanged() {
+    let (ok, text) = replay("random_grasps.mcap");
+    assert!(ok, "{text}");
+    assert!(
+        text.contains("335 compared with a recorded recommendation, 0 differ"),
+        "{text}"
+    );
+    assert!(
+        text.contains("0 recorded recommendations unmatched"),
+        "{text}"
+    );
+}
+
+#[test]
+fn the_bag_the_node_recorded_replays_with_its_settings() {
+    let (ok, text) = replay("node_recorded.mcap");
+    assert!(ok, "{text}");
+    assert!(
+        text.contains("solved with the settings it recorded (2 settings records)")
+            && text.contains("38 compared with a recorded recommendation, 0 differ")
+            && text.contains("0 recorded recommendations unmatched"),
+        "{text}"
+    );
+    // It was recorded with range:=graspable: solved as from above, its answers differ.
+    let (code, text) = replay_with("node_recorded.mcap", &["--range", "from_above"]);
+    assert_eq!(code, Some(1), "{text}");
+    assert!(
+        text.contains("overridden from the command line: range"),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_bag_written_by_rosbags_is_read() {
+    // It holds candidates only: solved, but nothing to compare with, which is not a pass...
+    let (code, text) = replay_with("rosbags_written.mcap", &[]);
+    assert_eq!(code, Some(1), "{text}");
+    assert!(
+        text.contains("24 of 24 candidates have no recorded recommendation"),
+        "{text}"
+    );
+    // ...unless asked for.
+    let (code, text) = replay_with("rosbags_written.mcap", &["--no-compare"]);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(text.contains("replayed 24 candidates"), "{text}");
+}
+
+#[test]
+fn a_changed_answer_fails_the_replay() {
+    // Flip one recorded answer by writing a copy through the library, then replay it.
+    use grasp_orient::record::{bag, BagWriter, Entry, Payload, Topics};
+    let src = format!("{}/bags/paper_cases.mcap", env!("CARGO_MANIFEST_DIR"));
+    let recorded = bag::read(std::path::Path::new(&src)).expect("golden bag reads");
+    let dir = temp_dir("golden");
+    let out = dir.path().join("tampered.mcap");
+    let topics = Topics {
+        candidates: "/grasp_candidates".into(),
+        recommendations: "/grip_recommendations".into(),
+        markers: None,
+        sets: None,
+    };
+    let mut w = BagWriter::create(&out, &topics, 100).expect("create");
+    for c in &recorded.candidates {
+        w.write(&Entry {
+            payload: Payload::Candidate(Box::new(c.message.clone())),
+            log_time: c.log_time,
+            publish_time: c.publish_time,
+        })
+        .expect("write");
+    }
+    for (i, r) in recorded.recommendations.iter().enumerate() {
+        let mut m = r.message.clone();
+        if i == 2 {
+            m.internal_force *= 1.0 + 1e-6;
+        }
+        w.write(&Entry {
+            payload: Payload::Recommendation(Box::new(m)),
+            log_time: r.log_time,
+            publish_time: r.publish_time,
+        })
+        .expect("write");
+    }
+    w.finish().expect("finish");
+    let status = bin()
+        .args(["replay", out.to_str().expect("utf-8")])
+        .output()
+        .expect("runs");
+    let text = String::from_utf8_lossy(&status.stdout);
+    assert!(!status.status.success(), "{text}");
+    assert!(
+        text.contains("internal_force") && text.contains("paper-c"),
+        "{text}"
+    );
+}

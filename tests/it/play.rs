@@ -1,0 +1,302 @@
+//! `play` feeds a recording to a live node over DDS, and that node's own recording replays
+//! unchanged: play, node, recording and replay end to end, with no ROS install.
+
+use crate::util::run::{bin, temp_dir};
+use std::process::{Command, Stdio};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+/// The tests that share `GRASP_ORIENT_TEST_DOMAIN_ID` take turns: two nodes and two players on one
+/// domain would answer and record each other's candidates.
+static TEST_DOMAIN: Mutex<()> = Mutex::new(());
+
+#[test]
+fn played_candidates_are_answered_recorded_and_replay_unchanged() {
+    let dir = temp_dir("play");
+    let domain = (200 + std::process::id() % 30).to_string();
+    let mut node = bin()
+        .args(["node", "--ros-args", "-p"])
+        .arg(format!("record_dir:={}", dir.path().display()))
+        .env("ROS_DOMAIN_ID", &domain)
+        .env("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("node starts");
+    let bag = concat!(env!("CARGO_MANIFEST_DIR"), "/bags/paper_cases.mcap");
+    let played = bin()
+        .args(["play", bag, "--rate", "0", "--wait", "20"])
+        .env("ROS_DOMAIN_ID", &domain)
+        .env("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+        .output()
+        .expect("play runs");
+    std::thread::sleep(Duration::from_millis(500));
+    let _ = Command::new("kill")
+        .args(["-INT", &node.id().to_string()])
+        .status();
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let status = loop {
+        if let Some(s) = node.try_wait().expect("wait") {
+            break Some(s);
+        }
+        if Instant::now() > deadline {
+            let _ = node.kill();
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    let text = String::from_utf8_lossy(&played.stdout).into_owned()
+        + &String::from_utf8_lossy(&played.stderr);
+    assert!(played.status.success(), "{text}");
+    assert!(text.contains("published 4 of 4 candidates"), "{text}");
+    assert!(
+        status.is_some_and(|s| s.success()),
+        "node did not exit cleanly on SIGINT"
+    );
+    let recording = std::fs::read_dir(dir.path())
+        .expect("record dir")
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .find(|p| p.extension().is_some_and(|x| x == "mcap"))
+        .expect("the node wrote a recording");
+    let out = bin()
+        .args(["replay", recording.to_str().expect("utf-8")])
+        .output()
+        .expect("replay runs");
+    let summary = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{summary}");
+    assert!(
+        summary.contains("4 compared with a recorded recommendation, 0 differ"),
+        "{summary}"
+    );
+}
+
+/// A recording of 3 candidates and 3 sets (the last with a `max_grip_force` of its own), with the
+/// sets' answers, as a node would have written it.
+fn write_candidates_and_sets(path: &std::path::Path) {
+    use grasp_orient::answer::{answer_set, Rules};
+    use grasp_orient::msg::{GraspCandidate, GraspCandidateSet};
+    use grasp_orient::record::{BagWriter, Entry, Payload, SetTopics, Topics};
+    use grasp_orient::solver::Settings;
+
+    let cases: Vec<GraspCandidate> = include_str!("../../examples/paper_cases.jsonl")
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("a candidate"))
+        .collect();
+    let topics = Topics {
+        candidates: "/grasp_candidates".into(),
+        recommendations: "/grip_recommendations".into(),
+        markers: None,
+        sets: Some(SetTopics::default_names()),
+    };
+    let mut w = BagWriter::create(path, &topics, 100).expect("create");
+    for k in 0..3usize {
+        let set = GraspCandidateSet {
+            id: format!("set-{k}").into(),
+            candidates: cases[..=k + 1].to_vec(),
+            max_grip_force: if k == 2 { 1.0 } else { 0.0 },
+            ..GraspCandidateSet::default()
+        };
+        let answer = answer_set(&set, &Settings::default(), &Rules::default());
+        let t = 1_000_000 * (k as u64 + 1);
+        let entry = |payload, at| Entry {
+            payload,
+            log_time: at,
+            publish_time: at,
+        };
+        let candidate = Payload::Candidate(Box::new(cases[k].clone()));
+        w.write(&entry(candidate, t)).expect("write");
+        w.write(&entry(Payload::CandidateSet(Box::new(set)), t + 10))
+            .expect("write");
+        w.write(&entry(Payload::RecommendationSet(Box::new(answer)), t + 20))
+            .expect("write");
+    }
+    w.finish().expect("finish");
+}
+
+/// Plays `source` into a node recording to `runs` on `domain`; what `play` printed, and the
+/// node's recording once it stopped cleanly.
+fn play_into_a_recording_node(
+    source: &std::path::Path,
+    runs: &std::path::Path,
+    domain: &str,
+) -> (String, std::path::PathBuf) {
+    let mut node = bin()
+        .args(["node", "--ros-args", "-p"])
+        .arg(format!("record_dir:={}", runs.display()))
+        .env("ROS_DOMAIN_ID", domain)
+        .env("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("node starts");
+    let played = bin()
+        .args(["play", source.to_str().expect("utf-8")])
+        .args(["--rate", "0", "--wait", "20"])
+        .env("ROS_DOMAIN_ID", domain)
+        .env("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+        .output()
+        .expect("play runs");
+    std::thread::sleep(Duration::from_millis(500));
+    let _ = Command::new("kill")
+        .args(["-INT", &node.id().to_string()])
+        .status();
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let status = loop {
+        if let Some(s) = node.try_wait().expect("wait") {
+            break Some(s);
+        }
+        if Instant::now() > deadline {
+            let _ = node.kill();
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    let text = String::from_utf8_lossy(&played.stdout).into_owned()
+        + &String::from_utf8_lossy(&played.stderr);
+    assert!(played.status.success(), "{text}");
+    assert!(
+        status.is_some_and(|s| s.success()),
+        "node did not exit cleanly"
+    );
+    let recording = std::fs::read_dir(runs)
+        .expect("record dir")
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .find(|p| p.extension().is_some_and(|x| x == "mcap"))
+        .expect("the node wrote a recording");
+    (text, recording)
+}
+
+/// `play` republishes recorded sets too: a recording with candidates and sets, played into a
+/// recording node, gives a recording whose sets (and candidates) replay unchanged.
+#[test]
+fn played_sets_are_answered_recorded_and_replay_unchanged() {
+    let _turn = TEST_DOMAIN.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = temp_dir("play_sets");
+    let source = dir.path().join("source.mcap");
+    write_candidates_and_sets(&source);
+    let domain = std::env::var("GRASP_ORIENT_TEST_DOMAIN_ID")
+        .unwrap_or_else(|_| (170 + std::process::id() % 30).to_string());
+    let (text, recording) = play_into_a_recording_node(&source, &dir.path().join("runs"), &domain);
+    assert!(text.contains("published 3 of 3 candidates"), "{text}");
+    assert!(text.contains("published 3 of 3 candidate sets"), "{text}");
+    let out = bin()
+        .args(["replay", recording.to_str().expect("utf-8")])
+        .output()
+        .expect("replay runs");
+    let summary = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{summary}");
+    assert!(
+        summary.contains(
+            "replayed 3 sets (their candidates counted above): 3 compared with a recorded \
+             answer, 0 differ"
+        ),
+        "{summary}"
+    );
+    // 3 single candidates and 2 + 3 + 4 in the sets.
+    assert!(summary.contains("replayed 12 candidates"), "{summary}");
+}
+
+/// The paper's cases stood up in the y-z plane of their frame (x → y, y → z, z → x), as spatial
+/// candidates; the last with its gravity tilted out of the grasp plane, so that it swings.
+fn spatial_cases() -> Vec<grasp_orient::msg::GraspCandidate> {
+    use grasp_orient::msg::GraspCandidate;
+    let mut cases: Vec<GraspCandidate> = include_str!("../../examples/paper_cases.jsonl")
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("a candidate"))
+        .collect();
+    for c in &mut cases {
+        c.model = GraspCandidate::MODEL_SPATIAL;
+        c.id = format!("{}-spatial", c.id).into();
+        for p in [&mut c.contact_1, &mut c.contact_2, &mut c.center_of_mass] {
+            (p.x, p.y, p.z) = (p.z, p.x, p.y);
+        }
+        for v in [&mut c.normal_1, &mut c.normal_2, &mut c.gravity] {
+            (v.x, v.y, v.z) = (v.z, v.x, v.y);
+        }
+    }
+    if let Some(last) = cases.last_mut() {
+        last.gravity.x = 0.5 * last.gravity.z.abs();
+    }
+    cases
+}
+
+/// `play` republishes spatial candidates, alone and in a set, with their `model`: the node answers
+/// them in 3D, as the library does, and its recording replays unchanged.
+#[test]
+fn played_spatial_candidates_are_answered_in_3d_and_replay_unchanged() {
+    use grasp_orient::answer::answer;
+    use grasp_orient::msg::{GraspCandidateSet, GripRecommendation};
+    use grasp_orient::record::{BagWriter, Entry, Payload, SetTopics, Topics};
+    use grasp_orient::solver::Settings;
+
+    let _turn = TEST_DOMAIN.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = temp_dir("play_spatial");
+    let source = dir.path().join("source.mcap");
+    let cases = spatial_cases();
+    let topics = Topics {
+        candidates: "/grasp_candidates".into(),
+        recommendations: "/grip_recommendations".into(),
+        markers: None,
+        sets: Some(SetTopics::default_names()),
+    };
+    let mut w = BagWriter::create(&source, &topics, 100).expect("create");
+    let entry = |payload, at| Entry {
+        payload,
+        log_time: at,
+        publish_time: at,
+    };
+    for (k, c) in (1u64..).zip(&cases) {
+        w.write(&entry(Payload::Candidate(Box::new(c.clone())), k * 1_000))
+            .expect("write");
+    }
+    let set = GraspCandidateSet {
+        id: "spatial-set".into(),
+        candidates: cases.clone(),
+        ..GraspCandidateSet::default()
+    };
+    w.write(&entry(Payload::CandidateSet(Box::new(set)), 10_000))
+        .expect("write");
+    w.finish().expect("finish");
+
+    let domain = std::env::var("GRASP_ORIENT_TEST_DOMAIN_ID")
+        .unwrap_or_else(|_| (140 + std::process::id() % 30).to_string());
+    let (text, recording) = play_into_a_recording_node(&source, &dir.path().join("runs"), &domain);
+    assert!(text.contains("published 4 of 4 candidates"), "{text}");
+    assert!(text.contains("published 1 of 1 candidate sets"), "{text}");
+
+    let bag = grasp_orient::record::bag::read(&recording).expect("the node's recording reads");
+    assert_eq!(bag.candidates.len(), 4, "every played candidate recorded");
+    assert!(bag.candidates.iter().all(|c| c.message.model == 1));
+    let settings = Settings::default();
+    for r in &bag.recommendations {
+        let c = cases
+            .iter()
+            .find(|c| c.id == r.message.candidate_id)
+            .expect("an answer to a played candidate");
+        let mut expected = answer(c, &settings);
+        expected.header = r.message.header.clone();
+        assert_eq!(format!("{:?}", r.message), format!("{expected:?}"));
+        assert_eq!(r.message.status, GripRecommendation::STATUS_OK);
+        // stood up in the y-z plane: the turn is about ±x, not about z
+        assert!((r.message.rotation_axis.x.abs() - 1.0).abs() < 1e-12 || c.gravity.x != 0.0);
+        assert!(r.message.rotation_axis.z.abs() < 1e-12 || c.gravity.x != 0.0);
+    }
+    let swings = &bag.recommendations[3].message;
+    assert!(swings.gripping_power_current.is_infinite() && swings.message.contains("swings"));
+    let set_answer = &bag.recommendation_sets[0].message;
+    assert_eq!(set_answer.recommendations.len(), 4);
+
+    let out = bin()
+        .args(["replay", recording.to_str().expect("utf-8")])
+        .output()
+        .expect("replay runs");
+    let summary = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{summary}");
+    assert!(
+        summary.contains("8 compared with a recorded recommendation, 0 differ")
+            && summary.contains("1 compared with a recorded answer, 0 differ"),
+        "{summary}"
+    );
+}
