@@ -41,7 +41,7 @@
 //! [`DEFINITIONS`] holds each type's full name (the wire struct's [`RosMessage::TYPE_NAME`]) and
 //! its `.msg` text. Ours are the files in `msg/`; the standard ones are copies of the files ROS 2
 //! Jazzy installs (common_interfaces 5.3.6, rcl_interfaces 2.0.3; Apache-2.0), kept verbatim in
-//! `src/msg/jazzy/<pkg>/<Name>.msg`. `tests/msg_contract.rs` holds every row to the peer's real
+//! `src/msg/jazzy/<pkg>/<Name>.msg`. `tests/it/msg_contract.rs` holds every row to the peer's real
 //! file (`share/<pkg>/msg/<Name>.msg`, found through `AMENT_PREFIX_PATH`) and every wire struct to
 //! its file, field for field; `tests/ros` compares the schemas of the node's recordings with an
 //! independent Python port of rosbag2's algorithm over the peer's files.

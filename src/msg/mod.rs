@@ -62,7 +62,7 @@ macro_rules! ros_message {
     };
 }
 
-/// The paper's Table 1 as messages (`examples/paper_cases.jsonl`; `tests/paper.rs` holds it to
+/// The paper's Table 1 as messages (`examples/paper_cases.jsonl`; `tests/it/paper.rs` holds it to
 /// the solver's Table 1 fixture), for tests.
 #[cfg(test)]
 pub(crate) fn paper_cases() -> Vec<GraspCandidate> {

@@ -14,7 +14,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 /// Agreement asked, relative to the larger of the force and the weight `m |g|` (as
-/// `tests/reference.rs` asks of the power at the current pose).
+/// `tests/it/reference.rs` asks of the power at the current pose).
 const TOL: f64 = 1e-9;
 
 /// The pushes of contact 1 and contact 2 along the line between them, into the object: each

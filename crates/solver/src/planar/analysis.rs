@@ -11,6 +11,7 @@
 //!
 //! So the minimiser is one of a short list of closed-form angles, each of which is evaluated.
 
+use super::curve::{self, Curve, Piece};
 use super::finger;
 use super::frame::GraspFrame;
 use super::paper::{self, FORCE_SCALE};
@@ -36,47 +37,6 @@ const ENVELOPE_TIE: f64 = 1e-12;
 /// five for explicit bounds (kept inline, not on the heap, up to three).
 type Intervals = SmallVec<[(f64, f64); 3]>;
 
-/// The objective on one interval of θ.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Shape {
-    /// `P = weight · FORCE_SCALE · sqrt(Q)`.
-    Quad(QuadForm),
-    /// `P = weight · FORCE_SCALE · S`.
-    Sin(Sinusoid),
-}
-
-impl Shape {
-    /// Value of the part before scaling (`Q` or `S`); monotone in `P`.
-    fn raw(&self, at: &Angle) -> f64 {
-        match self {
-            Shape::Quad(q) => q.value(at),
-            Shape::Sin(s) => s.value(at),
-        }
-    }
-
-    /// Sign-faithful slope (of `Q` or `S`).
-    fn slope(&self, at: &Angle) -> f64 {
-        match self {
-            Shape::Quad(q) => q.slope(at),
-            Shape::Sin(s) => s.slope(at),
-        }
-    }
-
-    fn minima_between(&self, lo: f64, hi: f64, out: &mut impl Extend<f64>) {
-        match self {
-            Shape::Quad(q) => q.minima_between(lo, hi, out),
-            Shape::Sin(s) => s.minima_between(lo, hi, out),
-        }
-    }
-
-    fn is_constant(&self) -> bool {
-        match self {
-            Shape::Quad(q) => q.is_constant(),
-            Shape::Sin(s) => s.is_zero(),
-        }
-    }
-}
-
 /// Up to two angles, collected without allocating (a piece shorter than 2π has at most two
 /// stationary minima).
 #[derive(Debug, Default)]
@@ -96,7 +56,7 @@ impl Extend<f64> for AtMostTwo {
     }
 }
 
-/// One interval of θ on which the objective is a single [`Shape`].
+/// One interval of θ on which the objective is a single [`Curve`].
 ///
 /// Its ends and minima are kept as [`Angle`]s, sine and cosine included: the walk that finds
 /// them, the local minima and the recommendation all evaluate shapes there, and each angle's
@@ -106,7 +66,7 @@ impl Extend<f64> for AtMostTwo {
 struct Segment {
     lo: Angle,
     hi: Angle,
-    shape: Shape,
+    shape: Curve,
     /// Stationary minima of the shape strictly inside `(lo, hi)` (at most two).
     minima: [Angle; 2],
     /// How many of `minima` are set.
@@ -114,7 +74,7 @@ struct Segment {
 }
 
 impl Segment {
-    fn new(lo: Angle, hi: Angle, shape: Shape) -> Self {
+    fn new(lo: Angle, hi: Angle, shape: Curve) -> Self {
         let mut found = AtMostTwo::default();
         shape.minima_between(lo.theta, hi.theta, &mut found);
         let mut minima = [lo; 2];
@@ -132,6 +92,24 @@ impl Segment {
 
     fn minima(&self) -> &[Angle] {
         &self.minima[..self.n_minima]
+    }
+}
+
+impl Piece for Segment {
+    fn lo(&self) -> Angle {
+        self.lo
+    }
+
+    fn hi(&self) -> Angle {
+        self.hi
+    }
+
+    fn curve(&self) -> &Curve {
+        &self.shape
+    }
+
+    fn minima(&self) -> impl Iterator<Item = Angle> + '_ {
+        Segment::minima(self).iter().copied()
     }
 }
 
@@ -307,10 +285,10 @@ impl Analysis {
                 self.segments.push(Segment::new(
                     lo,
                     hi,
-                    Shape::Quad(QuadForm::sum_of_squares(&terms)),
+                    Curve::Quad(QuadForm::sum_of_squares(&terms)),
                 ));
             }
-            Objective::InternalForce => self.segments.push(Segment::new(lo, hi, Shape::Sin(*f))),
+            Objective::InternalForce => self.segments.push(Segment::new(lo, hi, Curve::Sin(*f))),
             Objective::Norm1 => {
                 // Breakpoints inside the piece: where a friction force at α = f changes sign,
                 // and where the two friction zeros cross (r1 = r2 ⇔ c2 T_F1 - c1 T_F2 = 0).
@@ -328,7 +306,7 @@ impl Analysis {
                 let mut a = lo;
                 for b in inner.chain(std::iter::once(hi)) {
                     if b.theta > a.theta {
-                        let shape = Shape::Sin(self.norm1_piece(f, 0.5 * (a.theta + b.theta)));
+                        let shape = Curve::Sin(self.norm1_piece(f, 0.5 * (a.theta + b.theta)));
                         self.segments.push(Segment::new(a, b, shape));
                         a = b;
                     }
@@ -379,12 +357,8 @@ impl Analysis {
     }
 
     /// `P` in newtons from a shape's raw value.
-    fn power_from_raw(&self, shape: &Shape, raw: f64) -> f64 {
-        let k = self.frame.weight * FORCE_SCALE;
-        match shape {
-            Shape::Quad(_) => k * raw.max(0.0).sqrt(),
-            Shape::Sin(_) => k * raw,
-        }
+    fn power_from_raw(&self, shape: &Curve, raw: f64) -> f64 {
+        shape.power_from_value(raw, self.frame.weight * FORCE_SCALE)
     }
 
     /// The objective and the forces at any gravity angle, computed point-wise.
@@ -491,41 +465,11 @@ impl Analysis {
     /// Every local minimum of the objective over the closed graspable range, with its label
     /// among `labels` (the paper's candidates).
     fn local_minima(&self, labels: &[Option<(PaperCandidate, f64)>]) -> Vec<LocalMinimum> {
-        let mut found: Vec<LocalMinimum> = Vec::with_capacity(8);
-        let mut push = |at: &Angle, shape: &Shape| {
-            let theta = at.theta;
-            if found
-                .last()
-                .is_none_or(|m| (theta - m.gravity_angle).abs() > SAME_ANGLE)
-            {
-                found.push(LocalMinimum {
-                    gravity_angle: theta,
-                    power: self.power_from_raw(shape, shape.raw(at)),
-                    label: self.label_of(labels, theta),
-                });
-            }
-        };
-        let segs = &self.segments;
-        for (k, seg) in segs.iter().enumerate() {
-            let right = seg.shape.slope(&seg.lo);
-            let left = if k == 0 {
-                f64::NEG_INFINITY
-            } else {
-                segs[k - 1].shape.slope(&seg.lo)
-            };
-            if left <= 0.0 && right >= 0.0 {
-                push(&seg.lo, &seg.shape);
-            }
-            for t in seg.minima() {
-                push(t, &seg.shape);
-            }
-        }
-        if let Some(last) = segs.last() {
-            if last.shape.slope(&last.hi) <= 0.0 {
-                push(&last.hi, &last.shape);
-            }
-        }
-        found
+        curve::local_minima(
+            &self.segments,
+            |at, shape| self.power_from_raw(shape, shape.value(at)),
+            |theta| self.label_of(labels, theta),
+        )
     }
 
     /// The allowed range as intervals inside the graspable range.
@@ -629,7 +573,7 @@ impl Analysis {
                     .chain(inside.copied())
                     .chain(plateau)
                 {
-                    let p = self.power_from_raw(&seg.shape, seg.shape.raw(&at));
+                    let p = self.power_from_raw(&seg.shape, seg.shape.value(&at));
                     consider(at, p);
                 }
             }
@@ -709,28 +653,13 @@ impl Analysis {
     }
 }
 
-/// The objective on one piece, for the robust envelope (`robust.rs`): with `k = weight ·
-/// FORCE_SCALE`, the objective is `k · sqrt(Q)` on a [`Curve::Quad`] piece and `k · S` on a
-/// [`Curve::Sin`] piece.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum Curve {
-    /// `Q`, a quadratic form in `(sin θ, cos θ)` (the 2-norm squared).
-    Quad(QuadForm),
-    /// `S`, a sinusoid (the 1-norm, the internal force).
-    Sin(Sinusoid),
-}
-
 impl Analysis {
     /// The objective piece by piece, `(lo, hi, curve)` in increasing θ, tiling the graspable
     /// range.
     pub(crate) fn pieces(&self) -> impl Iterator<Item = (f64, f64, Curve)> + '_ {
-        self.segments.iter().map(|s| {
-            let curve = match s.shape {
-                Shape::Quad(q) => Curve::Quad(q),
-                Shape::Sin(f) => Curve::Sin(f),
-            };
-            (s.lo.theta, s.hi.theta, curve)
-        })
+        self.segments
+            .iter()
+            .map(|s| (s.lo.theta, s.hi.theta, s.shape))
     }
 }
 
@@ -786,7 +715,7 @@ mod tests {
                 let (lo, hi) = (seg.lo.theta, seg.hi.theta);
                 for k in 1..10 {
                     let t = lo + (hi - lo) * k as f64 / 10.0;
-                    let shape = a.power_from_raw(&seg.shape, seg.shape.raw(&Angle::new(t)));
+                    let shape = a.power_from_raw(&seg.shape, seg.shape.value(&Angle::new(t)));
                     let point = a.evaluate(t).power;
                     assert!(
                         abs_diff_eq!(shape, point, epsilon = 1e-12 * point.abs().max(1.0)),

@@ -24,7 +24,7 @@
 //!   `a_i = internal force ± W_x/2`, and the larger push is `internal force + |W_x|/2`.
 //!
 //! [`pushes`] computes `a_1, a_2` from the forces themselves (the definition); the unit tests
-//! below hold the two identities to the solver's own forces, and `tests/reference.rs` holds the
+//! below hold the two identities to the solver's own forces, and `tests/it/reference.rs` holds the
 //! result to the independent reference's contact forces projected on the line in the candidate's
 //! frame (code shared with nothing here).
 

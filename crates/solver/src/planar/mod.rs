@@ -7,6 +7,7 @@
 //! mass and a mass tolerance.
 
 pub(crate) mod analysis;
+pub(crate) mod curve;
 pub(crate) mod finger;
 pub(crate) mod frame;
 pub(crate) mod paper;
@@ -236,7 +237,7 @@ pub enum Verdict {
 /// # Example
 /// The paper's case study (c) (Table 1): a square held at the middle of two opposite sides,
 /// friction √3 and 1/√3, `Mg = 1`. The least gripping power is at candidate C,
-/// `θ_34 = -π/12` (Table 2 prints +0.261: its sign is wrong, see `tests/paper.rs`).
+/// `θ_34 = -π/12` (Table 2 prints +0.261: its sign is wrong, see `tests/it/paper.rs`).
 /// ```
 /// use grasp_orient_solver::{solve_orientation, Candidate, PaperCandidate, Settings, Verdict};
 /// use nalgebra::Vector2;

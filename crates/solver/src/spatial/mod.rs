@@ -25,7 +25,7 @@
 //! forces in Π; conversely, with gravity in Π the grasp holds exactly when the planar problem in Π
 //! holds with each 3D cone replaced by its slice by Π (§2). The paper's planar problem in Π is
 //! therefore the whole 3D problem, not an approximation. Checked against an SOCP over two 3D force
-//! vectors with circular cones (`tests/common/spatial.rs`, `tests/spatial.rs`), which also finds
+//! vectors with circular cones (`tests/it/util/spatial.rs`, `tests/it/spatial.rs`), which also finds
 //! every gravity direction out of Π infeasible.
 //!
 //! # 2. A 3D friction cone sliced by Π
@@ -53,7 +53,7 @@
 //! `ν = ±(p1 − c) × (p2 − c) / |…|` with the sign that makes `ν_z > 0` (or `ν_z = 0, ν_y > 0`, or
 //! `ν_z = ν_y = 0, ν_x > 0`) in the candidate frame. Π's basis `(e_x, e_y)` is the rotation that
 //! takes `+z` to `ν` applied to `+x` and `+y`. So a grasp lying in the x-y plane has `ν = +z`,
-//! `e_x = +x`, `e_y = +y` and reads exactly as the planar model (`tests/spatial.rs` checks 1e-12).
+//! `e_x = +x`, `e_y = +y` and reads exactly as the planar model (`tests/it/spatial.rs` checks 1e-12).
 //! The planar problem is solved in the coordinates `(e_x, e_y)`, and [`SpatialRecommendation::planar`]
 //! is its answer as the planar model gives it: the gravity angle and local minima in the paper frame
 //! of Π (right-handed about `ν`), labels A–E and the case a–d in the candidate's labelling.

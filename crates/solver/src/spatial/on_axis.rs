@@ -66,7 +66,7 @@
 //! evaluating the derivative on a grid of [`ARC_GRID`] intervals and bisecting every sign change
 //! from − to + on the derivative's sign until the bracket stops shrinking (about 1e-16 rad; the
 //! root is then limited by rounding in the derivative, ~1e-13 rad for a well-curved minimum;
-//! `tests/spatial.rs` measures the plane of 300 random on-axis answers within 3e-11 rad of the
+//! `tests/it/spatial.rs` measures the plane of 300 random on-axis answers within 3e-11 rad of the
 //! minimum of the best power over planes, which is that measurement's own resolution),
 //! and the best grid point is kept as well. Each plane so found is then solved exactly by the
 //! planar solver, and the least answer wins (ties within 1e-12 relative go to the smaller
@@ -77,7 +77,7 @@
 //!
 //! Guarantees: the value is exact to rounding except that two stationary points of `P(ψ)` closer
 //! than the grid spacing could hide a third minimum between them; the best grid point bounds what
-//! such a miss could cost, and the independent reference (`tests/spatial.rs`) finds no lower point
+//! such a miss could cost, and the independent reference (`tests/it/spatial.rs`) finds no lower point
 //! on thousands of random on-axis grasps. Where a whole region of the sphere is optimal (the
 //! internal force is zero on a region; the 2-norm is flat when `x1 = x2` and no squeeze is
 //! needed), the answer is the best of the candidate planes with the smallest rotation, which need

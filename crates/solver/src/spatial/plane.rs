@@ -94,7 +94,7 @@ const PRODUCT_SAFE: std::ops::RangeInclusive<f64> = 1e-70..=1e70;
 ///
 /// # Why
 /// Multiplying by a power of two is exact, so a scene and any power-of-two multiple of it come
-/// out bit for bit the same (`tests/magnitudes.rs`), and no length the contract admits, from the
+/// out bit for bit the same (`tests/it/magnitudes.rs`), and no length the contract admits, from the
 /// smallest subnormal up, underflows when squared: a contact distance of 1e-82 m squared twice
 /// (the norm of Π's cross product) would be 1e-328, below the smallest double.
 fn scale_exponent(m: f64) -> i32 {

@@ -2,6 +2,7 @@
 //! exact minimum (module docs of `planar::robust`, section 6).
 
 use super::*;
+use crate::planar::curve::{self, Piece};
 
 /// One piece of the worst-case curve: on `[lo, hi]` vertex `vertex` is on top with `curve`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -20,6 +21,24 @@ pub(crate) struct TopPiece {
 impl TopPiece {
     pub(crate) fn minima(&self) -> &[f64] {
         &self.minima[..self.n_minima]
+    }
+}
+
+impl Piece for TopPiece {
+    fn lo(&self) -> Angle {
+        Angle::new(self.lo)
+    }
+
+    fn hi(&self) -> Angle {
+        Angle::new(self.hi)
+    }
+
+    fn curve(&self) -> &Curve {
+        &self.curve
+    }
+
+    fn minima(&self) -> impl Iterator<Item = Angle> + '_ {
+        TopPiece::minima(self).iter().map(|&t| Angle::new(t))
     }
 }
 
@@ -95,43 +114,10 @@ impl Envelope {
         best.map_or(allowed[0].0, |(t, _)| t)
     }
 
-    /// Every local minimum of the envelope over its whole interval, for curves scaled by `k`.
+    /// Every local minimum of the envelope over its whole interval, for curves scaled by `k`,
+    /// unlabelled (the paper's candidates belong to one object).
     pub(crate) fn local_minima(&self, k: f64) -> Vec<LocalMinimum> {
-        let mut found: Vec<LocalMinimum> = Vec::with_capacity(8);
-        let mut push = |theta: f64, curve: &Curve| {
-            if found
-                .last()
-                .is_none_or(|m| (theta - m.gravity_angle).abs() > SAME_ANGLE)
-            {
-                found.push(LocalMinimum {
-                    gravity_angle: theta,
-                    power: curve.power(&Angle::new(theta), k),
-                    label: None,
-                });
-            }
-        };
-        let env = &self.pieces;
-        for (i, piece) in env.iter().enumerate() {
-            let start = Angle::new(piece.lo);
-            let right = piece.curve.slope(&start);
-            let left = if i == 0 {
-                f64::NEG_INFINITY
-            } else {
-                env[i - 1].curve.slope(&start)
-            };
-            if left <= 0.0 && right >= 0.0 {
-                push(piece.lo, &piece.curve);
-            }
-            for &t in piece.minima() {
-                push(t, &piece.curve);
-            }
-        }
-        if let Some(last) = env.last() {
-            if last.curve.slope(&Angle::new(last.hi)) <= 0.0 {
-                push(last.hi, &last.curve);
-            }
-        }
-        found
+        curve::local_minima(&self.pieces, |at, c| c.power(at, k), |_| None)
     }
 }
 
@@ -148,96 +134,6 @@ pub(crate) fn periodic_meet(lo: f64, hi: f64, glo: f64, ghi: f64) -> Vec<(f64, f
         }
     }
     out
-}
-
-impl Curve {
-    /// `Q` or `S` at `at`.
-    pub(crate) fn value(&self, at: &Angle) -> f64 {
-        match self {
-            Curve::Quad(q) => q.value(at),
-            Curve::Sin(s) => s.value(at),
-        }
-    }
-
-    /// Derivative of `Q` or `S`: the sign of the objective's slope.
-    pub(crate) fn slope(&self, at: &Angle) -> f64 {
-        match self {
-            Curve::Quad(q) => q.slope(at),
-            Curve::Sin(s) => s.slope(at),
-        }
-    }
-
-    /// The objective in newtons, `k sqrt(Q)` or `k S`.
-    pub(crate) fn power(&self, at: &Angle, k: f64) -> f64 {
-        match self {
-            Curve::Quad(q) => k * q.value(at).max(0.0).sqrt(),
-            Curve::Sin(s) => k * s.value(at),
-        }
-    }
-
-    /// The size of the coefficients, which bounds the rounding of a value.
-    pub(crate) fn coefficient_scale(&self) -> f64 {
-        match self {
-            Curve::Quad(q) => q.p.abs() + q.q.abs() + q.r.abs(),
-            Curve::Sin(s) => s.a.abs() + s.b.abs(),
-        }
-    }
-
-    pub(crate) fn is_constant(&self) -> bool {
-        match self {
-            Curve::Quad(q) => q.is_constant(),
-            Curve::Sin(s) => s.is_zero(),
-        }
-    }
-
-    /// Stationary minima strictly inside `(lo, hi)`, appended to `out`.
-    pub(crate) fn minima_between(&self, lo: f64, hi: f64, out: &mut Vec<f64>) {
-        match self {
-            Curve::Quad(q) => q.minima_between(lo, hi, out),
-            Curve::Sin(s) => s.minima_between(lo, hi, out),
-        }
-    }
-
-    /// The first angle strictly after `after` where `other` rises through `self`, if any
-    /// (module docs, section 6).
-    ///
-    /// # Formula
-    /// Sinusoids: `other - self` rises through zero at `-atan2(b, a) (mod 2π)`.
-    /// Quadratic forms: `other - self = m + ρ cos(2θ - φ)` rises through zero at
-    /// `θ = (φ - acos(-m/ρ)) / 2 (mod π)` when `|m| <= ρ`.
-    pub(crate) fn next_overtaken(&self, other: &Curve, after: f64) -> Option<f64> {
-        match (self, other) {
-            (Curve::Sin(s), Curve::Sin(o)) => o
-                .minus(s)
-                .rising_zero()
-                .map(|r| next_periodic(r, TAU, after)),
-            (Curve::Quad(s), Curve::Quad(o)) => quad_rising_zero(&QuadForm {
-                p: o.p - s.p,
-                q: o.q - s.q,
-                r: o.r - s.r,
-            })
-            .map(|r| next_periodic(r, PI, after)),
-            // One objective gives one kind of curve to every vertex.
-            _ => None,
-        }
-    }
-}
-
-/// The angle, mod π, where the quadratic form rises through zero; `None` where it never does.
-///
-/// # Formula
-/// `p sin²θ + q cos²θ + r sin θ cos θ = m + A cos 2θ + B sin 2θ = m + ρ cos(2θ - φ)` with
-/// `m = (p+q)/2`, `A = (q-p)/2`, `B = r/2`, `ρ = hypot(A, B)`, `φ = atan2(B, A)`. Its slope is
-/// `-2ρ sin(2θ - φ)`, positive where `2θ - φ ∈ (-π, 0)`, so the rising zero is
-/// `2θ - φ = -acos(-m/ρ)`.
-pub(crate) fn quad_rising_zero(d: &QuadForm) -> Option<f64> {
-    let m = 0.5 * (d.p + d.q);
-    let (a, b) = (0.5 * (d.q - d.p), 0.5 * d.r);
-    let rho = (a * a + b * b).sqrt();
-    if rho == 0.0 || m.abs() > rho {
-        return None;
-    }
-    Some(0.5 * (b.atan2(a) - (-m / rho).acos()))
 }
 
 /// Index of the highest curve at `t` among the vertices' current pieces; near-ties go to the

@@ -44,7 +44,7 @@
 //!   smallest mass. A smaller
 //!   friction coefficient shrinks the cone, so the worst friction is `μ / s`.
 //!
-//! Test: `tests/robust.rs` evaluates a dense grid of centres of mass over the region and masses
+//! Test: `tests/it/robust.rs` evaluates a dense grid of centres of mass over the region and masses
 //! over the interval with the independent reference of `tests/it/util`; no grid point is worse
 //! than the vertices (to 1e-9).
 //!
@@ -109,7 +109,7 @@
 //! where the line `β_1 = β_2` crosses the region's edge (at most two points, the pieces of `h`
 //! being affine on either side), and those points are evaluated. On random grasps whose normals
 //! lean far from the contact line the worst squeeze lies inside an edge, up to a fifth above
-//! every vertex (`tests/robust.rs`, `norm1_internal_force_worst_case_over_the_region`).
+//! every vertex (`tests/it/robust.rs`, `norm1_internal_force_worst_case_over_the_region`).
 //!
 //! # 6. The exact minimisation
 //! The worst-case objective `R(θ) = max_v P_v(θ)` is the upper envelope of the vertices' curves.
@@ -154,24 +154,23 @@
 //! force and `a_1 - a_2` the weight's component along the line, `W_line = m|g| sin θ`, which does
 //! not depend on `c`. So the worst finger force is the worst internal force plus `m_max|g| |sin θ| / 2`.
 
-use super::analysis::{Analysis, Curve};
+use super::analysis::Analysis;
+use super::curve::Curve;
 use super::frame::{length, unit, GraspFrame, MAX_COORDINATE};
 use super::paper::{self, FORCE_SCALE};
-use super::sinusoid::{next_periodic, wrap_angle, Angle, QuadForm};
+use super::sinusoid::{wrap_angle, Angle};
 use super::{
     solve_orientation, AllowedRange, Candidate, Contact, InvalidInput, LocalMinimum,
     NoForceClosure, Objective, Recommendation, Settings, Verdict,
 };
 use nalgebra::Vector2;
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::TAU;
 use std::fmt;
 
-/// Two angles closer than this (rad) are one point (as in the nominal analysis).
 mod envelope;
 
 pub(crate) use envelope::{periodic_meet, Envelope};
 
-const SAME_ANGLE: f64 = 1e-9;
 /// Objective values closer than this, relative to themselves or to the weight, tie; the smaller
 /// wrist rotation wins (as in the nominal analysis).
 const TIE: f64 = 1e-12;
@@ -935,9 +934,11 @@ fn candidate_labelling(f: &GraspFrame, forces: [f64; 4]) -> [f64; 4] {
 
 #[cfg(test)]
 mod tests {
-    use super::envelope::quad_rising_zero;
     use super::*;
+    use crate::planar::curve::quad_rising_zero;
+    use crate::sinusoid::QuadForm;
     use std::f64::consts::FRAC_PI_2;
+    use std::f64::consts::PI;
 
     fn square_case_c() -> Candidate {
         Candidate {
@@ -1350,7 +1351,7 @@ mod tests {
     /// A vertex whose curve is huge rises steeply through a small one just after its own zero:
     /// at the crossing, the steep curve's rounding (relative to its coefficients, about 1e9)
     /// exceeds the small curve's value scale. The walk once stayed on the small curve there and
-    /// missed the crossing (found by `tests/robust.rs`).
+    /// missed the crossing (found by `tests/it/robust.rs`).
     #[test]
     fn envelope_takes_a_steep_crossing() {
         let c = Candidate {

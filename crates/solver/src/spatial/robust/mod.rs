@@ -60,7 +60,7 @@
 //! This is the planar problem of `Π(c)` with the sliced cones (spatial module docs §2) in closed
 //! form; the planar solver on that plane gives the same values (unit test
 //! `closed_form_is_the_planar_problem_of_each_plane`), and the independent 3D reference agrees
-//! with the worst case it gives (`tests/spatial_robust.rs`, see *Status* below). Force closure is
+//! with the worst case it gives (`tests/it/spatial_robust.rs`, see *Status* below). Force closure is
 //! `p_i > cos ξ_i` at both contacts: it does not depend on `c`. Every force is proportional to the mass: the worst mass is the largest.
 //! "From above" (the upward vertical through `c` meets the segment) is `B1 <= 0` and `B2 <= 0`.
 //!
@@ -122,7 +122,7 @@
 //! # 7. What is reported
 //! At the recommended tilt and at the current one (after the swing): the worst objective, the
 //! worst squeeze and the worst finger force, `squeeze + W |sin θ| / 2` (the weight's part along
-//! the axis, `W sin θ`, is the same for every object: `solver/finger.rs`'s definition), and where
+//! the axis, `W sin θ`, is the same for every object: `planar/finger.rs`'s definition), and where
 //! the first two are attained; the nominal object's values and contact forces at rest in its
 //! plane at that tilt; the certificate; the local minima of `R_S` over the allowed range (their
 //! angles are those of the final sample set's envelope, their values the certified `R` there);
@@ -134,7 +134,7 @@
 //! What is checked: the closed form of §2 against the planar solver on each object's own plane
 //! (`closed_form_is_the_planar_problem_of_each_plane`, 2,000+ points, 1e-12), and the certified
 //! edge maximum of §4 against dense samples of every edge (`worst_is_at_least_every_sample_of_the_edges`).
-//! `tests/spatial_robust.rs` checks, against the independent 3D reference of `tests/common`
+//! `tests/it/spatial_robust.rs` checks, against the independent 3D reference of `tests/it/util`
 //! (Clarabel SOCP on the true cones):
 //! - the worst case at the recommended tilt: on 60 random off-axis grasps with random boxes and
 //!   mass tolerances, the reported worst `gripping_power` equals the reference's at the reported
@@ -867,7 +867,7 @@ impl Problem {
                 forces: [f64::NAN; 4],
             },
         };
-        // Paper frame (e_x, e_y) = (a, −v): the paper's normals and tangents (`solver/paper.rs`).
+        // Paper frame (e_x, e_y) = (a, −v): the paper's normals and tangents (`planar/paper.rs`).
         let [n1, f1, n2, f2] = value.forces;
         let p1 = Vector2::new(
             -frame.s1 * n1 - frame.c1 * f1,
