@@ -40,4 +40,4 @@ cp "$TARGET/debug/grasp_orient" "$TARGET/under-test/grasp_orient"
 echo "== the node against rclpy, recordings read by Python and by Foxglove's decoders, the colcon workspace build (pytest tests/ros)"
 # shellcheck disable=SC1090
 source "$ENV_SH"
-GRASP_ORIENT_BIN="$TARGET/under-test/grasp_orient" python -m pytest tests/ros -v
+GRASP_ORIENT_BIN="$TARGET/under-test/grasp_orient" python -m pytest tests/ros -v --durations=15
