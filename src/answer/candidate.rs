@@ -66,8 +66,11 @@ fn is_exact(m: &GraspCandidate) -> bool {
 /// The planar answer: the nominal solver's without tolerances, the robust solver's with them
 /// (status 1 naming the point of the box that fails, with the nominal answer in the fields, when
 /// no allowed orientation holds every object).
-fn solve_planar(m: &GraspCandidate, settings: &Settings) -> Result<GripRecommendation, String> {
-    let candidate = Candidate::try_from(m).map_err(|e| e.to_string())?;
+fn solve_planar(
+    m: &GraspCandidate,
+    settings: &Settings,
+) -> Result<GripRecommendation, MessageLimits> {
+    let candidate = Candidate::try_from(m)?;
     if is_exact(m) {
         // `solve_orientation` without its `Box`: the answer is built from the recommendation at
         // once, and one heap block fewer is one of a handful per candidate.
@@ -75,12 +78,12 @@ fn solve_planar(m: &GraspCandidate, settings: &Settings) -> Result<GripRecommend
             Ok(Ok(analysis)) => analysis
                 .recommend(&settings.range)
                 .map(|r| recommended(m, &r))
-                .map_err(|e| e.to_string()),
+                .map_err(MessageLimits::from),
             Ok(Err(why)) => Ok(no_closure(m, &why)),
-            Err(e) => Err(e.to_string()),
+            Err(e) => Err(e.into()),
         };
     }
-    let uncertainty = planar_uncertainty(m).map_err(|e| e.to_string())?;
+    let uncertainty = planar_uncertainty(m)?;
     match solve_robust(&candidate, &uncertainty, settings) {
         Ok(RobustVerdict::Exact(Verdict::Recommended(r))) => Ok(recommended(m, &r)),
         Ok(RobustVerdict::Exact(Verdict::NoForceClosure(why))) => Ok(no_closure(m, &why)),
@@ -96,7 +99,7 @@ fn solve_planar(m: &GraspCandidate, settings: &Settings) -> Result<GripRecommend
             Ok(out)
         }
         Ok(RobustVerdict::NoForceClosure(why)) => Ok(no_closure(m, &why)),
-        Err(e) => Err(e.to_string()),
+        Err(e) => Err(e.into()),
     }
 }
 

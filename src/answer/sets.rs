@@ -374,13 +374,24 @@ fn answer_all(
 /// A thread can be the first worker of one pool only, for its life: a second pool asked for on the
 /// same thread is refused with that reason (the node asks once). Another thread may still use the
 /// pool; its sets are then solved by the started threads alone.
-pub fn solver_pool(threads: usize) -> Result<rayon::ThreadPool, String> {
+pub fn solver_pool(threads: usize) -> Result<rayon::ThreadPool, PoolRefused> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .use_current_thread()
         .thread_name(|i| format!("solver-{i}"))
         .build()
-        .map_err(|e| format!("cannot start {threads} solver threads: {e}"))
+        .map_err(|cause| PoolRefused { threads, cause })
+}
+
+/// The solver threads could not be started.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot start {threads} solver threads: {cause}")]
+pub struct PoolRefused {
+    /// How many were asked for.
+    pub threads: usize,
+    /// Why not.
+    #[source]
+    pub cause: rayon::ThreadPoolBuildError,
 }
 
 /// The benchmark floor's answer to a set: as many empty recommendations as candidates (each with
@@ -651,7 +662,10 @@ mod tests {
             s.spawn(|| {
                 let _first = solver_pool(2).expect("threads");
                 let second = solver_pool(2).expect_err("a second pool on the same thread");
-                assert!(second.contains("cannot start 2 solver threads"), "{second}");
+                assert!(
+                    second.to_string().contains("cannot start 2 solver threads"),
+                    "{second}"
+                );
             });
         });
     }

@@ -156,7 +156,7 @@ fn parse_center_of_mass_tolerance(text: &str) -> Result<[f64; 3], String> {
     };
     let value = [number(x)?, number(y)?, number(z)?];
     let domain = Parameter::find("center_of_mass_tolerance").map_or(Domain::Any, |p| p.domain);
-    value.check(&domain)?;
+    value.check(&domain).map_err(|why| why.to_string())?;
     Ok(value)
 }
 
@@ -190,7 +190,7 @@ where
             .parse()
             .map_err(|_| format!("{text:?} is not a valid {}", T::ROS_TYPE.name()))?;
         let domain = Parameter::find(name).map_or(Domain::Any, |p| p.domain);
-        value.check(&domain)?;
+        value.check(&domain).map_err(|why| why.to_string())?;
         Ok(value)
     }
 }
@@ -202,7 +202,9 @@ pub fn real_in(min: f64, max: f64) -> impl Fn(&str) -> Result<f64, String> + Clo
             .trim()
             .parse()
             .map_err(|_| format!("{text:?} is not a number"))?;
-        value.check(&Domain::Real { min, max })?;
+        value
+            .check(&Domain::Real { min, max })
+            .map_err(|why| why.to_string())?;
         Ok(value)
     }
 }
@@ -217,7 +219,9 @@ pub fn integer_in(
             .trim()
             .parse()
             .map_err(|_| format!("{text:?} is not an integer"))?;
-        value.check(&Domain::Integer { min, max })?;
+        value
+            .check(&Domain::Integer { min, max })
+            .map_err(|why| why.to_string())?;
         Ok(value)
     }
 }

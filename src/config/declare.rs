@@ -133,6 +133,45 @@ impl Parameter {
     }
 }
 
+/// Why a value does not fit its parameter: the words after "parameter NAME: ".
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ValueError {
+    /// Not of the parameter's type (the YAML reader's words).
+    #[error("{0}")]
+    Type(String),
+    /// A vector with the wrong number of components.
+    #[error("expected 3 numbers [x, y, z], got {0}")]
+    Components(usize),
+    /// Outside the declared domain.
+    #[error("must be {domain}, got {value}")]
+    Domain {
+        /// The domain, as the parameter table prints it.
+        domain: String,
+        /// The value given.
+        value: String,
+    },
+    /// One component of a vector is wrong.
+    #[error("{axis}: {why}")]
+    Component {
+        /// `x`, `y` or `z`.
+        axis: &'static str,
+        /// What is wrong with it.
+        why: Box<ValueError>,
+    },
+    /// Not one of the names a choice takes.
+    #[error("{0}")]
+    Name(String),
+    /// `range_min` and `range_max` bound no interval.
+    #[error("bounds need finite range_min < range_max, got {lo} and {hi}")]
+    Bounds {
+        /// `range_min`, rad.
+        lo: f64,
+        /// `range_max`, rad.
+        hi: f64,
+    },
+}
+
 /// A type a parameter can have: how it reads from and writes to YAML and ROS, and how it is
 /// checked against a [`Domain`].
 pub trait Setting: Sized {
@@ -141,22 +180,22 @@ pub trait Setting: Sized {
     /// The domain every value of the type has, unless the declaration narrows it.
     const DOMAIN: Domain = Domain::Any;
     /// Reads a YAML value; `Err` says why not.
-    fn from_yaml(value: Value) -> Result<Self, String>;
+    fn from_yaml(value: Value) -> Result<Self, ValueError>;
     /// The YAML value.
     fn to_yaml(&self) -> Value;
     /// `Ok` when the value lies in `domain`; the reason otherwise.
-    fn check(&self, _domain: &Domain) -> Result<(), String> {
+    fn check(&self, _domain: &Domain) -> Result<(), ValueError> {
         Ok(())
     }
 }
 
-fn from_serde<T: serde::de::DeserializeOwned>(value: Value) -> Result<T, String> {
-    serde_yaml_ng::from_value(value).map_err(|e| e.to_string())
+fn from_serde<T: serde::de::DeserializeOwned>(value: Value) -> Result<T, ValueError> {
+    serde_yaml_ng::from_value(value).map_err(|e| ValueError::Type(e.to_string()))
 }
 
 impl Setting for bool {
     const ROS_TYPE: RosType = RosType::Bool;
-    fn from_yaml(value: Value) -> Result<Self, String> {
+    fn from_yaml(value: Value) -> Result<Self, ValueError> {
         from_serde(value)
     }
     fn to_yaml(&self) -> Value {
@@ -166,7 +205,7 @@ impl Setting for bool {
 
 impl Setting for String {
     const ROS_TYPE: RosType = RosType::String;
-    fn from_yaml(value: Value) -> Result<Self, String> {
+    fn from_yaml(value: Value) -> Result<Self, ValueError> {
         from_serde(value)
     }
     fn to_yaml(&self) -> Value {
@@ -176,16 +215,19 @@ impl Setting for String {
 
 impl Setting for i64 {
     const ROS_TYPE: RosType = RosType::Integer;
-    fn from_yaml(value: Value) -> Result<Self, String> {
+    fn from_yaml(value: Value) -> Result<Self, ValueError> {
         from_serde(value)
     }
     fn to_yaml(&self) -> Value {
         Value::Number((*self).into())
     }
-    fn check(&self, domain: &Domain) -> Result<(), String> {
+    fn check(&self, domain: &Domain) -> Result<(), ValueError> {
         match domain {
             Domain::Integer { min, max } if !(min..=max).contains(&self) => {
-                Err(format!("must be {domain}, got {self}"))
+                Err(ValueError::Domain {
+                    domain: domain.to_string(),
+                    value: self.to_string(),
+                })
             }
             _ => Ok(()),
         }
@@ -194,17 +236,20 @@ impl Setting for i64 {
 
 impl Setting for f64 {
     const ROS_TYPE: RosType = RosType::Double;
-    fn from_yaml(value: Value) -> Result<Self, String> {
+    fn from_yaml(value: Value) -> Result<Self, ValueError> {
         from_serde(value)
     }
     fn to_yaml(&self) -> Value {
         Value::Number((*self).into())
     }
-    fn check(&self, domain: &Domain) -> Result<(), String> {
+    fn check(&self, domain: &Domain) -> Result<(), ValueError> {
         match domain {
             // Written so that NaN fails.
             Domain::Real { min, max } if !(*self >= *min && *self <= *max) => {
-                Err(format!("must be {domain}, got {}", Real(*self)))
+                Err(ValueError::Domain {
+                    domain: domain.to_string(),
+                    value: Real(*self).to_string(),
+                })
             }
             _ => Ok(()),
         }
@@ -214,17 +259,19 @@ impl Setting for f64 {
 /// Three real numbers (a vector), each checked against the domain.
 impl Setting for [f64; 3] {
     const ROS_TYPE: RosType = RosType::DoubleArray;
-    fn from_yaml(value: Value) -> Result<Self, String> {
+    fn from_yaml(value: Value) -> Result<Self, ValueError> {
         let list: Vec<f64> = from_serde(value)?;
-        <[f64; 3]>::try_from(list.as_slice())
-            .map_err(|_| format!("expected 3 numbers [x, y, z], got {}", list.len()))
+        <[f64; 3]>::try_from(list.as_slice()).map_err(|_| ValueError::Components(list.len()))
     }
     fn to_yaml(&self) -> Value {
         Value::Sequence(self.iter().map(|v| Value::Number((*v).into())).collect())
     }
-    fn check(&self, domain: &Domain) -> Result<(), String> {
+    fn check(&self, domain: &Domain) -> Result<(), ValueError> {
         for (axis, v) in ["x", "y", "z"].into_iter().zip(self) {
-            v.check(domain).map_err(|why| format!("{axis}: {why}"))?;
+            v.check(domain).map_err(|why| ValueError::Component {
+                axis,
+                why: Box::new(why),
+            })?;
         }
         Ok(())
     }
@@ -233,10 +280,10 @@ impl Setting for [f64; 3] {
 impl<T: Choice> Setting for T {
     const ROS_TYPE: RosType = RosType::String;
     const DOMAIN: Domain = Domain::Choices(T::NAMES);
-    fn from_yaml(value: Value) -> Result<Self, String> {
+    fn from_yaml(value: Value) -> Result<Self, ValueError> {
         from_serde::<String>(value)?
             .parse::<T>()
-            .map_err(|e| e.to_string())
+            .map_err(|e| ValueError::Name(e.to_string()))
     }
     fn to_yaml(&self) -> Value {
         Value::String(self.to_string())

@@ -9,7 +9,7 @@ mod params;
 pub mod render;
 
 pub use choices::{bounds, Choice, InvalidBounds, RangeKind, UnknownName};
-pub use declare::{Domain, Parameter, RosType};
+pub use declare::{Domain, Parameter, RosType, ValueError};
 pub use params::{Config, PARAMETERS};
 
 use crate::answer::Rules;
@@ -72,7 +72,7 @@ pub enum ConfigError {
         /// The parameter.
         name: &'static str,
         /// What is wrong.
-        why: String,
+        why: ValueError,
     },
     /// A params file has no `ros__parameters` section for the node.
     #[error("{origin} has no section for node {node} (found: {}); a params file for it starts with `{node}:` or `/**:`, then `ros__parameters:`", if .found.is_empty() { "none".to_string() } else { .found.join(", ") })]
@@ -239,7 +239,7 @@ impl Config {
         let range = self.range.allowed(self.range_min, self.range_max).map_err(
             |InvalidBounds { lo, hi }| ConfigError::Value {
                 name: "range_min",
-                why: format!("bounds need finite range_min < range_max, got {lo} and {hi}"),
+                why: ValueError::Bounds { lo, hi },
             },
         )?;
         Ok(Settings {
