@@ -62,8 +62,7 @@ fn message(i: usize, c: &grasp_orient::solver::Candidate) -> GraspCandidate {
     }
 }
 
-/// Longer than a screen: it reads top to bottom as the report it prints, one measurement after
-/// another, each with its baseline.
+/// The report, one measurement after another, each with its baseline.
 fn main() {
     let n: usize = std::env::args()
         .skip(1)
@@ -77,13 +76,18 @@ fn main() {
     let dir = common::run::temp_dir("bench");
     let dir = dir.path();
 
-    // 1. The answering path with and without a live recording, alternated, best of 5.
+    recording_cost(&pool, &settings, dir);
+    bag_and_replay(&pool, &settings, dir, n);
+}
+
+/// The answering path with and without a live recording, alternated, best of 5.
+fn recording_cost(pool: &[GraspCandidate], settings: &Settings, dir: &std::path::Path) {
     let rounds = 200_000;
     let (mut off, mut on) = (f64::INFINITY, f64::INFINITY);
     for _ in 0..5 {
         let t = Instant::now();
         for i in 0..rounds {
-            black_box(answer(&pool[i % pool.len()], &settings));
+            black_box(answer(&pool[i % pool.len()], settings));
         }
         off = off.min(t.elapsed().as_secs_f64());
         let recorder = Recorder::start(
@@ -97,7 +101,7 @@ fn main() {
         let t = Instant::now();
         for i in 0..rounds {
             let c = &pool[i % pool.len()];
-            let a = answer(c, &settings);
+            let a = answer(c, settings);
             let now = i as u64;
             recorder.record(Entry {
                 payload: Payload::Candidate(Box::new(c.clone())),
@@ -122,8 +126,10 @@ fn main() {
         rounds as f64 / on,
         100.0 * (on - off) / off
     );
+}
 
-    // 2. A bag of n candidates with their answers, then replay it.
+/// A bag of `n` candidates with their answers, then replay it.
+fn bag_and_replay(pool: &[GraspCandidate], settings: &Settings, dir: &std::path::Path, n: usize) {
     let path = dir.join("big.mcap");
     std::fs::remove_file(&path).ok();
     let t = Instant::now();
@@ -131,7 +137,7 @@ fn main() {
     for i in 0..n {
         let mut c = pool[i % pool.len()].clone();
         c.id = format!("g{i}").into();
-        let a = answer(&c, &settings);
+        let a = answer(&c, settings);
         let time = 1_000_000_000 + i as u64 * 1000;
         writer
             .write(&Entry {
@@ -159,7 +165,7 @@ fn main() {
     let recorded = bag::read(&path).expect("read");
     let read_s = t.elapsed().as_secs_f64();
     let t2 = Instant::now();
-    let summary = replay(&recorded, &Plan::fixed(settings), |_| {}).expect("replays");
+    let summary = replay(&recorded, &Plan::fixed(*settings), |_| {}).expect("replays");
     let solve_s = t2.elapsed().as_secs_f64();
     let total = t.elapsed().as_secs_f64();
     assert_eq!(summary.compared, n as u64);

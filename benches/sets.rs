@@ -1,11 +1,11 @@
 //! A set of 1,000 candidates answered and ranked in-process, against the same 1,000 candidates
 //! answered one by one, in one process on one core: what a set costs over single candidates
 //! (targets: at most 1.1 times the singles, and at most 1 ms). Both answer with
-//! `sets::answer_one` under the default rules (the set adds its ranking); both build the full
+//! `answer::answer_one` under the default rules (the set adds its ranking); both build the full
 //! wire answers, as the node publishes them. Also printed, to show where a set's extra time goes:
 //! the singles' answers kept in a list (as a set keeps them until it is published), and the
 //! ranking alone; and, to show what more cores buy, the set on a pool of every core
-//! (`sets::solver_pool`, what the node answers large sets on), against a pool of as many started
+//! (`answer::solver_pool`, what the node answers large sets on), against a pool of as many started
 //! threads that the calling thread waits on (the node's pool before 2026-12-01, night); and the
 //! set on one thread and on the pool right after the process idled 0, 2 and 10 ms, as a node's
 //! sets come, which on a virtual machine whose cores slow down when idle is slower, and gains
@@ -97,31 +97,9 @@ fn main() {
         black_box(answer_set(&set, &settings, &rules));
     }
     let runs = 201;
-    let (mut singles, mut kept, mut sets) = (Vec::new(), Vec::new(), Vec::new());
-    for _ in 0..5 {
-        singles.push(median_secs(runs, || {
-            for c in &set.candidates {
-                black_box(answer_one(black_box(c), &settings, &rules));
-            }
-        }));
-        kept.push(median_secs(runs, || {
-            let answers: Vec<_> = set
-                .candidates
-                .iter()
-                .map(|c| answer_one(black_box(c), &settings, &rules))
-                .collect();
-            black_box(answers);
-        }));
-        sets.push(median_secs(runs, || {
-            black_box(answer_set(black_box(&set), &settings, &rules));
-        }));
-    }
-    for v in [&mut singles, &mut kept, &mut sets] {
-        v.sort_by(f64::total_cmp);
-    }
-    let (single, kept, whole) = (singles[2], kept[2], sets[2]);
+    let (single, kept, whole) = one_core(&set, &settings, &rules, runs);
     let answers = answer_set(&set, &settings, &rules);
-    // The node's pool (`sets::solver_pool`: this thread and cores - 1 started), here with every
+    // The node's pool (`answer::solver_pool`: this thread and cores - 1 started), here with every
     // core: what more cores buy. Against it, a pool of as many started threads, which this thread
     // waits on (how the node's pool was built before). The two take turns set by set, so that each
     // pool's threads have gone idle when a set comes, as between the sets a node is sent.
@@ -131,26 +109,9 @@ fn main() {
         .build()
         .ok();
     let node_pool = grasp_orient::answer::solver_pool(cores).ok();
-    let pooled = node_pool.as_ref().map(|pool| {
-        let time = |pool: &rayon::ThreadPool| {
-            let t = Instant::now();
-            black_box(answer_set_on(
-                black_box(&set),
-                &settings,
-                &rules,
-                Some(pool),
-            ));
-            t.elapsed().as_secs_f64()
-        };
-        let (mut ours, mut theirs) = (Vec::new(), Vec::new());
-        for _ in 0..5 * runs {
-            ours.push(time(pool));
-            if let Some(p) = &started {
-                theirs.push(time(p));
-            }
-        }
-        (median(ours).unwrap_or(f64::NAN), median(theirs))
-    });
+    let pooled = node_pool
+        .as_ref()
+        .map(|pool| pools_in_turns(&set, &settings, &rules, pool, started.as_ref(), runs));
     let idled: Vec<(u64, Idled)> = node_pool.as_ref().map_or_else(Vec::new, |pool| {
         [0, 2, 10]
             .into_iter()
@@ -214,6 +175,64 @@ fn main() {
             ": the ratio is not met"
         }
     );
+}
+
+/// One core, the middle of 5 medians of `runs` each: the set's candidates answered one by one, the
+/// same with the answers kept in a list, and the set answered and ranked, s.
+fn one_core(
+    set: &GraspCandidateSet,
+    settings: &Settings,
+    rules: &Rules,
+    runs: usize,
+) -> (f64, f64, f64) {
+    let (mut singles, mut kept, mut sets) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..5 {
+        singles.push(median_secs(runs, || {
+            for c in &set.candidates {
+                black_box(answer_one(black_box(c), settings, rules));
+            }
+        }));
+        kept.push(median_secs(runs, || {
+            let answers: Vec<_> = set
+                .candidates
+                .iter()
+                .map(|c| answer_one(black_box(c), settings, rules))
+                .collect();
+            black_box(answers);
+        }));
+        sets.push(median_secs(runs, || {
+            black_box(answer_set(black_box(set), settings, rules));
+        }));
+    }
+    for v in [&mut singles, &mut kept, &mut sets] {
+        v.sort_by(f64::total_cmp);
+    }
+    (singles[2], kept[2], sets[2])
+}
+
+/// The node's pool (this thread and the started ones) against a pool of as many started threads
+/// that this thread waits on, taking turns set by set: the medians of `5 * runs` sets each, s.
+fn pools_in_turns(
+    set: &GraspCandidateSet,
+    settings: &Settings,
+    rules: &Rules,
+    pool: &rayon::ThreadPool,
+    started: Option<&rayon::ThreadPool>,
+    runs: usize,
+) -> (f64, Option<f64>) {
+    let time = |pool: &rayon::ThreadPool| {
+        let t = Instant::now();
+        black_box(answer_set_on(black_box(set), settings, rules, Some(pool)));
+        t.elapsed().as_secs_f64()
+    };
+    let (mut ours, mut theirs) = (Vec::new(), Vec::new());
+    for _ in 0..5 * runs {
+        ours.push(time(pool));
+        if let Some(p) = started {
+            theirs.push(time(p));
+        }
+    }
+    (median(ours).unwrap_or(f64::NAN), median(theirs))
 }
 
 /// Medians, s, of a set answered right after the process slept.

@@ -123,8 +123,8 @@ fn planar_reply(m: &GraspCandidate, settings: &Settings) -> GripRecommendation {
 
 /// The answer to a candidate read in the spatial model. A mass tolerance alone scales every
 /// force of the nominal answer by `(m + Δm) / m`: at a fixed pose every force is proportional to
-/// the mass (`crates/solver/src/planar/robust/mod.rs`, section 1), so the largest mass is the worst and the pose
-/// does not change. A centre-of-mass box is answered by [`solve_spatial_robust`]: every object
+/// the mass (`crates/solver/src/planar/robust/mod.rs`, section 1), so the largest mass is the
+/// worst and the pose does not change. A centre-of-mass box is answered by [`solve_spatial_robust`]: every object
 /// swings about the contact axis to hang in its own plane, and the answer fixes the tilt of the
 /// axis whose worst case is least ([`spatial_robust_recommended`]).
 fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {

@@ -9,7 +9,7 @@
 //! - [`markers`]: an answer drawn for RViz and Foxglove.
 //!
 //! To add an output field: fill it here (or in the solver), declare it in `msg/*.msg` and the wire
-//! struct (`crate::msg`), and map it in `msg/convert.rs`.
+//! struct (`crate::msg`), and map it in `src/msg/convert.rs`.
 
 mod candidate;
 pub mod markers;

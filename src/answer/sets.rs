@@ -7,8 +7,8 @@
 //! two contacts. With coupled fingers (one motor through a rack, pinion or linkage) the motor gives
 //! the mean of the two pushes, which is exactly `internal_force`; with independently driven fingers
 //! each gives its own push, and the larger, `finger_force`, is what each must be able to give
-//! (derivation in `crates/solver/src/planar/finger.rs`). [`GripperDrive`] picks which of the two is *the grip force*
-//! compared with `max_grip_force` and used by the ranking.
+//! (derivation in `crates/solver/src/planar/finger.rs`). [`GripperDrive`] picks which of the two
+//! is *the grip force* compared with `max_grip_force` and used by the ranking.
 //!
 //! # Rules
 //! - A candidate that can be held (status 0) but needs more grip force than `max_grip_force`

@@ -7,8 +7,8 @@
 //! `--mass-tolerance` where it gives none) adds, on the power chart, each vertex's curve (the
 //! object with its centre of mass at that vertex of the box cut by the object, at the largest
 //! mass) and their upper envelope, the worst case that `solve_robust` minimises (same θ for every
-//! vertex: the paper frame's axes are the contacts', `crates/solver/src/planar/robust/mod.rs` section 2), with the
-//! robust recommendation on it.
+//! vertex: the paper frame's axes are the contacts', `crates/solver/src/planar/robust/mod.rs`
+//! section 2), with the robust recommendation on it.
 
 use super::SolveOptions;
 use anyhow::{anyhow, Context};

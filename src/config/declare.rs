@@ -133,7 +133,8 @@ impl Parameter {
     }
 }
 
-/// Why a value does not fit its parameter: the words after "parameter NAME: ".
+/// Why a value does not fit its parameter (in a [`ConfigError`](super::ConfigError), the words
+/// after "parameter NAME: "; for a command-line option, the whole reason).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum ValueError {

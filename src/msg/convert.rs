@@ -20,7 +20,8 @@ use nalgebra::Vector2;
 /// Longest accepted `id` and `header.frame_id`, bytes.
 pub const MAX_TEXT_BYTES: usize = 1024;
 
-/// What makes a candidate message unusable before the solver sees it.
+/// What makes a candidate message unusable: its own limits (text lengths, `model`), checked before
+/// the solver sees it, and the solver's refusal of its values ([`InvalidInput`]).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum MessageLimits {

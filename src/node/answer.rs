@@ -106,7 +106,7 @@ pub struct Answerer {
 
 /// The threads a large set is answered on: `threads` of them (parameter `solver_threads`), or one
 /// per core for 0, counting the node's own thread, which asks for the pool with its first large
-/// set and solves its share of each (`sets::solver_pool`); none for 1, or when the system refuses
+/// set and solves its share of each (`answer::solver_pool`); none for 1, or when the system refuses
 /// them (then the node's own thread answers alone).
 /// While a set is solved the DDS threads have little to do (the set has arrived and its answer is
 /// not yet written): measured from rclpy on two cores by `benches/bench_sets.py`, two solver

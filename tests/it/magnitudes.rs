@@ -386,7 +386,7 @@ proptest! {
     }
 }
 
-/// The three cases, each at the magnitude reported.
+/// The three cases first reported, each at the magnitude reported.
 #[test]
 fn tiny_gravity_normals_and_mass_are_answered_as_at_unit_scale() {
     let line = include_str!("../../examples/paper_cases.jsonl")

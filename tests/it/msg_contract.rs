@@ -263,7 +263,7 @@ fn embedded_definitions_are_their_files(of: impl Fn(&str) -> bool) {
     assert!(checked > 0, "no embedded definition was checked");
 }
 
-/// The contract in the issue fixes the first fields of GripRecommendation; extra fields may only
+/// The first release's contract fixes the first fields of GripRecommendation; extra fields may only
 /// come after them.
 #[test]
 fn contract_fields_come_first_and_in_order() {

@@ -20,7 +20,7 @@ use crate::util::robust::{
     arcs, finger_pushes, in_arc, minimise_worst, near_contact_line, quarter_turns,
     random_tolerances, side_of_contact_line, worst_at, RefObject, RefRegion,
 };
-use crate::util::{random_grasp, wrap, RefObjective, RefRange};
+use crate::util::{random_grasp, wrap, RefObjective, RefPoint, RefRange};
 use grasp_orient::solver::{
     solve_orientation, solve_robust, AllowedRange, BoxPointKind, Candidate, NoCommonOrientation,
     Objective, RobustRecommendation, RobustVerdict, Settings, Uncertainty, Verdict,
@@ -211,8 +211,9 @@ fn check_no_common(
     }
 }
 
-/// Every number of a recommendation against the reference. Long by nature: one check after
-/// another, each with its own message.
+/// Every number of a recommendation against the reference, one check after another, each with its
+/// own message: the worst power, the worst forces, the nominal object, the current pose, the
+/// allowed range and the optimality.
 fn check_recommended(
     c: &Candidate,
     half: Vector2<f64>,
@@ -267,9 +268,62 @@ fn check_recommended(
     }
     let there = at(r.gripping_power_at.position, m_max, omega);
     assert!((there.power - r.gripping_power).abs() <= TOL * scale);
-    // Internal and finger force: no sampled object needs more; the reported place needs that.
-    // Forces proportional to the mass are largest at the largest mass when positive, at the
-    // smallest when negative (the 1-norm's squeeze can be).
+    let case = Case { c, half, tm, s, r };
+    check_forces(&case, (internal, finger), &region, &at, tally);
+    // The nominal object at the recommended pose.
+    let nominal = at(c.center_of_mass, c.mass, omega);
+    let w = nominal.power.max(c.mass * g);
+    let mut err_n = (nominal.power - r.gripping_power_nominal).abs() / w;
+    err_n = err_n.max((nominal.internal_force - r.internal_force_nominal).abs() / w);
+    for k in 0..4 {
+        err_n = err_n.max((nominal.forces[k] - r.contact_forces[k]).abs() / w);
+    }
+    assert!(
+        err_n <= TOL,
+        "nominal object at the pose: {nominal:?} vs {r:?}"
+    );
+    tally.worst_nominal = tally.worst_nominal.max(err_n);
+    // The current pose.
+    let (now, now_internal, now_finger, _) = worst_at(c, &objs, 0.0);
+    assert!((now - r.gripping_power_current).abs() <= TOL * now.abs().max(1e-3 * w_max));
+    if s.objective != Objective::Norm1 {
+        let fscale = now_internal.abs().max(now.abs()).max(w_max);
+        assert!(
+            (now_internal - r.internal_force_current).abs() <= TOL * fscale,
+            "internal force at the current pose {} vs the reference's {now_internal}; {c:?} ± {half:?}, {tm}",
+            r.internal_force_current
+        );
+        assert!((now_finger - r.finger_force_current).abs() <= TOL * fscale);
+    }
+    let range = check_allowed_range(&case, &points);
+    check_optimality(&case, density, range, scale, tally);
+    tally.recommended += 1;
+}
+
+/// One robust recommendation under test, with the candidate and tolerances it answers.
+#[derive(Clone, Copy)]
+struct Case<'a> {
+    c: &'a Candidate,
+    half: Vector2<f64>,
+    tm: f64,
+    s: &'a Settings,
+    r: &'a RobustRecommendation,
+}
+
+/// The worst internal and finger force at the recommended pose: no sampled object needs more than
+/// reported (`(internal, finger)`: the largest over them), and the reported place needs that. Forces proportional to the mass are largest at the largest mass when positive, at
+/// the smallest when negative (the 1-norm's squeeze can be).
+fn check_forces(
+    case: &Case,
+    (internal, finger): (f64, f64),
+    region: &RefRegion,
+    at: &dyn Fn(Vector2<f64>, f64, f64) -> RefPoint,
+    tally: &mut Tally,
+) {
+    let Case { c, half, tm, s, r } = *case;
+    let m_max = c.mass + tm;
+    let w_max = m_max * c.gravity.norm();
+    let omega = r.wrist_rotation;
     let m_min = c.mass - tm;
     let mass_for = |v: f64| if v < 0.0 { m_min } else { m_max };
     let there = at(
@@ -321,34 +375,15 @@ fn check_recommended(
     }
     tally.worst_internal = tally.worst_internal.max(err_i);
     tally.worst_finger = tally.worst_finger.max(err_f);
-    // The nominal object at the recommended pose.
-    let nominal = at(c.center_of_mass, c.mass, omega);
-    let w = nominal.power.max(c.mass * g);
-    let mut err_n = (nominal.power - r.gripping_power_nominal).abs() / w;
-    err_n = err_n.max((nominal.internal_force - r.internal_force_nominal).abs() / w);
-    for k in 0..4 {
-        err_n = err_n.max((nominal.forces[k] - r.contact_forces[k]).abs() / w);
-    }
-    assert!(
-        err_n <= TOL,
-        "nominal object at the pose: {nominal:?} vs {r:?}"
-    );
-    tally.worst_nominal = tally.worst_nominal.max(err_n);
-    // The current pose.
-    let (now, now_internal, now_finger, _) = worst_at(c, &objs, 0.0);
-    assert!((now - r.gripping_power_current).abs() <= TOL * now.abs().max(1e-3 * w_max));
-    if s.objective != Objective::Norm1 {
-        let fscale = now_internal.abs().max(now.abs()).max(w_max);
-        assert!(
-            (now_internal - r.internal_force_current).abs() <= TOL * fscale,
-            "internal force at the current pose {} vs the reference's {now_internal}; {c:?} ± {half:?}, {tm}",
-            r.internal_force_current
-        );
-        assert!((now_finger - r.finger_force_current).abs() <= TOL * fscale);
-    }
-    // The allowed range: every object allows all of it, and it ends where one stops allowing.
+}
+
+/// The allowed range: every object allows all of it, and it ends where one stops allowing. Gives
+/// the range as `(start, length)` of wrist rotations.
+fn check_allowed_range(case: &Case, points: &[Vector2<f64>]) -> (f64, f64) {
+    let Case { c, half, s, r, .. } = *case;
+    let omega = r.wrist_rotation;
     let range = ref_range(s.range);
-    let point_objs = objects(c, &points, &[c.mass], s);
+    let point_objs = objects(c, points, &[c.mass], s);
     let allowed = arcs(&point_objs, range, c.gravity);
     assert_eq!(r.allowed.len(), 1);
     let (a, b) = r.allowed[0];
@@ -370,7 +405,23 @@ fn check_recommended(
         );
     }
     assert!(in_arc((start, len), omega, 1e-12));
-    // Optimality: scan the worst case over the allowed range.
+    (start, len)
+}
+
+/// Optimality: the reference's scan of the worst case over the allowed range `(start, len)` finds
+/// nothing lower, and the solver's worst case is no higher than the scan's least (relative to
+/// `scale`).
+fn check_optimality(
+    case: &Case,
+    density: Density,
+    (start, len): (f64, f64),
+    scale: f64,
+    tally: &mut Tally,
+) {
+    let Case { c, half, tm, s, r } = *case;
+    let d = (c.contact_1 - c.contact_2).norm();
+    let m_max = c.mass + tm;
+    let omega = r.wrist_rotation;
     let scan_region = RefRegion::new(c, half, density.scan_lattice, density.boundary * d);
     let scan_points: Vec<_> = scan_region
         .extreme
@@ -407,7 +458,6 @@ fn check_recommended(
         undetected
     };
     tally.scan_bound = tally.scan_bound.max(undetected / scale);
-    tally.recommended += 1;
 }
 
 fn run(seed: u64, wanted: usize, s: Settings, density: Density) -> Tally {

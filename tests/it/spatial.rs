@@ -67,10 +67,8 @@ fn rotate(k: &Vector3<f64>, angle: f64, v: &Vector3<f64>) -> Vector3<f64> {
 }
 
 /// Everything checkable at the solver's own answer: the reference's power there, the solver's
-/// forces against the 3D balance and cones, the rotation, and the current pose.
-///
-/// Longer than a screen: one block of checks per part of the answer, in the answer's order, each
-/// with the tolerance it needs and why.
+/// forces against the 3D balance and cones, the rotation, and the current pose; one block of
+/// checks per part of the answer, in the answer's order, each with the tolerance it needs.
 fn check_answer(c: &SpatialCandidate, s: &Settings, worst: &mut Worst) {
     let r = spatial(c, s);
     let reference = SpatialReference::new(c, s.friction_safety_factor);
@@ -87,17 +85,7 @@ fn check_answer(c: &SpatialCandidate, s: &Settings, worst: &mut Worst) {
     else {
         panic!("reference: {held:?} at the solver's pose; grasp {c:?}, answer {r:?}");
     };
-    match clarabel {
-        Some(p) => {
-            let gap = (p - power).abs() / scale;
-            assert!(
-                gap <= 1e-5,
-                "Clarabel {p} and its polish {power} disagree; {c:?}"
-            );
-            worst.clarabel = worst.clarabel.max(gap);
-        }
-        None => worst.clarabel_failed += 1,
-    }
+    note_clarabel(worst, clarabel, power, scale, c);
     // The objective at the solver's pose, and the squeeze there (which the reference's least-norm
     // forces share with the solver's: both take the least squeeze not below zero).
     let want = match s.objective {
@@ -125,44 +113,11 @@ fn check_answer(c: &SpatialCandidate, s: &Settings, worst: &mut Worst) {
     );
     worst.power = worst.power.max(finger_err);
     // 2. The solver's own forces hold the object in 3D, inside the true cones.
-    let [f1, f2] = r.force_vectors;
-    let w = r.gravity_direction * weight;
-    let d = (c.contact_1 - c.contact_2).norm();
-    let force = (f1 + f2 + w).norm() / weight;
-    let moment = ((c.contact_1 - c.center_of_mass).cross(&f1)
-        + (c.contact_2 - c.center_of_mass).cross(&f2))
-    .norm()
-        / (weight * d);
-    let mut balance = force.max(moment);
-    for (f, n, mu) in [
-        (f1, c.normal_1, c.friction_1),
-        (f2, c.normal_2, c.friction_2),
-    ] {
-        let mu = mu / s.friction_safety_factor;
-        let n = n.normalize();
-        let along = f.dot(&n);
-        let across = (f - n * along).norm();
-        // Outside the cone by this much of the weight (negative inside).
-        balance = balance.max((across - mu * along) / (weight * (1.0 + mu)));
-    }
-    let norm = (f1.norm_squared() + f2.norm_squared()).sqrt();
-    if s.objective == Objective::Norm2 {
-        balance = balance.max((norm - r.planar.gripping_power).abs() / scale);
-    }
+    let balance = balance_error(c, s, &r, scale);
     assert!(balance <= 1e-9, "solver's forces: {balance:e}; grasp {c:?}");
     worst.balance = worst.balance.max(balance);
     // 3. The rotation turns the current gravity into the recommended one, and is the smallest.
-    let g0 = c.gravity.normalize();
-    let k = r.rotation_axis;
-    let turned = rotate(&k, -r.rotation_angle, &g0);
-    let smallest = g0
-        .cross(&r.gravity_direction)
-        .norm()
-        .atan2(g0.dot(&r.gravity_direction));
-    let rot_err = (turned - r.gravity_direction)
-        .norm()
-        .max((smallest - r.rotation_angle).abs())
-        .max((k.norm() - 1.0).abs());
+    let rot_err = rotation_error(c, &r);
     assert!(
         rot_err <= 1e-9 && (0.0..=std::f64::consts::PI).contains(&r.rotation_angle),
         "rotation: {rot_err:e}; grasp {c:?}, answer {r:?}"
@@ -205,6 +160,76 @@ fn check_answer(c: &SpatialCandidate, s: &Settings, worst: &mut Worst) {
         (pose, held) => panic!("current pose {pose:?} but the reference says {held:?}; {c:?}"),
     }
     worst.grasps += 1;
+}
+
+/// Clarabel's own optimum agrees with its polished one, relative to `scale` (or Clarabel failed,
+/// which is counted).
+fn note_clarabel(
+    worst: &mut Worst,
+    clarabel: Option<f64>,
+    power: f64,
+    scale: f64,
+    c: &SpatialCandidate,
+) {
+    match clarabel {
+        Some(p) => {
+            let gap = (p - power).abs() / scale;
+            assert!(
+                gap <= 1e-5,
+                "Clarabel {p} and its polish {power} disagree; {c:?}"
+            );
+            worst.clarabel = worst.clarabel.max(gap);
+        }
+        None => worst.clarabel_failed += 1,
+    }
+}
+
+/// How far the solver's 3D contact forces are from holding the object inside the true cones, in
+/// units of the weight (and, under the 2-norm, how far their norm is from the reported power,
+/// relative to `scale`).
+fn balance_error(c: &SpatialCandidate, s: &Settings, r: &SpatialRecommendation, scale: f64) -> f64 {
+    let weight = c.mass * c.gravity.norm();
+    let [f1, f2] = r.force_vectors;
+    let w = r.gravity_direction * weight;
+    let d = (c.contact_1 - c.contact_2).norm();
+    let force = (f1 + f2 + w).norm() / weight;
+    let moment = ((c.contact_1 - c.center_of_mass).cross(&f1)
+        + (c.contact_2 - c.center_of_mass).cross(&f2))
+    .norm()
+        / (weight * d);
+    let mut balance = force.max(moment);
+    for (f, n, mu) in [
+        (f1, c.normal_1, c.friction_1),
+        (f2, c.normal_2, c.friction_2),
+    ] {
+        let mu = mu / s.friction_safety_factor;
+        let n = n.normalize();
+        let along = f.dot(&n);
+        let across = (f - n * along).norm();
+        // Outside the cone by this much of the weight (negative inside).
+        balance = balance.max((across - mu * along) / (weight * (1.0 + mu)));
+    }
+    let norm = (f1.norm_squared() + f2.norm_squared()).sqrt();
+    if s.objective == Objective::Norm2 {
+        balance = balance.max((norm - r.planar.gripping_power).abs() / scale);
+    }
+    balance
+}
+
+/// How far the reported rotation is from turning the current gravity into the recommended one by
+/// the smallest angle, about a unit axis.
+fn rotation_error(c: &SpatialCandidate, r: &SpatialRecommendation) -> f64 {
+    let g0 = c.gravity.normalize();
+    let k = r.rotation_axis;
+    let turned = rotate(&k, -r.rotation_angle, &g0);
+    let smallest = g0
+        .cross(&r.gravity_direction)
+        .norm()
+        .atan2(g0.dot(&r.gravity_direction));
+    (turned - r.gravity_direction)
+        .norm()
+        .max((smallest - r.rotation_angle).abs())
+        .max((k.norm() - 1.0).abs())
 }
 
 /// The larger push of two 3D contact forces along the contact line, into the object, N: what

@@ -325,12 +325,6 @@ fn scan_tilts(
             r.gravity_angle,
             r.allowed
         );
-        let a = (c.contact_1 - c.contact_2) / d;
-        let e1 = a
-            .cross(&Vector3::x())
-            .try_normalize(1e-6)
-            .unwrap_or_else(|| a.cross(&Vector3::y()).normalize());
-        let e2 = a.cross(&e1);
         let mut samples = region_samples(&c, &t, &r, per_edge, 0);
         if let Some((from, to)) = r.axis_segment {
             for i in 0..=per_edge + 1 {
@@ -344,82 +338,8 @@ fn scan_tilts(
             .filter(|th| r.allowed.iter().any(|(a, b)| (*a..=*b).contains(th)))
             .collect();
         for &theta in &scanned {
-            // The solver's own worst point at this tilt (its answer with the range pinned
-            // there), a point of the region like any other sample: the reference alone values it.
-            let pinned = Settings {
-                range: AllowedRange::Bounds {
-                    lo: theta,
-                    hi: theta + 1e-12,
-                },
-                ..settings
-            };
-            let mut here = samples.clone();
-            let v = solve_spatial_robust(&c, &u, &pinned);
-            if let Ok(SpatialRobustVerdict::Recommended(p)) = v {
-                let q = p.gripping_power_at.position;
-                assert!(
-                    in_region(&c, &t, &q),
-                    "grasp {k}: the pinned worst point {q:?} is outside the region"
-                );
-                here.push(q);
-            } else {
-                panic!("grasp {k}: no answer with the range pinned at {theta}: {v:?}");
-            }
-            let mut worst = f64::NEG_INFINITY;
-            for q in &here {
-                let object = SpatialCandidate {
-                    center_of_mass: *q,
-                    ..heavy
-                };
-                let reference = SpatialReference::new(&object, 1.0);
-                // Off the axis the object hangs in its own plane; on it, it does not swing and
-                // the roll of the gripper, left free, sets its plane: every plane is taken, the
-                // worst found by a scan of the planes refined by golden section.
-                let held = |g: &Vector3<f64>| {
-                    reference.at(g).power().unwrap_or_else(|| {
-                        panic!(
-                            "grasp {k}: at the allowed tilt {theta} the reference cannot hold \
-                             {q:?} under {g:?}"
-                        )
-                    })
-                };
-                let p = match hang(&c, q, theta) {
-                    Some(g) => {
-                        scan.socps += 1;
-                        held(&g)
-                    }
-                    None => {
-                        let mut at_plane = |psi: f64| {
-                            scan.socps += 1;
-                            held(
-                                &(a * theta.sin()
-                                    + (e1 * psi.cos() + e2 * psi.sin()) * theta.cos()),
-                            )
-                        };
-                        let step = std::f64::consts::TAU / AXIS_PLANES as f64;
-                        let (mut best, mut best_psi) = (f64::NEG_INFINITY, 0.0);
-                        for i in 0..AXIS_PLANES {
-                            let psi = step * i as f64;
-                            let p = at_plane(psi);
-                            if p > best {
-                                (best, best_psi) = (p, psi);
-                            }
-                        }
-                        let r = 0.5 * (5f64.sqrt() - 1.0);
-                        let (mut lo, mut hi) = (best_psi - step, best_psi + step);
-                        for _ in 0..60 {
-                            let (x1, x2) = (hi - r * (hi - lo), lo + r * (hi - lo));
-                            if at_plane(x1) >= at_plane(x2) {
-                                hi = x2;
-                            } else {
-                                lo = x1;
-                            }
-                        }
-                        best.max(at_plane(0.5 * (lo + hi)))
-                    }
-                };
-                worst = worst.max(p);
-            }
+            let here = with_pinned_worst(&c, &u, &settings, theta, &samples, k);
+            let worst = sampled_worst(&c, &heavy, &here, theta, k, &mut scan.socps);
             let margin = (worst - r.gripping_power) / r.gripping_power;
             scan.least_margin = scan.least_margin.min(margin);
             assert!(
@@ -442,28 +362,152 @@ fn scan_tilts(
             }
         }
         if range == AllowedRange::FromAbove {
-            let mid = 0.5 * (lo + hi);
-            let (mut lo_s, mut hi_s) = (-FRAC_PI_2, FRAC_PI_2);
-            for q in &dense {
-                if hang(&c, q, mid).is_none() {
-                    continue;
-                }
-                let up = from_above_limit(&c, q, mid, true);
-                let down = from_above_limit(&c, q, mid, false);
-                assert!(
-                    hi <= up + 1e-9 && lo >= down - 1e-9,
-                    "grasp {k}: the allowed range [{lo}, {hi}] exceeds [{down}, {up}] of {q:?}"
-                );
-                hi_s = hi_s.min(up);
-                lo_s = lo_s.max(down);
-            }
-            scan.range_slack = scan.range_slack.max(hi_s - hi).max(lo - lo_s);
+            let slack = from_above_slack(&c, &dense, (lo, hi), k);
+            scan.range_slack = scan.range_slack.max(slack);
         } else {
             assert_eq!(r.allowed, vec![(-FRAC_PI_2, FRAC_PI_2)]);
         }
         scan.grasps += 1;
     }
     scan
+}
+
+/// `samples` and the solver's own worst point at the tilt `theta` (its answer with the range
+/// pinned there), a point of the region like any other: the reference alone values it. `grasp`
+/// names the grasp in a failure.
+fn with_pinned_worst(
+    c: &SpatialCandidate,
+    u: &SpatialUncertainty,
+    settings: &Settings,
+    theta: f64,
+    samples: &[Vector3<f64>],
+    grasp: usize,
+) -> Vec<Vector3<f64>> {
+    use grasp_orient::solver::AllowedRange;
+    // The solver's own worst point at this tilt (its answer with the range pinned
+    // there), a point of the region like any other sample: the reference alone values it.
+    let pinned = Settings {
+        range: AllowedRange::Bounds {
+            lo: theta,
+            hi: theta + 1e-12,
+        },
+        ..*settings
+    };
+    let mut here = samples.to_vec();
+    let v = solve_spatial_robust(c, u, &pinned);
+    if let Ok(SpatialRobustVerdict::Recommended(p)) = v {
+        let q = p.gripping_power_at.position;
+        assert!(
+            in_region(c, &u.center_of_mass_tolerance, &q),
+            "grasp {grasp}: the pinned worst point {q:?} is outside the region"
+        );
+        here.push(q);
+    } else {
+        panic!("grasp {grasp}: no answer with the range pinned at {theta}: {v:?}");
+    }
+    here
+}
+
+/// The worst power over `points` at the tilt `theta`, by the 3D reference, each point the centre of
+/// mass of `heavy` (the grasp at the largest mass). Off the axis the object hangs in its own plane;
+/// on it, it does not swing and the roll of the gripper, left free, sets its plane: every plane is
+/// taken, the worst found by a scan of the planes refined by golden section. `socps` counts the
+/// reference's cone programs; `grasp` names the grasp in a failure.
+fn sampled_worst(
+    c: &SpatialCandidate,
+    heavy: &SpatialCandidate,
+    points: &[Vector3<f64>],
+    theta: f64,
+    grasp: usize,
+    socps: &mut usize,
+) -> f64 {
+    let d = (c.contact_1 - c.contact_2).norm();
+    let a = (c.contact_1 - c.contact_2) / d;
+    let e1 = a
+        .cross(&Vector3::x())
+        .try_normalize(1e-6)
+        .unwrap_or_else(|| a.cross(&Vector3::y()).normalize());
+    let e2 = a.cross(&e1);
+    let mut worst = f64::NEG_INFINITY;
+    for q in points {
+        let object = SpatialCandidate {
+            center_of_mass: *q,
+            ..*heavy
+        };
+        let reference = SpatialReference::new(&object, 1.0);
+        // Off the axis the object hangs in its own plane; on it, it does not swing and
+        // the roll of the gripper, left free, sets its plane: every plane is taken, the
+        // worst found by a scan of the planes refined by golden section.
+        let held = |g: &Vector3<f64>| {
+            reference.at(g).power().unwrap_or_else(|| {
+                panic!(
+                    "grasp {grasp}: at the allowed tilt {theta} the reference cannot hold \
+                     {q:?} under {g:?}"
+                )
+            })
+        };
+        let p = match hang(c, q, theta) {
+            Some(g) => {
+                *socps += 1;
+                held(&g)
+            }
+            None => {
+                let mut at_plane = |psi: f64| {
+                    *socps += 1;
+                    held(&(a * theta.sin() + (e1 * psi.cos() + e2 * psi.sin()) * theta.cos()))
+                };
+                let step = std::f64::consts::TAU / AXIS_PLANES as f64;
+                let (mut best, mut best_psi) = (f64::NEG_INFINITY, 0.0);
+                for i in 0..AXIS_PLANES {
+                    let psi = step * i as f64;
+                    let p = at_plane(psi);
+                    if p > best {
+                        (best, best_psi) = (p, psi);
+                    }
+                }
+                let r = 0.5 * (5f64.sqrt() - 1.0);
+                let (mut lo, mut hi) = (best_psi - step, best_psi + step);
+                for _ in 0..60 {
+                    let (x1, x2) = (hi - r * (hi - lo), lo + r * (hi - lo));
+                    if at_plane(x1) >= at_plane(x2) {
+                        hi = x2;
+                    } else {
+                        lo = x1;
+                    }
+                }
+                best.max(at_plane(0.5 * (lo + hi)))
+            }
+        };
+        worst = worst.max(p);
+    }
+    worst
+}
+
+/// The allowed range `[lo, hi]` of tilts exceeds no `dense` sample's own from-above bounds (found
+/// by bisection on the 3D definition at the range's middle); gives how far inside them it lies,
+/// rad. `grasp` names the grasp in a failure.
+fn from_above_slack(
+    c: &SpatialCandidate,
+    dense: &[Vector3<f64>],
+    (lo, hi): (f64, f64),
+    grasp: usize,
+) -> f64 {
+    let mid = 0.5 * (lo + hi);
+    let (mut lo_s, mut hi_s) = (-FRAC_PI_2, FRAC_PI_2);
+    for q in dense {
+        if hang(c, q, mid).is_none() {
+            continue;
+        }
+        let up = from_above_limit(c, q, mid, true);
+        let down = from_above_limit(c, q, mid, false);
+        assert!(
+            hi <= up + 1e-9 && lo >= down - 1e-9,
+            "grasp {grasp}: the allowed range [{lo}, {hi}] exceeds [{down}, {up}] of {q:?}"
+        );
+        hi_s = hi_s.min(up);
+        lo_s = lo_s.max(down);
+    }
+    (hi_s - hi).max(lo - lo_s)
 }
 
 #[test]

@@ -117,7 +117,7 @@ def load_paper_cases() -> list[dict]:
     return [json.loads(l) for l in PAPER_CASES.read_text().splitlines() if l.strip()]
 
 
-# One generator for every Python test: the port of tests/common/mod.rs random_grasp.
+# One generator for every Python test: the port of tests/it/util/mod.rs random_grasp.
 from mcap_util import random_grasp  # noqa: E402,F401
 
 

@@ -11,7 +11,7 @@
                         rosbags does not expose publish_time, so it is None there.
     read_mcap(path)     mcap.reader.make_reader + mcap_ros2.decoder.DecoderFactory.
 - mcap_facts(path): profile, schemas, channels with metadata, chunk compressions, raw payload headers.
-- The random force-closure grasp generator of tests/common/mod.rs (conftest re-exports it).
+- The random force-closure grasp generator of tests/it/util/mod.rs (conftest re-exports it).
 """
 from __future__ import annotations
 
@@ -351,7 +351,7 @@ def _cone_contains(p, n, mu, q) -> bool:
 
 
 def random_grasp(rng: random.Random, cid: str, frame_id: str = "object", stamp: tuple[int, int] | None = None) -> dict:
-    """A random force-closure grasp in a random frame (the generator of tests/common/mod.rs)."""
+    """A random force-closure grasp in a random frame (the generator of tests/it/util/mod.rs)."""
     u = rng.uniform
     while True:
         p1 = (u(-1, 1), u(-1, 1))
@@ -421,7 +421,7 @@ SPATIAL_KINDS = ("in_plane", "tilted", "near_axis", "on_axis")
 def random_spatial_grasp(rng: random.Random, cid: str, kind: str, frame_id: str = "object",
                          stamp: tuple[int, int] | None = None) -> dict:
     """A random spatial candidate (`model` 1) with force closure, in a random 3D frame and unit, built in a local
-    frame whose x-y plane is the grasp plane (independently of tests/common/spatial.rs, the same kinds):
+    frame whose x-y plane is the grasp plane (independently of tests/it/util/spatial.rs, the same kinds):
     - in_plane: normals in the plane; tilted: each normal tilted out of it by up to half its friction angle
       (so its sliced cone keeps the other contact); near_axis: the centre of mass 0.1% to 0.9% of the contact
       distance off the contact axis; on_axis: on it, normals within 0.8 of the friction angle of the axis.

@@ -205,7 +205,7 @@ def _with_dependency_headers_as_pkg_msg_name(src: Path, dst: Path):
         w.finish()
 
 
-def test_foxglove_check_fails_on_the_schema_text_of_issue_8(foxglove_dir, tmp_path):
+def test_foxglove_check_fails_on_pkg_msg_name_dependency_headers(foxglove_dir, tmp_path):
     """The check can fail: with dependencies named `pkg/msg/Name`, Foxglove's parser finds no definition for the
     `pkg/Name` of the fields and no channel decodes, while the Python readers accept the file."""
     bad = tmp_path / "pkg_msg_name_headers.mcap"

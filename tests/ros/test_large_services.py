@@ -85,7 +85,7 @@ def test_get_replies_of_10_kb_and_1_mb_reach_rclpy(services):
 
 
 def test_long_string_value_comes_back_whole(services):
-    # The issue's own case: a get of a 2,000-character record_dir, then 10 kB.
+    # The case first reported: a get of a 2,000-character record_dir, then 10 kB.
     for n in (2000, 10_000):
         path = "runs/" + "d" * (n - 5)
         req = SetParameters.Request(parameters=[Parameter(

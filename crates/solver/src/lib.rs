@@ -108,7 +108,8 @@ impl fmt::Display for Objective {
 
 /// A name that is not one of [`Objective::NAMES`].
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("{given:?} is not one of norm2, norm1, internal_force")]
+#[error("{given:?} is not one of {}", Objective::NAMES.join(", "))]
+#[non_exhaustive]
 pub struct UnknownObjective {
     /// What was given.
     pub given: String,

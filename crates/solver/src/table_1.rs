@@ -10,7 +10,7 @@ use crate::Candidate;
 /// frame (centre of mass at the origin, gravity along -y).
 ///
 /// # Panics
-/// For any other letter than `'a'` to `'d'`.
+/// For any other letter than `'a'` to `'d'`: the table has no other case.
 pub fn table_1(case: char) -> Candidate {
     use std::f64::consts::PI;
     let r3 = 3f64.sqrt();
@@ -19,7 +19,7 @@ pub fn table_1(case: char) -> Candidate {
         'b' => paper_grasp((5.0, 4.0), -3.0, (PI / 4.0, PI / 4.0), (1.5, 2.5)),
         'c' => paper_grasp((1.0, 1.0), -1.0, (PI / 2.0, PI / 2.0), (r3, 1.0 / r3)),
         'd' => paper_grasp((1.0, 3.0), -1.0, (PI / 2.0, PI / 2.0), (r3, 1.0 / r3)),
-        _ => unreachable!("Table 1 has four cases"),
+        _ => panic!("Table 1 has the cases 'a' to 'd', not {case:?}"),
     }
 }
 

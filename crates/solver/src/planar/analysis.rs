@@ -11,7 +11,7 @@
 //!
 //! So the minimiser is one of a short list of closed-form angles, each of which is evaluated.
 
-use super::curve::{self, Curve, Piece};
+use super::curve::{self, Curve, Piece, SAME_ANGLE};
 use super::finger;
 use super::frame::GraspFrame;
 use super::paper::{self, FORCE_SCALE};
@@ -24,7 +24,6 @@ use smallvec::{smallvec, SmallVec};
 use std::f64::consts::TAU;
 
 /// Two angles closer than this (rad) are the same point, for labels and duplicates.
-const SAME_ANGLE: f64 = 1e-9;
 /// Objective values closer than this, relative to themselves or to the weight, tie; the smaller
 /// wrist rotation wins.
 const TIE: f64 = 1e-12;

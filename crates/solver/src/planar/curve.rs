@@ -13,7 +13,7 @@ use crate::sinusoid::{next_periodic, Angle, QuadForm, Sinusoid};
 use std::f64::consts::{PI, TAU};
 
 /// Two local minima closer than this, rad, are one.
-const SAME_ANGLE: f64 = 1e-9;
+pub(crate) const SAME_ANGLE: f64 = 1e-9;
 
 /// `Q` or `S` of one piece.
 #[derive(Debug, Clone, Copy, PartialEq)]

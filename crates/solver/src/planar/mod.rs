@@ -2,7 +2,8 @@
 //!
 //! [`solve_orientation`] answers one [`Candidate`]; [`analyse`] gives the whole curve of gripping
 //! power over the graspable range. The submodules hold the steps: `frame` the paper frame and
-//! the input checks, `paper` the paper's closed forms, `analysis` the envelope and its minima,
+//! the input checks, `paper` the paper's closed forms, `analysis` the envelope and the objective on
+//! it, `curve` the objective's pieces and the walk that finds their local minima,
 //! `finger` the force each finger must give, and `robust` the worst case over a box of centres of
 //! mass and a mass tolerance.
 
