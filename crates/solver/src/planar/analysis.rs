@@ -355,9 +355,9 @@ impl Analysis {
         })
     }
 
-    /// `P` in newtons from a shape's raw value.
-    fn power_from_raw(&self, shape: &Curve, raw: f64) -> f64 {
-        shape.power_from_value(raw, self.frame.weight * FORCE_SCALE)
+    /// `P` in newtons of a piece's `shape` at `at`.
+    fn power(&self, shape: &Curve, at: &Angle) -> f64 {
+        shape.power(at, self.frame.weight * FORCE_SCALE)
     }
 
     /// The objective and the forces at any gravity angle, computed point-wise.
@@ -466,7 +466,7 @@ impl Analysis {
     fn local_minima(&self, labels: &[Option<(PaperCandidate, f64)>]) -> Vec<LocalMinimum> {
         curve::local_minima(
             &self.segments,
-            |at, shape| self.power_from_raw(shape, shape.value(at)),
+            |at, shape| self.power(shape, at),
             |theta| self.label_of(labels, theta),
         )
     }
@@ -572,7 +572,7 @@ impl Analysis {
                     .chain(inside.copied())
                     .chain(plateau)
                 {
-                    let p = self.power_from_raw(&seg.shape, seg.shape.value(&at));
+                    let p = self.power(&seg.shape, &at);
                     consider(at, p);
                 }
             }
@@ -714,7 +714,7 @@ mod tests {
                 let (lo, hi) = (seg.lo.theta, seg.hi.theta);
                 for k in 1..10 {
                     let t = lo + (hi - lo) * k as f64 / 10.0;
-                    let shape = a.power_from_raw(&seg.shape, seg.shape.value(&Angle::new(t)));
+                    let shape = a.power(&seg.shape, &Angle::new(t));
                     let point = a.evaluate(t).power;
                     assert!(
                         abs_diff_eq!(shape, point, epsilon = 1e-12 * point.abs().max(1.0)),

@@ -43,14 +43,9 @@ impl Curve {
 
     /// The objective in newtons, `k sqrt(Q)` or `k S`.
     pub(crate) fn power(&self, at: &Angle, k: f64) -> f64 {
-        self.power_from_value(self.value(at), k)
-    }
-
-    /// The objective in newtons from a value of `Q` or `S`.
-    pub(crate) fn power_from_value(&self, value: f64, k: f64) -> f64 {
         match self {
-            Curve::Quad(_) => k * value.max(0.0).sqrt(),
-            Curve::Sin(_) => k * value,
+            Curve::Quad(q) => k * q.value(at).max(0.0).sqrt(),
+            Curve::Sin(s) => k * s.value(at),
         }
     }
 
