@@ -333,13 +333,14 @@ fn scan_tilts(
             }
         }
         let dense = region_samples(&c, &t, &r, 12, 12);
+        let axes = axis_frame(&c);
         let scanned: Vec<f64> = (0..tilts)
             .map(|i| lo + (hi - lo) * i as f64 / (tilts - 1) as f64)
             .filter(|th| r.allowed.iter().any(|(a, b)| (*a..=*b).contains(th)))
             .collect();
         for &theta in &scanned {
             let here = with_pinned_worst(&c, &u, &settings, theta, &samples, k);
-            let worst = sampled_worst(&c, &heavy, &here, theta, k, &mut scan.socps);
+            let worst = sampled_worst(&c, &heavy, &here, theta, axes, k, &mut scan.socps);
             let margin = (worst - r.gripping_power) / r.gripping_power;
             scan.least_margin = scan.least_margin.min(margin);
             assert!(
@@ -408,8 +409,19 @@ fn with_pinned_worst(
     here
 }
 
+/// The unit contact axis `a` (contact 2 to contact 1) and two unit vectors `e1`, `e2` across it,
+/// with `a × e1 = e2`: the planes through the axis are `cos ψ e1 + sin ψ e2`.
+fn axis_frame(c: &SpatialCandidate) -> [Vector3<f64>; 3] {
+    let a = (c.contact_1 - c.contact_2) / (c.contact_1 - c.contact_2).norm();
+    let e1 = a
+        .cross(&Vector3::x())
+        .try_normalize(1e-6)
+        .unwrap_or_else(|| a.cross(&Vector3::y()).normalize());
+    [a, e1, a.cross(&e1)]
+}
+
 /// The worst power over `points` at the tilt `theta`, by the 3D reference, each point the centre of
-/// mass of `heavy` (the grasp at the largest mass). Off the axis the object hangs in its own plane;
+/// mass of `heavy` (the grasp at the largest mass), `[a, e1, e2]` its [`axis_frame`]. Off the axis the object hangs in its own plane;
 /// on it, it does not swing and the roll of the gripper, left free, sets its plane: every plane is
 /// taken, the worst found by a scan of the planes refined by golden section. `socps` counts the
 /// reference's cone programs; `grasp` names the grasp in a failure.
@@ -418,16 +430,10 @@ fn sampled_worst(
     heavy: &SpatialCandidate,
     points: &[Vector3<f64>],
     theta: f64,
+    [a, e1, e2]: [Vector3<f64>; 3],
     grasp: usize,
     socps: &mut usize,
 ) -> f64 {
-    let d = (c.contact_1 - c.contact_2).norm();
-    let a = (c.contact_1 - c.contact_2) / d;
-    let e1 = a
-        .cross(&Vector3::x())
-        .try_normalize(1e-6)
-        .unwrap_or_else(|| a.cross(&Vector3::y()).normalize());
-    let e2 = a.cross(&e1);
     let mut worst = f64::NEG_INFINITY;
     for q in points {
         let object = SpatialCandidate {
