@@ -275,11 +275,20 @@ fn report(summary: &Summary, secs: f64, no_compare: bool) -> anyhow::Result<()> 
         writeln!(
             out,
             "replayed {} sets (their candidates counted above): {} compared with a recorded \
-             answer, {} differ, {} recorded set answers unmatched",
+             answer, {} differ, {} recorded set answers unmatched{}",
             summary.sets,
             summary.sets_compared,
             summary.sets_differing,
-            summary.unmatched_set_answers
+            summary.unmatched_set_answers,
+            if summary.in_refused_sets > 0 {
+                format!(
+                    "; {} candidates in sets refused as a whole, compared through the set's \
+                     status and message",
+                    summary.in_refused_sets
+                )
+            } else {
+                String::new()
+            }
         )?;
     }
     if !summary.largest.is_empty() {
@@ -321,7 +330,9 @@ fn verdict(summary: &Summary, no_compare: bool) -> anyhow::Result<()> {
             summary.unmatched_set_answers
         ));
     }
-    let uncompared = summary.candidates - summary.compared;
+    let uncompared = summary
+        .candidates
+        .saturating_sub(summary.compared + summary.in_refused_sets);
     if !no_compare && uncompared > 0 {
         no.push(format!(
             "{uncompared} of {} candidates have no recorded recommendation to compare with \

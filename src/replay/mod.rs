@@ -42,6 +42,9 @@ pub struct Summary {
     pub sets_differing: u64,
     /// Recorded set answers no set matched.
     pub unmatched_set_answers: u64,
+    /// Candidates of sets refused as a whole, again and in the recording: compared through the
+    /// set's status and message, having no recommendations of their own.
+    pub in_refused_sets: u64,
 }
 
 impl Summary {
@@ -55,6 +58,7 @@ impl Summary {
         self.sets_compared += other.sets_compared;
         self.sets_differing += other.sets_differing;
         self.unmatched_set_answers += other.unmatched_set_answers;
+        self.in_refused_sets += other.in_refused_sets;
         for (field, gap) in other.largest {
             self.note_gap(field, gap);
         }
@@ -127,8 +131,14 @@ const LISTS: [ListField; 2] = [
     ("local_minima_power", |r| &r.local_minima_power),
 ];
 
-/// Every text and count compared: unequal is a gap of 1.
-const EXACT: [ExactField; 7] = [
+/// Every text and count compared: unequal is a gap of 1. The candidate's id and header pair a
+/// single answer with its candidate, so they matter for members of a set, paired by place.
+const EXACT: [ExactField; 10] = [
+    ("candidate_id", |a, b| a.candidate_id == b.candidate_id),
+    ("header.frame_id", |a, b| {
+        a.header.frame_id == b.header.frame_id
+    }),
+    ("header.stamp", |a, b| a.header.stamp == b.header.stamp),
     ("status", |a, b| a.status == b.status),
     ("message", |a, b| a.message == b.message),
     ("grasp_case", |a, b| a.grasp_case == b.grasp_case),

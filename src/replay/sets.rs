@@ -90,6 +90,9 @@ pub(super) fn replay_sets(
             if compare_set(&set.message, &ours, theirs, bag, &mut summary) {
                 summary.sets_differing += 1;
             }
+            if ours.status != GripRecommendationSet::STATUS_OK && ours.recommendations.is_empty() {
+                summary.in_refused_sets += set.message.candidates.len() as u64;
+            }
         }
         if keep {
             answers.push(Recorded {

@@ -184,3 +184,26 @@ fn a_changed_answer_fails_the_replay() {
         "{text}"
     );
 }
+
+/// `replay --write` writes what it solved; that recording replays without a difference, for
+/// every golden bag (one that holds only candidates is written with `--no-compare`).
+#[test]
+fn every_golden_bag_round_trips_through_replay_write() {
+    let dir = temp_dir("round_trip");
+    for (name, args) in [
+        ("paper_cases.mcap", &[][..]),
+        ("random_grasps.mcap", &[]),
+        ("node_recorded.mcap", &[]),
+        ("rosbags_written.mcap", &["--no-compare"]),
+    ] {
+        let fresh = dir.path().join(name);
+        let fresh = fresh.to_str().expect("utf-8");
+        let (code, text) = replay_with(name, &[args, &["--write", fresh]].concat());
+        assert_eq!(code, Some(0), "{name}: {text}");
+        let out = bin().args(["replay", fresh]).output().expect("binary runs");
+        let text = String::from_utf8_lossy(&out.stdout).into_owned()
+            + &String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "{name} written again: {text}");
+        assert!(text.contains(" 0 differ"), "{name}: {text}");
+    }
+}

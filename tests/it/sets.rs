@@ -3,7 +3,7 @@
 
 use crate::util::run::{bin, paper_lines, paper_messages, temp_dir};
 use grasp_orient::answer::{answer_set, Rules};
-use grasp_orient::msg::{GraspCandidateSet, GripRecommendation};
+use grasp_orient::msg::{GraspCandidateSet, GripRecommendation, GripRecommendationSet};
 use grasp_orient::record::{bag, BagWriter, Entry, Payload, SetTopics, Topics};
 use grasp_orient::solver::Settings;
 use serde_json::Value;
@@ -199,11 +199,15 @@ fn topics() -> Topics {
 }
 
 /// A recording of three sets and their answers, `edit` applied to the answers first.
-fn write_sets(path: &Path, edit: impl Fn(usize, &mut grasp_orient::msg::GripRecommendationSet)) {
-    let mut w = BagWriter::create(path, &topics(), 100).expect("create");
+fn write_sets(path: &Path, edit: impl Fn(usize, &mut GripRecommendationSet)) {
+    write_these_sets(path, three_sets(), edit);
+}
+
+/// Three sets: the paper's cases, the same with a bad one and a limit, and an empty one.
+fn three_sets() -> Vec<GraspCandidateSet> {
     let mut cases = paper_messages();
     cases[1].mass = f64::NAN;
-    let sets = [
+    vec![
         GraspCandidateSet {
             id: "all".into(),
             candidates: paper_messages(),
@@ -219,7 +223,18 @@ fn write_sets(path: &Path, edit: impl Fn(usize, &mut grasp_orient::msg::GripReco
             id: "empty".into(),
             ..GraspCandidateSet::default()
         },
-    ];
+    ]
+}
+
+/// A recording of `sets` and their answers as the writer of the node records them, `edit`
+/// applied to the answers first.
+fn write_these_sets(
+    path: &Path,
+    sets: Vec<GraspCandidateSet>,
+    edit: impl Fn(usize, &mut GripRecommendationSet),
+) {
+    let mut w = BagWriter::create(path, &topics(), 100).expect("create");
+    let n = sets.len() as u64;
     for (k, set) in sets.into_iter().enumerate() {
         let mut answer = answer_set(&set, &Settings::default(), &Rules::default());
         edit(k, &mut answer);
@@ -240,7 +255,7 @@ fn write_sets(path: &Path, edit: impl Fn(usize, &mut grasp_orient::msg::GripReco
     let written = w.finish().expect("finish");
     assert_eq!(
         (written.candidate_sets, written.recommendation_sets),
-        (3, 3)
+        (n, n)
     );
 }
 
@@ -329,4 +344,102 @@ fn a_changed_member_a_changed_ranking_or_status_fails_the_replay() {
     let (ok, text) = replay(&limit);
     assert!(!ok, "{text}");
     assert!(text.contains("status"), "{text}");
+}
+
+/// Sets the node refuses as a whole: too large, a negative `max_grip_force`, an id over the
+/// limit; with the three ordinary ones.
+fn with_refused_sets() -> Vec<GraspCandidateSet> {
+    let mut sets = three_sets();
+    let too_large = GraspCandidateSet {
+        id: "too large".into(),
+        candidates: (0..Rules::default().max_set_size + 1)
+            .map(|k| paper_messages()[k % 4].clone())
+            .collect(),
+        ..GraspCandidateSet::default()
+    };
+    let negative = GraspCandidateSet {
+        id: "negative limit".into(),
+        candidates: paper_messages(),
+        max_grip_force: -1.0,
+        ..GraspCandidateSet::default()
+    };
+    let long_id = GraspCandidateSet {
+        id: "x".repeat(2000).into(),
+        candidates: paper_messages(),
+        ..GraspCandidateSet::default()
+    };
+    sets.extend([too_large, negative, long_id]);
+    sets
+}
+
+#[test]
+fn sets_refused_as_a_whole_replay_and_their_refusal_is_compared() {
+    let dir = temp_dir("refused_sets");
+    let path = dir.path().join("refused.mcap");
+    write_these_sets(&path, with_refused_sets(), |_, _| {});
+    let recorded = bag::read(&path).expect("reads");
+    let refused = recorded.recommendation_sets[3..]
+        .iter()
+        .filter(|s| s.message.status != GripRecommendationSet::STATUS_OK)
+        .count();
+    assert_eq!(refused, 3, "the three are refused as a whole");
+    let (ok, text) = replay(&path);
+    assert!(ok, "{text}");
+    assert!(text.contains("0 differ"), "{text}");
+    // replay --write's own output replays too.
+    let fresh = dir.path().join("fresh.mcap");
+    let out = bin()
+        .args(["replay", path.to_str().expect("utf-8")])
+        .args(["--write", fresh.to_str().expect("utf-8")])
+        .output()
+        .expect("runs");
+    assert!(out.status.success(), "{}", stdout(&out));
+    let (ok, text) = replay(&fresh);
+    assert!(ok, "{text}");
+    // A refusal recorded with other words, or another status, is a difference.
+    let worded = dir.path().join("worded.mcap");
+    write_these_sets(&worded, with_refused_sets(), |k, a| {
+        if k == 4 {
+            a.message.push_str(" (changed)");
+        }
+    });
+    let (ok, text) = replay(&worded);
+    assert!(!ok, "{text}");
+    assert!(text.contains("set message"), "{text}");
+    let status = dir.path().join("status.mcap");
+    write_these_sets(&status, with_refused_sets(), |k, a| {
+        if k == 3 {
+            a.status = GripRecommendationSet::STATUS_INVALID_INPUT;
+        }
+    });
+    let (ok, text) = replay(&status);
+    assert!(!ok, "{text}");
+    assert!(text.contains("set status"), "{text}");
+}
+
+#[test]
+fn a_set_member_answering_another_candidate_fails_the_replay() {
+    let dir = temp_dir("sets_members");
+    type Edit = fn(&mut GripRecommendation);
+    let edits: [(&str, Edit); 3] = [
+        ("candidate_id", |r| r.candidate_id = "paper-x".into()),
+        ("header.frame_id", |r| {
+            r.header.frame_id = "elsewhere".into()
+        }),
+        ("header.stamp", |r| r.header.stamp.nanosec += 1),
+    ];
+    for (field, edit) in edits {
+        let path = dir.path().join(format!("{field}.mcap"));
+        write_sets(&path, |k, a| {
+            if k == 0 {
+                edit(&mut a.recommendations[1]);
+            }
+        });
+        let (ok, text) = replay(&path);
+        assert!(!ok, "{field}: {text}");
+        assert!(
+            text.contains(field) && text.contains("paper-b"),
+            "{field}: {text}"
+        );
+    }
 }
