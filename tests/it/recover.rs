@@ -196,6 +196,27 @@ fn inserted_bytes_lose_at_most_the_chunk_they_fall_in() {
     }
 }
 
+/// Bytes removed inside a chunk move the summary back: it is found, and only that chunk is lost.
+#[test]
+fn removed_bytes_lose_only_the_chunk_they_were_in() {
+    let whole = node_bag();
+    let (chunks, _) = layout(&whole);
+    for (chunk, n) in [(chunks[1], 100), (chunks[2], 7)] {
+        let at = chunk.offset + chunk.length / 2;
+        let mut bytes = whole[..at].to_vec();
+        bytes.extend_from_slice(&whole[at + n..]);
+        let what = format!("{n} bytes removed at {at}");
+        let (got, out) = recover(&bytes);
+        kept_all_but(&got, &out, Some(chunk), &what);
+        assert!(
+            got.damage
+                .iter()
+                .any(|d| d.contains(&format!("{n} bytes")) && d.contains("removed")),
+            "{what}: {got:?}"
+        );
+    }
+}
+
 /// A file cut short keeps every chunk before the cut; the chunk cut through is dropped, and
 /// nothing says how many messages it held.
 #[test]
