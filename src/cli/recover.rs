@@ -52,8 +52,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     writeln!(
         out,
-        "recovered {} messages of {} into {}",
+        "recovered {} messages in {} chunks of {} into {}",
         got.kept_total(),
+        got.chunks_kept,
         args.broken.display(),
         args.output.display()
     )?;
@@ -69,8 +70,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             String::new()
         };
         return Err(Negative(format!(
-            "{}: {counted} messages dropped{uncounted}; {} damaged place{} in all",
+            "{}: {counted} messages and {} chunk{} dropped{uncounted}; {} damaged place{} in all",
             args.broken.display(),
+            got.chunks_dropped,
+            if got.chunks_dropped == 1 { "" } else { "s" },
             got.damage_count,
             if got.damage_count == 1 { "" } else { "s" }
         ))

@@ -23,9 +23,11 @@ pub mod channels;
 pub mod lifecycle;
 pub mod output;
 pub mod recover;
+pub(crate) mod resync;
 pub mod scan;
 pub mod settings;
 mod sink;
+pub(crate) mod summary;
 
 use crate::msg::{
     cdr, definitions, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,

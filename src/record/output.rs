@@ -1,7 +1,7 @@
 //! Where the files that commands write go: under a temporary name beside their destination,
 //! renamed into place only when complete, and never over one of the command's inputs. A crash
 //! or an error therefore leaves the destination as it was (and at worst a hidden `.NAME.*.part`
-//! file beside it).
+//! file beside it). Outputs get the mode of any file a command creates: 0666 less the umask.
 
 use std::fs::File;
 use std::path::{Path, PathBuf};
@@ -76,9 +76,14 @@ impl Replacement {
         let name = destination
             .file_name()
             .map_or_else(|| "output".into(), |n| n.to_string_lossy());
-        let (file, temp) = tempfile::Builder::new()
-            .prefix(&format!(".{name}."))
-            .suffix(".part")
+        let prefix = format!(".{name}.");
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix).suffix(".part");
+        // tempfile creates its files 0600; an output is a file like any other the command
+        // creates: 0666 less the umask, which the kernel takes off at creation.
+        #[cfg(unix)]
+        builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+        let (file, temp) = builder
             .tempfile_in(folder)
             .map_err(|source| OutputError::Create {
                 path: destination.to_path_buf(),

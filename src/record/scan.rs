@@ -53,6 +53,8 @@ pub mod op {
     pub const CHUNK_INDEX: u8 = 0x08;
     /// Attachment.
     pub const ATTACHMENT: u8 = 0x09;
+    /// Attachment index.
+    pub const ATTACHMENT_INDEX: u8 = 0x0A;
     /// Statistics.
     pub const STATISTICS: u8 = 0x0B;
     /// Metadata.
@@ -561,6 +563,52 @@ fn parse_statistics<'a>(record: &Record<'a>) -> Result<Parsed<'a>, Damage> {
     })
 }
 
+/// A chunk index record of the summary: where one chunk lies in the file.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ChunkIndex {
+    /// Offset of the chunk record's opcode.
+    pub chunk_start: u64,
+    /// Length of the whole chunk record (opcode and length field included).
+    pub chunk_length: u64,
+    /// Size of its compressed records.
+    pub compressed_size: u64,
+    /// Size of its records once decompressed.
+    pub uncompressed_size: u64,
+}
+
+/// Reads a chunk index record.
+pub fn parse_chunk_index(record: &Record<'_>) -> Result<ChunkIndex, Damage> {
+    let mut f = Fields::new(record, "chunk index");
+    f.u64("message_start_time")?;
+    f.u64("message_end_time")?;
+    let chunk_start = f.u64("chunk_start_offset")?;
+    let chunk_length = f.u64("chunk_length")?;
+    f.bytes32("message_index_offsets")?;
+    f.u64("message_index_length")?;
+    f.string("compression")?;
+    Ok(ChunkIndex {
+        chunk_start,
+        chunk_length,
+        compressed_size: f.u64("compressed_size")?,
+        uncompressed_size: f.u64("uncompressed_size")?,
+    })
+}
+
+/// Reads the offset and length (of the whole record) that a metadata index or an attachment
+/// index record gives, both their first two fields.
+pub fn parse_record_index(record: &Record<'_>) -> Result<(u64, u64), Damage> {
+    let mut f = Fields::new(record, "index");
+    Ok((f.u64("offset")?, f.u64("length")?))
+}
+
+/// Whether a chunk record's body ends where its fields end (a length field that says more
+/// hides the records after it).
+pub fn chunk_fills_its_record(chunk: &Chunk<'_>, record: &Record<'_>) -> bool {
+    // Two times, the size, the CRC, the compression's length and the records' length.
+    let fields = 8 + 8 + 8 + 4 + 4 + 8;
+    fields + chunk.compression.len() + chunk.data.len() == record.body.len()
+}
+
 /// A chunk's records, decompressed: exactly `uncompressed_size` bytes, their CRC checked when
 /// the chunk has one. Memory grows with what the decompressor produces, never with the size the
 /// chunk claims. `Err` says why not.
@@ -672,6 +720,24 @@ impl Scan<'_> {
 /// Walks a whole file. `Err` when it is not an MCAP file at all (empty, too short, no magic, no
 /// header record); damage after the header is reported in the [`Scan`].
 pub fn scan(bytes: &[u8]) -> Result<Scan<'_>, Damage> {
+    let (profile, mut records) = open(bytes)?;
+    let mut out = Scan {
+        profile: Some(profile),
+        ..Scan::default()
+    };
+    walk(bytes, &mut records, &mut out);
+    Ok(out)
+}
+
+/// The profile of a file's header record and the offset of the record after it. `Err` when it
+/// is not an MCAP file at all (empty, too short, no magic, no header record).
+pub fn header(bytes: &[u8]) -> Result<(String, u64), Damage> {
+    let (profile, records) = open(bytes)?;
+    Ok((profile, records.position()))
+}
+
+/// Checks the magic and reads the header: its profile, and the walk of the records after it.
+fn open(bytes: &[u8]) -> Result<(String, Records<'_>), Damage> {
     if bytes.is_empty() {
         return Err(Damage::at(0, "the file is empty (0 bytes)"));
     }
@@ -687,24 +753,19 @@ pub fn scan(bytes: &[u8]) -> Result<Scan<'_>, Damage> {
     }
     let complete = bytes.len() >= 2 * MAGIC.len() && bytes.ends_with(MAGIC);
     let mut records = Records::new(&bytes[MAGIC.len()..], MAGIC.len() as u64, !complete);
-    let mut out = Scan::default();
     match records.next() {
-        None => {
-            return Err(Damage {
-                offset: MAGIC.len() as u64,
-                what: "the file holds only the MCAP magic, no records".into(),
-                cut_short: true,
-            })
-        }
-        Some(Err(d)) => return Err(d),
+        None => Err(Damage {
+            offset: MAGIC.len() as u64,
+            what: "the file holds only the MCAP magic, no records".into(),
+            cut_short: true,
+        }),
+        Some(Err(d)) => Err(d),
         Some(Ok(r)) => match parse(&r) {
-            Ok(Parsed::Header { profile }) => out.profile = Some(profile),
-            Ok(_) => return Err(Damage::at(r.offset, "the first record is not a header")),
-            Err(d) => return Err(d),
+            Ok(Parsed::Header { profile }) => Ok((profile, records)),
+            Ok(_) => Err(Damage::at(r.offset, "the first record is not a header")),
+            Err(d) => Err(d),
         },
     }
-    walk(bytes, &mut records, &mut out);
-    Ok(out)
 }
 
 /// The data section, then the summary, then the footer and the end magic.

@@ -14,6 +14,7 @@ mod msg_contract;
 mod paper;
 mod play;
 mod recordings;
+mod recover;
 mod reference;
 mod robust;
 mod sets;
