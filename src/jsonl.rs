@@ -39,6 +39,144 @@ pub enum LinesError {
     Write(std::io::Error),
 }
 
+/// Why a text is not a candidate: the field at fault (its path, as `contact_1.x`), what the field
+/// takes and what it was given, with where in the text.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum JsonError {
+    /// The text is not JSON.
+    #[error("not JSON: {why} {at}")]
+    Syntax {
+        /// serde_json's words.
+        why: String,
+        /// Where: `at column C`, or `at line L column C` in a text of several lines.
+        at: String,
+    },
+    /// A field of the wrong type, or a number outside its type's range.
+    #[error("{prefix}expected {expected}, got {got} {at}", prefix = field_prefix(.path))]
+    Field {
+        /// The path of the field, as `candidates[3].model` (empty at the top).
+        path: String,
+        /// What the field takes.
+        expected: String,
+        /// What it was given.
+        got: String,
+        /// Where.
+        at: String,
+    },
+    /// A field that is missing or unknown, or another refusal of an object.
+    #[error("{prefix}{why} {at}", prefix = field_prefix(.path))]
+    Object {
+        /// The path of the object (empty at the top).
+        path: String,
+        /// serde's words.
+        why: String,
+        /// Where.
+        at: String,
+    },
+}
+
+/// `field PATH: `, or nothing for the top level.
+fn field_prefix(path: &str) -> String {
+    if path.is_empty() {
+        String::new()
+    } else {
+        format!("field {path}: ")
+    }
+}
+
+/// Reads a value of type `T` (a `GraspCandidate`, a set) from JSON `text`, naming the field at
+/// fault when it is not one.
+pub fn parse<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, JsonError> {
+    let mut reader = serde_json::Deserializer::from_str(text);
+    let value = serde_path_to_error::deserialize(&mut reader)
+        .map_err(|e| describe(&e.path().to_string(), e.inner(), text))?;
+    reader.end().map_err(|e| describe(".", &e, text))?;
+    Ok(value)
+}
+
+/// serde's words for a refusal at `path` (`.` for the top level) turned into [`JsonError`].
+fn describe(path: &str, inner: &serde_json::Error, text: &str) -> JsonError {
+    let at = if inner.line() <= 1 {
+        format!("at column {}", inner.column())
+    } else {
+        format!("at line {} column {}", inner.line(), inner.column())
+    };
+    // serde_json's message without its " at line L column C".
+    let full = inner.to_string();
+    let suffix = format!(" at line {} column {}", inner.line(), inner.column());
+    let why = full.strip_suffix(&suffix).unwrap_or(&full).to_string();
+    let path = if path == "." { "" } else { path }.to_string();
+    if let Some(rest) = why
+        .strip_prefix("invalid type: ")
+        .or_else(|| why.strip_prefix("invalid value: "))
+    {
+        if let Some((got, expected)) = rest.rsplit_once(", expected ") {
+            return JsonError::Field {
+                path,
+                expected: expected_in_words(expected),
+                got: got.replace('`', ""),
+                at,
+            };
+        }
+    }
+    if why == "number out of range" && !path.is_empty() {
+        return JsonError::Field {
+            path,
+            expected: "a number within ±1.8e308 (a double)".to_string(),
+            got: number_before(text, inner.line(), inner.column()),
+            at,
+        };
+    }
+    if inner.is_syntax() || inner.is_eof() {
+        return JsonError::Syntax { why, at };
+    }
+    // The path of an unknown field ends with its own name, which the words already give.
+    let path = if why.starts_with("unknown field") {
+        path.rsplit_once('.').map_or("", |(parent, _)| parent)
+    } else {
+        &path
+    };
+    JsonError::Object {
+        path: path.to_string(),
+        why,
+        at,
+    }
+}
+
+/// serde's name of an expected type in words: the range of an integer type.
+fn expected_in_words(expected: &str) -> String {
+    let range = match expected {
+        "u8" => "0 to 255",
+        "u16" => "0 to 65535",
+        "u32" => "0 to 4294967295",
+        "i32" => "-2147483648 to 2147483647",
+        "u64" => "0 to 18446744073709551615",
+        "i64" => "-9223372036854775808 to 9223372036854775807",
+        "f64" => return "a number (a double)".to_string(),
+        other => return other.to_string(),
+    };
+    format!("an integer from {range} ({expected})")
+}
+
+/// The number that ends just before `line`, `column` (from 1) of `text`, as written.
+fn number_before(text: &str, line: usize, column: usize) -> String {
+    let Some(row) = text.lines().nth(line.saturating_sub(1)) else {
+        return "a number out of range".to_string();
+    };
+    let end = row.char_indices().nth(column).map_or(row.len(), |(i, _)| i);
+    let head = &row[..end];
+    let start = head
+        .rfind(|c: char| !(c.is_ascii_digit() || matches!(c, '.' | 'e' | 'E' | '+' | '-')))
+        .map_or(0, |i| i + 1);
+    let number = head[start..].trim_end_matches(|c: char| !c.is_ascii_digit());
+    if number.is_empty() {
+        "a number out of range".to_string()
+    } else {
+        number.to_string()
+    }
+}
+
 /// The answer to line `number` (from 1) holding `line` (without its line break), with the
 /// gripper's limit of `rules` applied.
 pub fn answer_line(
@@ -52,7 +190,7 @@ pub fn answer_line(
             &GraspCandidate::default(),
             &format_args!("not UTF-8: invalid byte at column {}", e.valid_up_to() + 1),
         ),
-        Ok(text) => match serde_json::from_str::<GraspCandidate>(text) {
+        Ok(text) => match parse::<GraspCandidate>(text) {
             Ok(candidate) => answer_one(&candidate, settings, rules),
             Err(e) => invalid(&partial(text), &e),
         },
@@ -210,6 +348,68 @@ mod tests {
         assert!(out[2]["message"]
             .as_str()
             .is_some_and(|m| m.starts_with("line 4: ")));
+    }
+
+    /// The message of the answer to `line`, with the paper's case (a) as the rest of it.
+    fn refusal(field: &str) -> String {
+        let good = include_str!("../examples/paper_cases.jsonl")
+            .lines()
+            .next()
+            .expect("case a");
+        let line = good.replacen('{', &format!("{{{field}, "), 1);
+        let (out, _) = run(line.as_bytes());
+        out[0]["message"].as_str().expect("a message").to_string()
+    }
+
+    #[test]
+    fn every_refused_field_is_named_with_what_it_takes() {
+        for (field, message) in [
+            (
+                "\"model\": -1",
+                "line 1: invalid input: field model: expected an integer from 0 to 255 (u8), got \
+                 integer -1 at column 12",
+            ),
+            (
+                "\"mass\": 1e999",
+                "line 1: invalid input: field mass: expected a number within ±1.8e308 (a double), \
+                 got 1e999 at column 14",
+            ),
+            (
+                "\"contact_1\": {\"x\": \"a\"}",
+                "line 1: invalid input: field contact_1.x: expected a number (a double), got \
+                 string \"a\" at column 23",
+            ),
+            (
+                "\"header\": {\"stamp\": {\"sec\": 1.5}}",
+                "line 1: invalid input: field header.stamp.sec: expected an integer from \
+                 -2147483648 to 2147483647 (i32), got floating point 1.5 at column 32",
+            ),
+        ] {
+            assert_eq!(refusal(field), message, "{field}");
+        }
+        let unknown = refusal("\"massa\": 1");
+        assert!(
+            unknown.starts_with("line 1: invalid input: unknown field `massa`, expected one of"),
+            "{unknown}"
+        );
+        let nested = refusal("\"contact_1\": {\"w\": 1}");
+        assert!(
+            nested.starts_with("line 1: invalid input: field contact_1: unknown field `w`"),
+            "{nested}"
+        );
+        let (out, _) = run(b"{\"id\": \"x\"}\n{\n\"x\"\n");
+        assert_eq!(
+            out[0]["message"],
+            "line 1: invalid input: missing field `contact_1` at column 11"
+        );
+        assert_eq!(
+            out[1]["message"],
+            "line 2: invalid input: not JSON: EOF while parsing an object at column 1"
+        );
+        assert_eq!(
+            out[2]["message"],
+            "line 3: invalid input: expected struct GraspCandidate, got string \"x\" at column 3"
+        );
     }
 
     #[test]

@@ -162,6 +162,7 @@ fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {
                 Ok(SpatialRobustVerdict::Exact(SpatialVerdict::NoForceClosure(why))) => {
                     no_closure(m, &why)
                 }
+                Err(InvalidInput::Norm1SpatialTolerance) => invalid(m, &NORM1_WITH_BOX),
                 Err(e) => invalid(m, &e),
             }
         }
@@ -221,6 +222,15 @@ fn spatial_robust_recommended(
     out.gripping_power_nominal = r.gripping_power_nominal;
     (out, hang)
 }
+
+/// The refusal of a spatial candidate with a centre-of-mass box under objective norm1, naming
+/// where the box may come from and where the limit is documented: the solver's own words
+/// (`InvalidInput::Norm1SpatialTolerance`) do not say that the node's parameter gives a box to
+/// every candidate without one.
+const NORM1_WITH_BOX: &str = "objective norm1 with a center_of_mass_tolerance box (the \
+    candidate's own, or the parameter center_of_mass_tolerance where the candidate gives none) \
+    is not supported for spatial candidates (docs/uncertainty.md#spatial-candidates); use \
+    objective norm2 or internal_force";
 
 /// What a spatial candidate's tolerances ask for.
 enum SpatialTolerance {
@@ -725,6 +735,39 @@ mod spatial_tests {
         assert_eq!(a.gripping_power, exact.gripping_power);
         assert_eq!(a.wrist_rotation, exact.wrist_rotation);
         assert_eq!(a.gripping_power_nominal, exact.gripping_power);
+    }
+
+    /// Objective norm1 with a box on a spatial candidate is refused naming where the box comes
+    /// from and the page that says so; a planar candidate with the same box is answered.
+    #[test]
+    fn norm1_with_a_spatial_box_is_refused_naming_the_parameter_and_the_docs() {
+        let norm1 = Settings {
+            objective: crate::solver::Objective::Norm1,
+            ..Settings::default()
+        };
+        let boxed = with_tolerances(upright_square(), [0.01, 0.02, 0.0], 0.0);
+        let a = answer(&boxed, &norm1);
+        assert_eq!(a.status, GripRecommendation::STATUS_INVALID_INPUT);
+        assert_eq!(a.message, format!("invalid input: {NORM1_WITH_BOX}"));
+        assert!(
+            a.message.contains("parameter center_of_mass_tolerance")
+                && a.message.contains("docs/uncertainty.md#spatial-candidates"),
+            "{}",
+            a.message
+        );
+        let docs = include_str!("../../docs/uncertainty.md");
+        assert!(docs.contains("## Spatial candidates") && docs.contains("objective `norm1`"));
+        let readme = include_str!("../../README.md");
+        assert!(readme.contains("norm1"), "the README names the limit");
+        let planar = crate::msg::paper_cases().swap_remove(2);
+        let planar = with_tolerances(planar, [0.01, 0.02, 0.0], 0.0);
+        let a = answer(&planar, &norm1);
+        assert_ne!(
+            a.status,
+            GripRecommendation::STATUS_INVALID_INPUT,
+            "{}",
+            a.message
+        );
     }
 
     /// Spatial candidates: a mass tolerance scales every force but the nominal object's by

@@ -77,7 +77,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let text =
         grasp_orient::config::read_text(&args.candidate, grasp_orient::config::MAX_FILE_BYTES)
             .with_context(|| format!("cannot read {}", args.candidate.display()))?;
-    let message: GraspCandidate = serde_json::from_str(&text)
+    let message: GraspCandidate = grasp_orient::jsonl::parse(&text)
         .with_context(|| format!("{} is not a GraspCandidate", args.candidate.display()))?;
     let figure = match message.model {
         GraspCandidate::MODEL_PLANAR => {

@@ -96,7 +96,7 @@ fn read_set(args: &Args) -> anyhow::Result<(GraspCandidateSet, Vec<BadLine>)> {
         if line.trim().is_empty() {
             continue;
         }
-        match serde_json::from_str::<GraspCandidate>(&line) {
+        match grasp_orient::jsonl::parse::<GraspCandidate>(&line) {
             Ok(c) => set.candidates.push(c),
             Err(e) => {
                 bad.push((set.candidates.len(), number, line, e.to_string()));

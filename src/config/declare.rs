@@ -56,6 +56,15 @@ pub enum Domain {
         /// Largest allowed.
         max: f64,
     },
+    /// Real numbers from `min` (included) up to `limit` (excluded): the domain of a value the
+    /// solver refuses from `limit` on, so that no setting is accepted that every candidate would
+    /// then be refused for.
+    Below {
+        /// Smallest allowed.
+        min: f64,
+        /// Least value refused.
+        limit: f64,
+    },
 }
 
 impl Domain {
@@ -88,6 +97,7 @@ impl fmt::Display for Domain {
             }
             Domain::Real { min, max } if *max == f64::MAX => write!(f, ">= {}", Real(*min)),
             Domain::Real { min, max } => write!(f, "in [{}, {}]", Real(*min), Real(*max)),
+            Domain::Below { min, limit } => write!(f, "in [{}, {})", Real(*min), Real(*limit)),
         }
     }
 }
@@ -247,6 +257,12 @@ impl Setting for f64 {
         match domain {
             // Written so that NaN fails.
             Domain::Real { min, max } if !(*self >= *min && *self <= *max) => {
+                Err(ValueError::Domain {
+                    domain: domain.to_string(),
+                    value: Real(*self).to_string(),
+                })
+            }
+            Domain::Below { min, limit } if !(*self >= *min && *self < *limit) => {
                 Err(ValueError::Domain {
                     domain: domain.to_string(),
                     value: Real(*self).to_string(),

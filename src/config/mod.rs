@@ -249,6 +249,24 @@ impl Config {
         })
     }
 
+    /// What these settings refuse though each of them is valid, one line each, to log when they
+    /// are set: objective norm1 with a centre-of-mass box refuses every spatial candidate
+    /// (`docs/uncertainty.md`), while planar candidates are answered.
+    pub fn caveats(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.objective == crate::solver::Objective::Norm1
+            && self.center_of_mass_tolerance != [0.0; 3]
+        {
+            out.push(
+                "objective norm1 with center_of_mass_tolerance not zero: every spatial candidate \
+                 will be refused (status 2), planar ones are answered \
+                 (docs/uncertainty.md#spatial-candidates)"
+                    .to_string(),
+            );
+        }
+        out
+    }
+
     /// The gripper and set rules: `gripper_drive`, `max_grip_force`, `rank_by`, `max_set_size`,
     /// and the default tolerances `center_of_mass_tolerance`, `mass_tolerance` (their domains are checked by [`Config::solver_settings`]).
     pub fn rules(&self) -> Rules {
@@ -381,6 +399,79 @@ mod tests {
             .set_from_yaml("qos_depth", "abc")
             .expect_err("not a number");
         assert!(e.to_string().contains("qos_depth"), "{e}");
+    }
+
+    /// A tolerance every candidate would be refused for is refused when set: the domains end
+    /// where the solver's limits do (a box half-width below 1e6 m, a mass tolerance below the
+    /// largest mass a candidate may have).
+    #[test]
+    fn tolerances_that_refuse_every_candidate_are_refused_when_set() {
+        for (name, value, message) in [
+            (
+                "center_of_mass_tolerance",
+                "[1e6, 0.0, 0.0]",
+                "parameter center_of_mass_tolerance: x: must be in [0, 1e6), got 1e6",
+            ),
+            (
+                "mass_tolerance",
+                "1e9",
+                "parameter mass_tolerance: must be in [0, 1e9), got 1e9",
+            ),
+        ] {
+            let mut c = Config::default();
+            c.set_from_yaml(name, value).expect("the type is right");
+            let e = c.solver_settings().expect_err(value);
+            assert_eq!(e.to_string(), message);
+        }
+        // Just below the limits, a candidate is not refused for the tolerance the node gave it.
+        use crate::answer::{answer_one, DefaultTolerances, Rules};
+        use crate::msg::GripRecommendation;
+        let largest = Config {
+            center_of_mass_tolerance: [crate::solver::MAX_COORDINATE.next_down(), 0.0, 0.0],
+            mass_tolerance: params::MAX_MASS.next_down(),
+            ..Config::default()
+        };
+        let settings = largest.solver_settings().expect("in the domains");
+        let mut heaviest = crate::msg::paper_cases().swap_remove(2);
+        heaviest.mass = params::MAX_MASS;
+        for rules in [
+            Rules {
+                tolerances: DefaultTolerances {
+                    center_of_mass: [0.0; 3],
+                    ..largest.rules().tolerances
+                },
+                ..largest.rules()
+            },
+            largest.rules(),
+        ] {
+            let a = answer_one(&heaviest, &settings, &rules);
+            assert!(
+                !a.message.contains("tolerance"),
+                "refused for a tolerance in the domain: {}",
+                a.message
+            );
+        }
+        // params::MAX_MASS is the solver's: a candidate just heavier is refused for its mass.
+        heaviest.mass = params::MAX_MASS.next_up();
+        let a = answer_one(&heaviest, &settings, &Rules::default());
+        assert_eq!(a.status, GripRecommendation::STATUS_INVALID_INPUT);
+        assert!(a.message.contains("mass"), "{}", a.message);
+    }
+
+    #[test]
+    fn norm1_with_a_box_is_a_caveat() {
+        let mut c = Config::default();
+        c.set_from_yaml("objective", "norm1").expect("a name");
+        assert!(c.caveats().is_empty());
+        c.set_from_yaml("center_of_mass_tolerance", "[0.0, 0.01, 0.0]")
+            .expect("three numbers");
+        c.solver_settings()
+            .expect("valid: planar candidates take it");
+        let caveats = c.caveats();
+        assert_eq!(caveats.len(), 1);
+        assert!(caveats[0].contains("every spatial candidate will be refused"));
+        c.set_from_yaml("objective", "norm2").expect("a name");
+        assert!(c.caveats().is_empty());
     }
 
     #[test]

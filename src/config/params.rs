@@ -64,8 +64,13 @@ parameters! {
     /// axes, for a candidate whose own center_of_mass_tolerance is zero; the answer is the worst
     /// case over every centre of mass in the box (docs/uncertainty.md).
     center_of_mass_tolerance: [f64; 3] = [0.0; 3], "m",
-        in Domain::Real { min: 0.0, max: MAX_COORDINATE };
+        in Domain::Below { min: 0.0, limit: MAX_COORDINATE };
     /// The mass of a candidate whose own mass_tolerance is zero lies in mass ± this; the answer is
     /// the worst case over it (a candidate lighter than this is refused, status 2).
-    mass_tolerance: f64 = 0.0, "kg", in Domain::at_least(0.0);
+    mass_tolerance: f64 = 0.0, "kg", in Domain::Below { min: 0.0, limit: MAX_MASS };
 }
+
+/// The largest mass a candidate may have, kg (`MAX_MASS` of `crates/solver/src/planar/frame.rs`,
+/// which the crate keeps to itself): a mass tolerance from it on leaves no candidate a mass
+/// above its tolerance, so every one would be refused. `config::tests` checks the two agree.
+pub(crate) const MAX_MASS: f64 = 1e9;

@@ -32,6 +32,8 @@ pub struct Counts {
     pub no_closure: u64,
     /// Messages on the candidates topic that did not decode.
     pub undecodable: u64,
+    /// Sets (on their topic or as service requests) that did not decode; not candidates.
+    pub undecodable_sets: u64,
     /// Answered with status 3 (more grip force than `max_grip_force`).
     pub exceeds_gripper: u64,
     /// Sets answered (on the topic or the service); their candidates count above too.
@@ -93,6 +95,8 @@ pub struct Answerer {
     shared: Shared,
     echo: bool,
     node: String,
+    /// The candidates topic, whose undecodable messages count as candidates.
+    candidates_topic: String,
     counts: Counts,
     recording: Recording,
     /// The newest settings version the recording has heard of.
@@ -141,6 +145,7 @@ impl Answerer {
             shared,
             echo,
             node: node.to_string(),
+            candidates_topic: topics.candidates.clone(),
             counts: Counts::default(),
             recording: Recording::new(node, topics, qos_depth, on_stop),
             seen_version: 0,
@@ -490,15 +495,18 @@ impl Answerer {
         self.recording.check().iter().map(note).collect()
     }
 
-    /// Counts a message on `topic` that did not decode; the line to log.
+    /// Counts a message on `topic` that did not decode (a candidate on the candidates topic, a
+    /// set on any other topic or the service); the line to log.
     pub fn undecodable(&mut self, topic: &str, error: &dyn std::fmt::Debug) -> Note {
-        self.counts.undecodable += 1;
+        let (count, what) = if topic == self.candidates_topic {
+            (&mut self.counts.undecodable, "")
+        } else {
+            (&mut self.counts.undecodable_sets, " sets")
+        };
+        *count += 1;
         (
             Level::Warn,
-            format!(
-                "a message on {topic} could not be decoded ({error:?}); {} so far",
-                self.counts.undecodable
-            ),
+            format!("a message on {topic} could not be decoded ({error:?}); {count}{what} so far"),
         )
     }
 
@@ -513,13 +521,13 @@ impl Answerer {
                 c.answered, c.invalid, c.no_closure, c.undecodable
             ),
         )];
-        if c.exceeds_gripper + c.sets > 0 {
+        if c.exceeds_gripper + c.sets + c.undecodable_sets > 0 {
             notes.push((
                 Level::Info,
                 format!(
                     "{} candidates needed more than max_grip_force; {} sets answered, {} of them \
-                     refused whole",
-                    c.exceeds_gripper, c.sets, c.sets_refused
+                     refused whole; {} sets undecodable",
+                    c.exceeds_gripper, c.sets, c.sets_refused, c.undecodable_sets
                 ),
             ));
         }
@@ -606,6 +614,10 @@ mod tests {
 
         let note = a.undecodable("/grasp_candidates", &"bad CDR");
         assert!(note.1.contains("/grasp_candidates") && note.1.ends_with("1 so far"));
+        // A set that does not decode is no candidate: counted apart, on the line of the sets.
+        let note = a.undecodable("/grasp_candidate_sets", &"bad CDR");
+        assert!(note.1.ends_with("; 1 sets so far"), "{}", note.1);
+        a.undecodable("recommend", &"bad CDR");
         assert_eq!(
             a.counts(),
             Counts {
@@ -613,6 +625,7 @@ mod tests {
                 invalid: 1,
                 no_closure: 0,
                 undecodable: 1,
+                undecodable_sets: 2,
                 ..Counts::default()
             }
         );
@@ -620,6 +633,11 @@ mod tests {
         assert_eq!(
             last[0].1,
             "answered 2 candidates: 1 refused as invalid, 0 without force closure, 1 undecodable"
+        );
+        assert_eq!(
+            last[1].1,
+            "0 candidates needed more than max_grip_force; 0 sets answered, 0 of them refused \
+             whole; 2 sets undecodable"
         );
     }
 

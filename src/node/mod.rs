@@ -35,6 +35,16 @@ use std::pin::pin;
 /// Default node name.
 pub const NODE_NAME: &str = "grasp_orient";
 
+/// The node's topics, as it names them before namespace and remapping (checked to stay apart
+/// before any DDS entity is made).
+const TOPICS: [&str; 5] = [
+    "grasp_candidates",
+    "grip_recommendations",
+    "grip_markers",
+    "grasp_candidate_sets",
+    "grip_recommendation_sets",
+];
+
 /// What else the node does besides answering.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Options {
@@ -125,6 +135,7 @@ impl Endpoints {
 pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
     let start = Start::new(ros_argv)?;
     let name = start.node_name(NODE_NAME);
+    start.ros.check_distinct(&TOPICS, &name)?;
     let (config, settings) = load_config(&start.ros, &name)?;
     log::debug!("settings: {config:?}");
     let shared = Shared::new(config.clone(), settings);

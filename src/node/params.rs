@@ -110,8 +110,11 @@ impl std::fmt::Debug for Shared {
 }
 
 impl Shared {
-    /// Shares a validated config.
+    /// Shares a validated config, and logs its caveats ([`Config::caveats`]) as warnings.
     pub fn new(config: Config, settings: Settings) -> Self {
+        for caveat in config.caveats() {
+            log::warn!("{caveat}");
+        }
         let start = Version {
             seq: 0,
             since: 0,
@@ -195,6 +198,11 @@ impl Shared {
                 let mut live = shared.lock();
                 if live.config != config {
                     log::info!("parameter {name} set to {value:?}");
+                    if config.caveats() != live.config.caveats() {
+                        for caveat in config.caveats() {
+                            log::warn!("{caveat}");
+                        }
+                    }
                     live.push(name, config, settings);
                 }
                 if RECORDING_PARAMETERS.contains(&name) {
@@ -266,6 +274,12 @@ pub fn descriptor(p: &Parameter) -> raw::ParameterDescriptor {
             to_value: max,
             step: 0.0,
         },
+        // ROS ranges include their ends: the largest double below the limit.
+        Domain::Below { min, limit } => NumericRange::FloatingPointRange {
+            from_value: min,
+            to_value: limit.next_down(),
+            step: 0.0,
+        },
         Domain::Any | Domain::Choices(_) => NumericRange::NotSpecified,
     };
     ParameterDescriptor {
@@ -312,6 +326,17 @@ mod tests {
         assert!(check("qos_depth", &ParameterValue::Integer(7)).is_err());
         assert!(check("qos_depth", &ParameterValue::Integer(100)).is_ok());
         assert!(check("objective", &ParameterValue::NotSet).is_err());
+        // What every candidate would be refused for is refused when set.
+        let why = check(
+            "center_of_mass_tolerance",
+            &ParameterValue::DoubleArray(vec![0.0, 1e6, 0.0]),
+        )
+        .expect_err("a box no candidate takes");
+        assert_eq!(
+            why,
+            "parameter center_of_mass_tolerance: y: must be in [0, 1e6), got 1e6"
+        );
+        assert!(check("mass_tolerance", &ParameterValue::Double(1e9)).is_err());
         assert_eq!(s.lock().config.objective, crate::solver::Objective::Norm1);
     }
 
@@ -345,6 +370,11 @@ mod tests {
         assert_eq!(
             (q.integer_range[0].from_value, q.integer_range[0].to_value),
             (1, 100_000)
+        );
+        let t = find("center_of_mass_tolerance");
+        assert_eq!(
+            t.floating_point_range[0].to_value,
+            crate::solver::MAX_COORDINATE.next_down()
         );
         let s = find("friction_safety_factor");
         assert_eq!(s.floating_point_range[0].from_value, 1.0);

@@ -95,9 +95,83 @@ pub enum RosArgsError {
     /// A log level rcl does not know.
     #[error("--ros-args: --log-level {0:?} is not one of debug, info, warn, error, fatal, unset (or NAME:=LEVEL)")]
     LogLevel(String),
-    /// A namespace that is not absolute.
-    #[error("--ros-args: namespace {0:?} must start with '/'")]
-    RelativeNamespace(String),
+    /// A remap rule that is not `from:=to` with one `:=` and two non-empty sides.
+    #[error("--ros-args: remap {rule:?}: {why}")]
+    Remap {
+        /// The rule as given.
+        rule: String,
+        /// What is wrong with it.
+        why: NameError,
+    },
+    /// Two of the node's topics remapped onto one name.
+    #[error(
+        "--ros-args: topics {first} and {second} are both remapped to {target}; each topic needs \
+         a name of its own"
+    )]
+    SharedTarget {
+        /// The first topic, as the node names it.
+        first: String,
+        /// The second.
+        second: String,
+        /// The name both resolve to.
+        target: String,
+    },
+}
+
+/// Why a name breaks the ROS 2 naming rules (those of `rmw_validate_full_topic_name`,
+/// `rmw_validate_namespace` and `rmw_validate_node_name`).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum NameError {
+    /// A rule with a `:=` in either side (`a:=b:=c`).
+    #[error("has more than one ':='")]
+    TwoAssignments,
+    /// A side that is empty (`:=x`, `x:=`).
+    #[error("the {side} side is empty")]
+    Empty {
+        /// `left` or `right`.
+        side: &'static str,
+    },
+    /// A character outside `[A-Za-z0-9_/~]`.
+    #[error("{name:?} has {character:?} at {index}; names take letters, digits, '_' and '/'")]
+    Character {
+        /// The name.
+        name: String,
+        /// The character.
+        character: char,
+        /// Its byte index in the name.
+        index: usize,
+    },
+    /// A token that starts with a digit.
+    #[error("{name:?} has a token starting with a digit")]
+    DigitFirst {
+        /// The name.
+        name: String,
+    },
+    /// `//`, or a name ending in `/` (other than the namespace `/`).
+    #[error("{name:?} has an empty token ('//' or a trailing '/')")]
+    EmptyToken {
+        /// The name.
+        name: String,
+    },
+    /// A `~` other than a leading `~` or `~/`.
+    #[error("{name:?} has '~' other than at its start, followed by '/'")]
+    Tilde {
+        /// The name.
+        name: String,
+    },
+    /// A namespace that does not start with `/`.
+    #[error("namespace {name:?} must start with '/'")]
+    RelativeNamespace {
+        /// The namespace.
+        name: String,
+    },
+    /// A node name with a `/` or `~`, or longer than 255 bytes.
+    #[error("node name {name:?} must be one token of letters, digits and '_', at most 255 bytes")]
+    NodeName {
+        /// The name.
+        name: String,
+    },
 }
 
 impl RosArgs {
@@ -127,18 +201,7 @@ impl RosArgs {
                 "-r" | "--remap" => {
                     let v = value(&mut it, arg)?;
                     let (from, to) = assignment(arg, &v)?;
-                    // A "node:from" prefix targets one node; this process has one.
-                    let from = from.rsplit_once(':').map_or(from.as_str(), |(_, f)| f);
-                    match from {
-                        "__node" | "__name" => out.node_name = Some(to),
-                        "__ns" => {
-                            if !to.starts_with('/') {
-                                return Err(RosArgsError::RelativeNamespace(to));
-                            }
-                            out.namespace = Some(to);
-                        }
-                        _ => out.remaps.push((from.to_string(), to)),
-                    }
+                    out.remap(&v, &from, to)?;
                 }
                 "-p" | "--param" => {
                     let v = value(&mut it, arg)?;
@@ -161,6 +224,58 @@ impl RosArgs {
             }
         }
         Ok(out)
+    }
+
+    /// Applies the remap rule `rule` (`from:=to`, already split) after checking it against
+    /// the ROS 2 rules: one `:=`, both sides non-empty, each a valid name; `__ns` an absolute
+    /// namespace without a trailing `/`, `__node` a base name.
+    fn remap(&mut self, rule: &str, from: &str, to: String) -> Result<(), RosArgsError> {
+        let refuse = |why| RosArgsError::Remap {
+            rule: rule.to_string(),
+            why,
+        };
+        if to.contains(":=") {
+            return Err(refuse(NameError::TwoAssignments));
+        }
+        // A "node:from" prefix targets one node; this process has one.
+        let from = from.rsplit_once(':').map_or(from, |(_, f)| f);
+        for (side, text) in [("left", from), ("right", to.as_str())] {
+            if text.is_empty() {
+                return Err(refuse(NameError::Empty { side }));
+            }
+        }
+        match from {
+            "__node" | "__name" => {
+                check_node_name(&to).map_err(refuse)?;
+                self.node_name = Some(to);
+            }
+            "__ns" => {
+                check_namespace(&to).map_err(refuse)?;
+                self.namespace = Some(to);
+            }
+            _ => {
+                check_topic_name(from).map_err(refuse)?;
+                check_topic_name(&to).map_err(refuse)?;
+                self.remaps.push((from.to_string(), to));
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks that the node's topics `bases` (as it names them) resolve to distinct names once
+    /// remapped: two of them on one name would leave one without its endpoint.
+    pub fn check_distinct(&self, bases: &[&str], node: &str) -> Result<(), RosArgsError> {
+        let resolved: Vec<String> = bases.iter().map(|b| self.topic(b, node)).collect();
+        for (i, target) in resolved.iter().enumerate() {
+            if let Some(j) = resolved[..i].iter().position(|t| t == target) {
+                return Err(RosArgsError::SharedTarget {
+                    first: bases[j].to_string(),
+                    second: bases[i].to_string(),
+                    target: target.clone(),
+                });
+            }
+        }
+        Ok(())
     }
 
     /// The namespace, `/` by default, without a trailing slash.
@@ -186,11 +301,85 @@ impl RosArgs {
     }
 }
 
+/// Checks a topic or service name (absolute, relative, `~` or `~/...`) against the ROS 2 rules:
+/// tokens of `[A-Za-z0-9_]` not starting with a digit, separated by single `/`, no trailing `/`.
+fn check_topic_name(name: &str) -> Result<(), NameError> {
+    let rest = match name.strip_prefix('~') {
+        Some("") => return Ok(()),
+        Some(private) => private.strip_prefix('/').ok_or_else(|| NameError::Tilde {
+            name: name.to_string(),
+        })?,
+        None => name.strip_prefix('/').unwrap_or(name),
+    };
+    check_tokens(name, rest)
+}
+
+/// Checks `tokens`, the part of `name` after its leading `/` or `~/`: one or more tokens of
+/// `[A-Za-z0-9_]`, none starting with a digit, separated by single `/`.
+fn check_tokens(name: &str, tokens: &str) -> Result<(), NameError> {
+    let offset = name.len() - tokens.len();
+    for (index, character) in tokens.char_indices() {
+        let allowed = character.is_ascii_alphanumeric() || character == '_' || character == '/';
+        if character == '~' {
+            return Err(NameError::Tilde {
+                name: name.to_string(),
+            });
+        }
+        if !allowed {
+            return Err(NameError::Character {
+                name: name.to_string(),
+                character,
+                index: offset + index,
+            });
+        }
+    }
+    for token in tokens.split('/') {
+        match token.bytes().next() {
+            None => {
+                return Err(NameError::EmptyToken {
+                    name: name.to_string(),
+                })
+            }
+            Some(b) if b.is_ascii_digit() => {
+                return Err(NameError::DigitFirst {
+                    name: name.to_string(),
+                })
+            }
+            Some(_) => {}
+        }
+    }
+    Ok(())
+}
+
+/// Checks a namespace: `/`, or `/` followed by valid tokens, with no trailing `/`.
+fn check_namespace(name: &str) -> Result<(), NameError> {
+    match name.strip_prefix('/') {
+        None => Err(NameError::RelativeNamespace {
+            name: name.to_string(),
+        }),
+        Some("") => Ok(()),
+        Some(tokens) => check_tokens(name, tokens),
+    }
+}
+
+/// Checks a node's base name: one token of `[A-Za-z0-9_]`, not starting with a digit, at most
+/// 255 bytes.
+fn check_node_name(name: &str) -> Result<(), NameError> {
+    if name.len() > 255 || name.contains(['/', '~']) {
+        return Err(NameError::NodeName {
+            name: name.to_string(),
+        });
+    }
+    check_tokens(name, name)
+}
+
 /// `name` made absolute in namespace `ns` for node `node`.
 fn resolve(name: &str, ns: &str, node: &str) -> String {
     let base = if ns == "/" { "" } else { ns };
     if name.starts_with('/') {
         name.to_string()
+    } else if name == "~" {
+        format!("{base}/{node}")
     } else if let Some(private) = name.strip_prefix("~/") {
         format!("{base}/{node}/{private}")
     } else {
@@ -273,7 +462,109 @@ mod tests {
         ));
         assert!(matches!(
             RosArgs::parse(&args("-r __ns:=robot")),
-            Err(RosArgsError::RelativeNamespace(_))
+            Err(RosArgsError::Remap {
+                why: NameError::RelativeNamespace { .. },
+                ..
+            })
         ));
+    }
+
+    /// The message of the error `text` gives, which must be refused.
+    fn refusal(text: &str) -> String {
+        RosArgs::parse(&args(text)).expect_err(text).to_string()
+    }
+
+    #[test]
+    fn remaps_follow_the_ros_2_rules() {
+        for (text, message) in [
+            (
+                "-r :=x",
+                "--ros-args: remap \":=x\": the left side is empty",
+            ),
+            (
+                "-r x:=",
+                "--ros-args: remap \"x:=\": the right side is empty",
+            ),
+            (
+                "-r a:=b:=c",
+                "--ros-args: remap \"a:=b:=c\": has more than one ':='",
+            ),
+            (
+                "-r __ns:=/arm/",
+                "--ros-args: remap \"__ns:=/arm/\": \"/arm/\" has an empty token ('//' or a \
+                 trailing '/')",
+            ),
+            (
+                "-r __ns:=arm",
+                "--ros-args: remap \"__ns:=arm\": namespace \"arm\" must start with '/'",
+            ),
+            (
+                "-r grip_markers:=a//b",
+                "--ros-args: remap \"grip_markers:=a//b\": \"a//b\" has an empty token ('//' \
+                 or a trailing '/')",
+            ),
+            (
+                "-r grip_markers:=viz/",
+                "--ros-args: remap \"grip_markers:=viz/\": \"viz/\" has an empty token ('//' \
+                 or a trailing '/')",
+            ),
+            (
+                "-r grip_markers:=/2d",
+                "--ros-args: remap \"grip_markers:=/2d\": \"/2d\" has a token starting with a \
+                 digit",
+            ),
+            (
+                "-r grip-markers:=x",
+                "--ros-args: remap \"grip-markers:=x\": \"grip-markers\" has '-' at 4; names \
+                 take letters, digits, '_' and '/'",
+            ),
+            (
+                "-r x:=a~b",
+                "--ros-args: remap \"x:=a~b\": \"a~b\" has '~' other than at its start, \
+                 followed by '/'",
+            ),
+            (
+                "-r __node:=arm/left",
+                "--ros-args: remap \"__node:=arm/left\": node name \"arm/left\" must be one \
+                 token of letters, digits and '_', at most 255 bytes",
+            ),
+            (
+                "-r __node:=2arm",
+                "--ros-args: remap \"__node:=2arm\": \"2arm\" has a token starting with a digit",
+            ),
+        ] {
+            assert_eq!(refusal(text), message, "{text}");
+        }
+        let a = RosArgs::parse(&args(
+            "-r __ns:=/ -r __node:=arm_2 -r ~/status:=/s -r grasp_orient:/x:=~ -r a/b:=c",
+        ))
+        .expect("valid");
+        assert_eq!(a.namespace(), "/");
+        assert_eq!(a.topic("/x", "arm_2"), "/arm_2");
+        assert_eq!(a.topic("~/status", "arm_2"), "/s");
+        assert_eq!(a.topic("a/b", "arm_2"), "/c");
+        let a = RosArgs::parse(&args("-r __ns:=/arm/left")).expect("valid");
+        assert_eq!(a.namespace(), "/arm/left");
+    }
+
+    #[test]
+    fn two_topics_remapped_onto_one_are_refused() {
+        let topics = ["grasp_candidates", "grip_recommendations", "grip_markers"];
+        let a =
+            RosArgs::parse(&args("-r grip_markers:=/arm/out -r __ns:=/arm")).expect("valid rules");
+        a.check_distinct(&topics, "grasp_orient")
+            .expect("distinct names");
+        let a =
+            RosArgs::parse(&args("-r grip_markers:=grip_recommendations")).expect("valid rules");
+        assert_eq!(
+            a.check_distinct(&topics, "grasp_orient")
+                .expect_err("shared")
+                .to_string(),
+            "--ros-args: topics grip_recommendations and grip_markers are both remapped to \
+             /grip_recommendations; each topic needs a name of its own"
+        );
+        let a = RosArgs::parse(&args("-r grasp_candidates:=/a -r grip_recommendations:=/a"))
+            .expect("valid rules");
+        assert!(a.check_distinct(&topics, "grasp_orient").is_err());
     }
 }

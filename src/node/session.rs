@@ -15,10 +15,11 @@ use crate::msg::{message_type_name, RosMessage};
 use anyhow::{bail, Context as _};
 use async_signal::{Signal, Signals};
 use futures::StreamExt;
-use ros2_client::dds::rustdds::DomainParticipantBuilder;
+use ros2_client::dds::rustdds::{DomainParticipantBuilder, RTPSEntity as _};
+use ros2_client::gid::Gid;
 use ros2_client::qos::History;
 use ros2_client::ros2::LogLevel;
-use ros2_client::{rosout, Context, Name, Node, NodeName, NodeOptions, QosProfile};
+use ros2_client::{rosout, Context, Name, Node, NodeEvent, NodeName, NodeOptions, QosProfile};
 
 /// How this process takes part in the DDS graph.
 #[derive(Debug, Clone, Copy)]
@@ -114,11 +115,14 @@ impl Start {
             .unwrap_or_else(|| default.to_string())
     }
 
-    /// Joins the graph as node `name` in the namespace of `-r __ns:=`.
+    /// Joins the graph as node `name` in the namespace of `-r __ns:=`, and watches it for
+    /// another node of the same full name ([`Session::watch_namesakes`]).
     pub fn open(self, name: &str, options: NodeOptions) -> anyhow::Result<Session> {
         let graph = Graph::from_env()?;
         let namespace = self.ros.namespace();
-        Session::open(graph, &namespace, name, options, self.shutdown, self.ros)
+        let mut session = Session::open(graph, &namespace, name, options, self.shutdown, self.ros)?;
+        session.watch_namesakes();
+        Ok(session)
     }
 }
 
@@ -130,9 +134,15 @@ pub struct Session {
     pub ros: RosArgs,
     name: String,
     shutdown: Shutdown,
+    // Fields drop in this order when a session is dropped without `close` (a command refused
+    // after joining the graph): the node first, while its spinner can still hear the request to
+    // stop; before, the spinner went first and ros2-client logged "Cannot notify spin task to
+    // stop" above the refusal.
+    node: Node,
     executor: smol::Executor<'static>,
     spinner: smol::Task<Result<(), ros2_client::CreateError>>,
-    node: Node,
+    /// The watch for another node of the same name, while it runs.
+    namesakes: Option<smol::Task<()>>,
     context: Context,
 }
 
@@ -187,9 +197,41 @@ impl Session {
             shutdown,
             executor,
             spinner,
+            namesakes: None,
             node,
             context,
         })
+    }
+
+    /// Warns once for each other DDS participant that holds a node of this node's full name, as
+    /// it appears in `ros_discovery_info` (whoever started first: that topic keeps each
+    /// participant's last list for those who join later). rcl only warns of a namesake in its
+    /// own process; two nodes of one name on a domain share their parameter services, their
+    /// `/rosout` logger and their line in `ros2 node list`.
+    pub fn watch_namesakes(&mut self) {
+        let Some(events) = self.node.status_receiver() else {
+            return;
+        };
+        let own = Gid::from(self.context.domain_participant().guid());
+        let name = self.node.fully_qualified_name();
+        let logger = self.node.logging_handle();
+        self.namesakes = Some(self.executor.spawn(async move {
+            let mut warned = std::collections::BTreeSet::new();
+            while let Ok(event) = events.recv().await {
+                let NodeEvent::ParticipantEntities(info) = event else {
+                    continue;
+                };
+                let namesake = info
+                    .nodes()
+                    .iter()
+                    .any(|n| n.fully_qualified_name() == name);
+                if info.gid() != own && namesake && warned.insert(info.gid()) {
+                    let text = namesake_warning(&name, info.gid());
+                    log::warn!(target: "grasp_orient::node", "{text}");
+                    rosout!(logger, LogLevel::Warn, "{}", text);
+                }
+            }
+        }));
     }
 
     /// The node.
@@ -219,10 +261,12 @@ impl Session {
         let Session {
             executor,
             spinner,
+            namesakes,
             node,
             context,
             ..
         } = self;
+        drop(namesakes);
         drop(node);
         smol::block_on(executor.run(async {
             if let Err(e) = spinner.await {
@@ -232,6 +276,17 @@ impl Session {
         drop(executor);
         drop(context);
     }
+}
+
+/// The warning for another node named `name` in DDS participant `gid`, with the caution
+/// `ros2 node list` prints for names that are shared.
+fn namesake_warning(name: &str, gid: Gid) -> String {
+    format!(
+        "another node named {name} is on the ROS graph (DDS participant {gid:?}). Be aware that \
+         nodes that share an exact name can have unintended side effects: their parameter \
+         services, /rosout logger name and entry in `ros2 node list` are shared. Give this one \
+         another name with --ros-args -r __node:=NAME"
+    )
 }
 
 /// Creates the topic `full_name` (absolute) carrying messages of type `M`.

@@ -636,3 +636,81 @@ fn the_spatial_docs_example_is_solves_output() {
         }
     }
 }
+
+/// A JSON field of the wrong type or out of range is named with what it takes, by each command
+/// that reads candidates: `solve` and `rank` per line, `plot` for its file.
+#[test]
+fn json_errors_name_the_field_and_what_it_takes() {
+    let good = paper_lines().lines().next().expect("case a").to_string();
+    let bad_model = good.replacen('{', "{\"model\": -1, ", 1);
+    let bad_mass = good.replacen('{', "{\"mass\": 1e999, ", 1);
+    let (lines, _, _) = run_solve(&[], &format!("{bad_model}\n{bad_mass}\n"));
+    assert_eq!(
+        lines[0]["message"],
+        "line 1: invalid input: field model: expected an integer from 0 to 255 (u8), got \
+         integer -1 at column 12"
+    );
+    assert_eq!(
+        lines[1]["message"],
+        "line 2: invalid input: field mass: expected a number within ±1.8e308 (a double), got \
+         1e999 at column 14"
+    );
+    let dir = temp_dir("json_errors");
+    let input = dir.path().join("bad.jsonl");
+    std::fs::write(&input, format!("{good}\n{bad_model}\n")).expect("write");
+    let out = bin()
+        .args(["rank", "--json", input.to_str().expect("utf-8")])
+        .output()
+        .expect("rank runs");
+    let reply: Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(
+        reply["recommendations"][1]["message"],
+        "line 2: invalid input: field model: expected an integer from 0 to 255 (u8), got \
+         integer -1 at column 12"
+    );
+    let plotted = dir.path().join("bad.json");
+    std::fs::write(&plotted, &bad_mass).expect("write");
+    let (code, stderr) = exit_of(&[
+        "plot",
+        plotted.to_str().expect("utf-8"),
+        "-o",
+        dir.path().join("x.svg").to_str().expect("utf-8"),
+    ]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(
+        stderr.contains("field mass: expected a number within ±1.8e308 (a double), got 1e999"),
+        "{stderr}"
+    );
+}
+
+/// A tolerance that every candidate would be refused for is refused when given as an option (it
+/// was accepted, then every candidate was refused for a field it left at zero); the node's
+/// parameters are checked in `node_start.rs`.
+#[test]
+fn tolerances_every_candidate_would_be_refused_for_are_refused_when_set() {
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["solve", "--center-of-mass-tolerance", "1e6,0,0"],
+            "x: must be in [0, 1e6), got 1e6",
+        ),
+        (
+            &["rank", "--mass-tolerance", "1e9"],
+            "must be in [0, 1e9), got 1e9",
+        ),
+    ];
+    for (args, why) in cases {
+        let (code, stderr) = exit_of(args);
+        assert_eq!(code, Some(2), "{args:?}: {stderr}");
+        let first = stderr.lines().next().unwrap_or_default();
+        assert!(first.contains(why), "{args:?}: {stderr}");
+    }
+    // Just below, no candidate is refused as invalid (a box this large holds none of them: status 1).
+    let (lines, stderr, _) = run_solve(
+        &["--center-of-mass-tolerance", "999999,0,0"],
+        &paper_lines(),
+    );
+    assert_eq!(lines.len(), 4, "{stderr}");
+    for line in &lines {
+        assert_ne!(line["status"], 2, "{} {stderr}", line["message"]);
+    }
+}

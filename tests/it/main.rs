@@ -11,6 +11,7 @@ mod golden_bags;
 mod invariants;
 mod magnitudes;
 mod msg_contract;
+mod node_start;
 mod paper;
 mod play;
 mod recordings;

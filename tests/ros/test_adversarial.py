@@ -203,6 +203,25 @@ def test_parameter_out_of_its_domain_is_refused(peer, client, name, value):
     good_one_answered(client)
 
 
+def test_tolerances_every_candidate_would_be_refused_for_are_refused_when_set(peer, client):
+    """A center_of_mass_tolerance of 1e6 m was accepted, and then every candidate was refused for a field it
+    left at zero; the domains now end where the solver's limits do, and the service says why."""
+    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+    params = Params(peer)
+    box = ParameterValue(type=ParameterType.PARAMETER_DOUBLE_ARRAY, double_array_value=[1e6, 0.0, 0.0])
+    mass = ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=1e9)
+    for name, value, words in [
+            ("center_of_mass_tolerance", box, "center_of_mass_tolerance: x: must be in [0, 1e6), got 1e6"),
+            ("mass_tolerance", mass, "mass_tolerance: must be in [0, 1e9), got 1e9")]:
+        req = SetParameters.Request(parameters=[Parameter(name=name, value=value)])
+        (r,) = peer.call(params.set_client, req).results
+        assert not r.successful, f"{name} accepted"
+        assert words in r.reason, r.reason
+    assert params.get("mass_tolerance") == [0.0]
+    good_one_answered(client)
+
+
 def test_descriptors_state_every_numeric_domain(peer, client):
     from rcl_interfaces.srv import DescribeParameters
     cl = peer.node.create_client(DescribeParameters, "/grasp_orient/describe_parameters")
@@ -315,3 +334,37 @@ def test_log_level_fatal_hides_info(start_node, peer):
     n.stop_and_check()
     with n._lock:
         assert not any("INFO" in line or "WARN" in line for line in n.lines), n.output(20)
+
+
+def test_a_node_of_the_same_name_on_the_domain_is_warned_of(start_node, peer):
+    """Two nodes of one full name share their parameter services and /rosout logger; rcl warns only of a
+    namesake in its own process. The node warns once, on stderr and /rosout, when an rclpy node of its name
+    joins the domain, and `get_node_names` shows both."""
+    import rclpy
+    from rcl_interfaces.msg import Log
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    n = start_node("--ros-args", "-r", "__ns:=/twin", "-p", "record:=false", name="grasp_orient node /twin")
+    logs = []
+    qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
+    sub = peer.node.create_subscription(Log, "/rosout", logs.append, qos)
+    peer.spin_until(lambda: sub.get_publisher_count() > 1, 5.0)
+    peer.spin_for(1.0)
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    warning = "another node named /twin/grasp_orient is on the ROS graph"
+    try:
+        twin = rclpy.create_node("grasp_orient", namespace="/twin", context=ctx)
+        n.wait_for_line(re.escape(warning), timeout=15.0)
+        assert peer.spin_until(lambda: any(warning in m.msg for m in logs), 10.0), \
+            f"not on /rosout; saw {[m.msg[:80] for m in logs][:5]}"
+        (log,) = [m for m in logs if warning in m.msg]
+        assert log.level == Log.WARN and log.name.endswith("grasp_orient"), log
+        assert peer.spin_until(lambda: peer.node.get_node_names_and_namespaces().count(
+            ("grasp_orient", "/twin")) == 2, 5.0), peer.node.get_node_names_and_namespaces()
+        peer.spin_for(1.0)
+        assert sum(warning in line for line in n.all_lines()) == 1, n.output(20)
+        twin.destroy_node()
+    finally:
+        peer.node.destroy_subscription(sub)
+        rclpy.try_shutdown(context=ctx)
+    n.stop_and_check()
