@@ -1,0 +1,176 @@
+//! The edge and vertex rule: a contact on an edge or a vertex takes the pseudo-normal (the mean of
+//! the faces' normals, angle-weighted at a vertex), and says so.
+
+use grasp_orient_geometry::{
+    cast_fingers, ClosingAxis, Contact, Feature, GripperPose, Mesh, Object, Primitive, Shape,
+};
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+
+use crate::agreement::angle_between;
+use crate::objects::{faceted_cylinder, TestMesh};
+
+/// A gripper closing along `b` through `through`, `width` open.
+fn closing_through(through: Point3<f64>, b: Vector3<f64>, width: f64) -> GripperPose {
+    let rotation = UnitQuaternion::rotation_between(&Vector3::y(), &b).unwrap_or_else(|| {
+        UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
+    });
+    GripperPose {
+        tool_pose: Isometry3::from_parts(Translation3::from(through.coords), rotation),
+        width,
+        closing_axis: ClosingAxis::Y,
+    }
+}
+
+fn contacts(shape: Shape, gripper: &GripperPose) -> [Contact; 2] {
+    let object = Object {
+        pose: Isometry3::identity(),
+        shape,
+    };
+    cast_fingers(gripper, &object).expect("both fingers touch")
+}
+
+fn assert_normal(c: &Contact, expected: Vector3<f64>, feature: Feature) {
+    let angle = angle_between(&c.normal, &expected.normalize());
+    assert!(angle < 1e-12, "normal {:?} is {angle:e} rad off", c.normal);
+    assert_eq!(c.feature, feature);
+}
+
+/// A unit cube centred on the origin, each face split along a diagonal.
+fn cube_mesh() -> TestMesh {
+    let vertices = (0..8)
+        .map(|i| {
+            [
+                f64::from(i & 1) - 0.5,
+                f64::from((i >> 1) & 1) - 0.5,
+                f64::from((i >> 2) & 1) - 0.5,
+            ]
+        })
+        .collect();
+    let quads = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let triangles = quads
+        .iter()
+        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .collect();
+    TestMesh {
+        vertices,
+        triangles,
+    }
+}
+
+fn cube_shapes() -> [Shape; 2] {
+    let m = cube_mesh();
+    [
+        Primitive::Box {
+            x: 1.0,
+            y: 1.0,
+            z: 1.0,
+        }
+        .into(),
+        Mesh::from_triangles("cube", &m.vertices, &m.triangles, [1.0; 3])
+            .expect("a cube")
+            .into(),
+    ]
+}
+
+#[test]
+fn a_box_edge_takes_the_mean_of_its_two_faces() {
+    // The closing line runs along x = y through the edge x = 0.5, y = 0.5 (finger 1 meets it).
+    for shape in cube_shapes() {
+        let b = Vector3::new(-1.0, -1.0, 0.0).normalize();
+        let gripper = closing_through(Point3::new(0.0, 0.0, 0.1), b, 4.0);
+        let [c1, c2] = contacts(shape, &gripper);
+        assert_normal(&c1, Vector3::new(-1.0, -1.0, 0.0), Feature::Edge);
+        assert_normal(&c2, Vector3::new(1.0, 1.0, 0.0), Feature::Edge);
+        assert!((c1.point - Point3::new(0.5, 0.5, 0.1)).norm() < 1e-12);
+    }
+}
+
+#[test]
+fn a_box_corner_takes_the_mean_of_its_three_faces() {
+    for shape in cube_shapes() {
+        let gripper = closing_through(
+            Point3::origin(),
+            Vector3::new(1.0, 1.0, 1.0).normalize(),
+            4.0,
+        );
+        let [c1, c2] = contacts(shape, &gripper);
+        assert_normal(&c1, Vector3::new(1.0, 1.0, 1.0), Feature::Vertex);
+        assert_normal(&c2, Vector3::new(-1.0, -1.0, -1.0), Feature::Vertex);
+    }
+}
+
+#[test]
+fn a_mesh_face_diagonal_is_not_an_edge() {
+    // Through the centre of the faces x = ±0.5, on the diagonal that splits them.
+    let [_, mesh] = cube_shapes();
+    let gripper = closing_through(Point3::new(0.0, 0.1, 0.1), Vector3::x(), 3.0);
+    let [c1, c2] = contacts(mesh, &gripper);
+    assert_normal(&c1, Vector3::x(), Feature::Face);
+    assert_normal(&c2, -Vector3::x(), Feature::Face);
+}
+
+#[test]
+fn a_cylinder_rim_takes_the_mean_of_cap_and_side() {
+    let cylinder = Primitive::Cylinder {
+        height: 2.0,
+        radius: 1.0,
+    };
+    // Along (1, 0, 1) through the rim points (1, 0, 1) and (−1, 0, −1).
+    let b = Vector3::new(-1.0, 0.0, -1.0).normalize();
+    let gripper = closing_through(Point3::new(1.0, 0.0, 1.0) + b, b, 2.0 * 2f64.sqrt() + 1.0);
+    let [c1, c2] = contacts(cylinder.into(), &gripper);
+    assert!((c1.point - Point3::new(1.0, 0.0, 1.0)).norm() < 1e-12);
+    assert_normal(&c1, Vector3::new(-1.0, 0.0, -1.0), Feature::Edge);
+    assert!((c2.point - Point3::new(-1.0, 0.0, -1.0)).norm() < 1e-12);
+    assert_normal(&c2, Vector3::new(1.0, 0.0, 1.0), Feature::Edge);
+}
+
+#[test]
+fn a_cone_tip_takes_the_axis_and_its_base_rim_the_mean() {
+    let cone = Primitive::Cone {
+        height: 2.0,
+        radius: 1.0,
+    };
+    // Down the axis: the tip (0, 0, 1), then the base's centre.
+    let gripper = closing_through(Point3::origin(), -Vector3::z(), 4.0);
+    let [c1, c2] = contacts(cone.into(), &gripper);
+    assert!((c1.point - Point3::new(0.0, 0.0, 1.0)).norm() < 1e-12);
+    assert_normal(&c1, -Vector3::z(), Feature::Vertex);
+    assert_normal(&c2, Vector3::z(), Feature::Face);
+    // Through the base rim at (−1, 0, −1), horizontally: the side's outward normal there is
+    // (−2, 0, 1)/√5 and the base's (0, 0, −1).
+    let gripper = closing_through(Point3::new(0.0, 0.0, -1.0), Vector3::x(), 4.0);
+    let [c1, _] = contacts(cone.into(), &gripper);
+    let side = Vector3::new(-2.0, 0.0, 1.0).normalize();
+    assert_normal(&c1, -(side + Vector3::new(0.0, 0.0, -1.0)), Feature::Edge);
+}
+
+#[test]
+fn a_faceted_cylinder_vertex_takes_the_angle_weighted_mean() {
+    // The top cap's centre vertex: the cap's triangles all face +z, so the normal is unique.
+    let m = faceted_cylinder(1.0, 2.0, 16);
+    let mesh: Shape = Mesh::from_triangles("cylinder", &m.vertices, &m.triangles, [1.0; 3])
+        .expect("closed")
+        .into();
+    let gripper = closing_through(Point3::origin(), Vector3::z(), 4.0);
+    let [c1, c2] = contacts(mesh.clone(), &gripper);
+    assert_normal(&c1, Vector3::z(), Feature::Face);
+    assert_normal(&c2, -Vector3::z(), Feature::Face);
+    // A rim vertex at angle 0, (1, 0, 1): two side facets (π/2 each, their normals at ±π/16
+    // about +x) and the cap (the polygon's angle, +z) meet there, so the normal lies strictly
+    // between +x and +z, in the plane y = 0 by symmetry.
+    let b = Vector3::new(-1.0, 0.0, -1.0).normalize();
+    let gripper = closing_through(Point3::new(1.0, 0.0, 1.0) + b, b, 4.5);
+    let [c1, _] = contacts(mesh, &gripper);
+    assert_eq!(c1.feature, Feature::Vertex);
+    assert!((c1.point - Point3::new(1.0, 0.0, 1.0)).norm() < 1e-12);
+    let inward = c1.normal.into_inner();
+    assert!(inward.x < -0.1 && inward.z < -0.1 && inward.y.abs() < 1e-12);
+}
