@@ -488,67 +488,72 @@ fn cast_cone(half_height: f64, radius: f64, ray: &LocalRay) -> LocalCast {
     })
 }
 
-/// parry's BVH ray cast; the inside test by parry's pseudo-normals (closed meshes only).
+/// parry's BVH ray cast. For a closed mesh the ray runs on past `max`: a start inside meets a
+/// back face first (an exit). Where that first hit is on an edge or a vertex, or at the start
+/// itself, the back face proves nothing, and parry's point projection with pseudo-normals decides.
 fn cast_mesh(mesh: &Mesh, ray: &LocalRay) -> LocalCast {
     let trimesh = mesh.trimesh();
-    let origin = glam(&ray.origin);
-    if mesh.is_closed() {
-        let projection = trimesh.project_local_point(origin, false);
-        if projection.is_inside && (projection.point - origin).length() > ray.tolerance {
-            return LocalCast::Inside;
-        }
-    }
-    let Some(hit) = trimesh.cast_local_ray_and_get_normal(&ray.parry(), ray.max, false) else {
+    let closed = mesh.is_closed();
+    let reach = if closed { f64::MAX } else { ray.max };
+    let Some(hit) = trimesh.cast_local_ray_and_get_normal(&ray.parry(), reach, false) else {
         return LocalCast::Miss;
     };
     let t = hit.time_of_impact;
-    let q = glam(&ray.at(t));
     let id = hit.subshape;
     let triangle = trimesh.triangle(id);
+    let q = glam(&ray.at(t));
     let corners = [triangle.a, triangle.b, triangle.c];
     let mut face = nalgebra((triangle.b - triangle.a).cross(triangle.c - triangle.a)).normalize();
-    if !mesh.is_closed() && face.dot(&ray.direction) > 0.0 {
-        // Open: the face's side that the finger meets is its outside.
-        face = -face;
-    }
     let vertex = (0..3).find(|&i| (q - corners[i]).length() <= ray.tolerance);
     let edge = (0..3).find(|&i| {
         let (p, r) = (corners[i], corners[(i + 1) % 3]);
         let along = r - p;
         along.cross(q - p).length() <= ray.tolerance * along.length()
     });
+    if closed && face.dot(&ray.direction) > 0.0 {
+        let clear_exit = vertex.is_none() && edge.is_none() && t > ray.tolerance;
+        if clear_exit || starts_inside(trimesh, ray) {
+            return LocalCast::Inside;
+        }
+    }
+    if t > ray.max {
+        return LocalCast::Miss;
+    }
+    if !closed && face.dot(&ray.direction) > 0.0 {
+        // Open: the face's side that the finger meets is its outside.
+        face = -face;
+    }
+    let feature = match (vertex, edge) {
+        (Some(_), _) => Feature::Vertex,
+        (None, Some(_)) => Feature::Edge,
+        (None, None) => Feature::Face,
+    };
     let pseudo = trimesh.pseudo_normals_if_oriented().and_then(|normals| {
         let indices = trimesh.indices()[id as usize];
         match (vertex, edge) {
-            (Some(i), _) => Some((
-                normals.vertices_pseudo_normal[indices[i] as usize],
-                Feature::Vertex,
-            )),
-            (None, Some(i)) => Some((normals.edges_pseudo_normal[id as usize][i], Feature::Edge)),
+            (Some(i), _) => Some(normals.vertices_pseudo_normal[indices[i] as usize]),
+            (None, Some(i)) => Some(normals.edges_pseudo_normal[id as usize][i]),
             (None, None) => None,
         }
     });
-    let (outward, feature) = match pseudo {
-        Some((n, feature)) if n.length() > 0.0 => {
-            let n = nalgebra(n).normalize();
-            if n.cross(&face).norm() <= 1e-12 {
-                (face, Feature::Face)
-            } else {
-                (n, feature)
-            }
+    let (outward, feature) = match pseudo.map(nalgebra) {
+        // Coplanar faces: the normal is unique after all.
+        Some(n) if n.norm() > 0.0 && n.normalize().cross(&face).norm() <= 1e-12 => {
+            (face, Feature::Face)
         }
-        _ => {
-            let feature = match (vertex, edge) {
-                (Some(_), _) => Feature::Vertex,
-                (None, Some(_)) => Feature::Edge,
-                (None, None) => Feature::Face,
-            };
-            (face, feature)
-        }
+        Some(n) if n.norm() > 0.0 => (n.normalize(), feature),
+        _ => (face, feature),
     };
     LocalCast::Hit(LocalHit {
         t,
         outward,
         feature,
     })
+}
+
+/// Inside by more than the tolerance, by parry's projection and pseudo-normals.
+fn starts_inside(trimesh: &parry3d_f64::shape::TriMesh, ray: &LocalRay) -> bool {
+    let origin = glam(&ray.origin);
+    let projection = trimesh.project_local_point(origin, false);
+    projection.is_inside && (projection.point - origin).length() > ray.tolerance
 }

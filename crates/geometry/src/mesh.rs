@@ -210,19 +210,8 @@ fn merge_vertices(vertices: &[Vector], triangles: &[[u32; 3]]) -> (Vec<Vector>, 
 }
 
 fn estimate_bytes(trimesh: &TriMesh, resource: &str) -> usize {
-    let vertices = trimesh.vertices().len();
-    let triangles = trimesh.indices().len();
-    // The BVH: about two nodes a triangle, each two bounding boxes of f64 and two indices.
-    let bvh = 2 * triangles * (2 * 2 * size_of::<Vector>() + 16);
-    let pseudo_normals = trimesh
-        .pseudo_normals()
-        .map_or(0, |_| (vertices + 3 * triangles) * size_of::<Vector>());
-    size_of::<Mesh>()
-        + resource.len()
-        + std::mem::size_of_val(trimesh.vertices())
-        + std::mem::size_of_val(trimesh.indices())
-        + bvh
-        + pseudo_normals
+    // parry's own count: vertices, triangles, the BVH, the pseudo-normals.
+    size_of::<Mesh>() - size_of::<TriMesh>() + trimesh.total_memory_size() + resource.len()
 }
 
 #[cfg(test)]
