@@ -488,17 +488,24 @@ fn cast_cone(half_height: f64, radius: f64, ray: &LocalRay) -> LocalCast {
     })
 }
 
-/// parry's BVH ray cast. For a closed mesh the ray runs on past `max`: a start inside meets a
-/// back face first (an exit). Where that first hit is on an edge or a vertex, or at the start
-/// itself, the back face proves nothing, and parry's point projection with pseudo-normals decides.
+/// parry's BVH ray cast, from the tolerance behind the start, so that a start on the surface or
+/// inside it by less than the tolerance meets it at once (as the primitives' `t ≥ −tolerance`).
+/// For a closed mesh the ray runs on past `max`: a start inside meets a back face first (an
+/// exit). Where that first hit is on an edge or a vertex, or at the start itself, the back face
+/// proves nothing, and parry's point projection with pseudo-normals decides.
 fn cast_mesh(mesh: &Mesh, ray: &LocalRay) -> LocalCast {
     let trimesh = mesh.trimesh();
     let closed = mesh.is_closed();
-    let reach = if closed { f64::MAX } else { ray.max };
-    let Some(hit) = trimesh.cast_local_ray_and_get_normal(&ray.parry(), reach, false) else {
+    let reach = if closed {
+        f64::MAX
+    } else {
+        ray.max + ray.tolerance
+    };
+    let behind = Ray::new(glam(&ray.at(-ray.tolerance)), glam(&ray.direction));
+    let Some(hit) = trimesh.cast_local_ray_and_get_normal(&behind, reach, false) else {
         return LocalCast::Miss;
     };
-    let t = hit.time_of_impact;
+    let t = (hit.time_of_impact - ray.tolerance).max(0.0);
     let id = hit.subshape;
     let triangle = trimesh.triangle(id);
     let q = glam(&ray.at(t));
@@ -511,7 +518,7 @@ fn cast_mesh(mesh: &Mesh, ray: &LocalRay) -> LocalCast {
         along.cross(q - p).length() <= ray.tolerance * along.length()
     });
     if closed && face.dot(&ray.direction) > 0.0 {
-        let clear_exit = vertex.is_none() && edge.is_none() && t > ray.tolerance;
+        let clear_exit = vertex.is_none() && edge.is_none() && t > 0.0;
         if clear_exit || starts_inside(trimesh, ray) {
             return LocalCast::Inside;
         }

@@ -174,3 +174,38 @@ fn a_faceted_cylinder_vertex_takes_the_angle_weighted_mean() {
     let inward = c1.normal.into_inner();
     assert!(inward.x < -0.1 && inward.z < -0.1 && inward.y.abs() < 1e-12);
 }
+
+/// A finger starting on the surface, or inside it by less than the tolerance (1e-10 of the
+/// size), touches it at once; deeper is inside. Contact-GraspNet's poses start finger 1 exactly
+/// at the predicted contact.
+#[test]
+fn a_finger_starting_on_the_surface_touches_it_at_once() {
+    for shape in cube_shapes() {
+        for depth in [0.0, 1e-13, -1e-13] {
+            // Finger 1 starts at x = −0.5 + depth, closing along +x through a face's inside.
+            let gripper = GripperPose {
+                tool_pose: Isometry3::translation(0.5 + depth, 0.1, 0.2),
+                width: 2.0,
+                closing_axis: ClosingAxis::X,
+            };
+            let [c1, c2] = contacts(shape.clone(), &gripper);
+            assert!(c1.travel <= 1e-12, "depth {depth}: travel {}", c1.travel);
+            assert!((c1.point.x + 0.5).abs() <= 1e-12);
+            assert_normal(&c1, Vector3::x(), Feature::Face);
+            assert_normal(&c2, -Vector3::x(), Feature::Face);
+        }
+        let gripper = GripperPose {
+            tool_pose: Isometry3::translation(0.5 + 1e-6, 0.1, 0.2),
+            width: 2.0,
+            closing_axis: ClosingAxis::X,
+        };
+        let object = Object {
+            pose: Isometry3::identity(),
+            shape: shape.clone(),
+        };
+        assert!(matches!(
+            cast_fingers(&gripper, &object),
+            Err(grasp_orient_geometry::GeometryError::StartsInside { .. })
+        ));
+    }
+}
