@@ -29,8 +29,9 @@
 //! - Cylinder: on a rim, the mean of the cap's normal and the radial normal.
 //! - Cone: on the base rim, the mean of the base's normal and the side's normal; at the tip, the
 //!   axis `+z` (the angle-weighted mean of the side's normals around the tip).
-//! - Closed mesh: parry's pseudo-normals of the edge or vertex. Open mesh: the hit triangle's
-//!   normal (an open mesh's faces need not be oriented alike, so their mean means nothing).
+//! - Closed mesh: the pseudo-normal of the edge or vertex, from the triangles there. Open mesh:
+//!   the hit triangle's normal (an open mesh's faces need not be oriented alike, so their mean
+//!   means nothing).
 //!
 //! # Exactness
 //! Box and sphere: parry's closed-form ray casts. Mesh: parry's ray cast over its BVH (each
@@ -42,7 +43,7 @@ use std::str::FromStr;
 
 use nalgebra::{Isometry3, Point3, UnitVector3, Vector3};
 use parry3d_f64::math::Vector;
-use parry3d_f64::query::{PointQuery, Ray, RayCast};
+use parry3d_f64::query::{Ray, RayCast};
 use parry3d_f64::shape::{Ball, Cuboid};
 
 use crate::error::{Finger, GeometryError};
@@ -492,7 +493,7 @@ fn cast_cone(half_height: f64, radius: f64, ray: &LocalRay) -> LocalCast {
 /// inside it by less than the tolerance meets it at once (as the primitives' `t ≥ −tolerance`).
 /// For a closed mesh the ray runs on past `max`: a start inside meets a back face first (an
 /// exit). Where that first hit is on an edge or a vertex, or at the start itself, the back face
-/// proves nothing, and parry's point projection with pseudo-normals decides.
+/// proves nothing, and rays in other directions decide ([`starts_inside`]).
 fn cast_mesh(mesh: &Mesh, ray: &LocalRay) -> LocalCast {
     let trimesh = mesh.trimesh();
     let closed = mesh.is_closed();
@@ -519,7 +520,7 @@ fn cast_mesh(mesh: &Mesh, ray: &LocalRay) -> LocalCast {
     });
     if closed && face.dot(&ray.direction) > 0.0 {
         let clear_exit = vertex.is_none() && edge.is_none() && t > 0.0;
-        if clear_exit || starts_inside(trimesh, ray) {
+        if clear_exit || starts_inside(mesh, ray) {
             return LocalCast::Inside;
         }
     }
@@ -535,14 +536,12 @@ fn cast_mesh(mesh: &Mesh, ray: &LocalRay) -> LocalCast {
         (None, Some(_)) => Feature::Edge,
         (None, None) => Feature::Face,
     };
-    let pseudo = trimesh.pseudo_normals_if_oriented().and_then(|normals| {
-        let indices = trimesh.indices()[id as usize];
-        match (vertex, edge) {
-            (Some(i), _) => Some(normals.vertices_pseudo_normal[indices[i] as usize]),
-            (None, Some(i)) => Some(normals.edges_pseudo_normal[id as usize][i]),
-            (None, None) => None,
-        }
-    });
+    let corners = trimesh.indices()[id as usize];
+    let pseudo = match (closed, vertex, edge) {
+        (false, _, _) | (true, None, None) => None,
+        (true, Some(i), _) => Some(mesh.vertex_pseudo_normal(corners[i])),
+        (true, None, Some(i)) => Some(mesh.edge_pseudo_normal(corners[i], corners[(i + 1) % 3])),
+    };
     let (outward, feature) = match pseudo.map(nalgebra) {
         // Coplanar faces: the normal is unique after all.
         Some(n) if n.norm() > 0.0 && n.normalize().cross(&face).norm() <= 1e-12 => {
@@ -558,9 +557,50 @@ fn cast_mesh(mesh: &Mesh, ray: &LocalRay) -> LocalCast {
     })
 }
 
-/// Inside by more than the tolerance, by parry's projection and pseudo-normals.
-fn starts_inside(trimesh: &parry3d_f64::shape::TriMesh, ray: &LocalRay) -> bool {
+/// Whether a start is inside a closed mesh, by rays in three fixed directions: the first of them
+/// whose first hit lies inside a face (not on an edge or vertex) and beyond the tolerance tells,
+/// by that face's side (a back face is an exit). A ray that meets nothing means outside; if no
+/// ray is clear, the start is taken as outside.
+fn starts_inside(mesh: &Mesh, ray: &LocalRay) -> bool {
+    const DIRECTIONS: [[f64; 3]; 3] = [
+        [
+            0.267_261_241_912_424_4,
+            0.534_522_483_824_848_8,
+            0.801_783_725_737_273_2,
+        ],
+        [
+            -0.872_871_560_943_969_6,
+            0.218_217_890_235_992_4,
+            0.436_435_780_471_984_8,
+        ],
+        [
+            0.301_511_344_577_763_6,
+            -0.904_534_033_733_290_9,
+            0.301_511_344_577_763_6,
+        ],
+    ];
+    let trimesh = mesh.trimesh();
     let origin = glam(&ray.origin);
-    let projection = trimesh.project_local_point(origin, false);
-    projection.is_inside && (projection.point - origin).length() > ray.tolerance
+    for d in DIRECTIONS {
+        let d = Vector::from(d);
+        let Some(hit) =
+            trimesh.cast_local_ray_and_get_normal(&Ray::new(origin, d), f64::MAX, false)
+        else {
+            return false;
+        };
+        let triangle = trimesh.triangle(hit.subshape);
+        let q = origin + d * hit.time_of_impact;
+        let corners = [triangle.a, triangle.b, triangle.c];
+        let near_feature = (0..3).any(|i| {
+            let (p, r) = (corners[i], corners[(i + 1) % 3]);
+            (r - p).cross(q - p).length() <= ray.tolerance * (r - p).length()
+        });
+        if !near_feature && hit.time_of_impact > ray.tolerance {
+            return (triangle.b - triangle.a)
+                .cross(triangle.c - triangle.a)
+                .dot(d)
+                > 0.0;
+        }
+    }
+    false
 }

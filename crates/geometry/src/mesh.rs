@@ -4,11 +4,14 @@
 //! indices (in range); scale the vertices into metres; merge vertices at identical positions
 //! (STL stores each triangle's corners apart); drop triangles that become degenerate (two equal
 //! corners); check closedness ([`crate::mass::check_closed`]). A closed mesh gets its volume and
-//! centroid, is turned outward if it was wound inward (negative volume), and its triangle mesh
-//! is marked oriented so parry computes the pseudo-normals of its edges and vertices.
+//! centroid and is turned outward if it was wound inward (negative volume). Every mesh gets
+//! parry's BVH over its triangles, and the list of the triangles at each vertex, from which the
+//! pseudo-normal of an edge or a vertex is computed when a finger meets one (rarely: parry's own
+//! pseudo-normals for every edge and vertex took 40 % of the time to index and a quarter of the
+//! memory).
 
 use std::collections::HashMap;
-use std::mem::size_of;
+use std::mem::{size_of, size_of_val};
 
 use nalgebra::Point3;
 use parry3d_f64::mass_properties::details::trimesh_signed_volume_and_center_of_mass;
@@ -23,6 +26,9 @@ use crate::mass::check_closed;
 pub struct Mesh {
     resource: String,
     trimesh: TriMesh,
+    /// The triangles at vertex `v` are `at_vertex[first[v]..first[v + 1]]`.
+    first: Vec<u32>,
+    at_vertex: Vec<u32>,
     closed: Result<Closed, MeshDefect>,
     size: f64,
     bytes: usize,
@@ -80,26 +86,27 @@ impl Mesh {
                 }
             }
         }
-        let flags = if closed.is_ok() {
-            TriMeshFlags::ORIENTED
-        } else {
-            TriMeshFlags::empty()
-        };
-        let trimesh = TriMesh::with_flags(vertices, triangles, flags).map_err(|_| {
-            GeometryError::EmptyMesh {
-                resource: resource.clone(),
-            }
-        })?;
+        let (first, at_vertex) = triangles_at_vertices(vertices.len(), &triangles);
+        let trimesh =
+            TriMesh::with_flags(vertices, triangles, TriMeshFlags::empty()).map_err(|_| {
+                GeometryError::EmptyMesh {
+                    resource: resource.clone(),
+                }
+            })?;
         let closed = closed.map(|c| Closed {
             volume: c.volume.abs(),
             centroid: c.centroid,
         });
         let aabb = trimesh.local_aabb();
         let size = (aabb.maxs - aabb.mins).length();
-        let bytes = estimate_bytes(&trimesh, &resource);
+        let bytes = estimate_bytes(&trimesh, &resource)
+            + size_of_val(&first[..])
+            + size_of_val(&at_vertex[..]);
         Ok(Mesh {
             resource,
             trimesh,
+            first,
+            at_vertex,
             closed,
             size,
             bytes,
@@ -142,8 +149,8 @@ impl Mesh {
             .map(|c| Point3::new(c.centroid.x, c.centroid.y, c.centroid.z))
     }
 
-    /// What it holds in memory, bytes (an estimate: vertices, triangles, the BVH, the
-    /// pseudo-normals).
+    /// What it holds in memory, bytes (parry's count of its vertices, triangles and BVH, and
+    /// the triangles at each vertex).
     pub fn bytes(&self) -> usize {
         self.bytes
     }
@@ -151,6 +158,66 @@ impl Mesh {
     pub(crate) fn trimesh(&self) -> &TriMesh {
         &self.trimesh
     }
+
+    fn triangles_at(&self, vertex: u32) -> impl Iterator<Item = u32> + '_ {
+        let v = vertex as usize;
+        self.at_vertex[self.first[v] as usize..self.first[v + 1] as usize]
+            .iter()
+            .copied()
+    }
+
+    /// The pseudo-normal of a vertex (not normalised): the unit normals of the triangles at it,
+    /// each weighted by the triangle's angle there.
+    pub(crate) fn vertex_pseudo_normal(&self, vertex: u32) -> Vector {
+        let points = self.trimesh.vertices();
+        self.triangles_at(vertex)
+            .map(|t| {
+                let corners = self.trimesh.indices()[t as usize];
+                let k = corners.iter().position(|&c| c == vertex).unwrap_or(0);
+                let p = points[corners[k] as usize];
+                let u = points[corners[(k + 1) % 3] as usize] - p;
+                let w = points[corners[(k + 2) % 3] as usize] - p;
+                let angle = u.cross(w).length().atan2(u.dot(w));
+                unit_normal(self.trimesh.triangle(t)) * angle
+            })
+            .sum()
+    }
+
+    /// The pseudo-normal of an edge (not normalised): the sum of the unit normals of the
+    /// triangles along it.
+    pub(crate) fn edge_pseudo_normal(&self, a: u32, b: u32) -> Vector {
+        self.triangles_at(a)
+            .filter(|&t| self.trimesh.indices()[t as usize].contains(&b))
+            .map(|t| unit_normal(self.trimesh.triangle(t)))
+            .sum()
+    }
+}
+
+fn unit_normal(t: parry3d_f64::shape::Triangle) -> Vector {
+    (t.b - t.a).cross(t.c - t.a).normalize_or_zero()
+}
+
+/// For each vertex, the triangles that have it as a corner (compressed rows: offsets, then the
+/// triangles' indices).
+fn triangles_at_vertices(vertices: usize, triangles: &[[u32; 3]]) -> (Vec<u32>, Vec<u32>) {
+    let mut first = vec![0u32; vertices + 1];
+    for t in triangles {
+        for &c in t {
+            first[c as usize + 1] += 1;
+        }
+    }
+    for v in 0..vertices {
+        first[v + 1] += first[v];
+    }
+    let mut next = first.clone();
+    let mut at_vertex = vec![0u32; triangles.len() * 3];
+    for (i, t) in triangles.iter().enumerate() {
+        for &c in t {
+            at_vertex[next[c as usize] as usize] = i as u32;
+            next[c as usize] += 1;
+        }
+    }
+    (first, at_vertex)
 }
 
 fn check_scale(resource: &str, scale: [f64; 3]) -> Result<(), GeometryError> {
@@ -210,7 +277,7 @@ fn merge_vertices(vertices: &[Vector], triangles: &[[u32; 3]]) -> (Vec<Vector>, 
 }
 
 fn estimate_bytes(trimesh: &TriMesh, resource: &str) -> usize {
-    // parry's own count: vertices, triangles, the BVH, the pseudo-normals.
+    // parry's own count: vertices, triangles, the BVH.
     size_of::<Mesh>() - size_of::<TriMesh>() + trimesh.total_memory_size() + resource.len()
 }
 

@@ -209,3 +209,39 @@ fn a_finger_starting_on_the_surface_touches_it_at_once() {
         ));
     }
 }
+
+/// A closing line that grazes a convex edge of a closed mesh, leaving through the other face at
+/// once, touches the solid at one point only. Rounding decides whether the finger touches the edge
+/// or closes on nothing; it never starts inside, though the first triangle met may be a back face.
+#[test]
+fn a_line_grazing_an_edge_touches_it_or_nothing() {
+    let [box_shape, mesh] = cube_shapes();
+    let mut touched = 0;
+    for shape in [box_shape, mesh] {
+        for along in [Vector3::new(-1.0, 0.5, 0.0), Vector3::new(0.5, -1.0, 0.0)] {
+            let edge = Point3::new(0.5, 0.5, 0.1);
+            let gripper = closing_through(edge, along.normalize(), 1.0);
+            let object = Object {
+                pose: Isometry3::identity(),
+                shape: shape.clone(),
+            };
+            match cast_fingers(&gripper, &object) {
+                Ok(contacts) => {
+                    for c in contacts {
+                        assert!((c.point - edge).norm() < 1e-12, "{:?}", c.point);
+                        assert_normal(&c, Vector3::new(-1.0, -1.0, 0.0), Feature::Edge);
+                    }
+                    touched += 1;
+                }
+                Err(e) => assert!(
+                    matches!(
+                        e,
+                        grasp_orient_geometry::GeometryError::ClosesOnNothing { .. }
+                    ),
+                    "{e}"
+                ),
+            }
+        }
+    }
+    eprintln!("{touched} of 4 grazing lines touched the edge");
+}

@@ -247,3 +247,13 @@ fn the_cache_loads_a_resource_once_and_keeps_within_its_bound() {
     none.get(&a, [0.001; 3]).expect("loads");
     assert_eq!((none.len(), none.loads(), none.bytes()), (0, 2, 0));
 }
+
+/// The node will share meshes across its solver threads.
+#[test]
+fn meshes_and_the_cache_can_be_shared_across_threads() {
+    fn shared<T: Send + Sync>() {}
+    shared::<Mesh>();
+    shared::<MeshCache>();
+    shared::<grasp_orient_geometry::Shape>();
+    shared::<grasp_orient_geometry::Object>();
+}
