@@ -22,7 +22,7 @@
 //! *pseudo-normal* (Bærentzen and Aanæs): on an edge, the mean of its two faces' unit normals;
 //! on a vertex, the mean of its faces' unit normals weighted by the faces' angles at the vertex.
 //! It lies inside the cone of the faces' normals, is symmetric, and is the normal itself where
-//! the faces are coplanar; it is what parry computes for an oriented mesh. The [`Contact`]
+//! the faces are coplanar (it is also what parry uses to tell inside from outside). The [`Contact`]
 //! reports [`Feature::Edge`] or [`Feature::Vertex`] when the faces there are not coplanar, so a
 //! caller may refuse such a grasp.
 //! - Box: an edge averages its two faces' normals, a corner its three.
@@ -36,7 +36,8 @@
 //! # Exactness
 //! Box and sphere: parry's closed-form ray casts. Mesh: parry's ray cast over its BVH (each
 //! triangle exact). Cylinder and cone: closed forms in this file, because parry casts a ray on
-//! them by GJK iterations, which stop at a tolerance far coarser than `1e-9` rad.
+//! them by GJK iterations, whose normals were measured up to 1.9e-4 rad (cylinder) and 1.2e-3
+//! rad (cone) from the exact ones.
 
 use std::fmt;
 use std::str::FromStr;
