@@ -245,3 +245,32 @@ fn a_line_grazing_an_edge_touches_it_or_nothing() {
     }
     eprintln!("{touched} of 4 grazing lines touched the edge");
 }
+
+/// An open mesh (a cube without its top) has no inside: the normal points away from the finger
+/// whichever way its triangles are wound, and a finger may come in through the opening.
+#[test]
+fn an_open_mesh_normal_points_away_from_the_finger() {
+    let mut m = cube_mesh();
+    // The top face, z = +0.5, is the quad [4, 5, 7, 6]: its two triangles.
+    m.triangles.retain(|t| *t != [4, 5, 7] && *t != [4, 7, 6]);
+    assert_eq!(m.triangles.len(), 10);
+    for flip in [false, true] {
+        let triangles: Vec<[u32; 3]> = m
+            .triangles
+            .iter()
+            .map(|t| if flip { [t[0], t[2], t[1]] } else { *t })
+            .collect();
+        let open: Shape = Mesh::from_triangles("open box", &m.vertices, &triangles, [1.0; 3])
+            .expect("a mesh")
+            .into();
+        let gripper = closing_through(Point3::new(0.0, 0.1, 0.2), Vector3::x(), 3.0);
+        let [c1, c2] = contacts(open.clone(), &gripper);
+        assert_normal(&c1, Vector3::x(), Feature::Face);
+        assert_normal(&c2, -Vector3::x(), Feature::Face);
+        // Down through the opening: finger 1 (from above) meets the bottom's inner side.
+        let gripper = closing_through(Point3::new(0.1, 0.2, 0.0), -Vector3::z(), 3.0);
+        let [c1, _] = contacts(open, &gripper);
+        assert!((c1.point.z + 0.5).abs() < 1e-12);
+        assert_normal(&c1, -Vector3::z(), Feature::Face);
+    }
+}
