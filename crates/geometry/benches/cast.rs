@@ -6,11 +6,12 @@
 
 use std::hint::black_box;
 use std::io::Write;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use grasp_orient_geometry::{
-    cast_fingers, center_of_mass, load, parse, AmentIndex, ClosingAxis, GripperPose, MeshCache,
-    Object, Shape,
+    cast_fingers, center_of_mass, load, parse, AmentIndex, ClosingAxis, GripperPose, Mesh,
+    MeshCache, Object, Shape,
 };
 use grasp_orient_solver::{solve_spatial, Settings, SpatialCandidate, SpatialVerdict};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
@@ -121,77 +122,82 @@ fn poses(rng: &mut impl Rng, frame: &Isometry3<f64>) -> Vec<GripperPose> {
         .collect()
 }
 
-fn main() {
-    let dir = tempfile::tempdir().expect("a temporary folder");
-    let path = dir.path().join("torus.stl");
-    let triangles = write_torus_stl(&path, 250, 200);
+/// Parse alone, load and index, indexing alone, and the cache hit; the mesh, shared.
+fn time_loading(path: &std::path::Path, triangles: usize) -> Arc<Mesh> {
     let resource = path.display().to_string();
     let index = AmentIndex::default();
     let scale = [0.001; 3];
-
-    let parse_only = time(5, || parse(&resource, &path).expect("parses"));
+    let parse_only = time(5, || parse(&resource, path).expect("parses"));
     let load_index = time(5, || load(&resource, scale, &index).expect("loads"));
-    let (vertices, faces) = parse(&resource, &path).expect("parses");
+    let (vertices, faces) = parse(&resource, path).expect("parses");
     let index_only = time(5, || {
-        grasp_orient_geometry::Mesh::from_triangles(&resource, &vertices, &faces, scale)
-            .expect("indexes")
+        Mesh::from_triangles(&resource, &vertices, &faces, scale).expect("indexes")
     });
-    let mesh = load(&resource, scale, &index).expect("loads");
-    println!(
-        "mesh: {triangles} triangles, {} vertices after merging, {:.1} MB held, closed: {}",
-        mesh.vertex_count(),
-        mesh.bytes() as f64 / 1e6,
-        mesh.is_closed()
-    );
-    println!(
-        "parse only (read + mesh-loader): {:.1} ms",
-        parse_only.as_secs_f64() * 1e3
-    );
-    println!("load + index (parse, merge, closedness, volume, BVH, triangles at each vertex): {:.1} ms; indexing alone {:.1} ms",
-        load_index.as_secs_f64() * 1e3, index_only.as_secs_f64() * 1e3);
-
     let cache = MeshCache::new(index, 256 << 20);
-    let shared = cache.get(&resource, scale).expect("loads");
+    let mesh = cache.get(&resource, scale).expect("loads");
     let hit = time(5, || {
         for _ in 0..1000 {
             black_box(cache.get(&resource, scale).expect("kept"));
         }
     });
     println!(
-        "cache hit (resolve + lookup): {:.2} µs",
-        hit.as_secs_f64() * 1e3
+        "mesh: {triangles} triangles, {} vertices after merging, {:.1} MB held, closed: {}",
+        mesh.vertex_count(),
+        mesh.bytes() as f64 / 1e6,
+        mesh.is_closed()
     );
+    println!("parse only (read + mesh-loader): {:.1} ms", ms(parse_only));
+    println!(
+        "load + index (parse, merge, closedness, volume, BVH, triangles at each vertex): {:.1} ms; indexing alone {:.1} ms",
+        ms(load_index),
+        ms(index_only)
+    );
+    println!("cache hit (resolve + lookup): {:.2} µs", ms(hit));
+    mesh
+}
+
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
+
+/// The contacts of each pose that touches, as the 3D solver's candidates.
+fn cast_all(set: &[GripperPose], object: &Object) -> Vec<SpatialCandidate> {
+    let com = center_of_mass(&object.pose, &object.shape, None).expect("closed");
+    set.iter()
+        .filter_map(|g| cast_fingers(g, object).ok())
+        .map(|[c1, c2]| SpatialCandidate {
+            contact_1: c1.point.coords,
+            contact_2: c2.point.coords,
+            normal_1: c1.normal.into_inner(),
+            normal_2: c2.normal.into_inner(),
+            friction_1: 0.5,
+            friction_2: 0.5,
+            center_of_mass: com.coords,
+            mass: 0.3,
+            gravity: Vector3::new(0.0, 0.0, -9.81),
+        })
+        .collect()
+}
+
+fn main() {
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let path = dir.path().join("torus.stl");
+    let triangles = write_torus_stl(&path, 250, 200);
+    let mesh = time_loading(&path, triangles);
 
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     let frame = Isometry3::from_parts(Translation3::new(0.5, -0.2, 0.3), random_rotation(&mut rng));
     let object = Object {
         pose: frame,
-        shape: Shape::Mesh(shared),
+        shape: Shape::Mesh(mesh),
     };
     let set = poses(&mut rng, &frame);
-    let cast_all = || -> Vec<SpatialCandidate> {
-        let com = center_of_mass(&object.pose, &object.shape, None).expect("closed");
-        set.iter()
-            .filter_map(|g| cast_fingers(g, &object).ok())
-            .map(|[c1, c2]| SpatialCandidate {
-                contact_1: c1.point.coords,
-                contact_2: c2.point.coords,
-                normal_1: c1.normal.into_inner(),
-                normal_2: c2.normal.into_inner(),
-                friction_1: 0.5,
-                friction_2: 0.5,
-                center_of_mass: com.coords,
-                mass: 0.3,
-                gravity: Vector3::new(0.0, 0.0, -9.81),
-            })
-            .collect()
-    };
-    let candidates = cast_all();
-    let cast = time(9, cast_all);
+    let candidates = cast_all(&set, &object);
+    let cast = time(9, || cast_all(&set, &object));
     println!(
         "cast 1,000 poses: {:.2} ms, {:.2} µs a pose ({} with two contacts)",
-        cast.as_secs_f64() * 1e3,
-        cast.as_secs_f64() * 1e3,
+        ms(cast),
+        ms(cast),
         candidates.len()
     );
 
@@ -215,8 +221,8 @@ fn main() {
     println!("({recommended} of the 1,000 contact candidates have force closure)");
     println!(
         "3D solve of 1,000 contact candidates: {:.2} ms, {:.2} µs each",
-        solve.as_secs_f64() * 1e3,
-        solve.as_secs_f64() * 1e3
+        ms(solve),
+        ms(solve)
     );
     println!(
         "poses : contacts = (cast + solve) / solve = {:.2} (target ≤ 3)",
