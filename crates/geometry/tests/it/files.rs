@@ -139,7 +139,13 @@ fn stl_obj_and_collada_files_load_as_the_same_solid() {
     write_binary_stl(&binary, &m);
     write_ascii_stl(&ascii, &m);
     write_obj(&obj, &m);
-    for path in [&binary, &ascii, &obj] {
+    // A binary STL whose header begins with "solid", as some CAD programs write it.
+    let solid_header = dir.path().join("l_solid_header.stl");
+    write_binary_stl(&solid_header, &m);
+    let mut bytes = fs::read(&solid_header).expect("read");
+    bytes[..11].copy_from_slice(b"solid part ");
+    fs::write(&solid_header, bytes).expect("write");
+    for path in [&binary, &ascii, &obj, &solid_header] {
         let resource = format!("file://{}", path.display());
         assert_is_l(&load(&resource, [0.001; 3], &AmentIndex::default()).expect("loads"));
         let plain = path.display().to_string();
