@@ -369,3 +369,45 @@ fn a_faceted_cylinder_is_the_exact_one_within_its_faceting() {
     let com = center_of_mass(&Isometry3::identity(), &faceted.shape, None).expect("closed");
     assert!(com.coords.norm() < 1e-12);
 }
+
+/// Turning the gripper half a turn about an axis across the closing axis swaps its fingers: the
+/// contacts swap, the same to rounding.
+#[test]
+fn turning_the_gripper_over_swaps_the_fingers() {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let cases = random_cases(&mut rng);
+    let mut swapped = 0;
+    for case in &cases {
+        for _ in 0..20 {
+            let frame = random_frame(&mut rng, 1.0);
+            let gripper = random_gripper(&mut rng, case, &frame);
+            let across = match gripper.closing_axis {
+                ClosingAxis::X => Vector3::z_axis(),
+                _ => Vector3::x_axis(),
+            };
+            let mut turned = gripper;
+            turned.tool_pose.rotation *=
+                nalgebra::UnitQuaternion::from_axis_angle(&across, std::f64::consts::PI);
+            let object = Object {
+                pose: frame,
+                shape: case.shape.clone(),
+            };
+            let (Ok(a), Ok(b)) = (
+                cast_fingers(&gripper, &object),
+                cast_fingers(&turned, &object),
+            ) else {
+                continue;
+            };
+            for (p, q) in [(&a[0], &b[1]), (&a[1], &b[0])] {
+                assert!(
+                    (p.point - q.point).norm() <= 1e-12 * case.size().max(1.0),
+                    "{}",
+                    case.kind
+                );
+                assert!(angle_between(&p.normal, &q.normal) <= 1e-9, "{}", case.kind);
+            }
+            swapped += 1;
+        }
+    }
+    assert!(swapped > 200, "only {swapped} poses compared");
+}
