@@ -229,6 +229,34 @@ pub fn cast_fingers(gripper: &GripperPose, object: &Object) -> Result<[Contact; 
     Ok([cast(Finger::One)?, cast(Finger::Two)?])
 }
 
+/// What the 3D solver takes from a pose candidate: the two contacts and the centre of mass, all
+/// in the header frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Grasp {
+    /// `[finger 1, finger 2]`.
+    pub contacts: [Contact; 2],
+    /// The given centre of mass, or the shape's ([`crate::mass::center_of_mass`]).
+    pub center_of_mass: Point3<f64>,
+}
+
+/// The contacts ([`cast_fingers`]) and the centre of mass ([`crate::mass::center_of_mass`],
+/// `given` in the object frame) of a pose candidate.
+///
+/// The centre of mass comes first: a mesh that cannot give one without `given` is wrong input
+/// (status 2) whatever the fingers meet.
+pub fn grasp_from_pose(
+    gripper: &GripperPose,
+    object: &Object,
+    given: Option<Point3<f64>>,
+) -> Result<Grasp, GeometryError> {
+    let center_of_mass = crate::mass::center_of_mass(&object.pose, &object.shape, given)?;
+    let contacts = cast_fingers(gripper, object)?;
+    Ok(Grasp {
+        contacts,
+        center_of_mass,
+    })
+}
+
 pub(crate) fn check_pose(pose: &Isometry3<f64>, field: &'static str) -> Result<(), GeometryError> {
     let finite = pose.translation.vector.iter().all(|v| v.is_finite())
         && pose.rotation.coords.iter().all(|v| v.is_finite());

@@ -71,8 +71,8 @@ pub mod mesh;
 pub mod shape;
 
 pub use cast::{
-    cast_fingers, ClosingAxis, Contact, Feature, GripperPose, Object, UnknownClosingAxis,
-    FEATURE_TOLERANCE,
+    cast_fingers, grasp_from_pose, ClosingAxis, Contact, Feature, Grasp, GripperPose, Object,
+    UnknownClosingAxis, FEATURE_TOLERANCE,
 };
 pub use error::{Finger, GeometryError, MeshDefect};
 pub use load::{load, parse, resolve, AmentIndex, MeshCache};

@@ -4,8 +4,8 @@
 use std::fs;
 
 use grasp_orient_geometry::{
-    cast_fingers, center_of_mass, load, AmentIndex, ClosingAxis, Finger, GeometryError,
-    GripperPose, Mesh, MeshCache, MeshDefect, Object, Primitive,
+    cast_fingers, center_of_mass, grasp_from_pose, load, AmentIndex, ClosingAxis, Finger,
+    GeometryError, GripperPose, Mesh, MeshCache, MeshDefect, Object, Primitive,
 };
 use nalgebra::{Isometry3, Point3};
 
@@ -95,6 +95,26 @@ fn an_open_mesh_needs_a_given_centre_of_mass() {
     let frame = Isometry3::translation(1.0, 2.0, 3.0);
     let com = center_of_mass(&frame, &shape, Some(given)).expect("given");
     assert!((com - frame * given).norm() < 1e-15);
+    // A whole pose candidate: the missing centre of mass is wrong input (status 2), even when
+    // the fingers close on nothing too.
+    let object = Object { pose: frame, shape };
+    let away = GripperPose {
+        tool_pose: Isometry3::translation(5.0, 5.0, 5.0),
+        width: 0.1,
+        closing_axis: ClosingAxis::Y,
+    };
+    let e = grasp_from_pose(&away, &object, None).expect_err("no centre of mass");
+    assert!(matches!(e, GeometryError::NotClosed { .. }));
+    let e = grasp_from_pose(&away, &object, Some(given)).expect_err("nothing to grasp");
+    assert_eq!(e.status(), 1);
+    let across = GripperPose {
+        tool_pose: frame * Isometry3::translation(0.016, 0.016, 0.012),
+        width: 0.1,
+        closing_axis: ClosingAxis::X,
+    };
+    let grasp = grasp_from_pose(&across, &object, Some(given)).expect("a grasp");
+    assert!((grasp.center_of_mass - frame * given).norm() < 1e-15);
+    assert!((grasp.contacts[0].point - frame * Point3::new(0.0, 0.016, 0.012)).norm() < 1e-12);
     // Non-manifold: the same L twice, sharing every edge four times.
     let m = l_prism(0.064, 0.024);
     let twice: Vec<[u32; 3]> = m
