@@ -286,7 +286,7 @@ fn cone(h: f64, r: f64, o: Point3<f64>, d: Vector3<f64>) -> (bool, Option<(f64, 
     (inside, Some((t, inward)))
 }
 
-/// Möller–Trumbore: `t` and the barycentric `(u, v)` of the ray's crossing with a triangle.
+/// Möller–Trumbore: the `t ≥ 0` where the ray crosses a triangle, if it does.
 pub fn moller_trumbore(
     o: Point3<f64>,
     d: Vector3<f64>,
