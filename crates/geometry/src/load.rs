@@ -1,0 +1,291 @@
+//! Mesh resources: resolved as ROS resolves them, parsed, indexed, and kept in a bounded cache.
+//!
+//! # Resources
+//! - `package://<pkg>/<path>`: the ament index, as `ament_index_python`'s
+//!   `get_package_share_directory` finds it: the package name must match
+//!   `[a-zA-Z0-9][a-zA-Z0-9_-]+`; for each prefix of `AMENT_PREFIX_PATH` in order (empty and
+//!   missing entries skipped), the first whose `share/ament_index/resource_index/packages/<pkg>`
+//!   is a file is the package's prefix, and the file is `<prefix>/share/<pkg>/<path>`.
+//! - `file://<path>`: the path after the scheme (`file:///a/b.stl` is `/a/b.stl`).
+//! - Anything without `://`: a plain path. Other schemes are refused.
+//!
+//! # Formats
+//! By the file name's extension, case-insensitive: `.stl` (binary or ASCII), `.obj`, `.dae`
+//! (COLLADA, with its `<unit meter>` and node transforms applied), parsed by `mesh-loader`. All
+//! the meshes in a file are merged into one.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+
+use crate::error::GeometryError;
+use crate::mesh::Mesh;
+
+/// The prefixes of an ament index (`AMENT_PREFIX_PATH`).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct AmentIndex {
+    prefixes: Vec<PathBuf>,
+}
+
+impl AmentIndex {
+    /// The prefixes in `AMENT_PREFIX_PATH` (none if it is unset).
+    pub fn from_env() -> Self {
+        let prefixes = std::env::var_os("AMENT_PREFIX_PATH")
+            .map(|value| std::env::split_paths(&value).collect())
+            .unwrap_or_default();
+        AmentIndex { prefixes }
+    }
+
+    /// These prefixes, searched in order.
+    pub fn new<P: Into<PathBuf>>(prefixes: impl IntoIterator<Item = P>) -> Self {
+        AmentIndex {
+            prefixes: prefixes.into_iter().map(Into::into).collect(),
+        }
+    }
+
+    /// The share directory of a package, `<prefix>/share/<package>`, if a prefix has the package
+    /// in its index.
+    pub fn package_share(&self, package: &str) -> Option<PathBuf> {
+        self.prefixes
+            .iter()
+            .filter(|p| !p.as_os_str().is_empty() && p.exists())
+            .find(|p| {
+                p.join("share/ament_index/resource_index/packages")
+                    .join(package)
+                    .is_file()
+            })
+            .map(|p| p.join("share").join(package))
+    }
+}
+
+fn valid_package_name(name: &str) -> bool {
+    let mut chars = name.chars();
+    let first_ok = chars.next().is_some_and(|c| c.is_ascii_alphanumeric());
+    first_ok && name.len() >= 2 && chars.all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+}
+
+/// The file a resource names.
+pub fn resolve(resource: &str, index: &AmentIndex) -> Result<PathBuf, GeometryError> {
+    if let Some(rest) = resource.strip_prefix("package://") {
+        let (package, path) = rest.split_once('/').unwrap_or((rest, ""));
+        if !valid_package_name(package) {
+            return Err(GeometryError::InvalidPackageName {
+                resource: resource.to_owned(),
+                package: package.to_owned(),
+            });
+        }
+        let share = index
+            .package_share(package)
+            .ok_or_else(|| GeometryError::PackageNotFound {
+                resource: resource.to_owned(),
+                package: package.to_owned(),
+                searched: index.prefixes.clone(),
+            })?;
+        Ok(share.join(path))
+    } else if let Some(path) = resource.strip_prefix("file://") {
+        Ok(PathBuf::from(path))
+    } else if resource.contains("://") {
+        Err(GeometryError::UnsupportedScheme {
+            resource: resource.to_owned(),
+        })
+    } else {
+        Ok(PathBuf::from(resource))
+    }
+}
+
+/// A parsed mesh file: vertices in the file's units, triangles.
+pub type Triangles = (Vec<[f64; 3]>, Vec<[u32; 3]>);
+
+/// Read and parse a mesh file, without indexing it.
+pub fn parse(resource: &str, path: &Path) -> Result<Triangles, GeometryError> {
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    if !matches!(extension.as_deref(), Some("stl" | "obj" | "dae")) {
+        return Err(GeometryError::UnknownFormat {
+            resource: resource.to_owned(),
+        });
+    }
+    let bytes = std::fs::read(path).map_err(|source| GeometryError::Unreadable {
+        resource: resource.to_owned(),
+        path: path.to_owned(),
+        source,
+    })?;
+    let scene = mesh_loader::Loader::default()
+        .merge_meshes(true)
+        .load_from_slice(&bytes, path)
+        .map_err(|source| GeometryError::Unparsable {
+            resource: resource.to_owned(),
+            path: path.to_owned(),
+            source,
+        })?;
+    let mut vertices = Vec::new();
+    let mut triangles = Vec::new();
+    for mesh in scene.meshes {
+        let offset = u32::try_from(vertices.len()).unwrap_or(u32::MAX);
+        vertices.extend(mesh.vertices.iter().map(|v| v.map(f64::from)));
+        triangles.extend(
+            mesh.faces
+                .iter()
+                .map(|f| f.map(|k| k.saturating_add(offset))),
+        );
+    }
+    Ok((vertices, triangles))
+}
+
+/// Resolve, parse and index a mesh resource, scaled per axis into metres.
+pub fn load(resource: &str, scale: [f64; 3], index: &AmentIndex) -> Result<Mesh, GeometryError> {
+    let path = resolve(resource, index)?;
+    let (vertices, triangles) = parse(resource, &path)?;
+    Mesh::from_triangles(resource, &vertices, &triangles, scale)
+}
+
+/// Loaded meshes, each loaded once per resolved file and scale, holding at most a number of
+/// bytes ([`Mesh::bytes`]).
+///
+/// When a new mesh does not fit, the least recently used ones are dropped until it does; a mesh
+/// larger than the whole bound is returned but not kept. Meshes handed out stay alive while a
+/// caller holds them. A file changed after it was loaded is not reloaded. Loading holds the
+/// cache's lock, so two callers asking for the same resource at once load it once.
+#[derive(Debug)]
+pub struct MeshCache {
+    index: AmentIndex,
+    max_bytes: usize,
+    inner: Mutex<CacheInner>,
+}
+
+#[derive(Debug, Default)]
+struct CacheInner {
+    entries: HashMap<(PathBuf, [u64; 3]), Entry>,
+    bytes: usize,
+    clock: u64,
+    loads: u64,
+}
+
+#[derive(Debug)]
+struct Entry {
+    mesh: Arc<Mesh>,
+    last_used: u64,
+}
+
+impl MeshCache {
+    /// An empty cache resolving `package://` through `index`, holding at most `max_bytes`.
+    pub fn new(index: AmentIndex, max_bytes: usize) -> Self {
+        MeshCache {
+            index,
+            max_bytes,
+            inner: Mutex::new(CacheInner::default()),
+        }
+    }
+
+    /// The mesh of a resource at a scale, loaded if it is not kept yet.
+    pub fn get(&self, resource: &str, scale: [f64; 3]) -> Result<Arc<Mesh>, GeometryError> {
+        let path = resolve(resource, &self.index)?;
+        let key_path = std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone());
+        let key = (key_path, scale.map(|s| (s + 0.0).to_bits()));
+        let mut inner = self.inner.lock().unwrap_or_else(|e| e.into_inner());
+        inner.clock += 1;
+        let now = inner.clock;
+        if let Some(entry) = inner.entries.get_mut(&key) {
+            entry.last_used = now;
+            return Ok(Arc::clone(&entry.mesh));
+        }
+        let (vertices, triangles) = parse(resource, &path)?;
+        let mesh = Arc::new(Mesh::from_triangles(
+            resource, &vertices, &triangles, scale,
+        )?);
+        inner.loads += 1;
+        let size = mesh.bytes();
+        if size <= self.max_bytes {
+            while inner.bytes + size > self.max_bytes {
+                inner.evict_oldest();
+            }
+            inner.bytes += size;
+            let entry = Entry {
+                mesh: Arc::clone(&mesh),
+                last_used: now,
+            };
+            inner.entries.insert(key, entry);
+        }
+        Ok(mesh)
+    }
+
+    /// The bytes the kept meshes hold.
+    pub fn bytes(&self) -> usize {
+        self.lock().bytes
+    }
+
+    /// How many meshes are kept.
+    pub fn len(&self) -> usize {
+        self.lock().entries.len()
+    }
+
+    /// Whether no mesh is kept.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// How many files have been loaded (parsed and indexed) so far.
+    pub fn loads(&self) -> u64 {
+        self.lock().loads
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, CacheInner> {
+        self.inner.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+impl CacheInner {
+    fn evict_oldest(&mut self) {
+        let oldest = self
+            .entries
+            .iter()
+            .min_by_key(|(_, e)| e.last_used)
+            .map(|(k, _)| k.clone());
+        match oldest.and_then(|k| self.entries.remove(&k)) {
+            Some(entry) => self.bytes -= entry.mesh.bytes(),
+            None => self.bytes = 0,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn package_names_follow_ament() {
+        assert!(valid_package_name("grasp_orient"));
+        assert!(valid_package_name("a-1"));
+        assert!(!valid_package_name("a"));
+        assert!(!valid_package_name("_a"));
+        assert!(!valid_package_name("a/b"));
+        assert!(!valid_package_name("a.b"));
+    }
+
+    #[test]
+    fn schemes() {
+        let index = AmentIndex::default();
+        assert_eq!(
+            resolve("file:///tmp/a.stl", &index).ok(),
+            Some(PathBuf::from("/tmp/a.stl"))
+        );
+        assert_eq!(
+            resolve("meshes/a.stl", &index).ok(),
+            Some(PathBuf::from("meshes/a.stl"))
+        );
+        assert!(matches!(
+            resolve("http://example/a.stl", &index),
+            Err(GeometryError::UnsupportedScheme { .. })
+        ));
+        assert!(matches!(
+            resolve("package://x/a.stl", &index),
+            Err(GeometryError::InvalidPackageName { .. })
+        ));
+        assert!(matches!(
+            resolve("package://nowhere/a.stl", &index),
+            Err(GeometryError::PackageNotFound { .. })
+        ));
+    }
+}

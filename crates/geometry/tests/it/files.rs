@@ -1,0 +1,265 @@
+//! Mesh files written here (binary and ASCII STL, OBJ, COLLADA), read back through `load`,
+//! `package://` through a temporary ament prefix, and the cache.
+
+use std::fmt::Write as _;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use grasp_orient_geometry::{load, AmentIndex, Mesh, MeshCache};
+use nalgebra::Point3;
+
+use crate::objects::{l_prism, TestMesh};
+use crate::reference::divergence_volume_centroid;
+
+/// An L prism in millimetres; every coordinate is exact in f32, as the formats store them.
+fn l_mm() -> TestMesh {
+    l_prism(64.0, 24.0)
+}
+
+fn triangle_corners(m: &TestMesh) -> impl Iterator<Item = [[f64; 3]; 3]> + '_ {
+    m.triangles
+        .iter()
+        .map(|t| t.map(|k| m.vertices[k as usize]))
+}
+
+pub fn write_binary_stl(path: &Path, m: &TestMesh) {
+    let mut bytes = vec![0u8; 80];
+    bytes.extend((m.triangles.len() as u32).to_le_bytes());
+    for corners in triangle_corners(m) {
+        bytes.extend([0u8; 12]); // the normal: readers recompute it
+        for c in corners {
+            for v in c {
+                bytes.extend((v as f32).to_le_bytes());
+            }
+        }
+        bytes.extend([0u8; 2]);
+    }
+    fs::write(path, bytes).expect("write STL");
+}
+
+fn write_ascii_stl(path: &Path, m: &TestMesh) {
+    let mut s = String::from("solid l\n");
+    for corners in triangle_corners(m) {
+        s.push_str("  facet normal 0 0 0\n    outer loop\n");
+        for c in corners {
+            let _ = writeln!(s, "      vertex {} {} {}", c[0], c[1], c[2]);
+        }
+        s.push_str("    endloop\n  endfacet\n");
+    }
+    s.push_str("endsolid l\n");
+    fs::write(path, s).expect("write STL");
+}
+
+fn write_obj(path: &Path, m: &TestMesh) {
+    let mut s = String::from("# an L prism\no l\n");
+    for v in &m.vertices {
+        let _ = writeln!(s, "v {} {} {}", v[0], v[1], v[2]);
+    }
+    for t in &m.triangles {
+        let _ = writeln!(s, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1);
+    }
+    fs::write(path, s).expect("write OBJ");
+}
+
+/// COLLADA 1.4 with `<unit meter="0.001">`: the loader turns it into metres.
+fn write_dae(path: &Path, m: &TestMesh) {
+    let positions: Vec<String> = m
+        .vertices
+        .iter()
+        .flat_map(|v| v.map(|x| x.to_string()))
+        .collect();
+    let indices: Vec<String> = m
+        .triangles
+        .iter()
+        .flat_map(|t| t.map(|k| k.to_string()))
+        .collect();
+    let s = format!(
+        r##"<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><unit name="millimeter" meter="0.001"/><up_axis>Z_UP</up_axis></asset>
+  <library_geometries>
+    <geometry id="l-mesh" name="l">
+      <mesh>
+        <source id="l-positions">
+          <float_array id="l-positions-array" count="{np}">{positions}</float_array>
+          <technique_common>
+            <accessor source="#l-positions-array" count="{nv}" stride="3">
+              <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+            </accessor>
+          </technique_common>
+        </source>
+        <vertices id="l-vertices"><input semantic="POSITION" source="#l-positions"/></vertices>
+        <triangles count="{nt}">
+          <input semantic="VERTEX" source="#l-vertices" offset="0"/>
+          <p>{indices}</p>
+        </triangles>
+      </mesh>
+    </geometry>
+  </library_geometries>
+  <library_visual_scenes>
+    <visual_scene id="scene">
+      <node id="l" name="l"><instance_geometry url="#l-mesh"/></node>
+    </visual_scene>
+  </library_visual_scenes>
+  <scene><instance_visual_scene url="#scene"/></scene>
+</COLLADA>
+"##,
+        np = positions.len(),
+        nv = m.vertices.len(),
+        nt = m.triangles.len(),
+        positions = positions.join(" "),
+        indices = indices.join(" "),
+    );
+    fs::write(path, s).expect("write DAE");
+}
+
+/// Volume and centroid of the L in metres, by the reference.
+fn expected_l() -> (f64, Point3<f64>) {
+    let m = l_mm();
+    divergence_volume_centroid(&m.points(0.001), &m.indices())
+}
+
+fn assert_is_l(mesh: &Mesh) {
+    let (volume, centroid) = expected_l();
+    let got = mesh.volume().expect("closed");
+    assert!((got - volume).abs() <= 1e-12 * volume, "{got} vs {volume}");
+    let c = mesh.centroid().expect("closed");
+    assert!((c - centroid).norm() < 1e-12, "{c} vs {centroid}");
+    assert_eq!(mesh.vertex_count(), 12);
+    assert_eq!(mesh.triangle_count(), 20);
+}
+
+#[test]
+fn stl_obj_and_collada_files_load_as_the_same_solid() {
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let m = l_mm();
+    let binary = dir.path().join("l_binary.stl");
+    let ascii = dir.path().join("l_ascii.STL");
+    let obj = dir.path().join("l.obj");
+    write_binary_stl(&binary, &m);
+    write_ascii_stl(&ascii, &m);
+    write_obj(&obj, &m);
+    // A binary STL whose header begins with "solid", as some CAD programs write it.
+    let solid_header = dir.path().join("l_solid_header.stl");
+    write_binary_stl(&solid_header, &m);
+    let mut bytes = fs::read(&solid_header).expect("read");
+    bytes[..11].copy_from_slice(b"solid part ");
+    fs::write(&solid_header, bytes).expect("write");
+    for path in [&binary, &ascii, &obj, &solid_header] {
+        let resource = format!("file://{}", path.display());
+        assert_is_l(&load(&resource, [0.001; 3], &AmentIndex::default()).expect("loads"));
+        let plain = path.display().to_string();
+        assert_is_l(&load(&plain, [0.001; 3], &AmentIndex::default()).expect("loads"));
+    }
+    // COLLADA carries its own unit, millimetres, so its scale is 1. mesh-loader applies the
+    // unit in single precision (its vertices are f32), so the mesh agrees to f32's precision.
+    let dae = dir.path().join("l.dae");
+    write_dae(&dae, &m);
+    let mesh = load(&dae.display().to_string(), [1.0; 3], &AmentIndex::default()).expect("loads");
+    let (volume, centroid) = expected_l();
+    let got = mesh.volume().expect("closed");
+    assert!((got - volume).abs() <= 1e-6 * volume, "{got} vs {volume}");
+    let c = mesh.centroid().expect("closed");
+    assert!((c - centroid).norm() <= 1e-6 * 0.064, "{c} vs {centroid}");
+    assert_eq!((mesh.vertex_count(), mesh.triangle_count()), (12, 20));
+}
+
+/// A prefix with `share/ament_index/resource_index/packages/<pkg>` and the mesh under
+/// `share/<pkg>/meshes/`.
+fn ament_prefix(root: &Path, name: &str, package: &str, marker: bool) -> PathBuf {
+    let prefix = root.join(name);
+    let index = prefix.join("share/ament_index/resource_index/packages");
+    fs::create_dir_all(&index).expect("mkdir");
+    if marker {
+        fs::write(index.join(package), "").expect("marker");
+    }
+    let meshes = prefix.join("share").join(package).join("meshes");
+    fs::create_dir_all(&meshes).expect("mkdir");
+    prefix
+}
+
+#[test]
+fn package_resources_resolve_through_the_ament_index() {
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    // The first prefix has the files but no marker: ament skips it, and so must we.
+    let unmarked = ament_prefix(dir.path(), "unmarked", "grasp_objects", false);
+    let marked = ament_prefix(dir.path(), "marked", "grasp_objects", true);
+    let shadowed = ament_prefix(dir.path(), "later", "grasp_objects", true);
+    let m = l_mm();
+    write_binary_stl(&marked.join("share/grasp_objects/meshes/l.stl"), &m);
+    // A bad file in an unmarked prefix and in a later prefix: never read.
+    fs::write(
+        unmarked.join("share/grasp_objects/meshes/l.stl"),
+        "not a mesh",
+    )
+    .expect("write");
+    fs::write(
+        shadowed.join("share/grasp_objects/meshes/l.stl"),
+        "not a mesh",
+    )
+    .expect("write");
+    let index = AmentIndex::new([
+        PathBuf::new(),
+        dir.path().join("missing"),
+        unmarked,
+        marked.clone(),
+        shadowed,
+    ]);
+    assert_eq!(
+        index.package_share("grasp_objects"),
+        Some(marked.join("share/grasp_objects"))
+    );
+    let mesh = load("package://grasp_objects/meshes/l.stl", [0.001; 3], &index).expect("resolves");
+    assert_is_l(&mesh);
+}
+
+#[test]
+fn the_cache_loads_a_resource_once_and_keeps_within_its_bound() {
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let m = l_mm();
+    let a = dir.path().join("a.stl");
+    let b = dir.path().join("b.stl");
+    write_binary_stl(&a, &m);
+    write_binary_stl(&b, &m);
+    let (a, b) = (a.display().to_string(), b.display().to_string());
+    let one = load(&a, [0.001; 3], &AmentIndex::default())
+        .expect("loads")
+        .bytes();
+
+    let cache = MeshCache::new(AmentIndex::default(), 10 * one);
+    let first = cache.get(&a, [0.001; 3]).expect("loads");
+    let again = cache.get(&format!("file://{a}"), [0.001; 3]).expect("kept");
+    assert!(std::sync::Arc::ptr_eq(&first, &again));
+    assert_eq!(cache.loads(), 1);
+    cache
+        .get(&a, [0.002; 3])
+        .expect("another scale is another mesh");
+    assert_eq!((cache.loads(), cache.len()), (2, 2));
+
+    // Room for one: the least recently used goes.
+    let small = MeshCache::new(AmentIndex::default(), one + one / 2);
+    small.get(&a, [0.001; 3]).expect("loads");
+    small.get(&b, [0.001; 3]).expect("loads");
+    assert_eq!((small.len(), small.loads()), (1, 2));
+    assert!(small.bytes() <= one + one / 2);
+    small.get(&b, [0.001; 3]).expect("kept");
+    assert_eq!(small.loads(), 2);
+    small.get(&a, [0.001; 3]).expect("loaded again");
+    assert_eq!(small.loads(), 3);
+
+    // No room at all: served, never kept.
+    let none = MeshCache::new(AmentIndex::default(), one - 1);
+    none.get(&a, [0.001; 3]).expect("loads");
+    none.get(&a, [0.001; 3]).expect("loads");
+    assert_eq!((none.len(), none.loads(), none.bytes()), (0, 2, 0));
+}
+
+/// The node will share meshes across its solver threads.
+#[test]
+fn meshes_and_the_cache_can_be_shared_across_threads() {
+    fn shared<T: Send + Sync>() {}
+    shared::<Mesh>();
+    shared::<MeshCache>();
+    shared::<grasp_orient_geometry::Shape>();
+    shared::<grasp_orient_geometry::Object>();
+}
