@@ -407,8 +407,9 @@ fn take(
     let reader = match reader {
         Ok(reader) => reader.clone(),
         Err(why) => {
-            if !out.incompatible.contains(why) {
-                out.incompatible.push(why.clone());
+            let why = why.to_string();
+            if !out.incompatible.contains(&why) {
+                out.incompatible.push(why);
             }
             out.undecodable_count += 1;
             return Ok(());

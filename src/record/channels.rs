@@ -79,7 +79,7 @@ impl ChannelReader {
 /// The readers of the channels seen so far, by channel id; an incompatible channel is the reason.
 #[derive(Debug, Default)]
 pub(crate) struct Channels {
-    by_id: HashMap<u16, Result<ChannelReader, String>>,
+    by_id: HashMap<u16, Result<ChannelReader, IncompatibleChannel>>,
 }
 
 impl Channels {
@@ -90,7 +90,7 @@ impl Channels {
         table: &Table,
         id: u16,
         fields: &mut RecordedFields,
-    ) -> Option<&Result<ChannelReader, String>> {
+    ) -> Option<&Result<ChannelReader, IncompatibleChannel>> {
         match self.by_id.entry(id) {
             Entry::Occupied(known) => Some(known.into_mut()),
             Entry::Vacant(new) => {
@@ -106,7 +106,7 @@ fn make(
     channel: &Channel,
     schema: Option<&KnownSchema>,
     fields: &mut RecordedFields,
-) -> Result<ChannelReader, String> {
+) -> Result<ChannelReader, IncompatibleChannel> {
     let (carried, type_name) = Carried::of(channel, schema);
     let as_it_is = Ok(ChannelReader {
         carried,
@@ -127,11 +127,24 @@ fn make(
                 recorded: (!t.is_ours()).then(|| Arc::new(t)),
             })
         }
-        Err(e) => Err(format!(
-            "channel {} ({}) cannot be read as ours: {e}",
-            channel.topic, schema.name
-        )),
+        Err(source) => Err(IncompatibleChannel {
+            topic: channel.topic.clone(),
+            schema: schema.name.clone(),
+            source: Box::new(source),
+        }),
     }
+}
+
+/// A channel whose recorded type cannot be read as ours: its messages are not decoded.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("channel {topic} ({schema}) cannot be read as ours: {source}")]
+pub struct IncompatibleChannel {
+    /// The channel's topic.
+    pub topic: String,
+    /// The name of its schema.
+    pub schema: String,
+    /// Why not.
+    pub source: Box<crate::msg::schema::Incompatible>,
 }
 
 /// Which fields of our types a recording has: for each type, the fewest fields any of its

@@ -98,7 +98,7 @@ pub enum RecordError {
         /// What the file holds now.
         kept: Written,
         /// Whether the file could be closed at its last flush (`Err` says why not).
-        closed: Result<(), String>,
+        closed: Result<(), std::io::Error>,
     },
 }
 
@@ -117,7 +117,7 @@ fn with_causes(e: &dyn std::error::Error) -> String {
     text
 }
 
-fn closed_words(kept: &Written, closed: &Result<(), String>) -> String {
+fn closed_words(kept: &Written, closed: &Result<(), std::io::Error>) -> String {
     match closed {
         Ok(()) => format!(
             "the file was closed at its last complete flush and holds {} candidates, {} \
@@ -410,8 +410,7 @@ impl BagWriter {
         self.sink.refuse_writes();
         drop(self.writer.take());
         let (length, kept) = self.committed;
-        let closed =
-            sink::close_at(&self.path, length, &self.definitions).map_err(|e| e.to_string());
+        let closed = sink::close_at(&self.path, length, &self.definitions);
         RecordError::Stopped {
             path: self.path.clone(),
             cause: Box::new(cause),

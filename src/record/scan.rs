@@ -612,46 +612,73 @@ pub fn chunk_fills_its_record(chunk: &Chunk<'_>, record: &Record<'_>) -> bool {
 /// A chunk's records, decompressed: exactly `uncompressed_size` bytes, their CRC checked when
 /// the chunk has one. Memory grows with what the decompressor produces, never with the size the
 /// chunk claims. `Err` says why not.
-pub fn decompress<'a>(chunk: &Chunk<'a>) -> Result<Cow<'a, [u8]>, String> {
+pub fn decompress<'a>(chunk: &Chunk<'a>) -> Result<Cow<'a, [u8]>, Undecompressable> {
     let size = chunk.uncompressed_size;
+    let compressed = chunk.data.len();
     let out: Cow<'a, [u8]> = match chunk.compression.as_str() {
         "" => Cow::Borrowed(chunk.data),
-        "lz4" => {
-            let decoder = lz4::Decoder::new(chunk.data).map_err(|e| format!("lz4: {e}"))?;
-            Cow::Owned(
-                read_at_most(decoder, size, chunk.data.len()).map_err(|e| format!("lz4: {e}"))?,
-            )
-        }
-        "zstd" => {
-            let decoder = zstd::stream::read::Decoder::with_buffer(chunk.data)
-                .map_err(|e| format!("zstd: {e}"))?;
-            Cow::Owned(
-                read_at_most(decoder, size, chunk.data.len()).map_err(|e| format!("zstd: {e}"))?,
-            )
-        }
-        other => return Err(format!("unknown compression {other:?}")),
+        "lz4" => Cow::Owned(
+            lz4::Decoder::new(chunk.data)
+                .and_then(|d| read_at_most(d, size, compressed))
+                .map_err(Undecompressable::Lz4)?,
+        ),
+        "zstd" => Cow::Owned(
+            zstd::stream::read::Decoder::with_buffer(chunk.data)
+                .and_then(|d| read_at_most(d, size, compressed))
+                .map_err(Undecompressable::Zstd)?,
+        ),
+        other => return Err(Undecompressable::Compression(other.to_string())),
     };
     if out.len() as u64 != size {
-        return Err(format!(
-            "declares {size} bytes of records but holds {}{}",
-            if out.len() as u64 > size {
-                "more than "
-            } else {
-                ""
-            },
-            out.len().min(usize::try_from(size).unwrap_or(usize::MAX))
-        ));
+        return Err(Undecompressable::Size {
+            declared: size,
+            more: out.len() as u64 > size,
+            held: out.len().min(usize::try_from(size).unwrap_or(usize::MAX)),
+        });
     }
     if chunk.uncompressed_crc != 0 {
         let computed = crc32fast::hash(&out);
         if computed != chunk.uncompressed_crc {
-            return Err(format!(
-                "CRC mismatch (stored 0x{:08x}, computed 0x{computed:08x})",
-                chunk.uncompressed_crc
-            ));
+            return Err(Undecompressable::Crc {
+                stored: chunk.uncompressed_crc,
+                computed,
+            });
         }
     }
     Ok(out)
+}
+
+/// Why a chunk's records cannot be had.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Undecompressable {
+    /// The lz4 stream is damaged.
+    #[error("lz4: {0}")]
+    Lz4(std::io::Error),
+    /// The zstd stream is damaged.
+    #[error("zstd: {0}")]
+    Zstd(std::io::Error),
+    /// A compression this reader does not know.
+    #[error("unknown compression {0:?}")]
+    Compression(String),
+    /// The records are not as long as the chunk declares.
+    #[error("declares {declared} bytes of records but holds {}{held}", if *more { "more than " } else { "" })]
+    Size {
+        /// The declared length.
+        declared: u64,
+        /// Whether it holds more than declared.
+        more: bool,
+        /// What it holds, at most the declared length.
+        held: usize,
+    },
+    /// The records' CRC is not the stored one.
+    #[error("CRC mismatch (stored 0x{stored:08x}, computed 0x{computed:08x})")]
+    Crc {
+        /// The stored CRC.
+        stored: u32,
+        /// The CRC of the records.
+        computed: u32,
+    },
 }
 
 /// Everything `reader` gives, up to `limit + 1` bytes (one more shows that it held too many).
@@ -1084,7 +1111,7 @@ mod tests {
             compression: "zstd".into(),
             data: &[0x28, 0xb5, 0x2f, 0xfd, 0, 0x58, 0x11, 0, 0],
         };
-        let e = decompress(&chunk).expect_err("not that big");
+        let e = decompress(&chunk).expect_err("not that big").to_string();
         assert!(e.starts_with("declares") || e.starts_with("zstd"), "{e}");
         let chunk = Chunk {
             uncompressed_size: 3,
@@ -1094,6 +1121,7 @@ mod tests {
         };
         assert!(decompress(&chunk)
             .expect_err("bad crc")
+            .to_string()
             .contains("CRC mismatch"));
     }
 
