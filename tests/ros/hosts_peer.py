@@ -4,9 +4,9 @@ there, with that side's discovery settings, so it cannot be the test session's o
 on stdout.
 
     python tests/ros/hosts_peer.py graph                 candidates, a set and the service, once each
-    python tests/ros/hosts_peer.py burst --runs 20 --n 205
-                                                          runs of N candidates published at once, every
-                                                          answer's arrival timed from its candidate
+    python tests/ros/hosts_peer.py burst --runs 20 --n 205 --interval 0.002
+                                                          runs of N candidates, one every INTERVAL s,
+                                                          every answer's arrival timed from its candidate
 
 The discovery settings come from the environment this process is given (ROS_DOMAIN_ID,
 ROS_AUTOMATIC_DISCOVERY_RANGE, ROS_STATIC_PEERS): conftest.py, imported for its helpers, sets its own
@@ -70,9 +70,9 @@ def graph(peer, args) -> dict:
 
 
 def burst(peer, args) -> dict:
-    """`runs` runs of `n` candidates, each run published at once; per run, the seconds from the last candidate
-    published to each answer and each candidate's round trip. A run ends when all are answered or `timeout` s
-    after its last candidate."""
+    """`runs` runs of `n` candidates, one published every `interval` s (spinning in between); per run, the
+    seconds from the last candidate published to each answer and each candidate's round trip. A run ends when
+    all are answered or `timeout` s after its last candidate."""
     client = C.GraspClient(peer)
     client.ensure_roundtrip(args.timeout)
     rng = random.Random(120614)
@@ -83,9 +83,12 @@ def burst(peer, args) -> dict:
         sent: dict[str, float] = {}
         got: dict[str, float] = {}
         client.hook = lambda m: got.setdefault(m.candidate_id, time.monotonic())
+        due = time.monotonic()
         for c, m in zip(cands, msgs):
+            peer.spin_until(lambda: time.monotonic() >= due, args.interval)
             sent[c["id"]] = time.monotonic()
             client.pub.publish(m)
+            due += args.interval
         last = time.monotonic()
         peer.spin_until(lambda: all(i in got for i in sent), args.timeout)
         client.hook = None
@@ -102,6 +105,7 @@ def main() -> int:
     ap.add_argument("mode", choices=["graph", "burst"])
     ap.add_argument("--n", type=int, default=20, help="candidates (per run)")
     ap.add_argument("--runs", type=int, default=1)
+    ap.add_argument("--interval", type=float, default=0.002, help="s between candidates in a burst run")
     ap.add_argument("--timeout", type=float, default=30.0, help="s to wait for discovery and for answers")
     args = ap.parse_args()
     import rclpy
