@@ -110,7 +110,14 @@ impl StaticPeers {
     /// `ROS_STATIC_PEERS`: addresses or host names separated by `;` (blanks around them and
     /// empty entries ignored), each resolved to its first IPv4 address, as rmw_fastrtps does.
     fn parse(value: Option<&str>) -> anyhow::Result<Self> {
-        use std::net::ToSocketAddrs as _;
+        Self::parse_with(value, resolve_ipv4)
+    }
+
+    /// [`Self::parse`] with the name resolution given.
+    fn parse_with(
+        value: Option<&str>,
+        resolve: impl Fn(&str) -> Option<std::net::Ipv4Addr>,
+    ) -> anyhow::Result<Self> {
         let mut peers = Self::NONE;
         for entry in value.unwrap_or("").split(';').map(str::trim) {
             if entry.is_empty() {
@@ -119,23 +126,24 @@ impl StaticPeers {
             if peers.len == MAX_STATIC_PEERS {
                 bail!("ROS_STATIC_PEERS names more than {MAX_STATIC_PEERS} peers");
             }
-            let ip = (entry, 0)
-                .to_socket_addrs()
-                .ok()
-                .and_then(|mut addrs| {
-                    addrs.find_map(|a| match a.ip() {
-                        std::net::IpAddr::V4(ip) => Some(ip),
-                        std::net::IpAddr::V6(_) => None,
-                    })
-                })
-                .with_context(|| {
-                    format!("ROS_STATIC_PEERS: {entry:?} does not resolve to an IPv4 address")
-                })?;
+            let ip = resolve(entry).with_context(|| {
+                format!("ROS_STATIC_PEERS: {entry:?} does not resolve to an IPv4 address")
+            })?;
             peers.addrs[peers.len] = ip;
             peers.len += 1;
         }
         Ok(peers)
     }
+}
+
+/// The first IPv4 address of `host` (an address, or a name the system resolves).
+fn resolve_ipv4(host: &str) -> Option<std::net::Ipv4Addr> {
+    use std::net::ToSocketAddrs as _;
+    let mut addrs = (host, 0).to_socket_addrs().ok()?;
+    addrs.find_map(|a| match a.ip() {
+        std::net::IpAddr::V4(ip) => Some(ip),
+        std::net::IpAddr::V6(_) => None,
+    })
 }
 
 impl Graph {
@@ -484,12 +492,22 @@ mod tests {
 
     #[test]
     fn static_peers_split_on_semicolons_and_resolve_to_ipv4() {
-        let peers = StaticPeers::parse(Some(" 10.213.0.2;;localhost; 192.0.2.7 ;")).expect("peers");
+        // An address needs no resolver; a name goes to the one given (no DNS in a test).
+        assert_eq!(
+            super::resolve_ipv4("10.213.0.2"),
+            Some(Ipv4Addr::new(10, 213, 0, 2))
+        );
+        let hosts = |name: &str| match name {
+            "peer-b" => Some(Ipv4Addr::new(10, 213, 0, 2)),
+            _ => name.parse().ok(),
+        };
+        let peers = StaticPeers::parse_with(Some(" 10.213.0.1;;peer-b; 192.0.2.7 ;"), hosts)
+            .expect("peers");
         assert_eq!(
             peers.as_slice(),
             [
+                Ipv4Addr::new(10, 213, 0, 1),
                 Ipv4Addr::new(10, 213, 0, 2),
-                Ipv4Addr::LOCALHOST,
                 Ipv4Addr::new(192, 0, 2, 7)
             ]
         );
@@ -497,10 +515,10 @@ mod tests {
             .expect("none")
             .as_slice()
             .is_empty());
-        let e = StaticPeers::parse(Some("10.213.0.2;no such host.invalid")).expect_err("bad");
-        assert!(e.to_string().contains("\"no such host.invalid\""), "{e}");
+        let e = StaticPeers::parse_with(Some("10.213.0.2;peer-c"), hosts).expect_err("bad");
+        assert!(e.to_string().contains("\"peer-c\""), "{e}");
         let many = vec!["127.0.0.1"; 65].join(";");
-        assert!(StaticPeers::parse(Some(&many)).is_err());
+        assert!(StaticPeers::parse_with(Some(&many), hosts).is_err());
     }
 
     #[test]
