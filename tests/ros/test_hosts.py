@@ -107,13 +107,14 @@ def node_in(netns: str, env: dict, tmp_path: Path):
             node.kill()
 
 
-def run_peer(netns: str, env: dict, *args: str, timeout: float) -> dict:
+def run_peer(netns: str, env: dict, *args: str, timeout: float, fails: bool = False) -> dict:
     r = subprocess.run([sys.executable, str(PEER), *args], env=env, capture_output=True, text=True,
                        timeout=timeout, preexec_fn=enter(netns))
     lines = [l for l in r.stdout.splitlines() if l.startswith("{")]
     assert lines, f"the peer printed no result (exit {r.returncode}); stderr:\n{r.stderr[-3000:]}"
     out = json.loads(lines[-1])
-    assert "error" not in out, f"the peer in {netns}: {out['error']}\nstderr:\n{r.stderr[-3000:]}"
+    if not fails:
+        assert "error" not in out, f"the peer in {netns}: {out['error']}\nstderr:\n{r.stderr[-3000:]}"
     return out
 
 
@@ -136,6 +137,18 @@ def test_candidates_sets_and_the_service_across_two_hosts(range_, static, tmp_pa
                 assert f"static peers {PEER_IP}" in node.output(), node.output()
             out = run_peer(peer_ns, peer_env, "graph", "--n", "20", "--timeout", "30", timeout=120)
             check_graph(out, 20)
+
+
+def test_a_node_with_discovery_off_is_found_by_no_one(tmp_path):
+    """ROS_AUTOMATIC_DISCOVERY_RANGE=OFF: the peer names the node as a static peer, and still nothing
+    matches (Jazzy: OFF discovers no one, even a peer that found it)."""
+    require_environment()
+    with two_hosts("o") as (node_ns, peer_ns):
+        with node_in(node_ns, env_for("OFF", PEER_IP), tmp_path) as node:
+            assert "discovery range OFF" in node.output(), node.output()
+            out = run_peer(peer_ns, env_for("LOCALHOST", NODE_IP), "graph", "--n", "1", "--timeout", "8",
+                           timeout=60, fails=True)
+    assert out.get("error", "").startswith("no match on /grasp_candidates"), out
 
 
 def quantile(xs: list[float], q: float) -> float:
