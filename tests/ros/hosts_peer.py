@@ -94,7 +94,8 @@ def burst(peer, args) -> dict:
         client.hook = None
         runs.append({
             "answered": sum(1 for i in sent if i in got),
-            "after_last_s": sorted(got[i] - last for i in sent if i in got),
+            # in publishing order; None for a candidate not answered
+            "after_last_s": [got[i] - last if i in got else None for i in sent],
             "round_trip_s": sorted(got[i] - sent[i] for i in sent if i in got),
         })
     return {"n": args.n, "runs": runs}

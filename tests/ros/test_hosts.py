@@ -3,8 +3,9 @@ the node, .2 for the peer; the addresses exist only inside the namespaces), the 
 (tests/ros/hosts_peer.py) in the other. Candidates, a set and the service `~/recommend` are answered across
 them once with multicast discovery, and once with ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST and
 ROS_STATIC_PEERS naming the other side (Jazzy's set-up for networks without multicast). Then a lossy link:
-5% of the packets into the node's namespace dropped at random (nftables), runs of 205 candidates at 500/s,
-every answer within 2 s of the last candidate; the round trips are printed.
+5% of the packets into the node's namespace dropped at random (nftables), runs of 205 candidates at 500/s:
+every answer arrives, most runs end within 2 s of their last candidate; the figures are printed.
+Also: a node with the range OFF is found by no one.
 
 Needs root (CI runs as root), iproute2 and nftables (tests/peer/setup.sh installs them). A namespace that
 cannot be made fails the test, never skips it. Each test removes its namespaces (and with them the veth
@@ -158,7 +159,11 @@ def quantile(xs: list[float], q: float) -> float:
 
 def test_every_answer_arrives_over_a_lossy_link(tmp_path):
     """5% of the packets into the node's namespace are dropped; LOSS_RUNS runs of LOSS_N candidates, one every
-    LOSS_INTERVAL_S: every answer arrives within LOSS_LIMIT_S of its run's last candidate."""
+    LOSS_INTERVAL_S. Every answer arrives (before RustDDS patch 0008 some never did), and most runs end
+    within LOSS_LIMIT_S of their last candidate (before 0008 almost none did: a lost candidate waited for
+    the writer's next HEARTBEAT, every 3 s from Fast DDS). Not every run can: when a run's last candidate is
+    lost, or the repair of a lost one is lost too, no later DATA tells the node, and the writer's next
+    HEARTBEAT does; the figures (printed) say how often."""
     require_environment()
     nft = tool("nft")
     with two_hosts("l") as (node_ns, peer_ns):
@@ -173,12 +178,15 @@ def test_every_answer_arrives_over_a_lossy_link(tmp_path):
                            "--interval", str(LOSS_INTERVAL_S), "--timeout", "10", timeout=60 + 12 * LOSS_RUNS)
     runs = out["runs"]
     trips = [t for r in runs for t in r["round_trip_s"]]
-    lasts = [r["after_last_s"][-1] if r["after_last_s"] else float("nan") for r in runs]
-    print(f"\nlossy link (5% into the node's namespace), {len(runs)} runs of {LOSS_N}: answered "
-          f"{[r['answered'] for r in runs]}; last answer after the last candidate (s) "
-          f"{[round(x, 3) for x in lasts]}; round trip p50 {quantile(trips, 0.5) * 1e3:.1f} ms, "
+    lasts = [max((x for x in r["after_last_s"] if x is not None), default=float("nan")) for r in runs]
+    late = [[k for k, x in enumerate(r["after_last_s"]) if x is not None and x > LOSS_LIMIT_S] for r in runs]
+    print(f"\nlossy link (5% into the node's namespace), {len(runs)} runs of {LOSS_N} at "
+          f"{1 / LOSS_INTERVAL_S:.0f}/s: answered {[r['answered'] for r in runs]}; last answer after the last "
+          f"candidate (s) {[round(x, 3) for x in lasts]}; answers over {LOSS_LIMIT_S} s late (run: how many) "
+          f"{ {k: len(l) for k, l in enumerate(late) if l} }; round trip p50 {quantile(trips, 0.5) * 1e3:.1f} ms, "
           f"p99 {quantile(trips, 0.99) * 1e3:.1f} ms, max {max(trips) * 1e3:.1f} ms")
     short = [(k, r["answered"]) for k, r in enumerate(runs) if r["answered"] != LOSS_N]
     assert not short, f"runs with answers missing 10 s after the last candidate (run, answered): {short}"
-    late = [(k, round(x, 3)) for k, x in enumerate(lasts) if x > LOSS_LIMIT_S]
-    assert not late, f"runs whose last answer came over {LOSS_LIMIT_S} s after the last candidate: {late}"
+    on_time = sum(1 for x in lasts if x <= LOSS_LIMIT_S)
+    assert on_time >= len(runs) / 2, (f"only {on_time} of {len(runs)} runs had every answer within "
+                                      f"{LOSS_LIMIT_S} s of their last candidate")
