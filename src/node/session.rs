@@ -21,50 +21,241 @@ use ros2_client::qos::History;
 use ros2_client::ros2::LogLevel;
 use ros2_client::{rosout, Context, Name, Node, NodeEvent, NodeName, NodeOptions, QosProfile};
 
+/// `ROS_AUTOMATIC_DISCOVERY_RANGE`: how far the node looks for others (Jazzy's rcl and
+/// rmw_fastrtps; docs/node.md, "Several hosts").
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DiscoveryRange {
+    /// No other participant, not even on this host.
+    Off,
+    /// This host, and the static peers: no multicast.
+    Localhost,
+    /// Multicast, and the static peers (the default).
+    Subnet,
+    /// RustDDS's own settings; the static peers are ignored.
+    SystemDefault,
+}
+
+impl DiscoveryRange {
+    /// The environment's spelling.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Off => "OFF",
+            Self::Localhost => "LOCALHOST",
+            Self::Subnet => "SUBNET",
+            Self::SystemDefault => "SYSTEM_DEFAULT",
+        }
+    }
+
+    /// A value of `ROS_AUTOMATIC_DISCOVERY_RANGE` (any case); unset or empty is SUBNET.
+    fn parse(value: Option<&str>) -> anyhow::Result<Self> {
+        let Some(v) = value.map(str::trim).filter(|v| !v.is_empty()) else {
+            return Ok(Self::Subnet);
+        };
+        [
+            Self::Off,
+            Self::Localhost,
+            Self::Subnet,
+            Self::SystemDefault,
+        ]
+        .into_iter()
+        .find(|r| v.eq_ignore_ascii_case(r.name()))
+        .with_context(|| {
+            format!(
+                "ROS_AUTOMATIC_DISCOVERY_RANGE={v:?} is not a discovery range \
+                     (OFF, LOCALHOST, SUBNET or SYSTEM_DEFAULT)"
+            )
+        })
+    }
+
+    /// How many participant ids are probed at each static peer: what rmw_fastrtps gives Fast
+    /// DDS (32 for LOCALHOST, else its default `maxInitialPeersRange` of 4).
+    fn participant_ids(self) -> u16 {
+        match self {
+            Self::Localhost => 32,
+            _ => 4,
+        }
+    }
+}
+
+/// The most static peers the node takes (each costs SPDP datagrams every announcement).
+const MAX_STATIC_PEERS: usize = 64;
+
 /// How this process takes part in the DDS graph.
 #[derive(Debug, Clone, Copy)]
 pub struct Graph {
     /// `ROS_DOMAIN_ID`.
     pub domain_id: u16,
-    /// Discovery and traffic on loopback only.
-    pub localhost_only: bool,
+    /// `ROS_AUTOMATIC_DISCOVERY_RANGE`, or LOCALHOST by the deprecated `ROS_LOCALHOST_ONLY=1`.
+    pub range: DiscoveryRange,
+    /// `ROS_STATIC_PEERS` resolved, when the range uses them.
+    peers: StaticPeers,
+}
+
+/// The static peers' IPv4 addresses, in a fixed array so that a [`Graph`] stays `Copy`.
+#[derive(Debug, Clone, Copy)]
+struct StaticPeers {
+    addrs: [std::net::Ipv4Addr; MAX_STATIC_PEERS],
+    len: usize,
+}
+
+impl StaticPeers {
+    const NONE: Self = Self {
+        addrs: [std::net::Ipv4Addr::UNSPECIFIED; MAX_STATIC_PEERS],
+        len: 0,
+    };
+
+    fn as_slice(&self) -> &[std::net::Ipv4Addr] {
+        &self.addrs[..self.len]
+    }
+
+    /// `ROS_STATIC_PEERS`: addresses or host names separated by `;` (blanks around them and
+    /// empty entries ignored), each resolved to its first IPv4 address, as rmw_fastrtps does.
+    fn parse(value: Option<&str>) -> anyhow::Result<Self> {
+        Self::parse_with(value, resolve_ipv4)
+    }
+
+    /// [`Self::parse`] with the name resolution given.
+    fn parse_with(
+        value: Option<&str>,
+        resolve: impl Fn(&str) -> Option<std::net::Ipv4Addr>,
+    ) -> anyhow::Result<Self> {
+        let mut peers = Self::NONE;
+        for entry in value.unwrap_or("").split(';').map(str::trim) {
+            if entry.is_empty() {
+                continue;
+            }
+            if peers.len == MAX_STATIC_PEERS {
+                bail!("ROS_STATIC_PEERS names more than {MAX_STATIC_PEERS} peers");
+            }
+            let ip = resolve(entry).with_context(|| {
+                format!("ROS_STATIC_PEERS: {entry:?} does not resolve to an IPv4 address")
+            })?;
+            peers.addrs[peers.len] = ip;
+            peers.len += 1;
+        }
+        Ok(peers)
+    }
+}
+
+/// The first IPv4 address of `host` (an address, or a name the system resolves).
+fn resolve_ipv4(host: &str) -> Option<std::net::Ipv4Addr> {
+    use std::net::ToSocketAddrs as _;
+    let mut addrs = (host, 0).to_socket_addrs().ok()?;
+    addrs.find_map(|a| match a.ip() {
+        std::net::IpAddr::V4(ip) => Some(ip),
+        std::net::IpAddr::V6(_) => None,
+    })
 }
 
 impl Graph {
-    /// `ROS_DOMAIN_ID` (0 when unset), and `ROS_LOCALHOST_ONLY=1` or
-    /// `ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST` to keep to loopback.
+    /// `ROS_DOMAIN_ID` (0 when unset), `ROS_AUTOMATIC_DISCOVERY_RANGE` and `ROS_STATIC_PEERS`
+    /// as Jazzy's rcl reads them; `ROS_LOCALHOST_ONLY=1` (deprecated) means LOCALHOST without
+    /// static peers. A bad value is an error, where rcl would warn and assume LOCALHOST.
     pub fn from_env() -> anyhow::Result<Self> {
-        let domain_id = match std::env::var("ROS_DOMAIN_ID") {
-            Ok(s) if !s.trim().is_empty() => match s.trim().parse::<u16>() {
+        let var = |name| std::env::var(name).ok();
+        let domain_id = match var("ROS_DOMAIN_ID") {
+            Some(s) if !s.trim().is_empty() => match s.trim().parse::<u16>() {
                 Ok(id) if id <= 232 => id,
                 _ => bail!("ROS_DOMAIN_ID={s:?} is not a domain id (0..=232)"),
             },
             _ => 0,
         };
-        let localhost_only = std::env::var("ROS_LOCALHOST_ONLY").is_ok_and(|v| v == "1")
-            || std::env::var("ROS_AUTOMATIC_DISCOVERY_RANGE")
-                .is_ok_and(|v| v.eq_ignore_ascii_case("localhost"));
-        Ok(Self {
+        let localhost_only = var("ROS_LOCALHOST_ONLY").filter(|v| !v.is_empty());
+        let range = DiscoveryRange::parse(var("ROS_AUTOMATIC_DISCOVERY_RANGE").as_deref())?;
+        let peers = StaticPeers::parse(var("ROS_STATIC_PEERS").as_deref())?;
+        Ok(Self::resolve(
             domain_id,
-            localhost_only,
-        })
+            localhost_only.as_deref(),
+            range,
+            peers,
+        ))
+    }
+
+    /// The range and peers in force, with rcl's warnings.
+    fn resolve(
+        domain_id: u16,
+        localhost_only: Option<&str>,
+        range: DiscoveryRange,
+        peers: StaticPeers,
+    ) -> Self {
+        if localhost_only.is_some_and(|v| v.starts_with('1')) {
+            log::warn!(
+                "ROS_LOCALHOST_ONLY is deprecated: discovery range LOCALHOST, \
+                 ROS_AUTOMATIC_DISCOVERY_RANGE and ROS_STATIC_PEERS ignored"
+            );
+            return Self {
+                domain_id,
+                range: DiscoveryRange::Localhost,
+                peers: StaticPeers::NONE,
+            };
+        }
+        let used = matches!(range, DiscoveryRange::Localhost | DiscoveryRange::Subnet);
+        if peers.len > 0 && !used {
+            log::warn!("discovery range {}: ROS_STATIC_PEERS ignored", range.name());
+        }
+        Self {
+            domain_id,
+            range,
+            peers: if used { peers } else { StaticPeers::NONE },
+        }
+    }
+
+    /// The static peers in force.
+    pub fn static_peers(&self) -> &[std::net::Ipv4Addr] {
+        self.peers.as_slice()
+    }
+
+    /// The DDS participant for this range, as rmw_fastrtps configures Fast DDS: LOCALHOST
+    /// sends discovery to this host's and the static peers' discovery ports and uses no
+    /// multicast (with no static peer, it also announces loopback addresses only); SUBNET
+    /// adds the static peers to multicast; OFF discovers no one.
+    fn participant_builder(&self) -> DomainParticipantBuilder {
+        use std::net::{IpAddr, Ipv4Addr};
+        let builder = DomainParticipantBuilder::new(self.domain_id);
+        let peers = self.static_peers().iter().copied().map(IpAddr::V4);
+        match self.range {
+            DiscoveryRange::Off => builder
+                .with_only_networks([Ipv4Addr::LOCALHOST])
+                .multicast_discovery(false)
+                .same_host_loopback(false)
+                .discover_other_participants(false),
+            DiscoveryRange::Localhost => {
+                let builder = builder.multicast_discovery(false).with_initial_peers(
+                    peers.chain([IpAddr::V4(Ipv4Addr::LOCALHOST)]),
+                    self.range.participant_ids(),
+                );
+                if self.static_peers().is_empty() {
+                    builder.with_only_networks([Ipv4Addr::LOCALHOST])
+                } else {
+                    builder
+                }
+            }
+            DiscoveryRange::Subnet => {
+                builder.with_initial_peers(peers, self.range.participant_ids())
+            }
+            DiscoveryRange::SystemDefault => builder,
+        }
     }
 
     fn context(&self) -> anyhow::Result<Context> {
-        let mut builder = DomainParticipantBuilder::new(self.domain_id);
-        if self.localhost_only {
-            builder = builder.with_only_networks([std::net::Ipv4Addr::LOCALHOST]);
-        }
-        let participant = builder.build().context("cannot start DDS")?;
+        let participant = self
+            .participant_builder()
+            .build()
+            .context("cannot start DDS")?;
         Context::from_domain_participant(participant).context("cannot start the ROS context")
     }
 
-    /// ` (localhost only)` when it is, for log lines.
-    pub fn scope(&self) -> &'static str {
-        if self.localhost_only {
-            " (localhost only)"
-        } else {
-            ""
+    /// The discovery range and static peers when they are not the default, for log lines.
+    pub fn scope(&self) -> String {
+        let peers: Vec<String> = self.static_peers().iter().map(|p| p.to_string()).collect();
+        match (self.range, peers.is_empty()) {
+            (DiscoveryRange::Subnet, true) => String::new(),
+            (range, true) => format!(" (discovery range {})", range.name()),
+            (range, false) => format!(
+                " (discovery range {}, static peers {})",
+                range.name(),
+                peers.join(";")
+            ),
         }
     }
 }
@@ -317,4 +508,97 @@ pub fn say(node: &Node, level: log::Level, text: &str) {
         log::Level::Debug | log::Level::Trace => LogLevel::Debug,
     };
     rosout!(*node, level, "{}", text);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{DiscoveryRange, Graph, StaticPeers};
+    use std::net::Ipv4Addr;
+
+    #[test]
+    fn discovery_range_reads_as_rcl_does_and_refuses_the_rest() {
+        assert_eq!(
+            DiscoveryRange::parse(None).ok(),
+            Some(DiscoveryRange::Subnet)
+        );
+        assert_eq!(
+            DiscoveryRange::parse(Some("")).ok(),
+            Some(DiscoveryRange::Subnet)
+        );
+        for range in [
+            DiscoveryRange::Off,
+            DiscoveryRange::Localhost,
+            DiscoveryRange::Subnet,
+            DiscoveryRange::SystemDefault,
+        ] {
+            assert_eq!(DiscoveryRange::parse(Some(range.name())).ok(), Some(range));
+        }
+        assert_eq!(
+            DiscoveryRange::parse(Some("localhost")).ok(),
+            Some(DiscoveryRange::Localhost)
+        );
+        let e = DiscoveryRange::parse(Some("LAN")).expect_err("LAN is no range");
+        assert_eq!(
+            e.to_string(),
+            "ROS_AUTOMATIC_DISCOVERY_RANGE=\"LAN\" is not a discovery range \
+             (OFF, LOCALHOST, SUBNET or SYSTEM_DEFAULT)"
+        );
+    }
+
+    #[test]
+    fn static_peers_split_on_semicolons_and_resolve_to_ipv4() {
+        // An address needs no resolver; a name goes to the one given (no DNS in a test).
+        assert_eq!(
+            super::resolve_ipv4("10.213.0.2"),
+            Some(Ipv4Addr::new(10, 213, 0, 2))
+        );
+        let hosts = |name: &str| match name {
+            "peer-b" => Some(Ipv4Addr::new(10, 213, 0, 2)),
+            _ => name.parse().ok(),
+        };
+        let peers = StaticPeers::parse_with(Some(" 10.213.0.1;;peer-b; 192.0.2.7 ;"), hosts)
+            .expect("peers");
+        assert_eq!(
+            peers.as_slice(),
+            [
+                Ipv4Addr::new(10, 213, 0, 1),
+                Ipv4Addr::new(10, 213, 0, 2),
+                Ipv4Addr::new(192, 0, 2, 7)
+            ]
+        );
+        assert!(StaticPeers::parse(None)
+            .expect("none")
+            .as_slice()
+            .is_empty());
+        let e = StaticPeers::parse_with(Some("10.213.0.2;peer-c"), hosts).expect_err("bad");
+        assert!(e.to_string().contains("\"peer-c\""), "{e}");
+        let many = vec!["127.0.0.1"; 65].join(";");
+        assert!(StaticPeers::parse_with(Some(&many), hosts).is_err());
+    }
+
+    #[test]
+    fn static_peers_count_in_localhost_and_subnet_only() {
+        let peers = StaticPeers::parse(Some("10.213.0.2")).expect("peers");
+        for (range, used) in [
+            (DiscoveryRange::Off, false),
+            (DiscoveryRange::Localhost, true),
+            (DiscoveryRange::Subnet, true),
+            (DiscoveryRange::SystemDefault, false),
+        ] {
+            let graph = Graph::resolve(0, None, range, peers);
+            assert_eq!(graph.range, range);
+            assert_eq!(!graph.static_peers().is_empty(), used, "{range:?}");
+        }
+        // ROS_LOCALHOST_ONLY=1 wins over the range and drops the peers; 0 changes nothing.
+        let graph = Graph::resolve(0, Some("1"), DiscoveryRange::Subnet, peers);
+        assert_eq!(graph.range, DiscoveryRange::Localhost);
+        assert!(graph.static_peers().is_empty());
+        let graph = Graph::resolve(0, Some("0"), DiscoveryRange::Subnet, peers);
+        assert_eq!(graph.range, DiscoveryRange::Subnet);
+        assert_eq!(graph.static_peers(), [Ipv4Addr::new(10, 213, 0, 2)]);
+        assert_eq!(
+            graph.scope(),
+            " (discovery range SUBNET, static peers 10.213.0.2)"
+        );
+    }
 }

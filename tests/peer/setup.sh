@@ -50,6 +50,9 @@ APT_PKGS=()
 command -v cc  >/dev/null 2>&1 || APT_PKGS+=(gcc)
 command -v c++ >/dev/null 2>&1 || APT_PKGS+=(g++)
 command -v make >/dev/null 2>&1 || APT_PKGS+=(make)
+# tests/ros/test_hosts.py: two network namespaces joined by a veth pair (ip), a lossy link (nft)
+command -v ip  >/dev/null 2>&1 || [ -x /usr/sbin/ip ]  || APT_PKGS+=(iproute2)
+command -v nft >/dev/null 2>&1 || [ -x /usr/sbin/nft ] || APT_PKGS+=(nftables)
 
 py_is_311() { "$1" -c 'import sys; sys.exit(0 if sys.version_info[:2] == (3, 11) else 1)' >/dev/null 2>&1; }
 

@@ -64,6 +64,17 @@ use crate::{
 #[cfg(not(feature = "security"))]
 use crate::no_security::SecurityPluginsHandle;
 
+/// How far discovery reaches beyond the defaults: set on the builder.
+#[derive(Clone, Debug)]
+pub(crate) struct DiscoveryReach {
+  /// Unicast SPDP destinations: each initial peer's well-known discovery ports.
+  pub initial_peer_locators: Vec<Locator>,
+  /// Join the multicast groups, and so announce multicast locators.
+  pub multicast: bool,
+  /// Take in other participants found by SPDP.
+  pub discover_others: bool,
+}
+
 /// Builder object to create a [`DomainParticipant`] with non-default
 /// configuration.
 ///
@@ -77,6 +88,11 @@ pub struct DomainParticipantBuilder {
                                        * and multicast setup */
 
   same_host_loopback: bool, // prefer loopback for same-host peers + localhost SPDP discovery peers
+
+  initial_peers: Vec<IpAddr>,     // unicast SPDP destinations (RTPS 2.5 8.5.3.2)
+  initial_peer_participant_ids: u16, // participant ids probed at each initial peer
+  multicast_discovery: bool,      // join the multicast groups and announce multicast locators
+  discover_others: bool,          // take in other participants found by SPDP
 
   socket_receive_buffer_size: usize,
   socket_send_buffer_size: usize,
@@ -93,6 +109,10 @@ impl DomainParticipantBuilder {
       domain_id,
       only_networks: None,
       same_host_loopback: true,
+      initial_peers: Vec::new(),
+      initial_peer_participant_ids: 0,
+      multicast_discovery: true,
+      discover_others: true,
       socket_receive_buffer_size: Self::DEFAULT_SOCKET_RECEIVE_BUFFER_SIZE,
       socket_send_buffer_size: Self::DEFAULT_SOCKET_SEND_BUFFER_SIZE,
       #[cfg(feature = "security")]
@@ -126,6 +146,45 @@ impl DomainParticipantBuilder {
   /// `src/rtps/loopback_same_host_design.md`.
   pub fn same_host_loopback(mut self, enabled: bool) -> Self {
     self.same_host_loopback = enabled;
+    self
+  }
+
+  /// Initial peers: addresses that always get this participant's SPDP
+  /// announcements, unicast to their well-known discovery ports
+  /// (`spdp_well_known_unicast_port(domain_id, pid)`) for participant ids
+  /// `0..participant_ids`, besides multicast and the localhost peers. This is
+  /// the SPDPbuiltinParticipantWriter's pre-configured locator list of RTPS
+  /// 2.5 section 8.5.3.2, and what Fast DDS calls initial peers (with
+  /// `maxInitialPeersRange` for `participant_ids`; its default is 4): two
+  /// participants on hosts without multicast between them find each other
+  /// when either names the other. IPv6 addresses are skipped (the unicast
+  /// transport is IPv4 only). Calling it again replaces the list.
+  pub fn with_initial_peers(
+    mut self,
+    addrs: impl IntoIterator<Item = impl Into<IpAddr>>,
+    participant_ids: u16,
+  ) -> Self {
+    self.initial_peers = addrs.into_iter().map(Into::into).collect();
+    self.initial_peer_participant_ids = participant_ids;
+    self
+  }
+
+  /// Multicast discovery (default: enabled). When disabled, the participant
+  /// joins neither the SPDP nor the user-traffic multicast group, announces
+  /// no multicast locators, and so sends SPDP only to the localhost peers (see
+  /// [`Self::same_host_loopback`]) and the initial peers (see
+  /// [`Self::with_initial_peers`]). Unicast locators are announced as before.
+  pub fn multicast_discovery(mut self, enabled: bool) -> Self {
+    self.multicast_discovery = enabled;
+    self
+  }
+
+  /// Discovery of other participants (default: enabled). When disabled, SPDP
+  /// data from any other participant is ignored, so this participant never
+  /// matches a remote endpoint, even one that found it: a participant that
+  /// talks to nobody, as Fast DDS's limit of one participant makes it.
+  pub fn discover_other_participants(mut self, enabled: bool) -> Self {
+    self.discover_others = enabled;
     self
   }
 
@@ -344,6 +403,15 @@ impl DomainParticipantBuilder {
       self.socket_send_buffer_size,
       self.only_networks,
       self.same_host_loopback,
+      DiscoveryReach {
+        initial_peer_locators: crate::network::util::initial_peer_spdp_locators(
+          self.domain_id,
+          &self.initial_peers,
+          self.initial_peer_participant_ids,
+        ),
+        multicast: self.multicast_discovery,
+        discover_others: self.discover_others,
+      },
       dp_waker,
       discovery_sample_sender,
     )?;
@@ -539,6 +607,11 @@ impl DomainParticipant {
 
   pub(crate) fn only_networks(&self) -> Option<Arc<[IpAddr]>> {
     self.dpi.lock().ok().and_then(|g| g.only_networks())
+  }
+
+  /// False when this participant was built not to discover others.
+  pub(crate) fn discovers_others(&self) -> bool {
+    self.dpi.lock().map_or(true, |g| g.discovers_others())
   }
 
   /// Gets all DiscoveredTopics from DDS network
@@ -872,6 +945,7 @@ pub struct DomainParticipantWeak {
   #[cfg(feature = "security")] // just to avoid warning
   domain_id: u16,
   guid: GUID,
+  discovers_others: bool,
   #[cfg(feature = "security")] // just to avoid warning
   qos: QosPolicies,
 }
@@ -883,9 +957,15 @@ impl DomainParticipantWeak {
       #[cfg(feature="security")] // just to avoid warning
       domain_id: dp.domain_id(),
       guid: dp.guid(),
+      discovers_others: dp.discovers_others(),
       #[cfg(feature="security")] // just to avoid warning
       qos: dp.qos(),
     }
+  }
+
+  /// False when the participant was built not to discover others.
+  pub(crate) fn discovers_others(&self) -> bool {
+    self.discovers_others
   }
 
   pub fn create_publisher(&self, qos: &QosPolicies) -> CreateResult<Publisher> {
@@ -977,6 +1057,7 @@ impl DomainParticipantDisc {
     socket_send_buffer_size: usize,
     only_networks: Option<Vec<IpAddr>>,
     same_host_loopback: bool,
+    reach: DiscoveryReach,
     dp_waker: LoopWaker,
     discovery_sample_sender: ReadySender<mio1::Token>,
   ) -> CreateResult<Self> {
@@ -994,6 +1075,7 @@ impl DomainParticipantDisc {
       socket_send_buffer_size,
       only_networks,
       same_host_loopback,
+      reach,
       dp_waker,
       discovery_sample_sender,
     )?;
@@ -1083,6 +1165,10 @@ impl DomainParticipantDisc {
 
   pub(crate) fn only_networks(&self) -> Option<Arc<[IpAddr]>> {
     self.dpi.only_networks()
+  }
+
+  pub(crate) fn discovers_others(&self) -> bool {
+    self.dpi.discovers_others
   }
 
   #[cfg(feature = "security")] // just to avoid warning
@@ -1194,6 +1280,8 @@ pub(crate) struct DomainParticipantInner {
   security_plugins_handle: Option<SecurityPluginsHandle>,
 
   only_networks: Option<Arc<[IpAddr]>>,
+
+  discovers_others: bool,
 }
 
 impl Drop for DomainParticipantInner {
@@ -1236,6 +1324,7 @@ impl DomainParticipantInner {
     socket_send_buffer_size: usize,
     only_networks: Option<Vec<IpAddr>>,
     same_host_loopback: bool,
+    reach: DiscoveryReach,
     dp_waker: LoopWaker,
     discovery_sample_sender: ReadySender<mio1::Token>,
   ) -> CreateResult<Self> {
@@ -1246,17 +1335,22 @@ impl DomainParticipantInner {
 
     let mut listeners = HashMap::new();
 
-    match UDPListener::new_multicast_with_buf_size(
-      "0.0.0.0",
-      spdp_well_known_multicast_port(domain_id),
-      Ipv4Addr::new(239, 255, 0, 1),
-      socket_receive_buffer_size,
-      only_networks.as_deref(),
-    ) {
-      Ok(l) => {
+    // Without a multicast listener there is no multicast locator: none is
+    // announced, and the SPDP writer sends to no multicast group.
+    match reach.multicast.then(|| {
+      UDPListener::new_multicast_with_buf_size(
+        "0.0.0.0",
+        spdp_well_known_multicast_port(domain_id),
+        Ipv4Addr::new(239, 255, 0, 1),
+        socket_receive_buffer_size,
+        only_networks.as_deref(),
+      )
+    }) {
+      Some(Ok(l)) => {
         listeners.insert(DISCOVERY_MUL_LISTENER_TOKEN, l);
       }
-      Err(e) => warn!("Cannot get multicast discovery listener: {e:?}"),
+      Some(Err(e)) => warn!("Cannot get multicast discovery listener: {e:?}"),
+      None => info!("Multicast discovery disabled"),
     }
 
     let mut participant_id = 0;
@@ -1288,17 +1382,20 @@ impl DomainParticipantInner {
 
     // Now the user traffic listeners
 
-    match UDPListener::new_multicast_with_buf_size(
-      "0.0.0.0",
-      user_traffic_multicast_port(domain_id),
-      Ipv4Addr::new(239, 255, 0, 1),
-      socket_receive_buffer_size,
-      only_networks.as_deref(),
-    ) {
-      Ok(l) => {
+    match reach.multicast.then(|| {
+      UDPListener::new_multicast_with_buf_size(
+        "0.0.0.0",
+        user_traffic_multicast_port(domain_id),
+        Ipv4Addr::new(239, 255, 0, 1),
+        socket_receive_buffer_size,
+        only_networks.as_deref(),
+      )
+    }) {
+      Some(Ok(l)) => {
         listeners.insert(USER_TRAFFIC_MUL_LISTENER_TOKEN, l);
       }
-      Err(e) => warn!("Cannot get multicast user traffic listener: {e:?}"),
+      Some(Err(e)) => warn!("Cannot get multicast user traffic listener: {e:?}"),
+      None => {}
     }
 
     let user_traffic_listener = UDPListener::new_unicast_with_buf_size(
@@ -1378,6 +1475,7 @@ impl DomainParticipantInner {
     let disc_db_clone = discovery_db.clone();
     let security_plugins_clone = security_plugins_handle.clone();
     let only_networks_for_ev_loop = only_networks.clone();
+    let initial_peer_locators = reach.initial_peer_locators;
     let ev_loop_handle = thread::Builder::new()
       .name(format!("RustDDS Participant {participant_id} event loop"))
       .spawn(move || {
@@ -1412,6 +1510,7 @@ impl DomainParticipantInner {
           only_networks_for_ev_loop,
           socket_send_buffer_size,
           same_host_loopback,
+          initial_peer_locators,
           reader_ready_rx,
           writer_ready_rx,
           dp_waker,
@@ -1464,6 +1563,7 @@ impl DomainParticipantInner {
       self_locators,
       security_plugins_handle,
       only_networks,
+      discovers_others: reach.discover_others,
     })
   }
 
@@ -1745,6 +1845,8 @@ mod tests {
   use std::{
     collections::BTreeSet,
     net::{Ipv4Addr, SocketAddr, SocketAddrV4},
+    thread,
+    time::Duration,
   };
 
   use enumflags2::BitFlags;
@@ -1774,6 +1876,77 @@ mod tests {
     test::{random_data::RandomData, test_domain::test_domain_id},
   };
   use super::DomainParticipant;
+
+  // An initial peer gets SPDP at its well-known discovery port of each
+  // participant id in range, with multicast and the localhost peers off: only
+  // `with_initial_peers` can have sent what arrives.
+  #[test]
+  fn initial_peers_get_spdp_announcements() {
+    use std::{net::UdpSocket, time::Instant};
+    let domain = test_domain_id(49);
+    let probe = |pid| {
+      let s = UdpSocket::bind(("127.0.0.1", spdp_well_known_unicast_port(domain, pid)))
+        .expect("bind a probe at a participant id's discovery port");
+      s.set_read_timeout(Some(Duration::from_millis(100))).unwrap();
+      s
+    };
+    // Participant ids 0 and 1 are left to the participant itself.
+    let (inside, outside) = (probe(3), probe(4));
+    let dp = super::DomainParticipantBuilder::new(domain)
+      .same_host_loopback(false)
+      .multicast_discovery(false)
+      .with_initial_peers([Ipv4Addr::LOCALHOST], 4)
+      .build()
+      .expect("participant creation");
+    let rtps = |s: &UdpSocket| {
+      let mut buf = [0u8; 65_536];
+      matches!(s.recv(&mut buf), Ok(n) if n > 4 && &buf[..4] == b"RTPS")
+    };
+    let start = Instant::now();
+    let mut got = false;
+    while !got && start.elapsed() < Duration::from_secs(10) {
+      got = rtps(&inside);
+    }
+    assert!(got, "no SPDP at the initial peer's participant id 3 within 10 s");
+    assert!(!rtps(&outside), "SPDP at participant id 4, outside 0..4");
+    // No multicast locator: the participant sends SPDP to no group.
+    assert!(dp
+      .self_locators()
+      .get(&crate::rtps::constant::DISCOVERY_MUL_LISTENER_TOKEN)
+      .is_none_or(Vec::is_empty));
+  }
+
+  // A participant built not to discover others takes in no other participant,
+  // though it hears their SPDP on the localhost peers' ports; the other one
+  // finds it as usual.
+  #[test]
+  fn a_participant_that_discovers_no_one() {
+    use std::time::Instant;
+
+    use crate::{discovery::discovery_db::discovery_db_read, structure::entity::RTPSEntity};
+    let domain = test_domain_id(50);
+    let alone = super::DomainParticipantBuilder::new(domain)
+      .multicast_discovery(false)
+      .discover_other_participants(false)
+      .build()
+      .expect("participant creation");
+    let other = super::DomainParticipantBuilder::new(domain)
+      .multicast_discovery(false)
+      .build()
+      .expect("participant creation");
+    let knows = |dp: &DomainParticipant, of: &DomainParticipant| {
+      discovery_db_read(&dp.discovery_db())
+        .find_participant_proxy(of.guid().prefix)
+        .is_some()
+    };
+    let start = Instant::now();
+    while !knows(&other, &alone) && start.elapsed() < Duration::from_secs(10) {
+      thread::sleep(Duration::from_millis(50));
+    }
+    assert!(knows(&other, &alone), "the other participant never found it");
+    thread::sleep(Duration::from_millis(500));
+    assert!(!knows(&alone, &other), "it took in another participant");
+  }
 
   // TODO: improve basic test when more or the structure is known
   #[test]

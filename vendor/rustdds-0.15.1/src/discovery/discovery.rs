@@ -1054,6 +1054,14 @@ impl Discovery {
     &mut self,
     participant_data: &SpdpDiscoveredParticipantData,
   ) {
+    // A participant built not to discover others (participant-builder
+    // `discover_other_participants(false)`) takes in only itself.
+    if !self.domain_participant.discovers_others()
+      && participant_data.participant_guid.prefix != self.domain_participant.guid().prefix
+    {
+      trace!("spdp_receive: ignoring {:?}", participant_data.participant_guid);
+      return;
+    }
     let was_new = discovery_db_write(&self.discovery_db).update_participant(participant_data);
     let guid_prefix = participant_data.participant_guid.prefix;
 

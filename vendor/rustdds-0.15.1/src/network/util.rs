@@ -189,6 +189,33 @@ pub fn localhost_spdp_peer_locators(
     .collect()
 }
 
+/// Build the unicast SPDP locators of the initial peers (participant-builder
+/// `with_initial_peers`): `peer:spdp_well_known_unicast_port(domain_id, pid)`
+/// for each IPv4 peer and every `pid` in `0..participant_ids` whose port
+/// exists. IPv6 peers are skipped: the unicast transport is IPv4 only.
+pub fn initial_peer_spdp_locators(
+  domain_id: u16,
+  peers: &[IpAddr],
+  participant_ids: u16,
+) -> Vec<Locator> {
+  let mut locators = Vec::new();
+  for peer in peers.iter().filter(|ip| ip.is_ipv4()) {
+    for pid in 0..participant_ids {
+      // spdp_well_known_unicast_port, in u32: a high domain and participant id
+      // would overflow a port number.
+      let port = 7400 + 250 * u32::from(domain_id) + 10 + 2 * u32::from(pid);
+      let Ok(port) = u16::try_from(port) else {
+        break;
+      };
+      let locator = Locator::from(SocketAddr::new(*peer, port));
+      if !locators.contains(&locator) {
+        locators.push(locator);
+      }
+    }
+  }
+  locators
+}
+
 pub fn get_local_unicast_locators_filtered(
   port: u16,
   only_networks: Option<&[IpAddr]>,
@@ -303,7 +330,8 @@ mod tests {
 
   use super::{
     build_ifindex_map_inner, get_local_multicast_ip_addrs_inner, get_local_unicast_locators_inner,
-    localhost_spdp_peer_locators, path_mtu_payload_for_peer, IfAddr, InterfaceSelector,
+    initial_peer_spdp_locators, localhost_spdp_peer_locators, path_mtu_payload_for_peer, IfAddr,
+    InterfaceSelector,
   };
   use crate::{
     network::constant::spdp_well_known_unicast_port,
@@ -567,6 +595,31 @@ mod tests {
       path_mtu_payload_for_peer(&[], v4(192, 168, 1, 1)),
       FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE
     );
+  }
+
+  #[test]
+  fn initial_peers_get_each_participant_ids_discovery_port() {
+    let domain = 3;
+    let peers = [
+      v4(10, 213, 0, 2),
+      IpAddr::V6(Ipv6Addr::LOCALHOST),
+      v4(10, 213, 0, 2),
+      v4(192, 0, 2, 7),
+    ];
+    let locators = initial_peer_spdp_locators(domain, &peers, 2);
+    let port = |pid| spdp_well_known_unicast_port(domain, pid);
+    assert_eq!(
+      locators,
+      vec![
+        Locator::from(SocketAddr::new(v4(10, 213, 0, 2), port(0))),
+        Locator::from(SocketAddr::new(v4(10, 213, 0, 2), port(1))),
+        Locator::from(SocketAddr::new(v4(192, 0, 2, 7), port(0))),
+        Locator::from(SocketAddr::new(v4(192, 0, 2, 7), port(1))),
+      ]
+    );
+    // Domain 232, the highest: participant ids whose port would pass 65535 are left out.
+    let high = initial_peer_spdp_locators(232, &[v4(10, 213, 0, 2)], 120);
+    assert_eq!(high.len(), 63);
   }
 
   #[test]

@@ -49,6 +49,7 @@ use crate::{
     dds_cache::DDSCache,
     entity::RTPSEntity,
     guid::{EntityId, GuidPrefix, TokenDecode, GUID},
+    locator::Locator,
   },
   //QosPolicyBuilder,
   //QosPolicies,
@@ -140,6 +141,10 @@ pub struct DPEventLoop {
   // route same-host peers over loopback. See
   // `src/rtps/loopback_same_host_design.md`.
   same_host_loopback: bool,
+
+  // Unicast SPDP destinations at the initial peers (participant-builder
+  // `with_initial_peers`): the built-in SPDP writer announces to them too.
+  initial_peer_locators: Vec<Locator>,
 }
 
 impl DPEventLoop {
@@ -164,6 +169,7 @@ impl DPEventLoop {
     only_networks: Option<Arc<[IpAddr]>>,
     socket_send_buffer_size: usize,
     same_host_loopback: bool,
+    initial_peer_locators: Vec<Locator>,
     reader_ready: ReadyReceiver<EntityId>,
     writer_ready: ReadyReceiver<EntityId>,
     waker: LoopWaker,
@@ -257,6 +263,7 @@ impl DPEventLoop {
       participant_status_sender,
       discovery_command_sender,
       same_host_loopback,
+      initial_peer_locators,
     })
   }
 
@@ -1112,15 +1119,24 @@ impl DPEventLoop {
     //   loopback multicast;
     // - every writer may route a confirmed same-host peer over loopback.
     // See `src/rtps/loopback_same_host_design.md`.
+    // The SPDP writer also announces to the initial peers (`with_initial_peers`).
     new_writer.set_prefer_loopback_same_host(self.same_host_loopback);
-    if self.same_host_loopback
-      && new_writer.guid().entity_id == EntityId::SPDP_BUILTIN_PARTICIPANT_WRITER
-    {
-      new_writer.set_extra_unicast_destinations(localhost_spdp_peer_locators(
-        self.domain_info.domain_id,
-        self.domain_info.participant_id,
-        SPDP_LOCALHOST_PEER_COUNT,
-      ));
+    if new_writer.guid().entity_id == EntityId::SPDP_BUILTIN_PARTICIPANT_WRITER {
+      let mut extra = if self.same_host_loopback {
+        localhost_spdp_peer_locators(
+          self.domain_info.domain_id,
+          self.domain_info.participant_id,
+          SPDP_LOCALHOST_PEER_COUNT,
+        )
+      } else {
+        Vec::new()
+      };
+      for locator in &self.initial_peer_locators {
+        if !extra.contains(locator) {
+          extra.push(*locator);
+        }
+      }
+      new_writer.set_extra_unicast_destinations(extra);
     }
 
     // The doorbell is a shared ready-queue plus the poll waker, not a
@@ -1344,6 +1360,7 @@ mod tests {
         None,
         0,
         true,
+        Vec::new(),
         reader_ready,
         writer_ready,
         waker,

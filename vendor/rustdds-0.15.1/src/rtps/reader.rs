@@ -569,6 +569,9 @@ impl Reader {
 
     let writer_guid = GUID::new_with_prefix_and_id(mr_state.source_guid_prefix, data.writer_id);
     let writer_seq_num = data.writer_sn; // for borrow checker
+    // Patched for grasp_orient (0008-nack-on-gap.patch): the highest sequence number received
+    // from this writer before this DATA, to see whether it reveals a gap.
+    let highest_before = self.gap_watch(writer_guid);
 
     match self.data_to_dds_data(data, data_flags) {
       Ok(dds_data) => self.process_received_data(
@@ -601,6 +604,79 @@ impl Reader {
       }
       Err(e) => debug!("Parsing DATA to DDSData failed: {e}"),
     }
+    if let Some(highest) = highest_before {
+      if highest > SequenceNumber::zero() && writer_seq_num > highest + SequenceNumber::new(1) {
+        self.nack_revealed_gap(writer_guid, writer_seq_num, mr_state);
+      }
+    }
+  }
+
+  // The highest sequence number received from `writer_guid`, for a reliable stateful reader of
+  // a user topic (the ones that NACK a gap at once); None for the others.
+  fn gap_watch(&self, writer_guid: GUID) -> Option<SequenceNumber> {
+    if self.like_stateless
+      || self.reliability == policy::Reliability::BestEffort
+      || !self.my_guid.entity_id.entity_kind.is_user_defined()
+    {
+      return None;
+    }
+    self
+      .matched_writer(writer_guid)
+      .map(RtpsWriterProxy::highest_received)
+  }
+
+  // A DATA beyond the next expected sequence number proves that the ones between were lost
+  // (a writer sends in order): ask for them now with an ACKNACK (final flag set, so no
+  // HEARTBEAT is requested), instead of waiting for the writer's next HEARTBEAT, which Fast
+  // DDS sends every 3 s. One ACKNACK per gap revealed; if it or the repair is lost, the
+  // HEARTBEAT still brings the samples, as before.
+  fn nack_revealed_gap(
+    &mut self,
+    writer_guid: GUID,
+    revealed_by: SequenceNumber,
+    mr_state: &MessageReceiverState,
+  ) {
+    let reader_id = self.entity_id();
+    let Some(writer_proxy) = self.matched_writer_mut(writer_guid) else {
+      return;
+    };
+    let below = revealed_by - SequenceNumber::new(1);
+    let missing = writer_proxy.missing_seqnums(writer_proxy.all_ackable_before(), below);
+    let Some(&first_missing) = missing.first() else {
+      return;
+    };
+    let set = missing
+      .iter()
+      .copied()
+      .take_while(|sn| *sn < first_missing + SequenceNumber::new(256))
+      .collect();
+    let acknack = AckNack {
+      reader_id,
+      writer_id: writer_guid.entity_id,
+      reader_sn_state: SequenceNumberSet::from_base_and_set(first_missing, &set),
+      count: writer_proxy.next_ack_nack_sequence_number(),
+    };
+    let reply_locators = match mr_state.unicast_reply_locator_list {
+      [] | [Locator::Invalid] => writer_proxy.unicast_locator_list.clone(),
+      others => others.to_vec(),
+    };
+    debug!(
+      "DATA {revealed_by:?} from {writer_guid:?} reveals {} missing from {first_missing:?}: \
+       NACK at once. topic={:?}",
+      missing.len(),
+      self.topic_name
+    );
+    let flags = BitFlags::<ACKNACK_Flags>::from_flag(ACKNACK_Flags::Endianness)
+      | BitFlags::<ACKNACK_Flags>::from_flag(ACKNACK_Flags::Final);
+    self.send_acknack_to(
+      flags,
+      acknack,
+      InfoDestination {
+        guid_prefix: mr_state.source_guid_prefix,
+      },
+      &reply_locators,
+      writer_guid,
+    );
   }
 
   pub fn handle_datafrag_msg(
@@ -1827,6 +1903,96 @@ mod tests {
       DDSData::Data { serialized_payload } => assert!(serialized_payload.value.is_empty()),
       other => panic!("expected an empty sample, got {other:?}"),
     }
+  }
+
+  #[test]
+  fn a_gap_in_reliable_data_is_nacked_at_once() {
+    // A reliable user topic's reader, as in fragments_of_a_received_sample_leave_no_assembly_behind.
+    let dds_cache = Arc::new(RwLock::new(DDSCache::new()));
+    let topic_name = "test_name";
+    let qos_policy = QosPolicyBuilder::new()
+      .reliability(Reliability::Reliable {
+        max_blocking_time: Duration::from_millis(100),
+      })
+      .build();
+    let topic_cache_handle = dds_cache.write().unwrap().add_new_topic(
+      topic_name.to_string(),
+      TypeDesc::new("test_type".to_string()),
+      &qos_policy,
+    );
+    let (notification_sender, _notification_receiver) =
+      crate::mio_source::notification_channel(100);
+    let (_notification_event_source, notification_event_sender) =
+      mio_source::make_poll_channel().unwrap();
+    let (status_sender, _status_receiver) = sync_status_channel::<DataReaderStatus>(4).unwrap();
+    let (participant_status_sender, _participant_status_receiver) =
+      sync_status_channel(16).unwrap();
+    let (_reader_command_sender, reader_command_receiver) =
+      wake_channel::<ReaderCommand>(10, &LoopWaker::new());
+    let reader_guid = GUID::dummy_test_guid(EntityKind::READER_NO_KEY_USER_DEFINED);
+    let mut reader = Reader::new(
+      ReaderIngredients {
+        guid: reader_guid,
+        notification_sender,
+        status_sender,
+        topic_name: topic_name.to_string(),
+        topic_cache_handle,
+        like_stateless: false,
+        qos_policy: qos_policy.clone(),
+        data_reader_command_receiver: reader_command_receiver,
+        data_reader_waker: Arc::new(Mutex::new(None)),
+        poll_event_sender: notification_event_sender,
+        security_plugins: None,
+        discovery_notify: None,
+      },
+      Rc::new(UDPSender::new(0).unwrap()),
+      new_shared_timer(),
+      participant_status_sender,
+    );
+    let writer_guid = GUID::dummy_test_guid(EntityKind::WRITER_NO_KEY_USER_DEFINED);
+    let mr_state = MessageReceiverState {
+      source_guid_prefix: writer_guid.prefix,
+      ..Default::default()
+    };
+    reader.matched_writer_add(
+      writer_guid,
+      EntityId::UNKNOWN,
+      mr_state.unicast_reply_locator_list.to_vec(),
+      mr_state.multicast_reply_locator_list.to_vec(),
+      &qos_policy,
+    );
+    // ACKNACKs sent since the writer was matched (matching may send a preemptive one).
+    let sent = |reader: &Reader| {
+      reader
+        .matched_writer(writer_guid)
+        .expect("the writer is matched")
+        .sent_ack_nack_count
+    };
+    let base = sent(&reader);
+    let data = |reader: &mut Reader, sn: i64| {
+      let d = Data {
+        reader_id: reader_guid.entity_id,
+        writer_id: writer_guid.entity_id,
+        writer_sn: SequenceNumber::new(sn),
+        ..Data::default()
+      };
+      reader.handle_data_msg(d, BitFlags::from_flag(DATA_Flags::Data), &mr_state);
+      sent(reader) - base
+    };
+    // In order: nothing to ask for.
+    assert_eq!(data(&mut reader, 1), 0);
+    assert_eq!(data(&mut reader, 2), 0);
+    // 3 and 4 lost: 5 proves it, and the reader asks at once.
+    assert_eq!(
+      data(&mut reader, 5),
+      1,
+      "no ACKNACK when DATA 5 revealed 3 and 4 missing"
+    );
+    // 6 follows 5: no new gap, no new ACKNACK; 8 reveals 7.
+    assert_eq!(data(&mut reader, 6), 1);
+    assert_eq!(data(&mut reader, 8), 2);
+    // The repair of 3 reveals nothing.
+    assert_eq!(data(&mut reader, 3), 2);
   }
 
   #[test]

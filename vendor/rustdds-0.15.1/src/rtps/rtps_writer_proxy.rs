@@ -127,6 +127,11 @@ impl RtpsWriterProxy {
     }
   }
 
+  /// The highest sequence number received as DATA so far (zero before any).
+  pub fn highest_received(&self) -> SequenceNumber {
+    self.last_received_sequence_number
+  }
+
   // Check if we no samples in the received state.
   pub fn no_changes_received(&self) -> bool {
     self.ack_base == SequenceNumber::new(0) && self.changes.is_empty()
