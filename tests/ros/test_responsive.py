@@ -212,7 +212,9 @@ def test_max_set_time_cuts_a_set_and_replay_accepts_the_cut(start_node, peer, tm
           f"{budget} s: {ans.message!r}")
     assert ans.status == STATUS_INCOMPLETE, (ans.status, ans.message)
     assert f"max_set_time ({budget:g} s) ran out" in ans.message, ans.message
-    assert took < budget + 2.0, f"the cut set took {took:.2f} s"
+    # From publishing to the answer in Python: the transfer of 3 MB each way and rclpy's decoding of
+    # 10,000 answers add up to a second or two on a busy machine, beside the budget.
+    assert took < budget + 3.0, f"the cut set took {took:.2f} s"
     statuses = [r.status for r in ans.recommendations]
     unsolved = statuses.count(STATUS_NOT_SOLVED)
     assert len(statuses) == SET_SIZE and 0 < unsolved < SET_SIZE, unsolved
