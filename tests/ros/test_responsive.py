@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import signal
 import statistics
 import subprocess
@@ -193,13 +194,13 @@ def test_sigterm_with_a_set_in_flight_ends_within_a_second_with_the_recording_cl
 def test_max_set_time_cuts_a_set_and_replay_accepts_the_cut(start_node, peer, tmp_path, grasp_bin):
     cands = heavy_candidates()
     per_set = seconds_per_set(cands)
-    budget = 0.5
-    assert per_set > 4 * budget, f"a set takes {per_set:.2f} s on one core: too light to be cut"
+    # A budget well inside the set's solving on two threads, however fast the binary.
+    budget = max(0.05, min(0.5, round(per_set / 8, 2)))
     ns = "/responsive_budget"
     runs = tmp_path / "runs"
     node = start_node("--ros-args", "-r", f"__ns:={ns}", "-p", "record:=true", "-p", f"record_dir:={runs}",
                       "-p", "objective:=internal_force", "-p", f"max_set_time:={budget}",
-                      name="grasp_orient node (max_set_time 0.5 s)")
+                      "--log-level", "grasp_orient:=debug", name=f"grasp_orient node (max_set_time {budget} s)")
     sets = SetClient(peer, ns)
     sets.wait_matched()
     msg = set_msg(cands, "cut")
@@ -208,13 +209,17 @@ def test_max_set_time_cuts_a_set_and_replay_accepts_the_cut(start_node, peer, tm
     assert peer.spin_until(lambda: "cut" in sets.answers, 30), "no answer to the set to cut"
     took = time.monotonic() - t0
     ans = sets.answers["cut"][0]
-    print(f"a set of {SET_SIZE} ({per_set:.1f} s on one core) answered in {took:.2f} s with max_set_time "
-          f"{budget} s: {ans.message!r}")
+    print(f"a set of {SET_SIZE} ({per_set:.1f} s on one core) answered in {took:.2f} s (round trip) with "
+          f"max_set_time {budget} s: {ans.message!r}")
     assert ans.status == STATUS_INCOMPLETE, (ans.status, ans.message)
     assert f"max_set_time ({budget:g} s) ran out" in ans.message, ans.message
-    # From publishing to the answer in Python: the transfer of 3 MB each way and rclpy's decoding of
-    # 10,000 answers add up to a second or two on a busy machine, beside the budget.
-    assert took < budget + 3.0, f"the cut set took {took:.2f} s"
+    # The set thread's time for it, from the node's line per set (src/node/sets.rs, AnswerLine): the
+    # budget, the candidate under way when it ran out, the rest answered unsolved, the ranking. The round
+    # trip seen here adds the transfer of 3 MB each way and rclpy's decoding of 10,000 answers.
+    line = node.wait_for_line(r'set "cut" \(topic\): .* answered in [0-9.]+ ms', timeout=10)
+    solving = float(re.search(r"answered in ([0-9.]+) ms", line).group(1)) / 1e3
+    print(f"the node's line: {line}")
+    assert budget <= solving < budget + 0.5, f"the set thread took {solving:.3f} s on a set cut at {budget} s"
     statuses = [r.status for r in ans.recommendations]
     unsolved = statuses.count(STATUS_NOT_SOLVED)
     assert len(statuses) == SET_SIZE and 0 < unsolved < SET_SIZE, unsolved
