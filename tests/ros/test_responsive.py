@@ -156,16 +156,16 @@ def test_sigterm_with_a_set_in_flight_ends_within_a_second_with_the_recording_cl
     cands = heavy_candidates()
     ns = "/responsive_stop"
     runs = tmp_path / "runs"
+    # A set twice the default max_set_size: before the change, the node finished it before it left.
     node = start_node("--ros-args", "-r", f"__ns:={ns}", "-p", "record:=true", "-p", f"record_dir:={runs}",
-                      "-p", "objective:=internal_force", name="grasp_orient node (SIGTERM under load)")
+                      "-p", "objective:=internal_force", "-p", f"max_set_size:={2 * SET_SIZE}",
+                      name="grasp_orient node (SIGTERM under load)")
     sets = SetClient(peer, ns)
     sets.wait_matched()
     small = sets.send(set_msg(cands[:20], "before"))
     assert small.status == 0
-    msg = set_msg(cands, "in-flight")
-    sets.pub.publish(msg)
-    msg.id = "waiting"
-    sets.pub.publish(msg)
+    sets.pub.publish(set_msg(cands + cands, "in-flight"))
+    sets.pub.publish(set_msg(cands, "waiting"))
     wait_until_solving(peer, node)
     t0 = time.monotonic()
     node.proc.send_signal(signal.SIGTERM)
@@ -176,7 +176,7 @@ def test_sigterm_with_a_set_in_flight_ends_within_a_second_with_the_recording_cl
         raise AssertionError(f"no exit within 10 s of SIGTERM; output:\n{node.output()}")
     took = time.monotonic() - t0
     node._reader.join(2)
-    print(f"SIGTERM with a set of {SET_SIZE} in flight and one waiting: exit {rc} after {1e3 * took:.0f} ms")
+    print(f"SIGTERM with a set of {2 * SET_SIZE} in flight and one waiting: exit {rc} after {1e3 * took:.0f} ms")
     assert rc == 0, f"exit code {rc}; output:\n{node.output()}"
     assert took <= 1.0, f"the node took {took:.2f} s to exit after SIGTERM; output:\n{node.output()}"
     assert any("closed:" in line for line in node.all_lines()), node.output()
