@@ -3,11 +3,10 @@
 //! signals while a set is solved, and only publishes the set's answer once it is ready.
 //!
 //! ```text
-//! node thread   set taken from DDS ── SetWorker::submit ──► queue (max_queued_sets waiting at most)
-//!                                        │ full: STATUS_BUSY at once                 │
-//! set thread                             ▼                                           ▼
-//!                                  SetWorker::done ◄── SetDone ◄── solve: answer_set_within
-//! clock thread  raises the Interrupt when the set's max_set_time runs out ──────────┘
+//! node thread   set from DDS ── SetWorker::submit ──► queue ──► set thread: answer_set_within ──┐
+//!               (max_queued_sets already waiting: STATUS_BUSY at once)                         │
+//!               answer published ◄── SetWorker::done ◄── SetDone ◄─────────────────────────────┘
+//! clock thread  raises the Interrupt when the set's max_set_time runs out
 //! ```
 //!
 //! Each set's solving stops between two candidates when its `max_set_time` runs out (the clock
