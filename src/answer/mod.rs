@@ -17,7 +17,7 @@ mod sets;
 
 pub use candidate::{answer, answer_in_full, Answered};
 pub use sets::{
-    answer_one, answer_one_in_full, answer_set, answer_set_on, apply_limit, echo_set, is_sorted_by,
-    rank, solver_pool, DefaultTolerances, GripperDrive, PoolRefused, RankBy, Rules,
-    DEFAULT_MAX_SET_SIZE, PARALLEL_FROM,
+    answer_one, answer_one_in_full, answer_set, answer_set_on, answer_set_within, apply_limit,
+    busy, cut_like, echo_set, is_sorted_by, not_solved, rank, solver_pool, DefaultTolerances,
+    GripperDrive, Halt, Interrupt, PoolRefused, RankBy, Rules, DEFAULT_MAX_SET_SIZE, PARALLEL_FROM,
 };

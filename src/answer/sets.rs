@@ -20,6 +20,9 @@
 //! - A set larger than `max_set_size` is refused as a whole with `STATUS_TOO_LARGE` before any
 //!   candidate is solved; a set whose own fields are bad with `STATUS_INVALID_INPUT`. A set's own
 //!   `max_grip_force` of 0 means the node's.
+//! - A set whose solving is stopped ([`answer_set_within`]: its `max_set_time` ran out, or the node
+//!   is stopping) gets `STATUS_INCOMPLETE`, and its members not solved `STATUS_NOT_SOLVED`; a set
+//!   the node cannot take now ([`busy`]) `STATUS_BUSY`, nothing solved.
 //! - The node's `center_of_mass_tolerance` and `mass_tolerance` ([`DefaultTolerances`]) apply to
 //!   a candidate that leaves its own at zero; a candidate's own non-zero tolerance wins.
 
@@ -31,6 +34,7 @@ use crate::msg::{
 use crate::solver::Settings;
 use std::borrow::Cow;
 use std::cmp::Ordering;
+use std::sync::atomic::{AtomicU8, Ordering as AtomicOrdering};
 
 /// How the fingers of the gripper are driven: which force is the grip force.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -316,6 +320,62 @@ pub fn answer_set_on(
     rules: &Rules,
     pool: Option<&rayon::ThreadPool>,
 ) -> GripRecommendationSet {
+    answer_set_inner(set, settings, rules, pool, None)
+}
+
+/// [`answer_set_on`], stopped between two candidates once `interrupt` is raised: the candidates
+/// not solved by then are answered with `STATUS_NOT_SOLVED` (header and id only, and a message
+/// that says why), the set with `STATUS_INCOMPLETE` and a message that says why and how many were
+/// solved (`max_set_time`, s, is the budget the message names), and the ranking ranks the solved
+/// ones. With no raise before the last candidate, the answer is [`answer_set_on`]'s.
+///
+/// On a pool the solved candidates need not be the first ones: each thread stops where it is.
+/// A candidate is never stopped in the middle: one that takes long holds its thread until done.
+pub fn answer_set_within(
+    set: &GraspCandidateSet,
+    settings: &Settings,
+    rules: &Rules,
+    pool: Option<&rayon::ThreadPool>,
+    interrupt: &Interrupt,
+    max_set_time: f64,
+) -> GripRecommendationSet {
+    let mut out = answer_set_inner(set, settings, rules, pool, Some(interrupt));
+    let Some(halt) = interrupt.halt() else {
+        return out;
+    };
+    let n = out.recommendations.len();
+    let unsolved = out
+        .recommendations
+        .iter()
+        .filter(|r| r.status == GripRecommendation::STATUS_NOT_SOLVED)
+        .count();
+    if out.status != GripRecommendationSet::STATUS_OK || unsolved == 0 {
+        return out;
+    }
+    let solved = n - unsolved;
+    out.status = GripRecommendationSet::STATUS_INCOMPLETE;
+    out.message = match halt {
+        Halt::OutOfTime => compact_str::format_compact!(
+            "incomplete: max_set_time ({max_set_time} s) ran out with {solved} of {n} candidates \
+             solved; the other {unsolved} have status 4 (not solved): raise max_set_time, or send \
+             smaller sets"
+        ),
+        Halt::Stopping => compact_str::format_compact!(
+            "incomplete: the node was stopping, with {solved} of {n} candidates solved; the other \
+             {unsolved} have status 4 (not solved)"
+        ),
+    };
+    out
+}
+
+/// The answer to a set, stopped by `interrupt` when there is one and it is raised.
+fn answer_set_inner(
+    set: &GraspCandidateSet,
+    settings: &Settings,
+    rules: &Rules,
+    pool: Option<&rayon::ThreadPool>,
+    interrupt: Option<&Interrupt>,
+) -> GripRecommendationSet {
     let mut out = empty_answer(set, rules);
     if let Some((status, message)) = refusal(set, rules) {
         out.status = status;
@@ -330,19 +390,24 @@ pub fn answer_set_on(
         },
         ..*rules
     };
-    out.recommendations = answer_all(&set.candidates, settings, &rules, pool);
+    out.recommendations = answer_all(&set.candidates, settings, &rules, pool, interrupt);
     out.ranking = rank(&out.recommendations, &rules);
     out
 }
 
-/// Every candidate answered in order, on the threads of `pool` for a large set.
+/// Every candidate answered in order, on the threads of `pool` for a large set; once `interrupt`
+/// is raised, each candidate left is answered [`not_solved`] (one atomic load per candidate).
 fn answer_all(
     candidates: &[GraspCandidate],
     settings: &Settings,
     rules: &Rules,
     pool: Option<&rayon::ThreadPool>,
+    interrupt: Option<&Interrupt>,
 ) -> Vec<GripRecommendation> {
-    let one = |c: &GraspCandidate| answer_one(c, settings, rules);
+    let one = |c: &GraspCandidate| match interrupt.and_then(Interrupt::halt) {
+        Some(halt) => not_solved(c, halt),
+        None => answer_one(c, settings, rules),
+    };
     match pool {
         Some(pool) if pool.current_num_threads() > 1 && candidates.len() >= PARALLEL_FROM => {
             use rayon::prelude::*;
@@ -357,6 +422,121 @@ fn answer_all(
         }
         _ => candidates.iter().map(one).collect(),
     }
+}
+
+/// Why the solving of a set stopped before its end.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Halt {
+    /// Its time (parameter `max_set_time`) ran out.
+    OutOfTime,
+    /// The node is stopping.
+    Stopping,
+}
+
+/// A flag that another thread raises to stop the solving of a set between two candidates
+/// ([`answer_set_within`]): the node's clock when a set's time runs out, its shutdown. A raised
+/// [`Halt::Stopping`] stays raised; [`Halt::OutOfTime`] is lowered for the next set with
+/// [`Interrupt::lower_time`].
+#[derive(Debug, Default)]
+pub struct Interrupt(AtomicU8);
+
+impl Interrupt {
+    const OUT_OF_TIME: u8 = 1;
+    const STOPPING: u8 = 2;
+
+    /// Raises `halt`.
+    pub fn raise(&self, halt: Halt) {
+        let bit = match halt {
+            Halt::OutOfTime => Self::OUT_OF_TIME,
+            Halt::Stopping => Self::STOPPING,
+        };
+        self.0.fetch_or(bit, AtomicOrdering::SeqCst);
+    }
+
+    /// Lowers [`Halt::OutOfTime`] (a stop stays raised).
+    pub fn lower_time(&self) {
+        self.0.fetch_and(!Self::OUT_OF_TIME, AtomicOrdering::SeqCst);
+    }
+
+    /// What is raised: [`Halt::Stopping`] before [`Halt::OutOfTime`].
+    pub fn halt(&self) -> Option<Halt> {
+        let bits = self.0.load(AtomicOrdering::Relaxed);
+        if bits & Self::STOPPING != 0 {
+            Some(Halt::Stopping)
+        } else if bits & Self::OUT_OF_TIME != 0 {
+            Some(Halt::OutOfTime)
+        } else {
+            None
+        }
+    }
+}
+
+/// The answer to a member of a set that was not solved: its header and id, status 4
+/// (`STATUS_NOT_SOLVED`), and why.
+pub fn not_solved(c: &GraspCandidate, halt: Halt) -> GripRecommendation {
+    let mut header = c.header.clone();
+    header.frame_id = clip(&header.frame_id).into();
+    GripRecommendation {
+        header,
+        candidate_id: clip(&c.id).into(),
+        status: GripRecommendation::STATUS_NOT_SOLVED,
+        message: CompactString::const_new(match halt {
+            Halt::OutOfTime => "not solved: the set's max_set_time ran out",
+            Halt::Stopping => "not solved: the node was stopping",
+        }),
+        ..GripRecommendation::default()
+    }
+}
+
+/// The answer to a set the node cannot take now, `max_queued` sets (parameter `max_queued_sets`)
+/// already waiting to be solved: `STATUS_BUSY` and nothing solved, or the set's own refusal (too
+/// large, bad fields) when it has one, which sending it again would not cure.
+pub fn busy(set: &GraspCandidateSet, rules: &Rules, max_queued: usize) -> GripRecommendationSet {
+    let mut out = empty_answer(set, rules);
+    let (status, message) = refusal(set, rules).unwrap_or_else(|| {
+        (
+            GripRecommendationSet::STATUS_BUSY,
+            format!(
+                "busy: {max_queued} sets already wait to be solved (max_queued_sets \
+                 {max_queued}); nothing was solved: send the set again later"
+            ),
+        )
+    });
+    out.status = status;
+    out.message = message.into();
+    out
+}
+
+/// `ours`, the answer to a set solved whole, made comparable with `recorded`, the recorded answer
+/// to the same set when that was not solved whole: when it was cut short (`STATUS_INCOMPLETE`),
+/// the members `recorded` did not solve are taken as recorded, and so are its status and message,
+/// and the ranking keeps, in our order, the members `recorded` solved; when it was refused as
+/// busy (`STATUS_BUSY`: nothing solved, nothing to compare), `recorded` itself. Borrowed as it is
+/// otherwise, or when `recorded` holds another number of members.
+pub fn cut_like<'a>(
+    ours: &'a GripRecommendationSet,
+    recorded: &GripRecommendationSet,
+) -> Cow<'a, GripRecommendationSet> {
+    if recorded.status == GripRecommendationSet::STATUS_BUSY {
+        return Cow::Owned(recorded.clone());
+    }
+    if recorded.status != GripRecommendationSet::STATUS_INCOMPLETE
+        || recorded.recommendations.len() != ours.recommendations.len()
+    {
+        return Cow::Borrowed(ours);
+    }
+    let solved =
+        |i: usize| recorded.recommendations[i].status != GripRecommendation::STATUS_NOT_SOLVED;
+    let mut out = ours.clone();
+    for (i, r) in out.recommendations.iter_mut().enumerate() {
+        if !solved(i) {
+            *r = recorded.recommendations[i].clone();
+        }
+    }
+    out.ranking.retain(|&i| solved(i as usize));
+    out.status = recorded.status;
+    out.message = recorded.message.clone();
+    Cow::Owned(out)
 }
 
 /// A pool of `threads` threads to answer large sets on: the calling thread and `threads - 1`
@@ -415,8 +595,8 @@ pub fn echo_set(set: &GraspCandidateSet) -> GripRecommendationSet {
 
 /// Whether `ranking` is sorted by the ranking key of `recommendations` as `ranked_by` names it
 /// (`internal_force`, `finger_force` or `gripping_power`), within `tolerance` relative to the
-/// larger magnitude (and 1), and with ties in wrist rotation order; `None` when `ranked_by` names
-/// no such field.
+/// larger magnitude (and 1), and with equal values in wrist rotation order; `None` when
+/// `ranked_by` names no such field.
 pub fn is_sorted_by(
     ranking: &[u32],
     recommendations: &[GripRecommendation],
@@ -437,12 +617,16 @@ pub fn is_sorted_by(
     Some(entries.windows(2).all(|w| {
         let (a, b) = (key(w[0]), key(w[1]));
         match a.partial_cmp(&b) {
-            _ if close(a, b) => {
+            // A smaller value first is in order, however close: the ranking sorts the values
+            // themselves, and only exact ties go to the wrist rotation.
+            Some(Ordering::Less) => true,
+            // A larger one only within the tolerance: solved again, two values may swap.
+            Some(Ordering::Greater) => close(a, b),
+            Some(Ordering::Equal) => {
                 let (ra, rb) = (w[0].wrist_rotation.abs(), w[1].wrist_rotation.abs());
                 ra <= rb || close(ra, rb)
             }
-            Some(Ordering::Less) => true,
-            _ => false,
+            None => false,
         }
     }))
 }
@@ -599,6 +783,19 @@ mod tests {
             Some(false)
         );
         assert_eq!(is_sorted_by(&[2, 0], &recs, "nothing", 1e-9), None);
+        // Values within the tolerance but not equal are ranked by value, not by wrist rotation
+        // (0 N and 3e-14 N: two spatial grasps the node recorded so).
+        let near = [with(0.0, 1.82), with(2.97e-14, 1.64)];
+        assert_eq!(rank(&near, &Rules::default()), [0, 1]);
+        assert_eq!(
+            is_sorted_by(&[0, 1], &near, "internal_force", 1e-9),
+            Some(true)
+        );
+        assert_eq!(
+            is_sorted_by(&[1, 0], &near, "internal_force", 1e-9),
+            Some(true),
+            "solved again, close values may swap"
+        );
     }
 
     #[test]
@@ -696,6 +893,156 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// A set whose solving is stopped answers the members left with status 4 and itself with
+    /// STATUS_INCOMPLETE, saying why and how many were solved; with no raise, the same answer as
+    /// answer_set_on, bit for bit.
+    #[test]
+    fn an_interrupted_set_answers_the_rest_not_solved() {
+        let cases = paper_cases();
+        let set = set_of(cases.clone());
+        let (settings, rules) = (Settings::default(), Rules::default());
+        let calm = Interrupt::default();
+        let whole = answer_set_within(&set, &settings, &rules, None, &calm, 10.0);
+        assert_eq!(
+            format!("{whole:?}"),
+            format!("{:?}", answer_set(&set, &settings, &rules))
+        );
+        let stop = Interrupt::default();
+        stop.raise(Halt::OutOfTime);
+        let out = answer_set_within(&set, &settings, &rules, None, &stop, 2.5);
+        assert_eq!(out.status, GripRecommendationSet::STATUS_INCOMPLETE);
+        assert!(
+            out.message
+                .contains("max_set_time (2.5 s) ran out with 0 of 4 candidates solved"),
+            "{}",
+            out.message
+        );
+        assert!(out.ranking.is_empty());
+        for (c, r) in cases.iter().zip(&out.recommendations) {
+            assert_eq!(r.status, GripRecommendation::STATUS_NOT_SOLVED);
+            assert_eq!((&r.candidate_id, &r.header), (&c.id, &c.header));
+            assert!(r.message.contains("max_set_time"), "{}", r.message);
+        }
+        // Stopping outlasts a lowered time, and wins over it.
+        stop.raise(Halt::Stopping);
+        stop.lower_time();
+        assert_eq!(stop.halt(), Some(Halt::Stopping));
+        let out = answer_set_within(&set, &settings, &rules, None, &stop, 2.5);
+        assert!(
+            out.message.contains("the node was stopping"),
+            "{}",
+            out.message
+        );
+        // A set refused whole keeps its refusal.
+        let small = Rules {
+            max_set_size: 3,
+            ..rules
+        };
+        let out = answer_set_within(&set, &settings, &small, None, &stop, 2.5);
+        assert_eq!(out.status, GripRecommendationSet::STATUS_TOO_LARGE);
+    }
+
+    /// Raised while the set is solved, on one thread and on a pool: the members solved before are
+    /// the whole set's answers, the rest status 4, and the ranking ranks the solved ones.
+    #[test]
+    fn a_set_stopped_midway_keeps_what_was_solved() {
+        // Uncertain centres of mass: the robust solver, tens of microseconds a candidate, so that
+        // the raise after 30 ms falls inside the set on a busy machine too.
+        let cases: Vec<GraspCandidate> = paper_cases()
+            .into_iter()
+            .map(|mut c| {
+                c.center_of_mass_tolerance.x = 0.01;
+                c
+            })
+            .collect();
+        let set = set_of((0..100_000).map(|i| cases[i % 4].clone()).collect());
+        let (settings, rules) = (
+            Settings::default(),
+            Rules {
+                max_set_size: 1_000_000,
+                ..Rules::default()
+            },
+        );
+        let whole: Vec<GripRecommendation> = cases
+            .iter()
+            .map(|c| answer_one(c, &settings, &rules))
+            .collect();
+        for threads in [1, 2] {
+            let interrupt = Interrupt::default();
+            let out = std::thread::scope(|s| {
+                let solving = s.spawn(|| {
+                    let pool = solver_pool(threads).expect("threads");
+                    answer_set_within(&set, &settings, &rules, Some(&pool), &interrupt, 0.03)
+                });
+                std::thread::sleep(std::time::Duration::from_millis(30));
+                interrupt.raise(Halt::OutOfTime);
+                solving.join().expect("no panic")
+            });
+            assert_eq!(out.status, GripRecommendationSet::STATUS_INCOMPLETE);
+            let unsolved =
+                |i: &usize| out.recommendations[*i].status == GripRecommendation::STATUS_NOT_SOLVED;
+            let solved: Vec<usize> = (0..set.candidates.len()).filter(|i| !unsolved(i)).collect();
+            assert!(
+                !solved.is_empty() && solved.len() < set.candidates.len(),
+                "{threads} threads: {} solved",
+                solved.len()
+            );
+            for &i in &solved {
+                assert_eq!(out.recommendations[i], whole[i % 4]);
+            }
+            let message = format!("with {} of 100000 candidates solved", solved.len());
+            assert!(out.message.contains(&message), "{}", out.message);
+            assert_eq!(out.ranking, rank(&out.recommendations, &rules));
+            assert!(
+                !out.ranking.is_empty() && !out.ranking.iter().any(|&i| unsolved(&(i as usize)))
+            );
+        }
+    }
+
+    #[test]
+    fn a_busy_answer_refuses_at_once_unless_the_set_has_its_own_refusal() {
+        let rules = Rules::default();
+        let out = busy(&set_of(paper_cases()), &rules, 16);
+        assert_eq!(out.status, GripRecommendationSet::STATUS_BUSY);
+        assert!(out.recommendations.is_empty() && out.ranking.is_empty());
+        assert!(
+            out.message.contains("16 sets already wait") && out.message.contains("max_queued_sets"),
+            "{}",
+            out.message
+        );
+        let mut bad = set_of(paper_cases());
+        bad.max_grip_force = -1.0;
+        assert_eq!(
+            busy(&bad, &rules, 16).status,
+            GripRecommendationSet::STATUS_INVALID_INPUT
+        );
+    }
+
+    /// Replay compares a set solved whole with a recorded answer that was cut: the members the
+    /// recording did not solve are taken as recorded, the ranking keeps the solved ones.
+    #[test]
+    fn cut_like_takes_what_the_recording_left_unsolved_as_recorded() {
+        let set = set_of(paper_cases());
+        let (settings, rules) = (Settings::default(), Rules::default());
+        let ours = answer_set(&set, &settings, &rules);
+        assert!(matches!(cut_like(&ours, &ours), Cow::Borrowed(_)));
+        let mut recorded = ours.clone();
+        recorded.status = GripRecommendationSet::STATUS_INCOMPLETE;
+        recorded.message = "incomplete: the node was stopping".into();
+        for i in [1, 3] {
+            recorded.recommendations[i] = not_solved(&set.candidates[i], Halt::Stopping);
+        }
+        recorded.ranking.retain(|&i| i != 1 && i != 3);
+        let like = cut_like(&ours, &recorded);
+        assert_eq!(*like, recorded);
+        // A member solved differently still differs.
+        recorded.recommendations[0].internal_force += 1.0;
+        assert_ne!(*cut_like(&ours, &recorded), recorded);
+        // A set refused as busy was not solved: nothing to compare.
+        let refused = busy(&set, &rules, 0);
+        assert_eq!(*cut_like(&ours, &refused), refused);
     }
 
     #[test]

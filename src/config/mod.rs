@@ -507,6 +507,10 @@ mod tests {
             ("max_grip_force", "-1.0"),
             ("max_grip_force", ".nan"),
             ("max_set_size", "0"),
+            ("max_set_time", "-1.0"),
+            ("max_set_time", ".inf"),
+            ("max_set_time", "1e6"),
+            ("max_queued_sets", "-1"),
         ] {
             let mut c = Config::default();
             c.set_from_yaml(name, bad).expect("the type is right");

@@ -56,10 +56,16 @@ parameters! {
     /// The most candidates a set may hold; a larger set is refused whole (STATUS_TOO_LARGE of
     /// GripRecommendationSet) rather than stalling the node.
     max_set_size: i64 = DEFAULT_MAX_SET_SIZE as i64, "candidates", in Domain::at_least_integer(1);
-    /// Threads a set of 128 candidates or more is solved on, the node's own thread among them: 0
-    /// (the default) one per core, 1 only the node's own thread. Every number gives the same
-    /// answer.
+    /// Threads a set of 128 candidates or more is solved on, the node's set thread among them: 0
+    /// (the default) one per core, 1 only the set thread. Every number gives the same answer.
     solver_threads (fixed): i64 = 0, "threads", in Domain::Integer { min: 0, max: 1024 };
+    /// The most time the node spends solving one set, from when its solving starts; the candidates
+    /// not solved by then get status 4 (STATUS_NOT_SOLVED of GripRecommendation) and the set
+    /// STATUS_INCOMPLETE. Checked between candidates. 0 means no limit.
+    max_set_time: f64 = 10.0, "s", in Domain::Real { min: 0.0, max: 86_400.0 };
+    /// The most sets that wait while another is solved; a set that arrives when that many wait is
+    /// refused at once, nothing solved (STATUS_BUSY of GripRecommendationSet).
+    max_queued_sets: i64 = 16, "sets", in Domain::Integer { min: 0, max: 1024 };
     /// Half-widths [x, y, z] of a box around each candidate's centre of mass, along its frame's
     /// axes, for a candidate whose own center_of_mass_tolerance is zero; the answer is the worst
     /// case over every centre of mass in the box (docs/uncertainty.md).

@@ -205,6 +205,7 @@ ros_message! {
         CANDIDATE_C_BEATEN: u8 = 2,
         CANDIDATE_C_OUT_OF_RANGE: u8 = 3,
         STATUS_EXCEEDS_GRIPPER: u8 = 3,
+        STATUS_NOT_SOLVED: u8 = 4,
     ] {
         /// Stamp and frame of the candidate.
         header: Header,
@@ -288,6 +289,8 @@ ros_message! {
         STATUS_OK: u8 = 0,
         STATUS_TOO_LARGE: u8 = 1,
         STATUS_INVALID_INPUT: u8 = 2,
+        STATUS_INCOMPLETE: u8 = 3,
+        STATUS_BUSY: u8 = 4,
     ] {
         /// Stamp and frame of the set.
         header: Header,

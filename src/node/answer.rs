@@ -1,13 +1,14 @@
 //! The answering loop without DDS: one call per received candidate gives the answer, the markers
 //! and the lines to log, and keeps the counts and the recording. The node's DDS glue only
 //! receives, publishes what [`Answerer::handle`] returns, and then hands it back to
-//! [`Answerer::record`]; unit tests drive it directly.
+//! [`Answerer::record`]; unit tests drive it directly. Sets are solved on the set thread
+//! (`set_worker.rs`); their answers come back here to be counted ([`Answerer::count_set`]) and
+//! recorded ([`Answerer::record_set`]).
 
 use super::params::Shared;
 use super::params::Version;
 use crate::answer::markers;
-use crate::answer::{answer_in_full, Answered};
-use crate::answer::{answer_one_in_full, answer_set_on, echo_set, solver_pool, PARALLEL_FROM};
+use crate::answer::{answer_one_in_full, Answered};
 use crate::msg::{
     short_id, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
     MarkerArray,
@@ -38,8 +39,12 @@ pub struct Counts {
     pub exceeds_gripper: u64,
     /// Sets answered (on the topic or the service); their candidates count above too.
     pub sets: u64,
-    /// Sets refused as a whole (too large, or bad fields of their own).
+    /// Sets refused as a whole (too large, bad fields of their own, or the node busy).
     pub sets_refused: u64,
+    /// Sets answered in part: their time ran out, or the node was stopping.
+    pub sets_incomplete: u64,
+    /// Candidates of those sets not solved (status 4); not counted as answered.
+    pub not_solved: u64,
 }
 
 /// The answer to one candidate, to publish in this order: `reply`, then `markers`.
@@ -73,8 +78,6 @@ pub struct SetOutcome {
     pub reply: GripRecommendationSet,
     /// The markers of the best candidate, when they are on and one can be held.
     pub markers: Option<MarkerArray>,
-    /// Lines to log.
-    pub notes: Vec<Note>,
     /// What goes to the recording once the answer is out.
     pub recorded: RecordedSet,
 }
@@ -87,6 +90,26 @@ pub struct RecordedSet {
     sent: u64,
     reply: Option<GripRecommendationSet>,
     markers: Option<MarkerArray>,
+}
+
+impl RecordedSet {
+    /// What to record of a set received at `received` and sent at `sent` (ns since the epoch):
+    /// the set, and its answer and markers when they are recorded.
+    pub fn new(
+        reply: Option<GripRecommendationSet>,
+        markers: Option<MarkerArray>,
+        set: GraspCandidateSet,
+        received: u64,
+        sent: u64,
+    ) -> Self {
+        Self {
+            set,
+            received,
+            sent,
+            reply,
+            markers,
+        }
+    }
 }
 
 /// Answers candidates with the settings in force when each was received; counts; records.
@@ -103,29 +126,6 @@ pub struct Answerer {
     seen_version: u64,
     /// Sets of the recording parameters acted on.
     seen_recording_sets: u64,
-    /// The threads large sets are answered on, started with the first large set (none in echo
-    /// mode, with `solver_threads` 1, or when they cannot start).
-    pool: std::cell::OnceCell<Option<rayon::ThreadPool>>,
-}
-
-/// The threads a large set is answered on: `threads` of them (parameter `solver_threads`), or one
-/// per core for 0, counting the node's own thread, which asks for the pool with its first large
-/// set and solves its share of each (`answer::solver_pool`); none for 1, or when the system refuses
-/// them (then the node's own thread answers alone).
-/// While a set is solved the DDS threads have little to do (the set has arrived and its answer is
-/// not yet written): measured from rclpy on two cores by `benches/bench_sets.py`, two solver
-/// threads answered a set of 1,000 sooner than one (`docs/performance.md`).
-fn set_pool(threads: i64) -> Option<rayon::ThreadPool> {
-    let threads = match usize::try_from(threads) {
-        Ok(0) | Err(_) => std::thread::available_parallelism().map_or(1, |n| n.get()),
-        Ok(n) => n,
-    };
-    if threads <= 1 {
-        return None;
-    }
-    solver_pool(threads)
-        .map_err(|e| log::warn!("{e}; sets are answered on one thread"))
-        .ok()
 }
 
 impl Answerer {
@@ -150,7 +150,6 @@ impl Answerer {
             recording: Recording::new(node, topics, qos_depth, on_stop),
             seen_version: 0,
             seen_recording_sets: 0,
-            pool: std::cell::OnceCell::new(),
         }
     }
 
@@ -359,91 +358,47 @@ impl Answerer {
         self.recording.check().iter().map(note).collect()
     }
 
-    /// The answer to one set, received at `received` and sent at `sent` (ns since the epoch), by
-    /// the same rules as [`Answerer::handle`]: the settings in force when it was received,
-    /// markers for the best candidate, one log line for the set when some of its candidates or
-    /// the set itself are refused. A large set is shared among `solver_threads` threads
-    /// (`set_pool`).
-    pub fn handle_set(&mut self, set: GraspCandidateSet, received: u64, sent: u64) -> SetOutcome {
-        let mut notes = Vec::new();
-        let (settings, markers_on, rules, threads) = {
-            let live = self.shared.lock();
-            let version = live.version_at(received);
-            (
-                version.settings,
-                version.config.publish_markers,
-                version.config.rules(),
-                version.config.solver_threads,
-            )
-        };
-        let reply = if self.echo {
-            echo_set(&set)
-        } else {
-            let pool = if set.candidates.len() >= PARALLEL_FROM {
-                // `solver_threads` is fixed: the pool is started once, with the first large set.
-                self.pool.get_or_init(|| set_pool(threads)).as_ref()
-            } else {
-                None
-            };
-            answer_set_on(&set, &settings, &rules, pool)
-        };
-        self.count_set(&reply, &mut notes);
-        let best = reply.ranking.first().map(|&i| i as usize);
-        let markers = best.filter(|_| markers_on && !self.echo).and_then(|i| {
-            let candidate = set.candidates.get(i)?;
-            // A spatial best candidate is drawn in 3D: its 3D solution is solved again (one
-            // candidate; the set's answers keep only the message fields).
-            let spatial = (candidate.model == GraspCandidate::MODEL_SPATIAL)
-                .then(|| answer_in_full(candidate, &settings).spatial)
-                .flatten();
-            Some(markers::build(
-                &rules.tolerances.apply(candidate),
-                reply.recommendations.get(i)?,
-                spatial.as_deref(),
-            ))
-        });
-        let recorded = RecordedSet {
-            reply: self.recording.is_on().then(|| reply.clone()),
-            markers: markers
-                .as_ref()
-                .filter(|_| self.recording.records_markers())
-                .cloned(),
-            set,
-            received,
-            sent,
-        };
-        SetOutcome {
-            reply,
-            markers,
-            notes,
-            recorded,
-        }
+    /// Whether a set's answer is to be recorded, and its markers: asked when the set is taken,
+    /// so that the set thread clones only what the recording takes.
+    pub fn records_sets(&self) -> (bool, bool) {
+        (self.recording.is_on(), self.recording.records_markers())
     }
 
-    /// Counts a set's answer, and says what was refused in it.
-    fn count_set(&mut self, reply: &GripRecommendationSet, notes: &mut Vec<Note>) {
+    /// Counts a set's answer; the lines that say what was refused or left unsolved in it.
+    pub fn count_set(&mut self, reply: &GripRecommendationSet) -> Vec<Note> {
+        let mut notes = Vec::new();
         self.counts.sets += 1;
-        if reply.status != GripRecommendationSet::STATUS_OK {
+        let incomplete = reply.status == GripRecommendationSet::STATUS_INCOMPLETE;
+        if reply.status != GripRecommendationSet::STATUS_OK && !incomplete {
             self.counts.sets_refused += 1;
             notes.push((
                 Level::Warn,
                 format!("set {:?}: {}", short_id(&reply.set_id), reply.message),
             ));
-            return;
+            return notes;
         }
-        let (mut invalid, mut no_closure, mut exceeds) = (0u64, 0u64, 0u64);
+        let (mut invalid, mut no_closure, mut exceeds, mut unsolved) = (0u64, 0u64, 0u64, 0u64);
         for r in &reply.recommendations {
             match r.status {
                 GripRecommendation::STATUS_OK => {}
                 GripRecommendation::STATUS_NO_FORCE_CLOSURE => no_closure += 1,
                 GripRecommendation::STATUS_EXCEEDS_GRIPPER => exceeds += 1,
+                GripRecommendation::STATUS_NOT_SOLVED => unsolved += 1,
                 _ => invalid += 1,
             }
         }
-        self.counts.answered += reply.recommendations.len() as u64;
+        self.counts.answered += reply.recommendations.len() as u64 - unsolved;
         self.counts.invalid += invalid;
         self.counts.no_closure += no_closure;
         self.counts.exceeds_gripper += exceeds;
+        self.counts.not_solved += unsolved;
+        if incomplete {
+            self.counts.sets_incomplete += 1;
+            notes.push((
+                Level::Warn,
+                format!("set {:?}: {}", short_id(&reply.set_id), reply.message),
+            ));
+        }
         if invalid > 0 {
             notes.push((
                 Level::Warn,
@@ -461,6 +416,7 @@ impl Answerer {
                 ),
             ));
         }
+        notes
     }
 
     /// Records a set's answer that went out at `answered` (ns since the epoch): its markers, the
@@ -526,8 +482,14 @@ impl Answerer {
                 Level::Info,
                 format!(
                     "{} candidates needed more than max_grip_force; {} sets answered, {} of them \
-                     refused whole; {} sets undecodable",
-                    c.exceeds_gripper, c.sets, c.sets_refused, c.undecodable_sets
+                     refused whole, {} incomplete ({} candidates not solved); {} sets \
+                     undecodable",
+                    c.exceeds_gripper,
+                    c.sets,
+                    c.sets_refused,
+                    c.sets_incomplete,
+                    c.not_solved,
+                    c.undecodable_sets
                 ),
             ));
         }
@@ -637,7 +599,7 @@ mod tests {
         assert_eq!(
             last[1].1,
             "0 candidates needed more than max_grip_force; 0 sets answered, 0 of them refused \
-             whole; 2 sets undecodable"
+             whole, 0 incomplete (0 candidates not solved); 2 sets undecodable"
         );
     }
 
@@ -665,20 +627,6 @@ mod tests {
         let out = a.handle(paper_case_a(), before, before);
         assert_eq!(out.reply.objective, "norm2");
         assert!(out.markers.is_some());
-    }
-
-    #[test]
-    fn solver_threads_pick_the_pool() {
-        assert!(set_pool(1).is_none(), "1: the node's own thread");
-        // Each pool on its own thread: the thread that asks is the pool's first worker.
-        let threads = |n| {
-            std::thread::spawn(move || set_pool(n).map_or(1, |p| p.current_num_threads()))
-                .join()
-                .expect("no panic")
-        };
-        assert_eq!(threads(3), 3);
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-        assert_eq!(threads(0), cores, "0: one per core");
     }
 
     #[test]

@@ -5,7 +5,10 @@
 //!
 //! [`run`] reads the settings, opens the [`session::Session`], creates the endpoints and the
 //! parameter services, and then only moves messages: each candidate goes to
-//! [`answer::Answerer::handle`], and what that returns is published and recorded.
+//! [`answer::Answerer::handle`], and what that returns is published and recorded. Sets go to the
+//! set thread ([`set_worker`]), so that however long a set takes, the node's thread keeps
+//! answering single candidates, parameter requests and signals; their answers are published as
+//! they come back.
 
 pub mod answer;
 pub mod demo;
@@ -15,6 +18,7 @@ mod params;
 pub mod play;
 pub mod ros_args;
 pub mod session;
+pub mod set_worker;
 pub mod sets;
 
 use crate::config::Config;
@@ -29,8 +33,15 @@ use params::Shared;
 use ros2_client::{MessageInfo, Node, NodeOptions, Publisher, Subscription};
 use ros_args::RosArgs;
 use session::{create_topic, qos, say, Session, Shutdown, Start};
+use set_worker::SetWorker;
 use sets::SetEndpoints;
 use std::pin::pin;
+use std::time::Duration;
+
+/// After a stop request, how long the node waits for the answers of the sets it holds (the one
+/// being solved stops between two candidates; those waiting are answered unsolved) before it
+/// leaves without them: well within the second a supervisor gives between SIGTERM and SIGKILL.
+const STOP_GRACE: Duration = Duration::from_millis(300);
 
 /// Default node name.
 pub const NODE_NAME: &str = "grasp_orient";
@@ -150,6 +161,8 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
     let topics = &endpoints.topics;
     announce(&session, topics);
     let (on_stop, mut woken) = wake_on_change(&shared);
+    let mut worker =
+        SetWorker::start(shared.clone(), options.echo).context("cannot start the set thread")?;
     let mut answerer = Answerer::new(
         shared,
         options.echo,
@@ -174,21 +187,27 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
         // The parameter services run as a task of their own, woken only by their requests.
         let local = smol::LocalExecutor::new();
         let _services = local.spawn(services.serve(node));
+        let mut loop_state = Loop {
+            answerer: &mut answerer,
+            worker: &mut worker,
+            woken: &mut woken,
+        };
         let outcome = local
             .run(serve(
                 node,
                 shutdown,
                 &endpoints,
-                &mut answerer,
-                &mut woken,
+                &mut loop_state,
                 demo.as_ref(),
             ))
             .await;
+        finish_sets(node, &endpoints, &mut answerer, &mut worker).await;
         tell(node, answerer.finish());
         outcome
     });
-    // Leave the graph in order: endpoints and services, the demo's participant, then the
-    // session (node, spinner, context).
+    // Leave the graph in order: the set thread (not waited for inside a long candidate),
+    // endpoints and services, the demo's participant, then the session (node, spinner, context).
+    drop(worker);
     drop(endpoints);
     drop(services);
     if let Some(demo) = demo {
@@ -241,16 +260,28 @@ fn wake_on_change(shared: &Shared) -> (OnStop, futures::channel::mpsc::Unbounded
     (on_stop, woken)
 }
 
+/// What the answering loop changes: the answerer, the set thread, and what wakes the loop.
+struct Loop<'a> {
+    answerer: &'a mut Answerer,
+    worker: &'a mut SetWorker,
+    woken: &'a mut futures::channel::mpsc::UnboundedReceiver<()>,
+}
+
 /// Answers every candidate until a signal, or until the demo is done; acts on parameter sets
-/// and on a recording that stopped as soon as `woken` says so.
+/// and on a recording that stopped as soon as `woken` says so. Sets are handed to the set thread
+/// and their answers sent as they come back.
 async fn serve(
     node: &Node,
     shutdown: &mut Shutdown,
     endpoints: &Endpoints,
-    answerer: &mut Answerer,
-    woken: &mut futures::channel::mpsc::UnboundedReceiver<()>,
+    state: &mut Loop<'_>,
     demo: Option<&Demo>,
 ) -> anyhow::Result<()> {
+    let Loop {
+        answerer,
+        worker,
+        woken,
+    } = state;
     let mut stream = pin!(endpoints.candidates.async_stream());
     let mut set_stream = pin!(endpoints.sets.candidates.async_stream());
     let mut calls = pin!(endpoints.sets.service.receive_request_stream());
@@ -261,11 +292,13 @@ async fn serve(
         }
     }
     .fuse());
+    let (sets, markers) = (&endpoints.sets, &endpoints.markers);
     loop {
         // Biased, in this order: a stop request wins over whatever is queued, then the demo's
         // end, then a parameter set or a stopped writer (so that it applies to every candidate
-        // still queued), then candidates; each candidate costs microseconds, so a signal is
-        // seen within one.
+        // still queued), then candidates, then sets' answers back from the set thread, then new
+        // sets; each costs the node's thread microseconds to milliseconds (a set is solved on
+        // the set thread), so a signal is seen within one.
         futures::select_biased! {
             signal = shutdown.requested().fuse() => {
                 say(node, log::Level::Info, &format!("{signal}: leaving the ROS graph"));
@@ -282,10 +315,12 @@ async fn serve(
                     tell(node, vec![note]);
                 }
             },
+            done = worker.done.select_next_some() => {
+                sets::answer_done(node, sets, markers, answerer, done).await;
+            }
             received = set_stream.select_next_some() => match received {
                 Ok((set, info)) => {
-                    let markers = &endpoints.markers;
-                    sets::answer_topic(node, &endpoints.sets, markers, answerer, set, &info).await;
+                    sets::take_topic(node, sets, markers, answerer, worker, set, &info).await;
                 }
                 Err(e) => {
                     let topic = endpoints.topics.sets.as_ref().map_or("", |s| &s.candidates);
@@ -295,14 +330,47 @@ async fn serve(
             },
             call = calls.select_next_some() => match call {
                 Ok((id, request)) => {
-                    let markers = &endpoints.markers;
-                    sets::answer_call(node, &endpoints.sets, markers, answerer, id, request).await;
+                    sets::take_call(node, sets, markers, answerer, worker, id, request).await;
                 }
                 Err(e) => {
                     let note = answerer.undecodable(sets::SERVICE, &e);
                     tell(node, vec![note]);
                 }
             },
+        }
+    }
+}
+
+/// On a stop request: stops the set thread and, for at most [`STOP_GRACE`], sends the answers of
+/// the sets it still holds (each cut where its solving stopped), so that a caller gets an answer
+/// and the recording holds it.
+async fn finish_sets(
+    node: &Node,
+    endpoints: &Endpoints,
+    answerer: &mut Answerer,
+    worker: &mut SetWorker,
+) {
+    worker.stop();
+    let mut grace = FutureExt::fuse(smol::Timer::after(STOP_GRACE));
+    loop {
+        futures::select_biased! {
+            done = worker.done.next() => match done {
+                Some(done) => {
+                    let markers = &endpoints.markers;
+                    sets::answer_done(node, &endpoints.sets, markers, answerer, done).await;
+                }
+                None => return,
+            },
+            _ = grace => {
+                if !worker.ended() {
+                    say(
+                        node,
+                        log::Level::Warn,
+                        "a set's candidate was still being solved; leaving without its answer",
+                    );
+                }
+                return;
+            }
         }
     }
 }

@@ -1,10 +1,13 @@
 //! The node's set endpoints: `grasp_candidate_sets` in, `grip_recommendation_sets` out (the same QoS
 //! as the other topics), and the service `~/recommend` (`grasp_orient/srv/Recommend`), served
-//! through ros2-client. Each set goes to [`Answerer::handle_set`]; its answer is published (or sent
-//! back to the caller), then its markers, then it is recorded.
+//! through ros2-client. Each set is handed to the set thread ([`SetWorker::submit`]) and the node's
+//! thread goes on; when its answer is back ([`answer_done`]) it is published (or sent back to the
+//! caller), then its markers, then it is counted and recorded. A set refused because the set
+//! thread's queue is full is answered the same way, at once.
 
 use super::answer::{Answerer, SetOutcome};
 use super::session::{create_topic, qos, say, Session};
+use super::set_worker::{SetDone, SetJob, SetWorker, Via};
 use crate::msg::{
     short_id, GraspCandidateSet, GripRecommendationSet, MarkerArray, RecommendRequest,
     RecommendResponse,
@@ -74,12 +77,14 @@ impl SetEndpoints {
     }
 }
 
-/// Answers one set from the topic: the answer goes out first; markers and the recording follow.
-pub async fn answer_topic(
+/// Takes one set from the topic: hands it to the set thread, or answers it at once when the set
+/// thread's queue is full.
+pub async fn take_topic(
     node: &Node,
     endpoints: &SetEndpoints,
     markers: &Publisher<MarkerArray>,
     answerer: &mut Answerer,
+    worker: &SetWorker,
     set: GraspCandidateSet,
     info: &MessageInfo,
 ) {
@@ -87,77 +92,111 @@ pub async fn answer_topic(
     // From the sample's arrival in the DDS reader (the last fragment) to here: the node's
     // thread waking, and the set decoded.
     let taken = Duration::from_nanos(now_ns().saturating_sub(received));
-    let started = Instant::now();
-    let outcome = answerer.handle_set(set, received, sent);
-    let took = started.elapsed();
+    let (record, record_markers) = answerer.records_sets();
+    let job = SetJob {
+        set,
+        received,
+        sent,
+        via: Via::Topic { taken },
+        record,
+        record_markers,
+    };
+    if let Err(done) = worker.submit(job) {
+        answer_done(node, endpoints, markers, answerer, *done).await;
+    }
+}
+
+/// Takes one call of `~/recommend` (its times are when it was taken), as [`take_topic`] does.
+pub async fn take_call(
+    node: &Node,
+    endpoints: &SetEndpoints,
+    markers: &Publisher<MarkerArray>,
+    answerer: &mut Answerer,
+    worker: &SetWorker,
+    id: RmwRequestId,
+    request: RecommendRequest,
+) {
+    let received = now_ns();
+    let (record, record_markers) = answerer.records_sets();
+    let job = SetJob {
+        set: request.candidate_set,
+        received,
+        sent: received,
+        via: Via::Service(id),
+        record,
+        record_markers,
+    };
+    if let Err(done) = worker.submit(job) {
+        answer_done(node, endpoints, markers, answerer, *done).await;
+    }
+}
+
+/// Sends a set's answer where the set came from (published, or the response to its call); then
+/// its markers; then counts and records it.
+pub async fn answer_done(
+    node: &Node,
+    endpoints: &SetEndpoints,
+    markers: &Publisher<MarkerArray>,
+    answerer: &mut Answerer,
+    done: SetDone,
+) {
+    let SetDone {
+        via,
+        outcome,
+        waited,
+        took,
+    } = done;
     let SetOutcome {
         reply,
         markers: array,
-        notes,
         recorded,
     } = outcome;
-    super::tell(node, notes);
-    let line = AnswerLine::new(&reply, "topic", Some(taken), took);
-    let publishing = Instant::now();
-    let published = endpoints.answers.async_publish(reply).await;
-    line.log(publishing.elapsed(), published.is_ok());
-    if let Err(e) = published {
-        say(
-            node,
-            log::Level::Error,
-            &format!("cannot publish a set answer: {e:?}"),
-        );
+    super::tell(node, answerer.count_set(&reply));
+    let (how, taken) = match via {
+        Via::Topic { taken } => ("topic", Some(taken)),
+        Via::Service(_) => ("service", None),
+    };
+    let line = AnswerLine::new(&reply, how, taken, took, waited);
+    let sending = Instant::now();
+    let sent = match via {
+        Via::Topic { .. } => endpoints
+            .answers
+            .async_publish(reply)
+            .await
+            .map_err(|e| format!("cannot publish a set answer: {e:?}")),
+        Via::Service(id) => {
+            let response = RecommendResponse {
+                recommendation_set: reply,
+            };
+            endpoints
+                .service
+                .async_send_response(id, response)
+                .await
+                .map_err(|e| format!("cannot send a {SERVICE} response: {e:?}"))
+        }
+    };
+    line.log(sending.elapsed(), sent.is_ok());
+    if let Err(e) = sent {
+        say(node, log::Level::Error, &e);
     }
     let answered = now_ns();
     publish_markers(markers, array).await;
     super::tell(node, answerer.record_set(recorded, answered));
 }
 
-/// Answers one call of `~/recommend`: the response goes back first; markers and the recording
-/// follow (the request's times are when it was taken).
-pub async fn answer_call(
-    node: &Node,
-    endpoints: &SetEndpoints,
-    markers: &Publisher<MarkerArray>,
-    answerer: &mut Answerer,
-    id: RmwRequestId,
-    request: RecommendRequest,
-) {
-    let received = now_ns();
-    let started = Instant::now();
-    let outcome = answerer.handle_set(request.candidate_set, received, received);
-    let took = started.elapsed();
-    super::tell(node, outcome.notes);
-    let line = AnswerLine::new(&outcome.reply, "service", None, took);
-    let response = RecommendResponse {
-        recommendation_set: outcome.reply,
-    };
-    let sending = Instant::now();
-    let sent = endpoints.service.async_send_response(id, response).await;
-    line.log(sending.elapsed(), sent.is_ok());
-    if let Err(e) = sent {
-        say(
-            node,
-            log::Level::Error,
-            &format!("cannot send a {SERVICE} response: {e:?}"),
-        );
-    }
-    let answered = now_ns();
-    publish_markers(markers, outcome.markers).await;
-    super::tell(node, answerer.record_set(outcome.recorded, answered));
-}
-
 /// One line at debug per set answered, as for single candidates, written once the answer is out:
 /// where the set's time in the node went. `taken`: from the set's arrival in the DDS reader to
-/// the start of its answer (the node's thread waking, and the set decoded; topic only);
-/// `answered in`: solving, ranking, the best candidate's markers and the recording's copy;
-/// `published in`: serializing the answer and handing it to DDS, and freeing it. `taken` also
-/// holds any wait behind the previous message's markers and recording, and is 0 when DDS gave
-/// no arrival time.
+/// the node's thread taking it (the thread waking, and the set decoded; topic only);
+/// `answered in`: solving on the set thread, ranking, the best candidate's markers and the
+/// recording's copy; `published in`: serializing the answer and handing it to DDS, and freeing
+/// it; `waited`: from the hand-over to the set thread to the start of its solving (the thread
+/// waking, and the sets before it in the queue). `taken` also holds any wait behind the
+/// previous message, and is 0 when DDS gave no arrival time.
 /// `benches/bench_sets.py` reads these lines.
 struct AnswerLine {
-    /// The line up to the publishing time; none when debug lines are off.
-    text: Option<String>,
+    /// The line up to the publishing time, and the wait for the set thread; none when debug
+    /// lines are off.
+    text: Option<(String, Duration)>,
 }
 
 impl AnswerLine {
@@ -166,6 +205,7 @@ impl AnswerLine {
         via: &str,
         taken: Option<Duration>,
         took: Duration,
+        waited: Duration,
     ) -> Self {
         if !log::log_enabled!(log::Level::Debug) {
             return Self { text: None };
@@ -175,27 +215,34 @@ impl AnswerLine {
             format!(", taken {:.3} ms after it arrived", ms(t))
         });
         Self {
-            text: Some(format!(
-                "set {:?} ({via}): {} candidates, {} ranked by {}, status {}{taken}, answered in \
-                 {:.3} ms",
-                short_id(&reply.set_id),
-                reply.recommendations.len(),
-                reply.ranking.len(),
-                reply.ranked_by,
-                reply.status,
-                ms(took)
+            text: Some((
+                format!(
+                    "set {:?} ({via}): {} candidates, {} ranked by {}, status {}{taken}, answered \
+                     in {:.3} ms",
+                    short_id(&reply.set_id),
+                    reply.recommendations.len(),
+                    reply.ranking.len(),
+                    reply.ranked_by,
+                    reply.status,
+                    ms(took)
+                ),
+                waited,
             )),
         }
     }
 
     fn log(self, sending: Duration, sent: bool) {
-        if let Some(text) = self.text {
+        if let Some((text, waited)) = self.text {
             let how = if sent {
                 "published in"
             } else {
                 "not published, after"
             };
-            log::debug!("{text}, {how} {:.3} ms", sending.as_secs_f64() * 1e3);
+            log::debug!(
+                "{text}, {how} {:.3} ms; it waited {:.3} ms for the set thread",
+                sending.as_secs_f64() * 1e3,
+                waited.as_secs_f64() * 1e3
+            );
         }
     }
 }

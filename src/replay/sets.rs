@@ -87,6 +87,8 @@ pub(super) fn replay_sets(
         summary.candidates += set.message.candidates.len() as u64;
         if let Some(theirs) = theirs {
             summary.sets_compared += 1;
+            // A set cut short (max_set_time, or the node stopping): its unsolved members as recorded.
+            let ours = crate::answer::cut_like(&ours, theirs);
             if compare_set(&set.message, &ours, theirs, bag, &mut summary) {
                 summary.sets_differing += 1;
             }

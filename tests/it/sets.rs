@@ -443,3 +443,40 @@ fn a_set_member_answering_another_candidate_fails_the_replay() {
         );
     }
 }
+
+/// A set the node refused as busy (its queue full) and one whose time ran out before any member
+/// was solved, as the node answers them: replay compares what was solved, and passes.
+#[test]
+fn busy_and_cut_sets_replay_as_recorded() {
+    use grasp_orient::answer::{answer_set_within, busy, Halt, Interrupt};
+    let dir = temp_dir("busy_sets");
+    let path = dir.path().join("busy.mcap");
+    let sets = three_sets();
+    let (first, second) = (sets[0].clone(), sets[1].clone());
+    write_these_sets(&path, sets, |k, a| {
+        let rules = Rules::default();
+        if k == 0 {
+            *a = busy(&first, &rules, 16);
+        } else if k == 1 {
+            let late = Interrupt::default();
+            late.raise(Halt::OutOfTime);
+            *a = answer_set_within(&second, &Settings::default(), &rules, None, &late, 0.5);
+        }
+    });
+    let recorded = bag::read(&path).expect("reads");
+    let statuses: Vec<u8> = recorded
+        .recommendation_sets
+        .iter()
+        .map(|s| s.message.status)
+        .collect();
+    assert_eq!(
+        statuses[..2],
+        [
+            GripRecommendationSet::STATUS_BUSY,
+            GripRecommendationSet::STATUS_INCOMPLETE
+        ]
+    );
+    let (ok, text) = replay(&path);
+    assert!(ok, "{text}");
+    assert!(text.contains("0 differ"), "{text}");
+}

@@ -1,0 +1,573 @@
+//! Sets are solved on a thread of their own, the set thread, so that a large or slow set holds up
+//! nothing else: the node's thread goes on answering single candidates, parameter requests and
+//! signals while a set is solved, and only publishes the set's answer once it is ready.
+//!
+//! ```text
+//! node thread   set from DDS ── SetWorker::submit ──► queue ──► set thread: answer_set_within ──┐
+//!               (max_queued_sets already waiting: STATUS_BUSY at once)                         │
+//!               answer published ◄── SetWorker::done ◄── SetDone ◄─────────────────────────────┘
+//! clock thread  raises the Interrupt when the set's max_set_time runs out
+//! ```
+//!
+//! Each set's solving stops between two candidates when its `max_set_time` runs out (the clock
+//! thread raises [`Interrupt`]) or when the node stops ([`SetWorker::stop`]): the candidates not
+//! solved get `STATUS_NOT_SOLVED` and the set `STATUS_INCOMPLETE` (`answer_set_within`). A set that
+//! arrives while `max_queued_sets` sets wait is answered at once with `STATUS_BUSY`.
+
+use super::answer::{RecordedSet, SetOutcome};
+use super::params::Shared;
+use crate::answer::PARALLEL_FROM;
+use crate::answer::{answer_in_full, markers};
+use crate::answer::{answer_set_within, busy, echo_set, solver_pool, Halt, Interrupt};
+use crate::msg::{GraspCandidate, GraspCandidateSet};
+use futures::channel::mpsc::{unbounded, UnboundedReceiver, UnboundedSender};
+use ros2_client::RmwRequestId;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{mpsc, Arc, Condvar, Mutex, MutexGuard};
+use std::time::{Duration, Instant};
+
+/// Where a set came from, and so where its answer goes.
+#[derive(Debug, Clone, Copy)]
+pub enum Via {
+    /// The topic `grasp_candidate_sets`; `taken`: from the set's arrival in the DDS reader to the
+    /// node's thread taking it.
+    Topic {
+        /// From arrival to taken.
+        taken: Duration,
+    },
+    /// A call of `~/recommend`, answered to this request.
+    Service(RmwRequestId),
+}
+
+/// One set for the set thread, with what its answer needs.
+#[derive(Debug)]
+pub struct SetJob {
+    /// The set.
+    pub set: GraspCandidateSet,
+    /// When it was received and sent, ns since the epoch (its settings are those in force when
+    /// it was received).
+    pub received: u64,
+    /// When it was sent.
+    pub sent: u64,
+    /// Where the answer goes.
+    pub via: Via,
+    /// Whether the recording was on when the set was taken: its answer is then cloned for it.
+    pub record: bool,
+    /// Whether the recording takes markers.
+    pub record_markers: bool,
+}
+
+/// A set's answer, back from the set thread.
+#[derive(Debug)]
+pub struct SetDone {
+    /// Where the answer goes.
+    pub via: Via,
+    /// The answer, its markers and what to record.
+    pub outcome: SetOutcome,
+    /// From the node's thread handing the set over to the set thread starting it.
+    pub waited: Duration,
+    /// The solving, the ranking, the best candidate's markers and the recording's copy.
+    pub took: Duration,
+}
+
+/// The set thread, its queue and its clock.
+#[derive(Debug)]
+pub struct SetWorker {
+    jobs: Option<mpsc::Sender<(SetJob, Instant)>>,
+    /// The answers, as they are ready.
+    pub done: UnboundedReceiver<SetDone>,
+    /// Sets handed over and not yet answered, the one being solved among them.
+    in_hand: Arc<AtomicUsize>,
+    interrupt: Arc<Interrupt>,
+    clock: Arc<Clock>,
+    thread: Option<std::thread::JoinHandle<()>>,
+    shared: Shared,
+}
+
+impl SetWorker {
+    /// Starts the set thread and its clock, answering with `shared`'s settings (with `echo`, an
+    /// empty answer per candidate, nothing solved).
+    pub fn start(shared: Shared, echo: bool) -> std::io::Result<Self> {
+        let interrupt = Arc::new(Interrupt::default());
+        let clock = Clock::start(interrupt.clone())?;
+        let (jobs, queue) = mpsc::channel::<(SetJob, Instant)>();
+        let (answers, done) = unbounded();
+        let in_hand = Arc::new(AtomicUsize::new(0));
+        let solver = Solver {
+            shared: shared.clone(),
+            echo,
+            pool: std::cell::OnceCell::new(),
+            interrupt: interrupt.clone(),
+            clock: clock.clone(),
+        };
+        let counter = in_hand.clone();
+        let thread = std::thread::Builder::new()
+            .name("sets".into())
+            .spawn(move || solver.work(&queue, &answers, &counter))?;
+        Ok(Self {
+            jobs: Some(jobs),
+            done,
+            in_hand,
+            interrupt,
+            clock,
+            thread: Some(thread),
+            shared,
+        })
+    }
+
+    /// Hands `job` to the set thread; when `max_queued_sets` sets already wait behind the one
+    /// being solved (or the node is stopping), its answer at once instead: `STATUS_BUSY`, nothing
+    /// solved.
+    pub fn submit(&self, job: SetJob) -> Result<(), Box<SetDone>> {
+        let (max_queued, rules) = {
+            let live = self.shared.lock();
+            let version = live.version_at(job.received);
+            let max = usize::try_from(version.config.max_queued_sets).unwrap_or(0);
+            (max, version.config.rules())
+        };
+        // Only this thread adds; the set thread takes away, so the count can only have fallen
+        // since it was read.
+        if self.in_hand.load(Ordering::SeqCst) <= max_queued {
+            if let Some(jobs) = &self.jobs {
+                self.in_hand.fetch_add(1, Ordering::SeqCst);
+                match jobs.send((job, Instant::now())) {
+                    Ok(()) => return Ok(()),
+                    Err(mpsc::SendError((back, _))) => {
+                        self.in_hand.fetch_sub(1, Ordering::SeqCst);
+                        return Err(Box::new(refused(back, max_queued, &rules)));
+                    }
+                }
+            }
+        }
+        Err(Box::new(refused(job, max_queued, &rules)))
+    }
+
+    /// Stops: the set being solved stops between two candidates, and those still waiting are
+    /// answered with every candidate not solved; the set thread ends after them. Their answers
+    /// still come on [`SetWorker::done`], which ends after the last.
+    pub fn stop(&mut self) {
+        self.interrupt.raise(Halt::Stopping);
+        self.jobs = None;
+        self.clock.quit();
+    }
+
+    /// Whether the set thread has ended (its last answer sent).
+    pub fn ended(&self) -> bool {
+        self.thread.as_ref().is_none_or(|t| t.is_finished())
+    }
+}
+
+impl Drop for SetWorker {
+    /// Stops, and joins the set thread when it has ended; one still inside a long candidate is
+    /// left to the end of the process rather than waited for.
+    fn drop(&mut self) {
+        self.stop();
+        if let Some(thread) = self.thread.take() {
+            if thread.is_finished() {
+                thread.join().ok();
+            } else {
+                log::warn!("the set thread is still solving a candidate; not waiting for it");
+            }
+        }
+    }
+}
+
+/// The answer to a set refused because the queue is full (or the set thread has ended).
+fn refused(job: SetJob, max_queued: usize, rules: &crate::answer::Rules) -> SetDone {
+    let reply = busy(&job.set, rules, max_queued);
+    SetDone {
+        via: job.via,
+        outcome: SetOutcome {
+            markers: None,
+            recorded: RecordedSet::new(
+                job.record.then(|| reply.clone()),
+                None,
+                job.set,
+                job.received,
+                job.sent,
+            ),
+            reply,
+        },
+        waited: Duration::ZERO,
+        took: Duration::ZERO,
+    }
+}
+
+/// What the set thread owns.
+struct Solver {
+    shared: Shared,
+    echo: bool,
+    /// The threads large sets are answered on, started with the first large set (none in echo
+    /// mode, with `solver_threads` 1, or when they cannot start).
+    pool: std::cell::OnceCell<Option<rayon::ThreadPool>>,
+    interrupt: Arc<Interrupt>,
+    clock: Arc<Clock>,
+}
+
+impl Solver {
+    /// Answers the sets of `queue` in turn until it closes, each answer sent on `answers`.
+    fn work(
+        &self,
+        queue: &mpsc::Receiver<(SetJob, Instant)>,
+        answers: &UnboundedSender<SetDone>,
+        in_hand: &AtomicUsize,
+    ) {
+        while let Ok((job, handed)) = queue.recv() {
+            let done = self.solve(job, handed.elapsed());
+            in_hand.fetch_sub(1, Ordering::SeqCst);
+            if answers.unbounded_send(done).is_err() {
+                return;
+            }
+        }
+    }
+
+    /// The answer to one set, by the same rules as a single candidate's: the settings in force
+    /// when it was received, and markers for the best candidate. A large set is shared among
+    /// `solver_threads` threads (`set_pool`); the solving stops when `max_set_time` runs out.
+    fn solve(&self, job: SetJob, waited: Duration) -> SetDone {
+        let started = Instant::now();
+        let SetJob {
+            set,
+            received,
+            sent,
+            via,
+            record,
+            record_markers,
+        } = job;
+        let (settings, markers_on, rules, threads, budget) = {
+            let live = self.shared.lock();
+            let version = live.version_at(received);
+            (
+                version.settings,
+                version.config.publish_markers,
+                version.config.rules(),
+                version.config.solver_threads,
+                version.config.max_set_time,
+            )
+        };
+        let reply = if self.echo {
+            echo_set(&set)
+        } else {
+            let pool = if set.candidates.len() >= PARALLEL_FROM {
+                // `solver_threads` is fixed: the pool is started once, with the first large set.
+                self.pool.get_or_init(|| set_pool(threads)).as_ref()
+            } else {
+                None
+            };
+            self.interrupt.lower_time();
+            let _watched = self.clock.watch(budget);
+            answer_set_within(&set, &settings, &rules, pool, &self.interrupt, budget)
+        };
+        let stopping = self.interrupt.halt() == Some(Halt::Stopping);
+        let best = reply.ranking.first().map(|&i| i as usize);
+        let markers = best
+            .filter(|_| markers_on && !self.echo && !stopping)
+            .and_then(|i| {
+                let candidate = set.candidates.get(i)?;
+                // A spatial best candidate is drawn in 3D: its 3D solution is solved again (one
+                // candidate; the set's answers keep only the message fields).
+                let spatial = (candidate.model == GraspCandidate::MODEL_SPATIAL)
+                    .then(|| answer_in_full(candidate, &settings).spatial)
+                    .flatten();
+                Some(markers::build(
+                    &rules.tolerances.apply(candidate),
+                    reply.recommendations.get(i)?,
+                    spatial.as_deref(),
+                ))
+            });
+        let recorded = RecordedSet::new(
+            record.then(|| reply.clone()),
+            markers.as_ref().filter(|_| record_markers).cloned(),
+            set,
+            received,
+            sent,
+        );
+        SetDone {
+            via,
+            outcome: SetOutcome {
+                reply,
+                markers,
+                recorded,
+            },
+            waited,
+            took: started.elapsed(),
+        }
+    }
+}
+
+/// The threads a large set is answered on: `threads` of them (parameter `solver_threads`), or one
+/// per core for 0, counting the set thread, which asks for the pool with its first large set and
+/// solves its share of each (`answer::solver_pool`); none for 1, or when the system refuses them
+/// (then the set thread answers alone).
+/// While a set is solved the DDS threads have little to do (the set has arrived and its answer is
+/// not yet written): measured from rclpy on two cores by `benches/bench_sets.py`, two solver
+/// threads answered a set of 1,000 sooner than one (`docs/performance.md`).
+fn set_pool(threads: i64) -> Option<rayon::ThreadPool> {
+    let threads = match usize::try_from(threads) {
+        Ok(0) | Err(_) => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        Ok(n) => n,
+    };
+    if threads <= 1 {
+        return None;
+    }
+    solver_pool(threads)
+        .map_err(|e| log::warn!("{e}; sets are answered on one thread"))
+        .ok()
+}
+
+/// The clock of a set's `max_set_time`: a thread that raises [`Halt::OutOfTime`] when the
+/// deadline it watches passes, so that the solving reads one atomic per candidate rather than the
+/// time.
+#[derive(Debug)]
+struct Clock {
+    state: Mutex<ClockState>,
+    wake: Condvar,
+    interrupt: Arc<Interrupt>,
+}
+
+#[derive(Debug, Default)]
+struct ClockState {
+    deadline: Option<Instant>,
+    quit: bool,
+}
+
+/// A deadline being watched; dropped, it is no longer (no raise can follow the drop).
+struct Watched<'a>(&'a Clock);
+
+impl Drop for Watched<'_> {
+    fn drop(&mut self) {
+        self.0.lock().deadline = None;
+    }
+}
+
+impl Clock {
+    fn start(interrupt: Arc<Interrupt>) -> std::io::Result<Arc<Self>> {
+        let clock = Arc::new(Self {
+            state: Mutex::new(ClockState::default()),
+            wake: Condvar::new(),
+            interrupt,
+        });
+        let ticking = clock.clone();
+        std::thread::Builder::new()
+            .name("set-clock".into())
+            .spawn(move || ticking.run())?;
+        Ok(clock)
+    }
+
+    fn lock(&self) -> MutexGuard<'_, ClockState> {
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Watches `seconds` from now (none for 0) until the guard is dropped.
+    fn watch(&self, seconds: f64) -> Watched<'_> {
+        let limit = (seconds > 0.0)
+            .then(|| Duration::try_from_secs_f64(seconds).ok())
+            .flatten();
+        self.lock().deadline = limit.and_then(|d| Instant::now().checked_add(d));
+        self.wake.notify_one();
+        Watched(self)
+    }
+
+    fn quit(&self) {
+        self.lock().quit = true;
+        self.wake.notify_one();
+    }
+
+    /// Waits for deadlines and raises the interrupt at each (under the lock, so that a deadline
+    /// no longer watched is never raised).
+    fn run(&self) {
+        let mut state = self.lock();
+        while !state.quit {
+            state = match state.deadline {
+                None => self.wake.wait(state).unwrap_or_else(|e| e.into_inner()),
+                Some(at) => {
+                    let now = Instant::now();
+                    if now >= at {
+                        self.interrupt.raise(Halt::OutOfTime);
+                        state.deadline = None;
+                        state
+                    } else {
+                        self.wake
+                            .wait_timeout(state, at - now)
+                            .map_or_else(|e| e.into_inner().0, |(s, _)| s)
+                    }
+                }
+            };
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Config;
+    use crate::msg::{GripRecommendation, GripRecommendationSet};
+    use futures::StreamExt;
+
+    fn worker(config: Config) -> SetWorker {
+        let settings = config.solver_settings().expect("valid");
+        SetWorker::start(Shared::new(config, settings), false).expect("threads")
+    }
+
+    fn paper_case() -> GraspCandidate {
+        let line = include_str!("../../examples/paper_cases.jsonl")
+            .lines()
+            .next();
+        serde_json::from_str(line.expect("a case")).expect("a GraspCandidate")
+    }
+
+    /// `n` copies of a paper case with an uncertain centre of mass (the robust solver).
+    fn job(id: &str, n: usize) -> SetJob {
+        let mut c = paper_case();
+        c.center_of_mass_tolerance.x = 0.01;
+        SetJob {
+            set: GraspCandidateSet {
+                id: id.into(),
+                candidates: vec![c; n],
+                ..GraspCandidateSet::default()
+            },
+            received: crate::record::now_ns(),
+            sent: 0,
+            via: Via::Topic {
+                taken: Duration::ZERO,
+            },
+            record: false,
+            record_markers: false,
+        }
+    }
+
+    fn next(w: &mut SetWorker) -> SetDone {
+        futures::executor::block_on(w.done.next()).expect("an answer")
+    }
+
+    fn unsolved(reply: &GripRecommendationSet) -> usize {
+        reply
+            .recommendations
+            .iter()
+            .filter(|r| r.status == GripRecommendation::STATUS_NOT_SOLVED)
+            .count()
+    }
+
+    /// Without a budget, the node's thread hands a set over at once and the answer comes back
+    /// whole, the same as the library's.
+    #[test]
+    fn a_set_is_solved_on_the_set_thread_and_comes_back_whole() {
+        let mut w = worker(Config {
+            max_set_time: 0.0,
+            ..Config::default()
+        });
+        let j = job("whole", 300);
+        let want = crate::answer::answer_set(
+            &j.set,
+            &Config::default().solver_settings().expect("valid"),
+            &Config::default().rules(),
+        );
+        let handed = Instant::now();
+        w.submit(j).expect("taken");
+        assert!(
+            handed.elapsed() < Duration::from_millis(50),
+            "handing over waited"
+        );
+        let done = next(&mut w);
+        assert_eq!(format!("{:?}", done.outcome.reply), format!("{want:?}"));
+        assert!(
+            done.outcome.markers.is_some(),
+            "markers of the best candidate"
+        );
+    }
+
+    /// max_set_time cuts a set that would take longer: status incomplete, the rest status 4.
+    #[test]
+    fn a_set_past_max_set_time_is_answered_in_part() {
+        let mut w = worker(Config {
+            max_set_time: 0.02,
+            max_set_size: 1_000_000,
+            ..Config::default()
+        });
+        w.submit(job("slow", 100_000)).expect("taken");
+        let done = next(&mut w);
+        let reply = &done.outcome.reply;
+        assert_eq!(reply.status, GripRecommendationSet::STATUS_INCOMPLETE);
+        assert!(
+            reply.message.contains("max_set_time (0.02 s) ran out"),
+            "{}",
+            reply.message
+        );
+        let left = unsolved(reply);
+        assert!(left > 0 && left < 100_000, "{left} not solved");
+        // The next set has a budget of its own.
+        w.submit(job("next", 10)).expect("taken");
+        assert_eq!(next(&mut w).outcome.reply.status, 0);
+    }
+
+    /// A set that arrives while max_queued_sets wait is refused at once, nothing solved.
+    #[test]
+    fn a_full_queue_refuses_at_once() {
+        let mut w = worker(Config {
+            max_set_time: 0.0,
+            max_queued_sets: 1,
+            max_set_size: 1_000_000,
+            ..Config::default()
+        });
+        w.submit(job("solved", 100_000)).expect("taken");
+        w.submit(job("waiting", 10)).expect("one may wait");
+        let refused = w.submit(job("refused", 10)).expect_err("a full queue");
+        assert_eq!(
+            refused.outcome.reply.status,
+            GripRecommendationSet::STATUS_BUSY
+        );
+        assert!(refused.outcome.reply.message.contains("max_queued_sets 1"));
+        w.stop();
+    }
+
+    /// A stop cuts the set being solved and answers those waiting unsolved, at once.
+    #[test]
+    fn a_stop_answers_every_set_held_at_once() {
+        let mut w = worker(Config {
+            max_set_time: 0.0,
+            max_set_size: 1_000_000,
+            ..Config::default()
+        });
+        w.submit(job("long", 100_000)).expect("taken");
+        w.submit(job("waiting", 1000)).expect("taken");
+        std::thread::sleep(Duration::from_millis(20));
+        let stopped = Instant::now();
+        w.stop();
+        let long = next(&mut w);
+        let waiting = next(&mut w);
+        assert!(
+            stopped.elapsed() < Duration::from_millis(500),
+            "{:?}",
+            stopped.elapsed()
+        );
+        assert!(futures::executor::block_on(w.done.next()).is_none());
+        assert!(
+            w.ended() || {
+                std::thread::sleep(Duration::from_millis(100));
+                w.ended()
+            }
+        );
+        for (done, id) in [(&long, "long"), (&waiting, "waiting")] {
+            let reply = &done.outcome.reply;
+            assert_eq!((reply.set_id.as_str(), reply.status), (id, 3));
+            assert!(reply.message.contains("stopping"), "{}", reply.message);
+            assert!(done.outcome.markers.is_none());
+        }
+        assert_eq!(unsolved(&waiting.outcome.reply), 1000);
+        assert!(w.submit(job("late", 1)).is_err(), "refused after a stop");
+    }
+
+    #[test]
+    fn solver_threads_pick_the_pool() {
+        assert!(set_pool(1).is_none(), "1: the set thread alone");
+        // Each pool on its own thread: the thread that asks is the pool's first worker.
+        let threads = |n| {
+            std::thread::spawn(move || set_pool(n).map_or(1, |p| p.current_num_threads()))
+                .join()
+                .expect("no panic")
+        };
+        assert_eq!(threads(3), 3);
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        assert_eq!(threads(0), cores, "0: one per core");
+    }
+}
