@@ -65,10 +65,10 @@
 //! These are closed forms with closed-form derivatives; the minima over the arc are found by
 //! evaluating the derivative on a grid of [`ARC_GRID`] intervals and bisecting every sign change
 //! from − to + on the derivative's sign until the bracket stops shrinking (about 1e-16 rad, at most
-//! [`BISECT_STEPS`] halvings; the root is then limited by rounding in the derivative, ~1e-13 rad for a well-curved minimum;
-//! `tests/it/spatial.rs` measures the plane of 300 random on-axis answers within 3e-11 rad of the
-//! minimum of the best power over planes, which is that measurement's own resolution),
-//! and the best grid point is kept as well. Each plane so found is then solved exactly by the
+//! `BISECT_STEPS` halvings; the root is then limited by rounding in the derivative, ~1e-13 rad for
+//! a well-curved minimum; `tests/it/spatial.rs` measures the plane of 300 random on-axis answers
+//! within 3e-11 rad of the minimum of the best power over planes, which is that measurement's own
+//! resolution), and the best grid point is kept as well. Each plane so found is then solved exactly by the
 //! planar solver, and the least answer wins (ties within 1e-12 relative go to the smaller
 //! rotation). When `δ_i = 0` (the normal along the axis) `A_i` is the same in every plane and the
 //! Pareto set shrinks to the other `η`, or to nothing when both are zero (a ball or a can gripped
@@ -87,7 +87,7 @@
 //! The 1-norm of `(N1, F1, N2, F2)` depends on the plane's own split of each force (module docs
 //! §3), so the monotonicity above does not hold. It is minimised over the planes by the planar
 //! solver on a grid of [`NORM1_GRID`] planes round the axis and golden-section search in each
-//! bracketing interval to 1e-10 rad (44 steps; at most [`GOLDEN_STEPS`]). The value is exact to
+//! bracketing interval to 1e-10 rad (44 steps; at most `GOLDEN_STEPS`). The value is exact to
 //! rounding at the point found, but a derivative-free search locates a smooth minimum only to about 1e-8 rad (values closer than
 //! that agree to rounding).
 

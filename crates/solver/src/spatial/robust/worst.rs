@@ -488,7 +488,7 @@ impl Worst {
 
 impl AxisView {
     /// The largest `quantity` over `segments` and the points `axis` (the region's points on the
-    /// contact axis, every plane taken), certified to [`CERTIFY`] (module docs §4): every end
+    /// contact axis, every plane taken), certified to [`tolerance`] (module docs §4): every end
     /// point and the axis points are evaluated, then each edge is split where its upper bound
     /// is largest until no piece can beat the best value by more than the tolerance.
     pub fn worst(
