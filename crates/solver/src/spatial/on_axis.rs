@@ -64,11 +64,11 @@
 //! (with the allowed range of gravity angles, also at the arc's points where `atan D` meets a bound).
 //! These are closed forms with closed-form derivatives; the minima over the arc are found by
 //! evaluating the derivative on a grid of [`ARC_GRID`] intervals and bisecting every sign change
-//! from − to + on the derivative's sign until the bracket stops shrinking (about 1e-16 rad; the
-//! root is then limited by rounding in the derivative, ~1e-13 rad for a well-curved minimum;
-//! `tests/it/spatial.rs` measures the plane of 300 random on-axis answers within 3e-11 rad of the
-//! minimum of the best power over planes, which is that measurement's own resolution),
-//! and the best grid point is kept as well. Each plane so found is then solved exactly by the
+//! from − to + on the derivative's sign until the bracket stops shrinking (about 1e-16 rad, at most
+//! `BISECT_STEPS` halvings; the root is then limited by rounding in the derivative, ~1e-13 rad for
+//! a well-curved minimum; `tests/it/spatial.rs` measures the plane of 300 random on-axis answers
+//! within 3e-11 rad of the minimum of the best power over planes, which is that measurement's own
+//! resolution), and the best grid point is kept as well. Each plane so found is then solved exactly by the
 //! planar solver, and the least answer wins (ties within 1e-12 relative go to the smaller
 //! rotation). When `δ_i = 0` (the normal along the axis) `A_i` is the same in every plane and the
 //! Pareto set shrinks to the other `η`, or to nothing when both are zero (a ball or a can gripped
@@ -87,8 +87,8 @@
 //! The 1-norm of `(N1, F1, N2, F2)` depends on the plane's own split of each force (module docs
 //! §3), so the monotonicity above does not hold. It is minimised over the planes by the planar
 //! solver on a grid of [`NORM1_GRID`] planes round the axis and golden-section search in each
-//! bracketing interval to 1e-10 rad. The value is exact to rounding at the point found, but a
-//! derivative-free search locates a smooth minimum only to about 1e-8 rad (values closer than
+//! bracketing interval to 1e-10 rad (44 steps; at most `GOLDEN_STEPS`). The value is exact to
+//! rounding at the point found, but a derivative-free search locates a smooth minimum only to about 1e-8 rad (values closer than
 //! that agree to rounding).
 
 use super::plane::{Basis, Geometry, PlaneSolve};
@@ -196,10 +196,25 @@ fn along_curve(grasp: &AxisGrasp, objective: Objective, psi: f64) -> (f64, f64) 
     }
 }
 
+/// Most halvings in [`bisect`]: a bracket of width at most 2π (an arc, or `[0, 1]`) stops
+/// shrinking after at most 56 halvings where its ends are away from zero (53 bits of mantissa
+/// and 3 of the width), and after at most 1,077 at zero (the exponent range down to the
+/// subnormals); 200 covers the first with room, and past it the bracket is narrower than 2π ×
+/// 2^-200 rad, below any angle the solver tells apart.
+const BISECT_STEPS: usize = 200;
+/// The bracket width, rad, at which the golden-section search of the 1-norm stops (module docs,
+/// *The 1-norm*).
+const GOLDEN_WIDTH: f64 = 1e-10;
+/// Most steps of that search: each shrinks the bracket by the golden ratio, from two grid steps
+/// `2 · 2π/NORM1_GRID` (0.131 rad) to [`GOLDEN_WIDTH`] in `ceil(ln(0.131/1e-10) / ln 1.618) = 44`
+/// steps; 64 leaves room for rounding and is never reached (a `NaN` value ends the search at
+/// once, as `hi − lo` then compares false).
+const GOLDEN_STEPS: usize = 64;
+
 /// `(lo + hi)/2` after bisecting `[lo, hi]` on `after_root` (false at `lo`, true at `hi`) until
-/// the bracket stops shrinking.
+/// the bracket stops shrinking, at most [`BISECT_STEPS`] times.
 fn bisect(mut lo: f64, mut hi: f64, after_root: impl Fn(f64) -> bool) -> f64 {
-    for _ in 0..200 {
+    for _ in 0..BISECT_STEPS {
         let mid = 0.5 * (lo + hi);
         if mid <= lo || mid >= hi {
             break;
@@ -411,7 +426,10 @@ fn norm1_candidates(
         let mut x1 = hi - golden * (hi - lo);
         let mut x2 = lo + golden * (hi - lo);
         let (mut f1, mut f2) = (power(x1)?, power(x2)?);
-        while hi - lo > 1e-10 {
+        for _ in 0..GOLDEN_STEPS {
+            if hi - lo <= GOLDEN_WIDTH {
+                break;
+            }
             if f1 <= f2 {
                 hi = x2;
                 (x2, f2) = (x1, f1);

@@ -85,9 +85,11 @@
 //! `κ'`. Interval arithmetic gives upper bounds of each term `T_j` (the four branches of `h_1`,
 //! `h_2`) and of its slope; per piece the bound is the least of the interval bound and the
 //! mean-value bound `F(mid) + sup|F'| w/2` (second order near a maximum; `P >= sqrt(1/2)` bounds
-//! `1/P`). Branch and bound splits the piece of highest bound until no piece can exceed the best
-//! value found by more than `worst::CERTIFY` (1e-12) of it. The maximum is then known to 1e-12 relative
-//! (to rounding: the intervals are not rounded outward), and the reported point attains it.
+//! `1/P`; for the squeeze, `max(T, 0) <= max(T(mid) + sup|T'| w/2, 0)`). Branch and bound splits
+//! the piece of highest bound (a heap) until no piece can exceed the best value found by more
+//! than `worst::tolerance`: `worst::CERTIFY` (1e-12) of it plus `worst::CERTIFY_ABS` (1e-12 of
+//! the weight; see *Tolerances*). The maximum is then known to that (to rounding: the intervals
+//! are not rounded outward), and the reported point attains it.
 //!
 //! # 5. The least worst case: an exchange method with a certificate
 //! `R(θ) = max over the region of P(θ, c)` is not an envelope of finitely many closed-form curves
@@ -101,8 +103,10 @@
 //! ```
 //!
 //! Start with the region's vertices (and its points on the axis); while `R(θ_S) − R_S(θ_S)` (with
-//! `R(θ_S)` certified from above, §4) exceeds [`EXCHANGE`] (1e-9) of `R(θ_S)`, add the worst point
-//! at `θ_S` to `S` and repeat (at most [`MAX_EXCHANGES`] times). The answer is `θ_S`; its worst
+//! `R(θ_S)` certified from above, §4) exceeds [`EXCHANGE`] (1e-9) of `R(θ_S)` plus
+//! [`EXCHANGE_ABS`] (1e-10 of the weight, *Tolerances*), add the worst point at `θ_S` to `S`
+//! (with two neighbours on its edge when it moved along one, *Iteration bounds*) and repeat (at most [`MAX_EXCHANGES`] times; sooner when no point can move `θ_S`, see *Iteration
+//! bounds*). The answer is `θ_S`; its worst
 //! case is exact (§4), and [`SpatialRobustRecommendation::optimality_gap`] is the certified bound
 //! of how far it can lie above the least worst case over the allowed range. (A stationary
 //! minimum of `R` carried by a moving worst point is approached by curves that touch `R` from
@@ -129,6 +133,53 @@
 //! the region's vertices and its points on the axis. With only the mass uncertain the region is
 //! the nominal centre of mass: the answer is the nominal object's over the tilts of §1 (for
 //! `from_above`, the nominal answer with every force scaled by `(m + Δm)/m`).
+//!
+//! # Tolerances
+//! Every force of §2 is proportional to the weight at the largest mass `W = m_max |g|`, and the
+//! solve works in units of it, so each tolerance is relative to the value plus absolute in units
+//! of `W`. That keeps the solve scale-free (grams and tonnes take the same steps; the unit test
+//! `tiny_normals_and_gravity_give_the_answer_of_unit_ones`), where a fixed number of newtons
+//! would be below the rounding of a heavy object's forces and above a light one's whole weight.
+//! - The exchange (§5) stops at a gap of `1e-9 R(θ_S) + 1e-10 W`. `1e-10 W` is 9.8e-10 N for
+//!   1 kg: six orders below what a gripper's force sensing resolves (about 1e-3 N, 1e-4 of that
+//!   weight), and far above the rounding of forces of order `W` (1e-16 of them). With the
+//!   relative part alone, a least worst squeeze near zero (the internal-force objective, where
+//!   wide cones hold the across forces without squeezing) asked for a gap below rounding: the
+//!   exchange ran to [`MAX_EXCHANGES`], every maximisation near its split limit, 13 s for the
+//!   grasp of the unit test `near_zero_worst_squeeze_stops_at_the_absolute_tolerance`, which now
+//!   answers in 2 exchanges and 271 splits with the same tilt (1e-13 rad) and squeeze (4.6e-13 N).
+//!   The 2-norm is at least `W / sqrt(2)` (§2: `s²/2 + B1² + B2² >= (s² + k²)/2`), so there the
+//!   absolute part adds at most 1.5e-10 of the value.
+//! - The certified maximum (§4) stops at `1e-12 |value| + 1e-12 W`, a hundredth of the exchange's
+//!   tolerance, so the certificate never decides when the exchange stops. Before, its absolute
+//!   floor was `1e-15 W`, about the rounding of the terms themselves, which the interval bounds
+//!   along a nearly flat edge reach only with pieces of 1e-8 of it.
+//! - What a user sees: [`SpatialRobustRecommendation::optimality_gap`] is at most
+//!   `1e-9 gripping_power + 1e-10 W` unless an iteration bound ended the search (the gap then
+//!   says how far it got).
+//!
+//! # Iteration bounds
+//! - The certified maximum (§4): at most `worst::MAX_SPLITS` (5,000) pieces split per
+//!   maximisation, each two evaluations and a heap operation; past it the largest bound left is
+//!   reported, honest but looser. No candidate of `benches/tail.rs` (100,000) comes near it.
+//! - The exchange (§5): at most [`MAX_EXCHANGES`] rounds. It also stops when the worst point at
+//!   `θ_S` is already in `S`, or its curve rises above the envelope at `θ_S` by no more than the
+//!   two evaluations of its value (the closed form of §2 and its planar curve) differ: `R_S` is
+//!   then (nearly) unchanged at `θ_S`, and what is left of the gap is that disagreement, not a
+//!   missing point. That happens near the friction limit, where values reach 1e6 `W` and the two
+//!   (and the envelope's ties) differ by more than 1e-9 of the value; before, such a candidate
+//!   added the same point until [`MAX_EXCHANGES`] (unit test
+//!   `exchange_stops_when_no_point_can_move_its_tilt`: the same answer with 5 and 14 points added
+//!   instead of 60).
+//! - Where the worst point moves along one edge from round to round (a stationary minimum of `R`
+//!   carried by a moving worst point), each point added alone lets `θ_S` jump from side to side
+//!   of the minimum, halving the gap every two rounds. So the two points of that edge half the
+//!   last step either side of the new one are added too (each round adds at most 3 points): any
+//!   point of the region gives a curve below `R`, so the certificate is unchanged, and the gap
+//!   halves every round (27 rounds to 14 for the slowest candidate of `benches/tail.rs`).
+//! - So an answer makes at most `MAX_EXCHANGES + 4 + L` maximisations (`L` the local minima it
+//!   reports), of at most `MAX_SPLITS` splits each; [`SpatialRobustRecommendation::splits`]
+//!   counts them. The envelope's walk is bounded in `planar/robust/envelope.rs`.
 //!
 //! # Status: used by the product for spatial candidates with a centre-of-mass box
 //! What is checked: the closed form of §2 against the planar solver on each object's own plane
@@ -170,18 +221,25 @@ use super::{
     SpatialVerdict,
 };
 use crate::planar::analysis::Analysis;
+use crate::planar::curve::Curve;
 use crate::planar::frame::{GraspFrame, MAX_COORDINATE};
 use crate::planar::paper::FORCE_SCALE;
 use crate::planar::robust::{check_tolerance, periodic_meet, Envelope};
+use crate::sinusoid::Angle;
 use crate::{AllowedRange, Contact, InvalidInput, LocalMinimum, Objective, Settings};
 use nalgebra::{Vector2, Vector3};
 use region::Region;
+use std::cell::Cell;
 use std::f64::consts::FRAC_PI_2;
 use std::fmt;
 use worst::{AxisPoint, AxisView, Quantity, Segment};
 
-/// Stop adding points when the certified gap is at most this fraction of the worst case.
+/// Stop adding points when the certified gap is at most this fraction of the worst case, plus
+/// [`EXCHANGE_ABS`] (module docs §5).
 pub const EXCHANGE: f64 = 1e-9;
+/// The absolute part of the exchange method's tolerance, a fraction of the weight at the largest
+/// mass: 1e-10 `m_max |g|`, 9.8e-10 N for 1 kg (module docs, *Tolerances*).
+pub const EXCHANGE_ABS: f64 = 1e-10;
 /// Most points added by the exchange method; past it the gap reached is reported.
 pub const MAX_EXCHANGES: usize = 60;
 
@@ -390,6 +448,9 @@ pub struct SpatialRobustRecommendation {
     pub mass_worst: f64,
     /// How many points the exchange method used (module docs §5).
     pub samples: usize,
+    /// How many pieces of edges the certified maximisations split in all (module docs §4): the
+    /// work of this answer, bounded (module docs §4).
+    pub splits: usize,
     /// The nominal object's own answer.
     pub nominal: SpatialRecommendation,
 }
@@ -521,6 +582,8 @@ struct Problem {
     weight: f64,
     nominal_weight: f64,
     mass_worst: f64,
+    /// The splits of every maximisation so far (module docs §4).
+    splits: Cell<usize>,
 }
 
 impl Problem {
@@ -606,6 +669,7 @@ impl Problem {
             weight: mass_worst * g_norm,
             nominal_weight: candidate.mass * g_norm,
             mass_worst,
+            splits: Cell::new(0),
         }
     }
 }
@@ -709,6 +773,7 @@ impl Problem {
                 t: 0.0,
                 point: self.center,
                 bound: value,
+                splits: 0,
             };
         }
         let q = if squeeze {
@@ -716,7 +781,9 @@ impl Problem {
         } else {
             self.quantity
         };
-        self.view.worst(q, theta, &self.segments, &self.axis_points)
+        let worst = self.view.worst(q, theta, &self.segments, &self.axis_points);
+        self.splits.set(self.splits.get() + worst.splits);
+        worst
     }
 
     /// A point of the maximisation named as a point of the region.
@@ -763,20 +830,68 @@ impl Problem {
             .map(|a| a.pieces().collect())
             .collect();
         let mut rounds = 0;
+        let mut last: Option<(usize, f64)> = None;
         loop {
             let envelope = Envelope::new(&tracks, lo, hi);
             let theta = envelope.least(allowed, self.current, FORCE_SCALE, 1.0);
             let lower = envelope.value(theta, FORCE_SCALE);
             let worst = self.worst(false, theta);
             let gap = (worst.bound - lower).max(0.0);
-            if gap <= EXCHANGE * worst.value || rounds >= MAX_EXCHANGES {
+            if gap <= EXCHANGE * worst.value + EXCHANGE_ABS || rounds >= MAX_EXCHANGES {
+                return (theta, gap, envelope, points.len());
+            }
+            let Some(track) = self
+                .analysis(&worst.point)
+                .map(|a| a.pieces().collect::<Vec<_>>())
+            else {
+                return (theta, gap, envelope, points.len());
+            };
+            // A point already sampled, or one whose curve does not rise above the envelope at
+            // θ_S, leaves the envelope's least at θ_S: every later round would be this one
+            // again. What is left of the gap is the rounding of the closed form of §2 against
+            // the envelope's curves and its ties (module docs §5, *Iteration bounds*).
+            let value = track_value(&track, theta);
+            if points.contains(&worst.point) || value - lower <= (worst.value - value).abs() {
                 return (theta, gap, envelope, points.len());
             }
             rounds += 1;
             points.push(worst.point);
-            match self.analysis(&worst.point) {
-                Some(a) => tracks.push(a.pieces().collect()),
-                None => return (theta, gap, envelope, points.len()),
+            tracks.push(track);
+            if let (Some(i), Some((j, t_last))) = (worst.segment, last) {
+                if i == j {
+                    self.neighbours(i, worst.t, worst.t - t_last, &mut points, &mut tracks);
+                }
+            }
+            last = worst.segment.map(|i| (i, worst.t));
+        }
+    }
+
+    /// Where the worst point moves along one edge as the exchange goes on (by `step` of the
+    /// edge's parameter in the last round), the points of that edge half a step either side of
+    /// it: their curves touch `R` on both sides of `θ_S`, where the single worst point's curve
+    /// alone lets the next `θ_S` land (module docs §5, *Iteration bounds*). Every point of the
+    /// region gives a curve below `R`, so they only tighten `R_S`.
+    fn neighbours(
+        &self,
+        segment: usize,
+        t: f64,
+        step: f64,
+        points: &mut Vec<AxisPoint>,
+        tracks: &mut Vec<Vec<(f64, f64, Curve)>>,
+    ) {
+        let s = &self.segments[segment];
+        for u in [t - 0.5 * step, t + 0.5 * step] {
+            let u = u.clamp(0.0, 1.0);
+            if u == t || !u.is_finite() {
+                continue;
+            }
+            let p = AxisPoint {
+                xi: s.start.xi + u * (s.end.xi - s.start.xi),
+                across: s.start.across + (s.end.across - s.start.across) * u,
+            };
+            if let Some(a) = self.analysis(&p) {
+                points.push(p);
+                tracks.push(a.pieces().collect());
             }
         }
     }
@@ -842,6 +957,7 @@ impl Problem {
             },
             mass_worst: self.mass_worst,
             samples,
+            splits: self.splits.get(),
             nominal,
         }
     }
@@ -889,6 +1005,16 @@ impl Problem {
         let ((a, b), (c, d)) = (split(0), split(1));
         (value, [a, b, c, d], vectors)
     }
+}
+
+/// The value at `theta` of one object's curve given piece by piece, in the envelope's scale
+/// ([`Envelope::value`]).
+fn track_value(track: &[(f64, f64, Curve)], theta: f64) -> f64 {
+    track
+        .iter()
+        .find(|p| theta <= p.1)
+        .or(track.last())
+        .map_or(f64::NAN, |p| p.2.power(&Angle::new(theta), FORCE_SCALE))
 }
 
 /// The smallest rotation of the object taking the current gravity `g0` to `d` (both unit), as
@@ -1035,7 +1161,7 @@ mod tests {
     }
 
     /// Module docs §4: the certified maximum is attained, is at least every sample of every
-    /// segment, and its bound is within `CERTIFY`.
+    /// segment, and its bound is within `worst::tolerance` of it.
     #[test]
     fn worst_is_at_least_every_sample_of_the_edges() {
         let settings = Settings::default();
@@ -1052,7 +1178,7 @@ mod tests {
                 for q in [Quantity::Norm2, Quantity::Squeeze] {
                     let w = p.view.worst(q, theta, &p.segments, &p.axis_points);
                     assert!(
-                        w.bound <= w.value * (1.0 + 2.0 * worst::CERTIFY) + 1e-15,
+                        w.bound <= w.value + 2.0 * worst::tolerance(w.value),
                         "grasp {k} θ {theta} {q:?}: {} bound {}",
                         w.value,
                         w.bound
@@ -1080,5 +1206,243 @@ mod tests {
             }
         }
         assert!(inside > 0, "some worst case lies inside an edge");
+    }
+
+    /// A slow candidate of `benches/tail.rs` or of a search over grasps like those of `grasp`,
+    /// with the answer the code before the absolute tolerances gave (tilt, rad; worst objective
+    /// or squeeze, N; its optimality gap, N).
+    struct Slow {
+        candidate: SpatialCandidate,
+        uncertainty: SpatialUncertainty,
+        settings: Settings,
+        theta: f64,
+        worst: f64,
+        gap: f64,
+    }
+
+    fn v(x: f64, y: f64, z: f64) -> Vector3<f64> {
+        Vector3::new(x, y, z)
+    }
+
+    fn settings(objective: Objective, range: AllowedRange) -> Settings {
+        Settings {
+            objective,
+            range,
+            friction_safety_factor: 1.0,
+        }
+    }
+
+    /// Two grasps whose least worst squeeze is nearly zero (2.4e-12 N and 3.2e-12 N for 1 kg):
+    /// before, 13.1 s and 3.4 s, 848,650 and 432,890 splits, 60 exchanges each.
+    fn near_zero() -> [Slow; 2] {
+        let on_x =
+            |n1: Vector3<f64>, n2: Vector3<f64>, mu: [f64; 2], c: Vector3<f64>| SpatialCandidate {
+                contact_1: v(0.5, 0.0, 0.0),
+                contact_2: v(-0.5, 0.0, 0.0),
+                normal_1: n1,
+                normal_2: n2,
+                friction_1: mu[0],
+                friction_2: mu[1],
+                center_of_mass: c,
+                mass: 1.0,
+                gravity: v(0.0, 0.0, -9.81),
+            };
+        let box_only = |t: Vector3<f64>| SpatialUncertainty {
+            center_of_mass_tolerance: t,
+            mass_tolerance: 0.0,
+        };
+        let squeeze = settings(Objective::InternalForce, AllowedRange::FromAbove);
+        [
+            Slow {
+                candidate: on_x(
+                    v(
+                        -0.6815505217213076,
+                        -0.07242003458118966,
+                        0.7281787039818404,
+                    ),
+                    v(
+                        0.9500655588463088,
+                        -0.27151487552663317,
+                        0.15380216598542368,
+                    ),
+                    [2.6557311296951367, 2.8237716723701576],
+                    v(
+                        -0.10530261081942052,
+                        0.06744281348838999,
+                        -0.25338512008042935,
+                    ),
+                ),
+                uncertainty: box_only(v(
+                    0.018852004023307157,
+                    0.05779785540169908,
+                    0.1334933618506316,
+                )),
+                settings: squeeze,
+                theta: -0.20833619399952674,
+                worst: 2.4107865703726363e-12,
+                gap: 9.042170769802352e-15,
+            },
+            Slow {
+                candidate: on_x(
+                    v(-0.7737229617873674, 0.16951864688963342, 0.6104229736499862),
+                    v(
+                        0.9996627730722427,
+                        0.015832826018956688,
+                        -0.02058304529867066,
+                    ),
+                    [2.730273375802295, 2.8415419211549255],
+                    v(0.18397766953444217, 0.0, -0.3732619286966661),
+                ),
+                uncertainty: box_only(v(
+                    0.12533002197510593,
+                    0.04859973371867802,
+                    0.14544780395194531,
+                )),
+                settings: squeeze,
+                theta: -0.2767464724034294,
+                worst: 3.1955038615194554e-12,
+                gap: 9.779493863340376e-15,
+            },
+        ]
+    }
+
+    /// Two random candidates of `benches/tail.rs` (#8792 and #7057 of 10,000) near their friction
+    /// limits (worst cases of 6e6 and 3e4 weights), where the closed form and the envelope's
+    /// curves differ by more than 1e-9 of the value: before, 60 exchanges each, the same point
+    /// added again from the sixth and the ninth on (17 ms and 16 ms).
+    fn stalled() -> [Slow; 2] {
+        [
+            Slow {
+                candidate: SpatialCandidate {
+                    contact_1: v(
+                        -1.1574751372189247,
+                        -0.19217043114056687,
+                        0.38937497679891575,
+                    ),
+                    contact_2: v(-0.6808526915378249, -1.2532419930319527, 0.470093511767125),
+                    normal_1: v(5.6384536440844295, -1.5475668434245964, -4.178425842080429),
+                    normal_2: v(-1.0439514926140983, 0.8059377811084422, 0.523303758841005),
+                    friction_1: 1.8457809785157102,
+                    friction_2: 0.7705562784004047,
+                    center_of_mass: v(
+                        -1.2149217611679903,
+                        -1.263057387385236,
+                        -0.05271830066805705,
+                    ),
+                    mass: 0.19478281224264662,
+                    gravity: v(10.32822757158938, 2.6231222872542594, -3.533838044566626),
+                },
+                uncertainty: SpatialUncertainty {
+                    center_of_mass_tolerance: v(
+                        0.3285526076281989,
+                        0.29987471628323575,
+                        0.15696614367656203,
+                    ),
+                    mass_tolerance: 0.02144190228808399,
+                },
+                settings: settings(Objective::Norm2, AllowedRange::Graspable),
+                theta: -0.9058400928580875,
+                worst: 1.2319644428713254e6,
+                gap: 1.7167989416105476e-3,
+            },
+            Slow {
+                candidate: SpatialCandidate {
+                    contact_1: v(
+                        -0.35555005168395126,
+                        -1.3960802994854324,
+                        0.5316673674899104,
+                    ),
+                    contact_2: v(-0.24847967096433804, -1.511068468207179, 0.5008542388780519),
+                    normal_1: v(0.20889315338557216, -0.9137321244483038, -2.011038268922028),
+                    normal_2: v(-0.12522124598822784, 0.126065726927939, 0.01260070716404045),
+                    friction_1: 1.5882557096741559,
+                    friction_2: 0.12763932692758997,
+                    center_of_mass: v(-0.3636958059404188, -1.4832912499306736, 0.537686013987476),
+                    mass: 22.537203552058187,
+                    gravity: v(9.043802656199327, 3.178870681810648, 3.5678849579373537),
+                },
+                uncertainty: SpatialUncertainty {
+                    center_of_mass_tolerance: v(
+                        0.040722356533697934,
+                        0.04132116257966973,
+                        0.005015202613254787,
+                    ),
+                    mass_tolerance: 3.971054276253289,
+                },
+                settings: settings(Objective::InternalForce, AllowedRange::Graspable),
+                theta: -0.6388369768524306,
+                worst: 8.403534968804736e6,
+                gap: 5.3825707519851634e-2,
+            },
+        ]
+    }
+
+    fn solved(s: &Slow) -> SpatialRobustRecommendation {
+        match solve_spatial_robust(&s.candidate, &s.uncertainty, &s.settings) {
+            Ok(SpatialRobustVerdict::Recommended(r)) => *r,
+            other => panic!("{other:?}"),
+        }
+    }
+
+    /// The points the exchange method added to the region's vertices and axis points (the worst
+    /// point of each round and its neighbours).
+    fn exchanges(r: &SpatialRobustRecommendation) -> usize {
+        r.samples - r.region.len() - usize::from(r.axis_segment.is_some()) * 2
+    }
+
+    /// Module docs, *Tolerances*: a least worst squeeze near zero stops at the absolute
+    /// tolerance, within the iteration counts of ordinary candidates (a few hundred splits, a
+    /// few exchanges), at the tilt and squeeze of before to well within the tolerance.
+    #[test]
+    fn near_zero_worst_squeeze_stops_at_the_absolute_tolerance() {
+        for (k, s) in near_zero().iter().enumerate() {
+            let r = solved(s);
+            let tol = EXCHANGE_ABS * r.mass_worst * s.candidate.gravity.norm();
+            println!(
+                "near zero {k}: θ {:.17} squeeze {:e} N gap {:e} N, {} splits, {} exchanges",
+                r.gravity_angle,
+                r.internal_force,
+                r.optimality_gap,
+                r.splits,
+                exchanges(&r)
+            );
+            assert!(r.splits <= 2_000, "{k}: {} splits", r.splits);
+            assert!(exchanges(&r) <= 10, "{k}: {} exchanges", exchanges(&r));
+            assert!(r.optimality_gap <= tol, "{k}");
+            // Within the tolerance (1e-10 of the weight, 9.8e-10 N here) of the answer before.
+            assert!((r.internal_force - s.worst).abs() <= tol + s.gap, "{k}");
+            assert!((r.gravity_angle - s.theta).abs() <= 1e-9, "{k}");
+        }
+    }
+
+    /// Module docs §5, *Iteration bounds*: when the worst point at θ_S is already a sample, or
+    /// its curve does not rise above the envelope there by more than its two evaluations differ,
+    /// the exchange stops instead of adding it again until [`MAX_EXCHANGES`] (60 points before);
+    /// the answer is the one of before.
+    #[test]
+    fn exchange_stops_when_no_point_can_move_its_tilt() {
+        for (k, s) in stalled().iter().enumerate() {
+            let r = solved(s);
+            let value = match s.settings.objective {
+                Objective::InternalForce => r.internal_force,
+                _ => r.gripping_power,
+            };
+            println!(
+                "stalled {k}: θ {:.17} worst {value:e} N gap {:e} N, {} splits, {} exchanges",
+                r.gravity_angle,
+                r.optimality_gap,
+                r.splits,
+                exchanges(&r)
+            );
+            assert!(exchanges(&r) <= 20, "{k}: {} exchanges", exchanges(&r));
+            assert!(r.splits <= 2_000, "{k}: {} splits", r.splits);
+            assert!(
+                (value - s.worst).abs() <= 1e-9 * s.worst,
+                "{k}: {value} {}",
+                s.worst
+            );
+            assert!(r.optimality_gap <= s.gap.max(1e-9 * value), "{k}");
+            assert!((r.gravity_angle - s.theta).abs() <= 1e-9, "{k}");
+        }
     }
 }
