@@ -1,0 +1,462 @@
+//! A pose candidate answered: the gripper pose and opening on the object → the two contacts, their
+//! inward normals and the centre of mass (`grasp_orient_geometry`) → the spatial candidate those
+//! make, answered as any [`GraspCandidate`] of model 1 is ([`answer_one`]) → the answer with the
+//! derived geometry, all in the candidate's header frame (`docs/poses.md`).
+//!
+//! # Policy
+//! - The object gives exactly one shape: `mesh` (a resource, loaded once per file and scale into
+//!   the [`PoseAnswerer`]'s cache), `inline_mesh`, or `primitive`. A primitive's dimensions are
+//!   metres: its `scale` must be 1 on every axis.
+//! - Both contacts take the object's `friction`; the centre of mass is `center_of_mass` (object
+//!   frame) when `has_center_of_mass`, else the shape's centroid. A `center_of_mass` other than
+//!   zero with `has_center_of_mass` false is refused: it was meant, and would be ignored.
+//! - Quaternions are normalised; one of norm zero or not finite is refused, naming the field.
+//! - A finger that closes on nothing: status 1, naming the finger. Everything else the geometry
+//!   refuses (an opening narrower than the object, an unreadable or open mesh without a centre
+//!   of mass, a bad scale or primitive): status 2, naming the resource or field.
+//! - **Edges and vertices** are answered, not refused: the contact takes the pseudo-normal
+//!   (`crates/geometry/src/cast.rs`), and `message` says which contact lies on an edge or a
+//!   vertex, so a caller who wants a face contact can drop it. A point finger on a convex edge is
+//!   a real grasp; the pseudo-normal is the middle of the normals the edge allows.
+//! - A set: its object's shape resolved once, each pose answered against it, and the answers
+//!   ranked by [`answer_set`] exactly as a [`GraspCandidateSet`]'s (the gripper's limit, the
+//!   set's `max_grip_force`, `max_set_size`), a pose refused by the geometry never ranked.
+
+use super::{answer_one, answer_set, Rules};
+use crate::msg::convert::no_closure;
+use crate::msg::{
+    invalid, CompactString, GraspCandidate, GraspCandidateSet, GraspObject, GripRecommendation,
+    Header, Point, Pose, PoseCandidate, PoseCandidateSet, PoseRecommendation,
+    PoseRecommendationSet, Vector3,
+};
+use crate::solver::Settings;
+use grasp_orient_geometry::{
+    grasp_from_pose, AmentIndex, ClosingAxis, Contact, Feature, GeometryError, Grasp, GripperPose,
+    MeshCache, Object, Primitive, Shape,
+};
+use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion};
+
+/// The most bytes of meshes a [`PoseAnswerer`] keeps loaded (least recently used dropped first).
+pub const MESH_CACHE_BYTES: usize = 512 << 20;
+
+/// Why a pose candidate cannot be turned into a grasp.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PoseRefusal {
+    /// The geometry's refusal: status 1 for a finger that closes on nothing, 2 otherwise.
+    #[error(transparent)]
+    Geometry(#[from] GeometryError),
+    /// Not exactly one of `mesh`, `inline_mesh` and `primitive` is given.
+    #[error("object: give exactly one shape (mesh, inline_mesh or primitive), got {given}")]
+    Shapes {
+        /// The shapes given, by field name (empty for none).
+        given: String,
+    },
+    /// A primitive with a scale other than 1.
+    #[error(
+        "object.scale must be 1 on every axis for a primitive (its dimensions are metres), got \
+         [{}, {}, {}]", .scale[0], .scale[1], .scale[2]
+    )]
+    PrimitiveScale {
+        /// The scale given.
+        scale: [f64; 3],
+    },
+    /// A quaternion that is no rotation.
+    #[error("{field} is not a rotation: its norm is {norm}")]
+    Orientation {
+        /// `grasp_pose.orientation`, `object.pose.orientation`, `poses[i].grasp_pose.orientation`.
+        field: String,
+        /// Its norm.
+        norm: f64,
+    },
+    /// `center_of_mass` given without `has_center_of_mass`.
+    #[error(
+        "object.center_of_mass is given but object.has_center_of_mass is false: set it true, or \
+         leave center_of_mass at zero for the shape's centroid"
+    )]
+    CenterOfMassFlag,
+}
+
+impl PoseRefusal {
+    /// The status of the answer: 1 when a finger closes on nothing, 2 otherwise.
+    pub fn status(&self) -> u8 {
+        match self {
+            PoseRefusal::Geometry(e) => e.status(),
+            _ => GripRecommendation::STATUS_INVALID_INPUT,
+        }
+    }
+}
+
+/// Answers pose candidates: the closing axis, and the meshes loaded so far (each file at each
+/// scale once, `package://` through the ament index it was made with).
+#[derive(Debug)]
+pub struct PoseAnswerer {
+    closing_axis: ClosingAxis,
+    meshes: MeshCache,
+}
+
+impl PoseAnswerer {
+    /// Closing along `closing_axis`, `package://` resolved through `index`.
+    pub fn new(closing_axis: ClosingAxis, index: AmentIndex) -> Self {
+        Self {
+            closing_axis,
+            meshes: MeshCache::new(index, MESH_CACHE_BYTES),
+        }
+    }
+
+    /// Closing along `closing_axis`, `package://` through `AMENT_PREFIX_PATH`.
+    pub fn from_env(closing_axis: ClosingAxis) -> Self {
+        Self::new(closing_axis, AmentIndex::from_env())
+    }
+
+    /// The meshes loaded so far.
+    pub fn meshes(&self) -> &MeshCache {
+        &self.meshes
+    }
+
+    /// The answer to one pose candidate under `rules`.
+    pub fn answer(
+        &self,
+        m: &PoseCandidate,
+        settings: &Settings,
+        rules: &Rules,
+    ) -> PoseRecommendation {
+        match self.place(m) {
+            Ok((candidate, grasp)) => finish(answer_one(&candidate, settings, rules), &grasp),
+            Err(why) => target_of(m).refused(&why),
+        }
+    }
+
+    /// The spatial candidate a pose candidate's fingers make, or the answer that refuses it
+    /// (status 1 or 2): for a caller that answers it among other candidates (`rank`).
+    pub fn spatial_candidate(
+        &self,
+        m: &PoseCandidate,
+    ) -> Result<GraspCandidate, Box<GripRecommendation>> {
+        self.place(m)
+            .map(|(candidate, _)| candidate)
+            .map_err(|why| Box::new(target_of(m).refused(&why).recommendation))
+    }
+
+    /// The candidate and the grasp of a pose candidate.
+    fn place(&self, m: &PoseCandidate) -> Result<(GraspCandidate, Grasp), Refused> {
+        let object = self.object(&m.object)?;
+        let grasp = self.grasp(&m.grasp_pose, "grasp_pose", m.width, &object, &m.object)?;
+        Ok((target_of(m).candidate(&grasp), grasp))
+    }
+
+    /// The answer to a set: its object's shape once, each pose answered against it, ranked as a
+    /// [`GraspCandidateSet`] is.
+    pub fn answer_set(
+        &self,
+        set: &PoseCandidateSet,
+        settings: &Settings,
+        rules: &Rules,
+    ) -> PoseRecommendationSet {
+        let target = |id| Target {
+            header: &set.header,
+            id,
+            object: &set.object,
+            gravity: &set.gravity,
+        };
+        // A set refused whole (too large) is not worth the geometry.
+        let placed: Vec<Result<Grasp, Refused>> = if set.poses.len() > rules.max_set_size {
+            Vec::new()
+        } else {
+            let object = self.object(&set.object).map_err(Refused::from);
+            set.poses
+                .iter()
+                .enumerate()
+                .map(|(i, p)| {
+                    let object = object.as_ref().map_err(Refused::clone)?;
+                    let field = format!("poses[{i}].grasp_pose");
+                    self.grasp(&p.grasp_pose, &field, p.width, object, &set.object)
+                        .map_err(Refused::from)
+                })
+                .collect()
+        };
+        let candidates = set
+            .poses
+            .iter()
+            .zip(&placed)
+            .map(|(p, g)| match g {
+                Ok(grasp) => target(&p.id).candidate(grasp),
+                // Refused below; the solver refuses it too, so it is never ranked.
+                Err(_) => GraspCandidate {
+                    header: set.header.clone(),
+                    id: p.id.clone(),
+                    ..GraspCandidate::default()
+                },
+            })
+            .collect();
+        let answered = answer_set(
+            &GraspCandidateSet {
+                header: set.header.clone(),
+                id: set.id.clone(),
+                candidates,
+                max_grip_force: set.max_grip_force,
+            },
+            settings,
+            rules,
+        );
+        let recommendations = answered
+            .recommendations
+            .into_iter()
+            .zip(set.poses.iter().zip(&placed))
+            .map(|(reply, (p, g))| match g {
+                Ok(grasp) => finish(reply, grasp),
+                Err(why) => target(&p.id).refused(why),
+            })
+            .collect();
+        PoseRecommendationSet {
+            header: answered.header,
+            set_id: answered.set_id,
+            recommendations,
+            ranking: answered.ranking,
+            ranked_by: answered.ranked_by,
+            status: answered.status,
+            message: answered.message,
+        }
+    }
+
+    /// The object's pose and shape, checked.
+    fn object(&self, o: &GraspObject) -> Result<Object, PoseRefusal> {
+        let pose = isometry(&o.pose, "object.pose")?;
+        let scale = [o.scale.x, o.scale.y, o.scale.z];
+        let mut given = Vec::new();
+        if !o.mesh.is_empty() {
+            given.push("mesh");
+        }
+        if !o.inline_mesh.triangles.is_empty() || !o.inline_mesh.vertices.is_empty() {
+            given.push("inline_mesh");
+        }
+        if o.primitive.kind != 0 || !o.primitive.dimensions.is_empty() {
+            given.push("primitive");
+        }
+        let shape: Shape = match given.as_slice() {
+            ["mesh"] => self.meshes.get(&o.mesh, scale)?.into(),
+            ["inline_mesh"] => {
+                let vertices: Vec<[f64; 3]> = o
+                    .inline_mesh
+                    .vertices
+                    .iter()
+                    .map(|v| [v.x, v.y, v.z])
+                    .collect();
+                let triangles: Vec<[u32; 3]> = o
+                    .inline_mesh
+                    .triangles
+                    .iter()
+                    .map(|t| t.vertex_indices)
+                    .collect();
+                grasp_orient_geometry::Mesh::from_triangles(
+                    "inline_mesh",
+                    &vertices,
+                    &triangles,
+                    scale,
+                )?
+                .into()
+            }
+            ["primitive"] => {
+                if scale != [1.0; 3] {
+                    return Err(PoseRefusal::PrimitiveScale { scale });
+                }
+                Primitive::from_shape_msgs(o.primitive.kind, &o.primitive.dimensions)?.into()
+            }
+            _ => {
+                return Err(PoseRefusal::Shapes {
+                    given: given.join(", "),
+                })
+            }
+        };
+        Ok(Object { pose, shape })
+    }
+
+    /// The contacts and centre of mass of one gripper pose on the object.
+    fn grasp(
+        &self,
+        tool: &Pose,
+        field: &str,
+        width: f64,
+        object: &Object,
+        o: &GraspObject,
+    ) -> Result<Grasp, PoseRefusal> {
+        let c = &o.center_of_mass;
+        let given = if o.has_center_of_mass {
+            Some(Point3::new(c.x, c.y, c.z))
+        } else if (c.x, c.y, c.z) != (0.0, 0.0, 0.0) {
+            return Err(PoseRefusal::CenterOfMassFlag);
+        } else {
+            None
+        };
+        let gripper = GripperPose {
+            tool_pose: isometry(tool, field)?,
+            width,
+            closing_axis: self.closing_axis,
+        };
+        Ok(grasp_from_pose(&gripper, object, given)?)
+    }
+}
+
+/// A refusal as an answer gives it: its status and words (the geometry's errors hold an
+/// `io::Error`, which does not clone, and a set's object refused is every pose's refusal).
+#[derive(Debug, Clone)]
+struct Refused {
+    status: u8,
+    message: String,
+}
+
+impl From<PoseRefusal> for Refused {
+    fn from(e: PoseRefusal) -> Self {
+        Refused {
+            status: e.status(),
+            message: e.to_string(),
+        }
+    }
+}
+
+/// A pose candidate's header, id, object and gravity.
+fn target_of(m: &PoseCandidate) -> Target<'_> {
+    Target {
+        header: &m.header,
+        id: &m.id,
+        object: &m.object,
+        gravity: &m.gravity,
+    }
+}
+
+/// What a candidate of a pose shares with its set: header, object and gravity, and its own id.
+struct Target<'a> {
+    header: &'a Header,
+    id: &'a CompactString,
+    object: &'a GraspObject,
+    gravity: &'a Vector3,
+}
+
+impl Target<'_> {
+    /// The spatial candidate the fingers make.
+    fn candidate(&self, grasp: &Grasp) -> GraspCandidate {
+        let [c1, c2] = &grasp.contacts;
+        GraspCandidate {
+            header: self.header.clone(),
+            id: self.id.clone(),
+            contact_1: point(&c1.point),
+            contact_2: point(&c2.point),
+            normal_1: vector(&c1.normal),
+            normal_2: vector(&c2.normal),
+            friction_1: self.object.friction,
+            friction_2: self.object.friction,
+            center_of_mass: point(&grasp.center_of_mass),
+            mass: self.object.mass,
+            gravity: self.gravity.clone(),
+            model: GraspCandidate::MODEL_SPATIAL,
+            ..GraspCandidate::default()
+        }
+    }
+
+    /// The answer to a pose the geometry refuses: status 1 or 2, no geometry (NaN).
+    fn refused(&self, why: &Refused) -> PoseRecommendation {
+        let stub = GraspCandidate {
+            header: self.header.clone(),
+            id: self.id.clone(),
+            ..GraspCandidate::default()
+        };
+        let recommendation = if why.status == GripRecommendation::STATUS_NO_FORCE_CLOSURE {
+            no_closure(&stub, &why.message)
+        } else {
+            invalid(&stub, &why.message)
+        };
+        let nan = Point {
+            x: f64::NAN,
+            y: f64::NAN,
+            z: f64::NAN,
+        };
+        let nan_vector = Vector3 {
+            x: f64::NAN,
+            y: f64::NAN,
+            z: f64::NAN,
+        };
+        PoseRecommendation {
+            recommendation,
+            contact_1: nan.clone(),
+            contact_2: nan.clone(),
+            normal_1: nan_vector.clone(),
+            normal_2: nan_vector,
+            center_of_mass: nan,
+        }
+    }
+}
+
+/// The answer with the grasp's geometry, and a note on a contact at an edge or a vertex.
+fn finish(mut reply: GripRecommendation, grasp: &Grasp) -> PoseRecommendation {
+    let [c1, c2] = &grasp.contacts;
+    let notes: Vec<String> = [("contact_1", c1), ("contact_2", c2)]
+        .into_iter()
+        .filter_map(|(name, c)| feature_note(name, c))
+        .collect();
+    if !notes.is_empty() {
+        let mut message = reply.message.to_string();
+        for note in notes {
+            if !message.is_empty() {
+                message.push_str("; ");
+            }
+            message.push_str(&note);
+        }
+        reply.message = message.into();
+    }
+    PoseRecommendation {
+        recommendation: reply,
+        contact_1: point(&c1.point),
+        contact_2: point(&c2.point),
+        normal_1: vector(&c1.normal),
+        normal_2: vector(&c2.normal),
+        center_of_mass: point(&grasp.center_of_mass),
+    }
+}
+
+/// What `message` says of a contact on an edge or a vertex.
+fn feature_note(name: &str, c: &Contact) -> Option<String> {
+    let feature = match c.feature {
+        Feature::Face => return None,
+        Feature::Edge => "an edge",
+        Feature::Vertex => "a vertex",
+    };
+    Some(format!(
+        "{name} lies on {feature} of the object: its normal is the pseudo-normal there \
+         (docs/poses.md)"
+    ))
+}
+
+/// A pose as an isometry, its quaternion normalised; `field` names it when the quaternion is no
+/// rotation. A translation not finite is left to the geometry, which names it.
+fn isometry(p: &Pose, field: &str) -> Result<Isometry3<f64>, PoseRefusal> {
+    let o = &p.orientation;
+    let q = Quaternion::new(o.w, o.x, o.y, o.z);
+    let norm = q.norm();
+    if !(norm.is_finite() && norm > 0.0) {
+        return Err(PoseRefusal::Orientation {
+            field: format!("{field}.orientation"),
+            norm,
+        });
+    }
+    let t = &p.position;
+    Ok(Isometry3::from_parts(
+        Translation3::new(t.x, t.y, t.z),
+        UnitQuaternion::from_quaternion(q),
+    ))
+}
+
+fn point(p: &Point3<f64>) -> Point {
+    Point {
+        x: p.x,
+        y: p.y,
+        z: p.z,
+    }
+}
+
+fn vector(v: &nalgebra::UnitVector3<f64>) -> Vector3 {
+    Vector3 {
+        x: v.x,
+        y: v.y,
+        z: v.z,
+    }
+}
