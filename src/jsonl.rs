@@ -4,7 +4,7 @@
 //! UTF-8, not JSON or not a candidate gets status 2 with its line number, and the lines after it
 //! are answered as usual. Memory is bounded by the longest line.
 
-use crate::answer::{answer_one, PoseAnswerer, Rules};
+use crate::answer::{answer_one, without_geometry, PoseAnswerer, Rules};
 use crate::msg::{invalid, GraspCandidate, GripRecommendation, PoseCandidate, PoseRecommendation};
 use crate::solver::Settings;
 use std::io::{BufRead, Read, Write};
@@ -265,10 +265,7 @@ pub fn answer_any_line(
     };
     let mut reply = match parse::<PoseCandidate>(text) {
         Ok(candidate) => poses.answer(&candidate, settings, rules),
-        Err(e) => PoseRecommendation {
-            recommendation: invalid(&partial(text), &e),
-            ..PoseRecommendation::default()
-        },
+        Err(e) => without_geometry(invalid(&partial(text), &e)),
     };
     let r = &mut reply.recommendation;
     if r.status == GripRecommendation::STATUS_INVALID_INPUT {

@@ -20,7 +20,7 @@ mod pose;
 mod sets;
 
 pub use candidate::{answer, answer_in_full, Answered};
-pub use pose::{PoseAnswerer, PoseRefusal, MESH_CACHE_BYTES};
+pub use pose::{without_geometry, PoseAnswerer, PoseRefusal, MESH_CACHE_BYTES};
 pub use sets::{
     answer_one, answer_one_in_full, answer_set, answer_set_on, apply_limit, echo_set, is_sorted_by,
     rank, solver_pool, DefaultTolerances, GripperDrive, PoolRefused, RankBy, Rules,

@@ -360,29 +360,36 @@ impl Target<'_> {
             id: self.id.clone(),
             ..GraspCandidate::default()
         };
-        let recommendation = if why.status == GripRecommendation::STATUS_NO_FORCE_CLOSURE {
-            no_closure(&stub, &why.message)
-        } else {
-            invalid(&stub, &why.message)
-        };
-        let nan = Point {
-            x: f64::NAN,
-            y: f64::NAN,
-            z: f64::NAN,
-        };
-        let nan_vector = Vector3 {
-            x: f64::NAN,
-            y: f64::NAN,
-            z: f64::NAN,
-        };
-        PoseRecommendation {
-            recommendation,
-            contact_1: nan.clone(),
-            contact_2: nan.clone(),
-            normal_1: nan_vector.clone(),
-            normal_2: nan_vector,
-            center_of_mass: nan,
-        }
+        without_geometry(
+            if why.status == GripRecommendation::STATUS_NO_FORCE_CLOSURE {
+                no_closure(&stub, &why.message)
+            } else {
+                invalid(&stub, &why.message)
+            },
+        )
+    }
+}
+
+/// The answer to a pose candidate refused before it had contacts: the refusal, and NaN for the
+/// geometry.
+pub fn without_geometry(recommendation: GripRecommendation) -> PoseRecommendation {
+    let nan = Point {
+        x: f64::NAN,
+        y: f64::NAN,
+        z: f64::NAN,
+    };
+    let nan_vector = Vector3 {
+        x: f64::NAN,
+        y: f64::NAN,
+        z: f64::NAN,
+    };
+    PoseRecommendation {
+        recommendation,
+        contact_1: nan.clone(),
+        contact_2: nan.clone(),
+        normal_1: nan_vector.clone(),
+        normal_2: nan_vector,
+        center_of_mass: nan,
     }
 }
 

@@ -730,7 +730,7 @@ fn every_refusal_names_its_cause_and_the_next_line_is_answered() {
         (
             cube_line("bad field", json!({"friction": "high"}), [0.0; 3], 0.1),
             2,
-            vec!["field object.friction"],
+            vec!["field object.friction", "expected a number"],
         ),
     ];
     let good = cube_line("good", json!({}), [0.0, 0.0, 0.01], 0.1);
@@ -765,7 +765,46 @@ fn every_refusal_names_its_cause_and_the_next_line_is_answered() {
         }
         assert_eq!(next["status"], 0, "{next}");
         assert_eq!(next["candidate_id"], "good");
+        assert!(out[2 * k]["contact_1"]["x"].is_null(), "{}", out[2 * k]);
     }
+}
+
+/// `rank` of candidate lines mixes GraspCandidates and PoseCandidates in one set; a pose the
+/// geometry refuses keeps its status (1 here) and is not ranked.
+#[test]
+fn rank_mixes_grasp_and_pose_candidate_lines() {
+    let paper = crate::util::run::paper_lines();
+    let input = format!(
+        "{}\n{paper}{}\n",
+        cube_line("cube", json!({}), [0.0, 0.0, 0.01], 0.1),
+        cube_line("nothing", json!({}), [0.0, 0.0, 0.5], 0.1),
+    );
+    let (out, _) = run("rank", &["--json"], &input, &[]);
+    let recommendations = out[0]["recommendations"].as_array().expect("a list");
+    assert_eq!(recommendations.len(), 6);
+    assert_eq!(recommendations[0]["candidate_id"], "cube");
+    assert_eq!(recommendations[0]["status"], 0, "{}", recommendations[0]);
+    assert_eq!(
+        recommendations[0]["rotation_axis"]["z"]
+            .as_f64()
+            .map(f64::abs),
+        Some(0.0)
+    );
+    let last = &recommendations[5];
+    assert_eq!(
+        (last["candidate_id"].as_str(), last["status"].as_u64()),
+        (Some("nothing"), Some(1))
+    );
+    assert!(last["message"]
+        .as_str()
+        .is_some_and(|m| m.contains("finger 1 closes on nothing")));
+    let ranking: Vec<u64> = out[0]["ranking"]
+        .as_array()
+        .expect("a ranking")
+        .iter()
+        .filter_map(Value::as_u64)
+        .collect();
+    assert!(ranking.contains(&0) && !ranking.contains(&5), "{ranking:?}");
 }
 
 /// A closing line through an edge of the box is answered, with the pseudo-normal and a note.
