@@ -175,20 +175,25 @@ impl PoseAnswerer {
                 })
                 .collect()
         };
-        let candidates = set
-            .poses
-            .iter()
-            .zip(&placed)
-            .map(|(p, g)| match g {
-                Ok(grasp) => target(&p.id).candidate(grasp),
-                // Refused below; the solver refuses it too, so it is never ranked.
-                Err(_) => GraspCandidate {
-                    header: set.header.clone(),
-                    id: p.id.clone(),
-                    ..GraspCandidate::default()
-                },
-            })
-            .collect();
+        let candidates = if placed.is_empty() {
+            // As many as the poses, for answer_set to refuse the set as too large (or to answer
+            // an empty one).
+            vec![GraspCandidate::default(); set.poses.len()]
+        } else {
+            set.poses
+                .iter()
+                .zip(&placed)
+                .map(|(p, g)| match g {
+                    Ok(grasp) => target(&p.id).candidate(grasp),
+                    // Refused below; the solver refuses it too, so it is never ranked.
+                    Err(_) => GraspCandidate {
+                        header: set.header.clone(),
+                        id: p.id.clone(),
+                        ..GraspCandidate::default()
+                    },
+                })
+                .collect()
+        };
         let answered = answer_set(
             &GraspCandidateSet {
                 header: set.header.clone(),
@@ -465,5 +470,171 @@ fn vector(v: &nalgebra::UnitVector3<f64>) -> Vector3 {
         x: v.x,
         y: v.y,
         z: v.z,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::msg::{GraspPose, MeshTriangle, Quaternion};
+
+    fn pose(x: f64, y: f64, z: f64) -> Pose {
+        Pose {
+            position: Point { x, y, z },
+            orientation: Quaternion {
+                x: 0.0,
+                y: 0.0,
+                z: 0.0,
+                w: 1.0,
+            },
+        }
+    }
+
+    /// A 40 mm cube in millimetres as an ASCII STL, corner at the origin.
+    fn write_cube(path: &std::path::Path) {
+        let c = |i: usize| {
+            [
+                40.0 * (i & 1) as f64,
+                40.0 * ((i >> 1) & 1) as f64,
+                40.0 * ((i >> 2) & 1) as f64,
+            ]
+        };
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let mut text = String::from("solid cube\n");
+        for q in quads {
+            for t in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
+                text.push_str(" facet normal 0 0 0\n  outer loop\n");
+                for i in t {
+                    let [x, y, z] = c(i);
+                    text.push_str(&format!("   vertex {x} {y} {z}\n"));
+                }
+                text.push_str("  endloop\n endfacet\n");
+            }
+        }
+        text.push_str("endsolid cube\n");
+        std::fs::write(path, text).expect("write the cube");
+    }
+
+    fn set_on(mesh: &str, poses: usize) -> PoseCandidateSet {
+        PoseCandidateSet {
+            id: "set".into(),
+            object: GraspObject {
+                pose: pose(0.0, 0.0, 0.0),
+                mesh: mesh.into(),
+                scale: Vector3 {
+                    x: 0.001,
+                    y: 0.001,
+                    z: 0.001,
+                },
+                mass: 0.2,
+                friction: 0.8,
+                ..GraspObject::default()
+            },
+            poses: (0..poses)
+                .map(|i| GraspPose {
+                    id: format!("p{i}").into(),
+                    grasp_pose: pose(0.02, 0.02, 0.01 + 0.004 * i as f64),
+                    width: 0.1,
+                })
+                .collect(),
+            gravity: Vector3 {
+                x: 0.0,
+                y: 0.0,
+                z: -9.81,
+            },
+            ..PoseCandidateSet::default()
+        }
+    }
+
+    #[test]
+    fn a_set_loads_its_mesh_once_and_a_refused_object_refuses_every_pose() {
+        let dir = tempfile::tempdir().expect("a folder");
+        let path = dir.path().join("cube.stl");
+        write_cube(&path);
+        let answerer = PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default());
+        let set = set_on(&path.display().to_string(), 5);
+        let (settings, rules) = (Settings::default(), Rules::default());
+        let answer = answerer.answer_set(&set, &settings, &rules);
+        assert_eq!(answer.recommendations.len(), 5);
+        assert_eq!(answer.ranking.len(), 5, "{answer:?}");
+        for r in &answer.recommendations {
+            assert_eq!(r.recommendation.status, 0, "{}", r.recommendation.message);
+            assert!((r.contact_1.y - 0.0).abs() < 1e-15 && (r.contact_2.y - 0.04).abs() < 1e-15);
+            assert!((r.center_of_mass.z - 0.02).abs() < 1e-15);
+        }
+        answerer.answer_set(&set, &settings, &rules);
+        assert_eq!(answerer.meshes().loads(), 1);
+
+        let missing = answerer.answer_set(&set_on("/no/such/cube.stl", 3), &settings, &rules);
+        assert!(missing.ranking.is_empty());
+        for r in &missing.recommendations {
+            assert_eq!(r.recommendation.status, 2);
+            assert!(r.recommendation.message.contains("/no/such/cube.stl"));
+            assert!(r.contact_1.x.is_nan());
+        }
+    }
+
+    #[test]
+    fn a_set_too_large_is_refused_before_any_mesh_is_loaded() {
+        let dir = tempfile::tempdir().expect("a folder");
+        let path = dir.path().join("cube.stl");
+        write_cube(&path);
+        let answerer = PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default());
+        let rules = Rules {
+            max_set_size: 2,
+            ..Rules::default()
+        };
+        let set = set_on(&path.display().to_string(), 3);
+        let answer = answerer.answer_set(&set, &Settings::default(), &rules);
+        assert_eq!(answer.status, PoseRecommendationSet::STATUS_TOO_LARGE);
+        assert!(answer.recommendations.is_empty());
+        assert_eq!(answerer.meshes().loads(), 0);
+    }
+
+    #[test]
+    fn an_inline_mesh_is_the_same_cube() {
+        let answerer = PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default());
+        let mut set = set_on("", 1);
+        let c = |i: usize| Point {
+            x: 40.0 * (i & 1) as f64,
+            y: 40.0 * ((i >> 1) & 1) as f64,
+            z: 40.0 * ((i >> 2) & 1) as f64,
+        };
+        set.object.inline_mesh.vertices = (0..8).map(c).collect();
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        set.object.inline_mesh.triangles = quads
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .map(|vertex_indices| MeshTriangle { vertex_indices })
+            .collect();
+        let r = answerer.answer(
+            &PoseCandidate {
+                id: "inline".into(),
+                grasp_pose: set.poses[0].grasp_pose.clone(),
+                width: 0.1,
+                object: set.object.clone(),
+                gravity: set.gravity.clone(),
+                ..PoseCandidate::default()
+            },
+            &Settings::default(),
+            &Rules::default(),
+        );
+        assert_eq!(r.recommendation.status, 0, "{}", r.recommendation.message);
+        assert!((r.contact_2.y - 0.04).abs() < 1e-15);
+        assert_eq!((r.normal_1.y, r.normal_2.y), (1.0, -1.0));
     }
 }
