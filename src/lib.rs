@@ -20,4 +20,5 @@ pub mod msg;
 pub mod record;
 pub mod replay;
 /// The mathematics, from the `grasp_orient_solver` crate (`crates/solver`).
+pub use grasp_orient_geometry as geometry;
 pub use grasp_orient_solver as solver;

@@ -6,6 +6,9 @@
 //!   (planar or spatial, nominal or robust), with which tolerances, and the refusals.
 //! - [`answer_one`], [`answer_set`] and [`rank`] (`sets.rs`): the grip force a gripper is set to,
 //!   the gripper's limit, the node's default tolerances, and sets answered and ranked.
+//! - [`PoseAnswerer`] (`pose.rs`): a gripper pose on an object (a pose candidate or a set of
+//!   them) → contacts, normals and centre of mass (`grasp_orient_geometry`) → the spatial
+//!   candidate they make, answered and ranked as above.
 //! - [`markers`]: an answer drawn for RViz and Foxglove.
 //!
 //! To add an output field: fill it here (or in the solver), declare it in `msg/*.msg` and the wire
@@ -13,9 +16,11 @@
 
 mod candidate;
 pub mod markers;
+mod pose;
 mod sets;
 
 pub use candidate::{answer, answer_in_full, Answered};
+pub use pose::{without_geometry, PoseAnswerer, PoseRefusal, MESH_CACHE_BYTES};
 pub use sets::{
     answer_one, answer_one_in_full, answer_set, answer_set_on, answer_set_within, apply_limit,
     busy, cut_like, echo_set, is_sorted_by, not_solved, rank, solver_pool, DefaultTolerances,

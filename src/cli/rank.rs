@@ -1,11 +1,15 @@
 //! `grasp_orient rank [FILE]`: JSON lines of candidates answered as one set, ranked by the force
-//! they need; a table a person reads at a glance, or (`--json`) the set's answer.
+//! they need; a table a person reads at a glance, or (`--json`) the set's answer. The lines are
+//! GraspCandidates and PoseCandidates, or one PoseCandidateSet (`docs/poses.md`).
 
 use super::SolveOptions;
 use anyhow::{bail, Context};
-use grasp_orient::answer::{answer_set, RankBy, Rules};
+use grasp_orient::answer::{answer_set, PoseAnswerer, RankBy, Rules};
+use grasp_orient::geometry::ClosingAxis;
+use grasp_orient::jsonl::{is_pose_candidate, is_pose_set};
 use grasp_orient::msg::{
-    invalid, short_id, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
+    invalid, short_id, GraspCandidate, GraspCandidateSet, GripRecommendation,
+    GripRecommendationSet, PoseCandidate, PoseCandidateSet,
 };
 use std::fmt::Write as _;
 use std::io::{BufRead, BufReader, Write};
@@ -14,9 +18,14 @@ use std::path::PathBuf;
 /// Arguments of `rank`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
-    /// File of JSON lines, one GraspCandidate per line (as `solve` reads them), taken as one set.
-    /// Standard input when absent or "-".
+    /// File of JSON lines, one GraspCandidate or PoseCandidate per line (as `solve` reads them),
+    /// taken as one set; or a single line holding a PoseCandidateSet (msg/PoseCandidateSet.msg),
+    /// whose --json answer is a PoseRecommendationSet. Standard input when absent or "-".
     pub file: Option<PathBuf>,
+    /// The axis of the gripper's tool frame that the fingers of a pose candidate close along:
+    /// x, y or z (parameter closing_axis, default y).
+    #[arg(long, value_name = "AXIS", value_parser = super::parse_name::<ClosingAxis>)]
+    pub closing_axis: Option<ClosingAxis>,
     /// Print the set's answer (a GripRecommendationSet, one JSON line) instead of the table.
     #[arg(long)]
     pub json: bool,
@@ -36,30 +45,58 @@ pub struct Args {
 const ID_CHARS: usize = 32;
 
 /// Reads the lines into a set (a line that is no candidate is kept as an empty one and answered
-/// with status 2 and its line number), answers it, and prints the table or the JSON answer.
+/// with status 2 and its line number; a pose candidate the geometry refuses, with its refusal),
+/// answers it, and prints the table or the JSON answer.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let (_, settings, mut rules) = args.options.configured()?;
+    let (config, settings, mut rules) = args.options.configured()?;
     if let Some(r) = args.rank_by {
         rules.rank_by = r;
     }
     if let Some(n) = args.max_set_size {
         rules.max_set_size = usize::try_from(n).unwrap_or(usize::MAX);
     }
-    let (set, bad) = read_set(args)?;
-    let mut reply = answer_set(&set, &settings, &rules);
-    for (index, number, line, reason) in bad {
-        if let Some(r) = reply.recommendations.get_mut(index) {
-            // As `solve` answers a line that is no candidate.
-            *r = invalid(&grasp_orient::jsonl::partial(&line), &reason);
-            r.message = compact_str::format_compact!("line {number}: {}", r.message);
+    let poses = PoseAnswerer::from_env(args.closing_axis.unwrap_or(config.closing_axis));
+    let (set, reply) = match read_input(args, &poses)? {
+        Input::Candidates(set, replaced) => {
+            let mut reply = answer_set(&set, &settings, &rules);
+            for (index, answer) in replaced {
+                if let Some(r) = reply.recommendations.get_mut(index) {
+                    *r = answer;
+                }
+            }
+            if args.json {
+                return print(&reply, reply.status, &reply.message);
+            }
+            (set, reply)
         }
-    }
+        Input::PoseSet(pose_set) => {
+            let reply = poses.answer_set(&pose_set, &settings, &rules);
+            if args.json {
+                return print(&reply, reply.status, &reply.message);
+            }
+            let set = GraspCandidateSet {
+                max_grip_force: pose_set.max_grip_force,
+                ..GraspCandidateSet::default()
+            };
+            let reply = GripRecommendationSet {
+                recommendations: reply
+                    .recommendations
+                    .into_iter()
+                    .map(|p| p.recommendation)
+                    .collect(),
+                header: reply.header,
+                set_id: reply.set_id,
+                ranking: reply.ranking,
+                ranked_by: reply.ranked_by,
+                status: reply.status,
+                message: reply.message,
+            };
+            (set, reply)
+        }
+    };
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
-    if args.json {
-        serde_json::to_writer(&mut out, &reply).context("cannot write the answer")?;
-        out.write_all(b"\n").context("cannot write the answer")?;
-    } else if reply.status == GripRecommendationSet::STATUS_OK {
+    if reply.status == GripRecommendationSet::STATUS_OK {
         out.write_all(table(&set, &reply, &rules).as_bytes())
             .context("cannot write the table")?;
     }
@@ -70,11 +107,28 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// A line that is no candidate: its index in the set, its number, its text and why.
-type BadLine = (usize, usize, String, String);
+/// Prints a set's answer as one JSON line; an error when the set is refused.
+fn print(reply: &impl serde::Serialize, status: u8, message: &str) -> anyhow::Result<()> {
+    let stdout = std::io::stdout();
+    let mut out = std::io::BufWriter::new(stdout.lock());
+    serde_json::to_writer(&mut out, reply).context("cannot write the answer")?;
+    out.write_all(b"\n").context("cannot write the answer")?;
+    out.flush().context("cannot write the answer")?;
+    if status != GripRecommendationSet::STATUS_OK {
+        bail!("the set is refused: {message}");
+    }
+    Ok(())
+}
 
-/// The candidates of the file, and the lines that are none.
-fn read_set(args: &Args) -> anyhow::Result<(GraspCandidateSet, Vec<BadLine>)> {
+/// What the file holds: candidates (with the answers that replace those of lines that are no
+/// candidate, by index), or one pose set.
+enum Input {
+    Candidates(GraspCandidateSet, Vec<(usize, GripRecommendation)>),
+    PoseSet(Box<PoseCandidateSet>),
+}
+
+/// The candidates of the file, or its pose set.
+fn read_input(args: &Args, poses: &PoseAnswerer) -> anyhow::Result<Input> {
     let (input, name): (Box<dyn BufRead>, String) = match &args.file {
         Some(path) if path.as_os_str() != "-" => (
             Box::new(BufReader::new(
@@ -85,26 +139,54 @@ fn read_set(args: &Args) -> anyhow::Result<(GraspCandidateSet, Vec<BadLine>)> {
         ),
         _ => (Box::new(std::io::stdin().lock()), "stdin".to_string()),
     };
+    let mut lines = Vec::new();
+    for (index, line) in input.lines().enumerate() {
+        let number = index + 1;
+        let line = line.with_context(|| format!("cannot read line {number}"))?;
+        if !line.trim().is_empty() {
+            lines.push((number, line));
+        }
+    }
+    if let Some((number, _)) = lines.iter().find(|(_, l)| is_pose_set(l)) {
+        if lines.len() != 1 {
+            bail!(
+                "line {number} is a PoseCandidateSet: rank reads one, alone in its input, or \
+                 candidate lines"
+            );
+        }
+        let set = grasp_orient::jsonl::parse::<PoseCandidateSet>(&lines[0].1)
+            .with_context(|| format!("line {number}: not a PoseCandidateSet"))?;
+        return Ok(Input::PoseSet(Box::new(set)));
+    }
     let mut set = GraspCandidateSet {
         id: name.into(),
         ..GraspCandidateSet::default()
     };
-    let mut bad = Vec::new();
-    for (index, line) in input.lines().enumerate() {
-        let number = index + 1;
-        let line = line.with_context(|| format!("cannot read line {number}"))?;
-        if line.trim().is_empty() {
-            continue;
-        }
-        match grasp_orient::jsonl::parse::<GraspCandidate>(&line) {
-            Ok(c) => set.candidates.push(c),
-            Err(e) => {
-                bad.push((set.candidates.len(), number, line, e.to_string()));
-                set.candidates.push(GraspCandidate::default());
+    let mut replaced = Vec::new();
+    for (number, line) in lines {
+        let index = set.candidates.len();
+        let read = if is_pose_candidate(&line) {
+            grasp_orient::jsonl::parse::<PoseCandidate>(&line).map(|p| poses.spatial_candidate(&p))
+        } else {
+            grasp_orient::jsonl::parse::<GraspCandidate>(&line).map(Ok)
+        };
+        let refusal = match read {
+            Ok(Ok(c)) => {
+                set.candidates.push(c);
+                continue;
             }
+            // As `solve` answers a line that is no candidate.
+            Err(e) => invalid(&grasp_orient::jsonl::partial(&line), &e),
+            Ok(Err(refused)) => *refused,
+        };
+        let mut refusal = refusal;
+        if refusal.status == GripRecommendation::STATUS_INVALID_INPUT {
+            refusal.message = compact_str::format_compact!("line {number}: {}", refusal.message);
         }
+        replaced.push((index, refusal));
+        set.candidates.push(GraspCandidate::default());
     }
-    Ok((set, bad))
+    Ok(Input::Candidates(set, replaced))
 }
 
 /// The status in words.

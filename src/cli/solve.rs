@@ -2,7 +2,9 @@
 
 use super::SolveOptions;
 use anyhow::Context;
-use grasp_orient::jsonl::answer_lines;
+use grasp_orient::answer::PoseAnswerer;
+use grasp_orient::geometry::ClosingAxis;
+use grasp_orient::jsonl::answer_lines_with;
 use std::io::BufReader;
 use std::path::PathBuf;
 
@@ -10,15 +12,21 @@ use std::path::PathBuf;
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
     /// File of JSON lines, one GraspCandidate per line (fields as in msg/GraspCandidate.msg,
-    /// snake_case; header and z optional). Standard input when absent or "-".
+    /// snake_case; header and z optional), or one PoseCandidate (msg/PoseCandidate.msg: a line
+    /// with grasp_pose; docs/poses.md). Standard input when absent or "-".
     pub file: Option<PathBuf>,
+    /// The axis of the gripper's tool frame that the fingers of a pose candidate close along:
+    /// x, y or z (parameter closing_axis, default y).
+    #[arg(long, value_name = "AXIS", value_parser = super::parse_name::<ClosingAxis>)]
+    pub closing_axis: Option<ClosingAxis>,
     #[command(flatten)]
     pub options: SolveOptions,
 }
 
 /// Solves every line; a bad line gets status 2 with its line number and the run goes on.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let (_, settings, rules) = args.options.configured()?;
+    let (config, settings, rules) = args.options.configured()?;
+    let poses = PoseAnswerer::from_env(args.closing_axis.unwrap_or(config.closing_axis));
     let stdout = std::io::stdout();
     let out = std::io::BufWriter::new(stdout.lock());
     let warn = |message: &str| log::warn!("{message}");
@@ -26,9 +34,16 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         Some(path) if path.as_os_str() != "-" => {
             let file = std::fs::File::open(path)
                 .with_context(|| format!("cannot open {}", path.display()))?;
-            answer_lines(BufReader::new(file), out, &settings, &rules, warn)
+            answer_lines_with(BufReader::new(file), out, &settings, &rules, &poses, warn)
         }
-        _ => answer_lines(std::io::stdin().lock(), out, &settings, &rules, warn),
+        _ => answer_lines_with(
+            std::io::stdin().lock(),
+            out,
+            &settings,
+            &rules,
+            &poses,
+            warn,
+        ),
     }?;
     log::info!(
         "{} candidates, {} not solved",

@@ -12,6 +12,7 @@ use super::choices::RangeKind;
 use super::declare::{parameters, Domain};
 use crate::answer::{GripperDrive, RankBy, DEFAULT_MAX_SET_SIZE};
 use crate::solver::{Objective, MAX_COORDINATE, MAX_SAFETY_FACTOR};
+use grasp_orient_geometry::ClosingAxis;
 use std::f64::consts::PI;
 
 parameters! {
@@ -74,6 +75,13 @@ parameters! {
     /// The mass of a candidate whose own mass_tolerance is zero lies in mass ± this; the answer is
     /// the worst case over it (a candidate lighter than this is refused, status 2).
     mass_tolerance: f64 = 0.0, "kg", in Domain::Below { min: 0.0, limit: MAX_MASS };
+    /// The axis of the gripper's tool frame along which the fingers close, for pose candidates
+    /// (x, y or z; docs/poses.md); solve and rank read it, the node takes no pose candidates yet.
+    closing_axis: ClosingAxis = ClosingAxis::Y, "";
+}
+
+impl super::choices::Choice for ClosingAxis {
+    const NAMES: &'static [&'static str] = &ClosingAxis::NAMES;
 }
 
 /// The largest mass a candidate may have, kg (`MAX_MASS` of `crates/solver/src/planar/frame.rs`,

@@ -47,15 +47,16 @@
 //! independent Python port of rosbag2's algorithm over the peer's files.
 
 use super::{
-    ColorRgba, CompressedImage, Duration, GraspCandidate, GraspCandidateSet, GripRecommendation,
-    GripRecommendationSet, Header, Marker, MarkerArray, MeshFile, Point, Pose, Quaternion,
-    RosMessage, Time, UvCoordinate, Vector3,
+    ColorRgba, CompressedImage, Duration, GraspCandidate, GraspCandidateSet, GraspObject,
+    GraspPose, GripRecommendation, GripRecommendationSet, Header, Marker, MarkerArray, Mesh,
+    MeshFile, MeshTriangle, Point, Pose, PoseCandidate, PoseCandidateSet, PoseRecommendation,
+    PoseRecommendationSet, Quaternion, RosMessage, SolidPrimitive, Time, UvCoordinate, Vector3,
 };
 use std::collections::BTreeSet;
 
 /// Every message type this crate reads or writes, by full name, with its `.msg` text exactly as
 /// its package ships it.
-pub const DEFINITIONS: [(&str, &str); 17] = [
+pub const DEFINITIONS: [(&str, &str); 26] = [
     (
         GraspCandidate::TYPE_NAME,
         include_str!("../../msg/GraspCandidate.msg"),
@@ -71,6 +72,39 @@ pub const DEFINITIONS: [(&str, &str); 17] = [
     (
         GripRecommendationSet::TYPE_NAME,
         include_str!("../../msg/GripRecommendationSet.msg"),
+    ),
+    (
+        MeshTriangle::TYPE_NAME,
+        include_str!("../../msg/MeshTriangle.msg"),
+    ),
+    (Mesh::TYPE_NAME, include_str!("../../msg/Mesh.msg")),
+    (
+        SolidPrimitive::TYPE_NAME,
+        include_str!("../../msg/SolidPrimitive.msg"),
+    ),
+    (
+        GraspObject::TYPE_NAME,
+        include_str!("../../msg/GraspObject.msg"),
+    ),
+    (
+        PoseCandidate::TYPE_NAME,
+        include_str!("../../msg/PoseCandidate.msg"),
+    ),
+    (
+        GraspPose::TYPE_NAME,
+        include_str!("../../msg/GraspPose.msg"),
+    ),
+    (
+        PoseCandidateSet::TYPE_NAME,
+        include_str!("../../msg/PoseCandidateSet.msg"),
+    ),
+    (
+        PoseRecommendation::TYPE_NAME,
+        include_str!("../../msg/PoseRecommendation.msg"),
+    ),
+    (
+        PoseRecommendationSet::TYPE_NAME,
+        include_str!("../../msg/PoseRecommendationSet.msg"),
     ),
     (
         Time::TYPE_NAME,
@@ -285,12 +319,16 @@ fn field_type_at(bytes: &[u8], start: usize) -> Option<(std::ops::Range<usize>, 
 mod tests {
     use super::*;
 
-    const TOP_LEVEL: [&str; 5] = [
+    const TOP_LEVEL: [&str; 9] = [
         GraspCandidate::TYPE_NAME,
         GripRecommendation::TYPE_NAME,
         GraspCandidateSet::TYPE_NAME,
         GripRecommendationSet::TYPE_NAME,
         MarkerArray::TYPE_NAME,
+        PoseCandidate::TYPE_NAME,
+        PoseCandidateSet::TYPE_NAME,
+        PoseRecommendation::TYPE_NAME,
+        PoseRecommendationSet::TYPE_NAME,
     ];
 
     /// The dependency lines of a full text, in order.

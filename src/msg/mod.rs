@@ -82,6 +82,12 @@ macro_rules! wire_name {
     };
 }
 
+mod poses;
+pub use poses::{
+    GraspObject, GraspPose, Mesh, MeshTriangle, PoseCandidate, PoseCandidateSet,
+    PoseRecommendation, PoseRecommendationSet, SolidPrimitive,
+};
+
 mod visualization;
 pub use visualization::{
     ColorRgba, CompressedImage, Duration, Marker, MarkerArray, MeshFile, Pose, UvCoordinate,

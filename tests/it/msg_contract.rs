@@ -12,9 +12,11 @@
 
 use grasp_orient::msg::definitions::{split_type_name, DEFINITIONS};
 use grasp_orient::msg::{
-    ColorRgba, CompressedImage, Duration, GraspCandidate, GraspCandidateSet, GripRecommendation,
-    GripRecommendationSet, Header, Marker, MarkerArray, MeshFile, Point, Pose, Quaternion,
-    RecommendRequest, RecommendResponse, RosMessage, Time, UvCoordinate, Vector3,
+    ColorRgba, CompressedImage, Duration, GraspCandidate, GraspCandidateSet, GraspObject,
+    GraspPose, GripRecommendation, GripRecommendationSet, Header, Marker, MarkerArray, Mesh,
+    MeshFile, MeshTriangle, Point, Pose, PoseCandidate, PoseCandidateSet, PoseRecommendation,
+    PoseRecommendationSet, Quaternion, RecommendRequest, RecommendResponse, RosMessage,
+    SolidPrimitive, Time, UvCoordinate, Vector3,
 };
 use std::collections::BTreeSet;
 use std::path::PathBuf;
@@ -156,6 +158,31 @@ fn grip_recommendation_matches_its_msg_file() {
     check::<GripRecommendation>();
 }
 
+/// The pose candidate messages (docs/poses.md), each against its `.msg` file.
+fn check_pose_messages() -> [(&'static str, fn()); 9] {
+    [
+        (MeshTriangle::TYPE_NAME, check::<MeshTriangle> as fn()),
+        (Mesh::TYPE_NAME, check::<Mesh>),
+        (SolidPrimitive::TYPE_NAME, check::<SolidPrimitive>),
+        (GraspObject::TYPE_NAME, check::<GraspObject>),
+        (PoseCandidate::TYPE_NAME, check::<PoseCandidate>),
+        (GraspPose::TYPE_NAME, check::<GraspPose>),
+        (PoseCandidateSet::TYPE_NAME, check::<PoseCandidateSet>),
+        (PoseRecommendation::TYPE_NAME, check::<PoseRecommendation>),
+        (
+            PoseRecommendationSet::TYPE_NAME,
+            check::<PoseRecommendationSet>,
+        ),
+    ]
+}
+
+#[test]
+fn pose_messages_match_their_msg_files() {
+    for (_, check) in check_pose_messages() {
+        check();
+    }
+}
+
 #[test]
 fn sets_match_their_msg_files() {
     check::<GraspCandidateSet>();
@@ -223,7 +250,12 @@ fn peer_standard_structs_match_the_jazzy_msg_files() {
     for (_, check) in &checked {
         check();
     }
-    let structs: BTreeSet<&str> = checked.iter().map(|(name, _)| *name).collect();
+    let poses = check_pose_messages();
+    let structs: BTreeSet<&str> = checked
+        .iter()
+        .chain(&poses)
+        .map(|(name, _)| *name)
+        .collect();
     let embedded: BTreeSet<&str> = DEFINITIONS.iter().map(|(name, _)| *name).collect();
     assert_eq!(
         structs, embedded,

@@ -1,0 +1,640 @@
+//! A pose candidate answered: the gripper pose and opening on the object → the two contacts, their
+//! inward normals and the centre of mass (`grasp_orient_geometry`) → the spatial candidate those
+//! make, answered as any [`GraspCandidate`] of model 1 is ([`answer_one`]) → the answer with the
+//! derived geometry, all in the candidate's header frame (`docs/poses.md`).
+//!
+//! # Policy
+//! - The object gives exactly one shape: `mesh` (a resource, loaded once per file and scale into
+//!   the [`PoseAnswerer`]'s cache), `inline_mesh`, or `primitive`. A primitive's dimensions are
+//!   metres: its `scale` must be 1 on every axis.
+//! - Both contacts take the object's `friction`; the centre of mass is `center_of_mass` (object
+//!   frame) when `has_center_of_mass`, else the shape's centroid. A `center_of_mass` other than
+//!   zero with `has_center_of_mass` false is refused: it was meant, and would be ignored.
+//! - Quaternions are normalised; one of norm zero or not finite is refused, naming the field.
+//! - A finger that closes on nothing: status 1, naming the finger. Everything else the geometry
+//!   refuses (an opening narrower than the object, an unreadable or open mesh without a centre
+//!   of mass, a bad scale or primitive): status 2, naming the resource or field.
+//! - **Edges and vertices** are answered, not refused: the contact takes the pseudo-normal
+//!   (`crates/geometry/src/cast.rs`), and `message` says which contact lies on an edge or a
+//!   vertex, so a caller who wants a face contact can drop it. A point finger on a convex edge is
+//!   a real grasp; the pseudo-normal is the middle of the normals the edge allows.
+//! - A set: its object's shape resolved once, each pose answered against it, and the answers
+//!   ranked by [`answer_set`] exactly as a [`GraspCandidateSet`]'s (the gripper's limit, the
+//!   set's `max_grip_force`, `max_set_size`), a pose refused by the geometry never ranked.
+
+use super::{answer_one, answer_set, Rules};
+use crate::msg::convert::no_closure;
+use crate::msg::{
+    invalid, CompactString, GraspCandidate, GraspCandidateSet, GraspObject, GripRecommendation,
+    Header, Point, Pose, PoseCandidate, PoseCandidateSet, PoseRecommendation,
+    PoseRecommendationSet, Vector3,
+};
+use crate::solver::Settings;
+use grasp_orient_geometry::{
+    grasp_from_pose, AmentIndex, ClosingAxis, Contact, Feature, GeometryError, Grasp, GripperPose,
+    MeshCache, Object, Primitive, Shape,
+};
+use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion};
+
+/// The most bytes of meshes a [`PoseAnswerer`] keeps loaded (least recently used dropped first).
+pub const MESH_CACHE_BYTES: usize = 512 << 20;
+
+/// Why a pose candidate cannot be turned into a grasp.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PoseRefusal {
+    /// The geometry's refusal: status 1 for a finger that closes on nothing, 2 otherwise.
+    #[error(transparent)]
+    Geometry(#[from] GeometryError),
+    /// Not exactly one of `mesh`, `inline_mesh` and `primitive` is given.
+    #[error("object: give exactly one shape (mesh, inline_mesh or primitive), got {given}")]
+    Shapes {
+        /// The shapes given, by field name (empty for none).
+        given: String,
+    },
+    /// A primitive with a scale other than 1.
+    #[error(
+        "object.scale must be 1 on every axis for a primitive (its dimensions are metres), got \
+         [{}, {}, {}]", .scale[0], .scale[1], .scale[2]
+    )]
+    PrimitiveScale {
+        /// The scale given.
+        scale: [f64; 3],
+    },
+    /// A quaternion that is no rotation.
+    #[error("{field} is not a rotation: its norm is {norm}")]
+    Orientation {
+        /// `grasp_pose.orientation`, `object.pose.orientation`, `poses[i].grasp_pose.orientation`.
+        field: String,
+        /// Its norm.
+        norm: f64,
+    },
+    /// `center_of_mass` given without `has_center_of_mass`.
+    #[error(
+        "object.center_of_mass is given but object.has_center_of_mass is false: set it true, or \
+         leave center_of_mass at zero for the shape's centroid"
+    )]
+    CenterOfMassFlag,
+}
+
+impl PoseRefusal {
+    /// The status of the answer: 1 when a finger closes on nothing, 2 otherwise.
+    pub fn status(&self) -> u8 {
+        match self {
+            PoseRefusal::Geometry(e) => e.status(),
+            _ => GripRecommendation::STATUS_INVALID_INPUT,
+        }
+    }
+}
+
+/// Answers pose candidates: the closing axis, and the meshes loaded so far (each file at each
+/// scale once, `package://` through the ament index it was made with).
+#[derive(Debug)]
+pub struct PoseAnswerer {
+    closing_axis: ClosingAxis,
+    meshes: MeshCache,
+}
+
+impl PoseAnswerer {
+    /// Closing along `closing_axis`, `package://` resolved through `index`.
+    pub fn new(closing_axis: ClosingAxis, index: AmentIndex) -> Self {
+        Self {
+            closing_axis,
+            meshes: MeshCache::new(index, MESH_CACHE_BYTES),
+        }
+    }
+
+    /// Closing along `closing_axis`, `package://` through `AMENT_PREFIX_PATH`.
+    pub fn from_env(closing_axis: ClosingAxis) -> Self {
+        Self::new(closing_axis, AmentIndex::from_env())
+    }
+
+    /// The meshes loaded so far.
+    pub fn meshes(&self) -> &MeshCache {
+        &self.meshes
+    }
+
+    /// The answer to one pose candidate under `rules`.
+    pub fn answer(
+        &self,
+        m: &PoseCandidate,
+        settings: &Settings,
+        rules: &Rules,
+    ) -> PoseRecommendation {
+        match self.place(m) {
+            Ok((candidate, grasp)) => finish(answer_one(&candidate, settings, rules), &grasp),
+            Err(why) => target_of(m).refused(&why),
+        }
+    }
+
+    /// The spatial candidate a pose candidate's fingers make, or the answer that refuses it
+    /// (status 1 or 2): for a caller that answers it among other candidates (`rank`).
+    pub fn spatial_candidate(
+        &self,
+        m: &PoseCandidate,
+    ) -> Result<GraspCandidate, Box<GripRecommendation>> {
+        self.place(m)
+            .map(|(candidate, _)| candidate)
+            .map_err(|why| Box::new(target_of(m).refused(&why).recommendation))
+    }
+
+    /// The candidate and the grasp of a pose candidate.
+    fn place(&self, m: &PoseCandidate) -> Result<(GraspCandidate, Grasp), Refused> {
+        let object = self.object(&m.object)?;
+        let grasp = self.grasp(&m.grasp_pose, "grasp_pose", m.width, &object, &m.object)?;
+        Ok((target_of(m).candidate(&grasp), grasp))
+    }
+
+    /// The answer to a set: its object's shape once, each pose answered against it, ranked as a
+    /// [`GraspCandidateSet`] is.
+    pub fn answer_set(
+        &self,
+        set: &PoseCandidateSet,
+        settings: &Settings,
+        rules: &Rules,
+    ) -> PoseRecommendationSet {
+        let target = |id| Target {
+            header: &set.header,
+            id,
+            object: &set.object,
+            gravity: &set.gravity,
+        };
+        // A set refused whole (too large) is not worth the geometry.
+        let placed: Vec<Result<Grasp, Refused>> = if set.poses.len() > rules.max_set_size {
+            Vec::new()
+        } else {
+            let object = self.object(&set.object).map_err(Refused::from);
+            set.poses
+                .iter()
+                .enumerate()
+                .map(|(i, p)| {
+                    let object = object.as_ref().map_err(Refused::clone)?;
+                    let field = format!("poses[{i}].grasp_pose");
+                    self.grasp(&p.grasp_pose, &field, p.width, object, &set.object)
+                        .map_err(Refused::from)
+                })
+                .collect()
+        };
+        let candidates = if placed.is_empty() {
+            // As many as the poses, for answer_set to refuse the set as too large (or to answer
+            // an empty one).
+            vec![GraspCandidate::default(); set.poses.len()]
+        } else {
+            set.poses
+                .iter()
+                .zip(&placed)
+                .map(|(p, g)| match g {
+                    Ok(grasp) => target(&p.id).candidate(grasp),
+                    // Refused below; the solver refuses it too, so it is never ranked.
+                    Err(_) => GraspCandidate {
+                        header: set.header.clone(),
+                        id: p.id.clone(),
+                        ..GraspCandidate::default()
+                    },
+                })
+                .collect()
+        };
+        let answered = answer_set(
+            &GraspCandidateSet {
+                header: set.header.clone(),
+                id: set.id.clone(),
+                candidates,
+                max_grip_force: set.max_grip_force,
+            },
+            settings,
+            rules,
+        );
+        let recommendations = answered
+            .recommendations
+            .into_iter()
+            .zip(set.poses.iter().zip(&placed))
+            .map(|(reply, (p, g))| match g {
+                Ok(grasp) => finish(reply, grasp),
+                Err(why) => target(&p.id).refused(why),
+            })
+            .collect();
+        PoseRecommendationSet {
+            header: answered.header,
+            set_id: answered.set_id,
+            recommendations,
+            ranking: answered.ranking,
+            ranked_by: answered.ranked_by,
+            status: answered.status,
+            message: answered.message,
+        }
+    }
+
+    /// The object's pose and shape, checked.
+    fn object(&self, o: &GraspObject) -> Result<Object, PoseRefusal> {
+        let pose = isometry(&o.pose, "object.pose")?;
+        let scale = [o.scale.x, o.scale.y, o.scale.z];
+        let mut given = Vec::new();
+        if !o.mesh.is_empty() {
+            given.push("mesh");
+        }
+        if !o.inline_mesh.triangles.is_empty() || !o.inline_mesh.vertices.is_empty() {
+            given.push("inline_mesh");
+        }
+        if o.primitive.kind != 0 || !o.primitive.dimensions.is_empty() {
+            given.push("primitive");
+        }
+        let shape: Shape = match given.as_slice() {
+            ["mesh"] => self.meshes.get(&o.mesh, scale)?.into(),
+            ["inline_mesh"] => {
+                let vertices: Vec<[f64; 3]> = o
+                    .inline_mesh
+                    .vertices
+                    .iter()
+                    .map(|v| [v.x, v.y, v.z])
+                    .collect();
+                let triangles: Vec<[u32; 3]> = o
+                    .inline_mesh
+                    .triangles
+                    .iter()
+                    .map(|t| t.vertex_indices)
+                    .collect();
+                grasp_orient_geometry::Mesh::from_triangles(
+                    "inline_mesh",
+                    &vertices,
+                    &triangles,
+                    scale,
+                )?
+                .into()
+            }
+            ["primitive"] => {
+                if scale != [1.0; 3] {
+                    return Err(PoseRefusal::PrimitiveScale { scale });
+                }
+                Primitive::from_shape_msgs(o.primitive.kind, &o.primitive.dimensions)?.into()
+            }
+            _ => {
+                return Err(PoseRefusal::Shapes {
+                    given: given.join(", "),
+                })
+            }
+        };
+        Ok(Object { pose, shape })
+    }
+
+    /// The contacts and centre of mass of one gripper pose on the object.
+    fn grasp(
+        &self,
+        tool: &Pose,
+        field: &str,
+        width: f64,
+        object: &Object,
+        o: &GraspObject,
+    ) -> Result<Grasp, PoseRefusal> {
+        let c = &o.center_of_mass;
+        let given = if o.has_center_of_mass {
+            Some(Point3::new(c.x, c.y, c.z))
+        } else if (c.x, c.y, c.z) != (0.0, 0.0, 0.0) {
+            return Err(PoseRefusal::CenterOfMassFlag);
+        } else {
+            None
+        };
+        let gripper = GripperPose {
+            tool_pose: isometry(tool, field)?,
+            width,
+            closing_axis: self.closing_axis,
+        };
+        Ok(grasp_from_pose(&gripper, object, given)?)
+    }
+}
+
+/// A refusal as an answer gives it: its status and words (the geometry's errors hold an
+/// `io::Error`, which does not clone, and a set's object refused is every pose's refusal).
+#[derive(Debug, Clone)]
+struct Refused {
+    status: u8,
+    message: String,
+}
+
+impl From<PoseRefusal> for Refused {
+    fn from(e: PoseRefusal) -> Self {
+        Refused {
+            status: e.status(),
+            message: e.to_string(),
+        }
+    }
+}
+
+/// A pose candidate's header, id, object and gravity.
+fn target_of(m: &PoseCandidate) -> Target<'_> {
+    Target {
+        header: &m.header,
+        id: &m.id,
+        object: &m.object,
+        gravity: &m.gravity,
+    }
+}
+
+/// What a candidate of a pose shares with its set: header, object and gravity, and its own id.
+struct Target<'a> {
+    header: &'a Header,
+    id: &'a CompactString,
+    object: &'a GraspObject,
+    gravity: &'a Vector3,
+}
+
+impl Target<'_> {
+    /// The spatial candidate the fingers make.
+    fn candidate(&self, grasp: &Grasp) -> GraspCandidate {
+        let [c1, c2] = &grasp.contacts;
+        GraspCandidate {
+            header: self.header.clone(),
+            id: self.id.clone(),
+            contact_1: point(&c1.point),
+            contact_2: point(&c2.point),
+            normal_1: vector(&c1.normal),
+            normal_2: vector(&c2.normal),
+            friction_1: self.object.friction,
+            friction_2: self.object.friction,
+            center_of_mass: point(&grasp.center_of_mass),
+            mass: self.object.mass,
+            gravity: self.gravity.clone(),
+            model: GraspCandidate::MODEL_SPATIAL,
+            ..GraspCandidate::default()
+        }
+    }
+
+    /// The answer to a pose the geometry refuses: status 1 or 2, no geometry (NaN).
+    fn refused(&self, why: &Refused) -> PoseRecommendation {
+        let stub = GraspCandidate {
+            header: self.header.clone(),
+            id: self.id.clone(),
+            ..GraspCandidate::default()
+        };
+        without_geometry(
+            if why.status == GripRecommendation::STATUS_NO_FORCE_CLOSURE {
+                no_closure(&stub, &why.message)
+            } else {
+                invalid(&stub, &why.message)
+            },
+        )
+    }
+}
+
+/// The answer to a pose candidate refused before it had contacts: the refusal, and NaN for the
+/// geometry.
+pub fn without_geometry(recommendation: GripRecommendation) -> PoseRecommendation {
+    let nan = Point {
+        x: f64::NAN,
+        y: f64::NAN,
+        z: f64::NAN,
+    };
+    let nan_vector = Vector3 {
+        x: f64::NAN,
+        y: f64::NAN,
+        z: f64::NAN,
+    };
+    PoseRecommendation {
+        recommendation,
+        contact_1: nan.clone(),
+        contact_2: nan.clone(),
+        normal_1: nan_vector.clone(),
+        normal_2: nan_vector,
+        center_of_mass: nan,
+    }
+}
+
+/// The answer with the grasp's geometry, and a note on a contact at an edge or a vertex.
+fn finish(mut reply: GripRecommendation, grasp: &Grasp) -> PoseRecommendation {
+    let [c1, c2] = &grasp.contacts;
+    let notes: Vec<String> = [("contact_1", c1), ("contact_2", c2)]
+        .into_iter()
+        .filter_map(|(name, c)| feature_note(name, c))
+        .collect();
+    if !notes.is_empty() {
+        let mut message = reply.message.to_string();
+        for note in notes {
+            if !message.is_empty() {
+                message.push_str("; ");
+            }
+            message.push_str(&note);
+        }
+        reply.message = message.into();
+    }
+    PoseRecommendation {
+        recommendation: reply,
+        contact_1: point(&c1.point),
+        contact_2: point(&c2.point),
+        normal_1: vector(&c1.normal),
+        normal_2: vector(&c2.normal),
+        center_of_mass: point(&grasp.center_of_mass),
+    }
+}
+
+/// What `message` says of a contact on an edge or a vertex.
+fn feature_note(name: &str, c: &Contact) -> Option<String> {
+    let feature = match c.feature {
+        Feature::Face => return None,
+        Feature::Edge => "an edge",
+        Feature::Vertex => "a vertex",
+    };
+    Some(format!(
+        "{name} lies on {feature} of the object: its normal is the pseudo-normal there \
+         (docs/poses.md)"
+    ))
+}
+
+/// A pose as an isometry, its quaternion normalised; `field` names it when the quaternion is no
+/// rotation. A translation not finite is left to the geometry, which names it.
+fn isometry(p: &Pose, field: &str) -> Result<Isometry3<f64>, PoseRefusal> {
+    let o = &p.orientation;
+    let q = Quaternion::new(o.w, o.x, o.y, o.z);
+    let norm = q.norm();
+    if !(norm.is_finite() && norm > 0.0) {
+        return Err(PoseRefusal::Orientation {
+            field: format!("{field}.orientation"),
+            norm,
+        });
+    }
+    let t = &p.position;
+    Ok(Isometry3::from_parts(
+        Translation3::new(t.x, t.y, t.z),
+        UnitQuaternion::from_quaternion(q),
+    ))
+}
+
+fn point(p: &Point3<f64>) -> Point {
+    Point {
+        x: p.x,
+        y: p.y,
+        z: p.z,
+    }
+}
+
+fn vector(v: &nalgebra::UnitVector3<f64>) -> Vector3 {
+    Vector3 {
+        x: v.x,
+        y: v.y,
+        z: v.z,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::msg::{GraspPose, MeshTriangle, Quaternion};
+
+    fn pose(x: f64, y: f64, z: f64) -> Pose {
+        Pose {
+            position: Point { x, y, z },
+            orientation: Quaternion {
+                x: 0.0,
+                y: 0.0,
+                z: 0.0,
+                w: 1.0,
+            },
+        }
+    }
+
+    /// A 40 mm cube in millimetres as an ASCII STL, corner at the origin.
+    fn write_cube(path: &std::path::Path) {
+        let c = |i: usize| {
+            [
+                40.0 * (i & 1) as f64,
+                40.0 * ((i >> 1) & 1) as f64,
+                40.0 * ((i >> 2) & 1) as f64,
+            ]
+        };
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let mut text = String::from("solid cube\n");
+        for q in quads {
+            for t in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
+                text.push_str(" facet normal 0 0 0\n  outer loop\n");
+                for i in t {
+                    let [x, y, z] = c(i);
+                    text.push_str(&format!("   vertex {x} {y} {z}\n"));
+                }
+                text.push_str("  endloop\n endfacet\n");
+            }
+        }
+        text.push_str("endsolid cube\n");
+        std::fs::write(path, text).expect("write the cube");
+    }
+
+    fn set_on(mesh: &str, poses: usize) -> PoseCandidateSet {
+        PoseCandidateSet {
+            id: "set".into(),
+            object: GraspObject {
+                pose: pose(0.0, 0.0, 0.0),
+                mesh: mesh.into(),
+                scale: Vector3 {
+                    x: 0.001,
+                    y: 0.001,
+                    z: 0.001,
+                },
+                mass: 0.2,
+                friction: 0.8,
+                ..GraspObject::default()
+            },
+            poses: (0..poses)
+                .map(|i| GraspPose {
+                    id: format!("p{i}").into(),
+                    grasp_pose: pose(0.02, 0.02, 0.01 + 0.004 * i as f64),
+                    width: 0.1,
+                })
+                .collect(),
+            gravity: Vector3 {
+                x: 0.0,
+                y: 0.0,
+                z: -9.81,
+            },
+            ..PoseCandidateSet::default()
+        }
+    }
+
+    #[test]
+    fn a_set_loads_its_mesh_once_and_a_refused_object_refuses_every_pose() {
+        let dir = tempfile::tempdir().expect("a folder");
+        let path = dir.path().join("cube.stl");
+        write_cube(&path);
+        let answerer = PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default());
+        let set = set_on(&path.display().to_string(), 5);
+        let (settings, rules) = (Settings::default(), Rules::default());
+        let answer = answerer.answer_set(&set, &settings, &rules);
+        assert_eq!(answer.recommendations.len(), 5);
+        assert_eq!(answer.ranking.len(), 5, "{answer:?}");
+        for r in &answer.recommendations {
+            assert_eq!(r.recommendation.status, 0, "{}", r.recommendation.message);
+            assert!((r.contact_1.y - 0.0).abs() < 1e-15 && (r.contact_2.y - 0.04).abs() < 1e-15);
+            assert!((r.center_of_mass.z - 0.02).abs() < 1e-15);
+        }
+        answerer.answer_set(&set, &settings, &rules);
+        assert_eq!(answerer.meshes().loads(), 1);
+
+        let missing = answerer.answer_set(&set_on("/no/such/cube.stl", 3), &settings, &rules);
+        assert!(missing.ranking.is_empty());
+        for r in &missing.recommendations {
+            assert_eq!(r.recommendation.status, 2);
+            assert!(r.recommendation.message.contains("/no/such/cube.stl"));
+            assert!(r.contact_1.x.is_nan());
+        }
+    }
+
+    #[test]
+    fn a_set_too_large_is_refused_before_any_mesh_is_loaded() {
+        let dir = tempfile::tempdir().expect("a folder");
+        let path = dir.path().join("cube.stl");
+        write_cube(&path);
+        let answerer = PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default());
+        let rules = Rules {
+            max_set_size: 2,
+            ..Rules::default()
+        };
+        let set = set_on(&path.display().to_string(), 3);
+        let answer = answerer.answer_set(&set, &Settings::default(), &rules);
+        assert_eq!(answer.status, PoseRecommendationSet::STATUS_TOO_LARGE);
+        assert!(answer.recommendations.is_empty());
+        assert_eq!(answerer.meshes().loads(), 0);
+    }
+
+    #[test]
+    fn an_inline_mesh_is_the_same_cube() {
+        let answerer = PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default());
+        let mut set = set_on("", 1);
+        let c = |i: usize| Point {
+            x: 40.0 * (i & 1) as f64,
+            y: 40.0 * ((i >> 1) & 1) as f64,
+            z: 40.0 * ((i >> 2) & 1) as f64,
+        };
+        set.object.inline_mesh.vertices = (0..8).map(c).collect();
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        set.object.inline_mesh.triangles = quads
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .map(|vertex_indices| MeshTriangle { vertex_indices })
+            .collect();
+        let r = answerer.answer(
+            &PoseCandidate {
+                id: "inline".into(),
+                grasp_pose: set.poses[0].grasp_pose.clone(),
+                width: 0.1,
+                object: set.object.clone(),
+                gravity: set.gravity.clone(),
+                ..PoseCandidate::default()
+            },
+            &Settings::default(),
+            &Rules::default(),
+        );
+        assert_eq!(r.recommendation.status, 0, "{}", r.recommendation.message);
+        assert!((r.contact_2.y - 0.04).abs() < 1e-15);
+        assert_eq!((r.normal_1.y, r.normal_2.y), (1.0, -1.0));
+    }
+}
