@@ -595,27 +595,32 @@ fn cube_line(id: &str, object: Value, position: [f64; 3], width: f64) -> String 
     .to_string()
 }
 
-/// (d) Every refusal, each followed by a good line that is still answered.
-#[test]
-fn every_refusal_names_its_cause_and_the_next_line_is_answered() {
-    let dir = temp_dir("poses_refusals");
-    let open = dir.path().join("open.stl");
+/// A refused line, its status, and words its message holds.
+type Refusal = (String, u64, Vec<String>);
+
+fn words(w: &[&str]) -> Vec<String> {
+    w.iter().map(|w| w.to_string()).collect()
+}
+
+/// The refusals that come from the fingers, the mesh files in `dir` and the scale.
+fn mesh_refusals(dir: &Path) -> Vec<Refusal> {
+    let open = dir.join("open.stl");
     write_stl(&open, &prism(&L_OUTLINE, L_HEIGHT, true));
     let open = open.display().to_string();
-    let closed = dir.path().join("closed.stl");
+    let closed = dir.join("closed.stl");
     write_stl(&closed, &prism(&L_OUTLINE, L_HEIGHT, false));
     let closed = closed.display().to_string();
     let mm = json!({"x": 0.001, "y": 0.001, "z": 0.001});
-    let refusals: Vec<(String, u64, Vec<&str>)> = vec![
+    vec![
         (
             cube_line("nothing", json!({}), [0.0, 0.0, 0.5], 0.1),
             1,
-            vec!["finger 1", "closes on nothing"],
+            words(&["finger 1", "closes on nothing"]),
         ),
         (
             cube_line("narrow", json!({}), [0.0, 0.0, 0.0], 0.04),
             2,
-            vec!["starts inside", "narrower"],
+            words(&["starts inside", "narrower"]),
         ),
         (
             cube_line(
@@ -625,7 +630,7 @@ fn every_refusal_names_its_cause_and_the_next_line_is_answered() {
                 0.1,
             ),
             2,
-            vec!["/no/such/mesh.stl", "cannot read"],
+            words(&["/no/such/mesh.stl", "cannot read"]),
         ),
         (
             cube_line(
@@ -635,7 +640,7 @@ fn every_refusal_names_its_cause_and_the_next_line_is_answered() {
                 0.1,
             ),
             2,
-            vec![open.as_str(), "open"],
+            words(&[open.as_str(), "open"]),
         ),
         (
             cube_line(
@@ -645,7 +650,7 @@ fn every_refusal_names_its_cause_and_the_next_line_is_answered() {
                 0.1,
             ),
             2,
-            vec![closed.as_str(), "scale [0.0, 1.0, 1.0]"],
+            words(&[closed.as_str(), "scale [0.0, 1.0, 1.0]"]),
         ),
         (
             cube_line(
@@ -655,8 +660,14 @@ fn every_refusal_names_its_cause_and_the_next_line_is_answered() {
                 0.1,
             ),
             2,
-            vec!["inline_mesh", "scale"],
+            words(&["inline_mesh", "scale"]),
         ),
+    ]
+}
+
+/// The refusals that come from the primitive, the object's own fields and the JSON.
+fn shape_refusals() -> Vec<Refusal> {
+    vec![
         (
             cube_line(
                 "primitive scale",
@@ -665,7 +676,7 @@ fn every_refusal_names_its_cause_and_the_next_line_is_answered() {
                 0.1,
             ),
             2,
-            vec!["object.scale", "primitive"],
+            words(&["object.scale", "primitive"]),
         ),
         (
             cube_line(
@@ -675,7 +686,7 @@ fn every_refusal_names_its_cause_and_the_next_line_is_answered() {
                 0.1,
             ),
             2,
-            vec!["unknown", "type 7"],
+            words(&["unknown", "type 7"]),
         ),
         (
             cube_line(
@@ -685,7 +696,7 @@ fn every_refusal_names_its_cause_and_the_next_line_is_answered() {
                 0.1,
             ),
             2,
-            vec!["type 5"],
+            words(&["type 5"]),
         ),
         (
             cube_line(
@@ -695,7 +706,7 @@ fn every_refusal_names_its_cause_and_the_next_line_is_answered() {
                 0.1,
             ),
             2,
-            vec!["box", "dimensions [0.1, 0.1]"],
+            words(&["box", "dimensions [0.1, 0.1]"]),
         ),
         (
             cube_line(
@@ -705,7 +716,7 @@ fn every_refusal_names_its_cause_and_the_next_line_is_answered() {
                 0.1,
             ),
             2,
-            vec!["exactly one shape", "mesh, primitive"],
+            words(&["exactly one shape", "mesh, primitive"]),
         ),
         (
             cube_line(
@@ -715,7 +726,7 @@ fn every_refusal_names_its_cause_and_the_next_line_is_answered() {
                 0.1,
             ),
             2,
-            vec!["has_center_of_mass"],
+            words(&["has_center_of_mass"]),
         ),
         (
             cube_line(
@@ -725,14 +736,22 @@ fn every_refusal_names_its_cause_and_the_next_line_is_answered() {
                 0.1,
             ),
             2,
-            vec!["object.pose.orientation"],
+            words(&["object.pose.orientation"]),
         ),
         (
             cube_line("bad field", json!({"friction": "high"}), [0.0; 3], 0.1),
             2,
-            vec!["field object.friction", "expected a number"],
+            words(&["field object.friction", "expected a number"]),
         ),
-    ];
+    ]
+}
+
+/// (d) Every refusal, each followed by a good line that is still answered.
+#[test]
+fn every_refusal_names_its_cause_and_the_next_line_is_answered() {
+    let dir = temp_dir("poses_refusals");
+    let mut refusals = mesh_refusals(dir.path());
+    refusals.extend(shape_refusals());
     let good = cube_line("good", json!({}), [0.0, 0.0, 0.01], 0.1);
     let mut input = String::new();
     for (line, _, _) in &refusals {
