@@ -179,7 +179,11 @@
 //!   halves every round (27 rounds to 14 for the slowest candidate of `benches/tail.rs`).
 //! - So an answer makes at most `MAX_EXCHANGES + 4 + L` maximisations (`L` the local minima it
 //!   reports), of at most `MAX_SPLITS` splits each; [`SpatialRobustRecommendation::splits`]
-//!   counts them. The envelope's walk is bounded in `planar/robust/envelope.rs`.
+//!   counts them. A maximisation depends only on the quantity and the tilt, so one at a tilt
+//!   already maximised (the answer's tilt is the last exchange round's, and usually one of the
+//!   local minima's) is taken from the earlier one, not made again. The envelope's walk is
+//!   bounded in `planar/robust/envelope.rs`; a curve nowhere on top of a round's envelope is
+//!   left out of the later rounds' walks (points are only added, so it stays below them).
 //!
 //! # Status: used by the product for spatial candidates with a centre-of-mass box
 //! What is checked: the closed form of §2 against the planar solver on each object's own plane
@@ -229,7 +233,7 @@ use crate::sinusoid::Angle;
 use crate::{AllowedRange, Contact, InvalidInput, LocalMinimum, Objective, Settings};
 use nalgebra::{Vector2, Vector3};
 use region::Region;
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 use std::f64::consts::FRAC_PI_2;
 use std::fmt;
 use worst::{AxisPoint, AxisView, Quantity, Segment};
@@ -584,6 +588,10 @@ struct Problem {
     mass_worst: f64,
     /// The splits of every maximisation so far (module docs §4).
     splits: Cell<usize>,
+    /// The maximisations made so far, by quantity and tilt (the bits of θ): the last exchange
+    /// round's tilt is the answer's, and usually one of the local minima's too, and a
+    /// maximisation depends on nothing else, so each is made once.
+    done: RefCell<Vec<(bool, u64, worst::Worst)>>,
 }
 
 impl Problem {
@@ -670,6 +678,7 @@ impl Problem {
             nominal_weight: candidate.mass * g_norm,
             mass_worst,
             splits: Cell::new(0),
+            done: RefCell::new(Vec::new()),
         }
     }
 }
@@ -781,8 +790,13 @@ impl Problem {
         } else {
             self.quantity
         };
+        let key = (squeeze, theta.to_bits());
+        if let Some(&(_, _, w)) = self.done.borrow().iter().find(|d| (d.0, d.1) == key) {
+            return w;
+        }
         let worst = self.view.worst(q, theta, &self.segments, &self.axis_points);
         self.splits.set(self.splits.get() + worst.splits);
+        self.done.borrow_mut().push((key.0, key.1, worst));
         worst
     }
 
@@ -855,6 +869,19 @@ impl Problem {
                 return (theta, gap, envelope, points.len());
             }
             rounds += 1;
+            // A curve nowhere on top of the envelope stays below every later one (points are
+            // only added): it is dropped from the walks of later rounds.
+            if !envelope.pieces.is_empty() {
+                let mut on_top = vec![false; tracks.len()];
+                for p in &envelope.pieces {
+                    on_top[p.vertex] = true;
+                }
+                let mut k = 0;
+                tracks.retain(|_| {
+                    k += 1;
+                    on_top[k - 1]
+                });
+            }
             points.push(worst.point);
             tracks.push(track);
             if let (Some(i), Some((j, t_last))) = (worst.segment, last) {
