@@ -490,16 +490,17 @@ mod tests {
         }
     }
 
-    /// A 40 mm cube in millimetres as an ASCII STL, corner at the origin.
-    fn write_cube(path: &std::path::Path) {
-        let c = |i: usize| {
+    /// A 40 mm cube in millimetres, corner at the origin: its corners and its triangles, two to
+    /// a face, wound outward.
+    fn cube_mm() -> ([[f64; 3]; 8], Vec<[u32; 3]>) {
+        let corners = std::array::from_fn(|i| {
             [
                 40.0 * (i & 1) as f64,
                 40.0 * ((i >> 1) & 1) as f64,
                 40.0 * ((i >> 2) & 1) as f64,
             ]
-        };
-        let quads = [
+        });
+        let quads: [[u32; 4]; 6] = [
             [0, 2, 3, 1],
             [4, 5, 7, 6],
             [0, 1, 5, 4],
@@ -507,16 +508,24 @@ mod tests {
             [0, 4, 6, 2],
             [1, 3, 7, 5],
         ];
+        let triangles = quads
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect();
+        (corners, triangles)
+    }
+
+    /// [`cube_mm`] as an ASCII STL.
+    fn write_cube(path: &std::path::Path) {
+        let (corners, triangles) = cube_mm();
         let mut text = String::from("solid cube\n");
-        for q in quads {
-            for t in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
-                text.push_str(" facet normal 0 0 0\n  outer loop\n");
-                for i in t {
-                    let [x, y, z] = c(i);
-                    text.push_str(&format!("   vertex {x} {y} {z}\n"));
-                }
-                text.push_str("  endloop\n endfacet\n");
+        for t in triangles {
+            text.push_str(" facet normal 0 0 0\n  outer loop\n");
+            for i in t {
+                let [x, y, z] = corners[i as usize];
+                text.push_str(&format!("   vertex {x} {y} {z}\n"));
             }
+            text.push_str("  endloop\n endfacet\n");
         }
         text.push_str("endsolid cube\n");
         std::fs::write(path, text).expect("write the cube");
@@ -602,23 +611,11 @@ mod tests {
     fn an_inline_mesh_is_the_same_cube() {
         let answerer = PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default());
         let mut set = set_on("", 1);
-        let c = |i: usize| Point {
-            x: 40.0 * (i & 1) as f64,
-            y: 40.0 * ((i >> 1) & 1) as f64,
-            z: 40.0 * ((i >> 2) & 1) as f64,
-        };
-        set.object.inline_mesh.vertices = (0..8).map(c).collect();
-        let quads = [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ];
-        set.object.inline_mesh.triangles = quads
-            .iter()
-            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        let (corners, triangles) = cube_mm();
+        set.object.inline_mesh.vertices =
+            corners.iter().map(|&[x, y, z]| Point { x, y, z }).collect();
+        set.object.inline_mesh.triangles = triangles
+            .into_iter()
             .map(|vertex_indices| MeshTriangle { vertex_indices })
             .collect();
         let r = answerer.answer(
