@@ -1,33 +1,17 @@
 //! The `grasp_orient` binary as a user runs it.
 
-use crate::util::run::{bin, paper_lines, temp_dir};
+use crate::util::run::{bin, json_lines, paper_lines, run_fed, temp_dir};
 use serde_json::Value;
 use std::io::Write;
 use std::process::Stdio;
 
 fn run_solve(args: &[&str], input: &str) -> (Vec<Value>, String, bool) {
-    let mut child = bin()
-        .arg("solve")
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("binary runs");
-    child
-        .stdin
-        .take()
-        .expect("stdin")
-        .write_all(input.as_bytes())
-        .expect("write stdin");
-    let out = child.wait_with_output().expect("binary exits");
-    let lines = String::from_utf8(out.stdout)
-        .expect("utf-8")
-        .lines()
-        .map(|l| serde_json::from_str(l).expect("every output line is JSON"))
-        .collect();
+    let mut cmd = bin();
+    cmd.arg("solve").args(args);
+    let (out, written) = run_fed(cmd, input);
+    written.expect("write stdin");
     (
-        lines,
+        json_lines(&out),
         String::from_utf8_lossy(&out.stderr).into_owned(),
         out.status.success(),
     )

@@ -3,7 +3,7 @@
 //! by a reference that shares no code with the product (closed-form ray casts on the primitives,
 //! plain Möller–Trumbore over every triangle of a mesh, the centroid from the solid's boxes).
 
-use crate::util::run::{bin, temp_dir};
+use crate::util::run::{bin, json_lines, run_fed, temp_dir};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -20,26 +20,11 @@ fn run(command: &str, args: &[&str], input: &str, env: &[(&str, &Path)]) -> (Vec
     for (k, v) in env {
         cmd.env(k, v);
     }
-    let mut child = cmd
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("binary runs");
-    child
-        .stdin
-        .take()
-        .expect("stdin")
-        .write_all(input.as_bytes())
-        .expect("write stdin");
-    let out = child.wait_with_output().expect("binary exits");
+    let (out, written) = run_fed(cmd, input);
+    written.expect("write stdin");
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
     assert!(out.status.success(), "{command} failed: {stderr}");
-    let lines = String::from_utf8(out.stdout)
-        .expect("utf-8")
-        .lines()
-        .map(|l| serde_json::from_str(l).expect("every output line is JSON"))
-        .collect();
+    let lines = json_lines(&out);
     (lines, stderr)
 }
 

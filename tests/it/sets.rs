@@ -1,34 +1,22 @@
 //! Sets of candidates as a user meets them without DDS: `rank` (table and JSON), `solve` with the
 //! gripper's limit, and recordings of sets written, replayed, tampered with and rewritten.
 
-use crate::util::run::{bin, paper_lines, paper_messages, temp_dir};
+use crate::util::run::{bin, json_lines, paper_lines, paper_messages, run_fed, temp_dir};
 use grasp_orient::answer::{answer_set, Rules};
 use grasp_orient::msg::{GraspCandidateSet, GripRecommendation, GripRecommendationSet};
 use grasp_orient::record::{bag, BagWriter, Entry, Payload, SetTopics, Topics};
 use grasp_orient::solver::Settings;
-use serde_json::Value;
-use std::io::Write;
 use std::path::Path;
-use std::process::{Output, Stdio};
+use std::process::Output;
 
 /// Runs the binary with `input` on standard input.
 fn run(args: &[&str], input: &str) -> Output {
-    let mut child = bin()
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("binary runs");
+    let mut cmd = bin();
+    cmd.args(args);
     // A binary that exits before reading its input (a refused argument, a crash) closes the pipe:
     // the write then fails, and what the binary said is the better report, so it is returned for
     // the caller to judge (a refused `--rank-by` may or may not have exited before the write).
-    let written = child
-        .stdin
-        .take()
-        .expect("stdin")
-        .write_all(input.as_bytes());
-    let out = child.wait_with_output().expect("binary exits");
+    let (out, written) = run_fed(cmd, input);
     match written {
         Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => panic!(
             "writing to `grasp_orient {}` failed ({e}); it exited with {:?}: {}",
@@ -42,13 +30,6 @@ fn run(args: &[&str], input: &str) -> Output {
 
 fn stdout(out: &Output) -> String {
     String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-fn json_lines(out: &Output) -> Vec<Value> {
-    stdout(out)
-        .lines()
-        .map(|l| serde_json::from_str(l).expect("JSON"))
-        .collect()
 }
 
 #[test]

@@ -2,7 +2,9 @@
 //! users send it.
 
 use grasp_orient::msg::GraspCandidate;
-use std::process::Command;
+use serde_json::Value;
+use std::io::Write;
+use std::process::{Command, Output, Stdio};
 
 /// A command that runs the `grasp_orient` binary built for these tests.
 pub fn bin() -> Command {
@@ -28,5 +30,30 @@ pub fn paper_messages() -> Vec<GraspCandidate> {
         .lines()
         .filter(|l| !l.trim().is_empty())
         .map(|l| serde_json::from_str(l).expect("a candidate"))
+        .collect()
+}
+
+/// Runs `cmd` with `input` on its standard input: what it printed, and how writing the input
+/// went (a binary that exits before reading its input closes the pipe; the caller judges).
+pub fn run_fed(mut cmd: Command, input: &str) -> (Output, std::io::Result<()>) {
+    let mut child = cmd
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("binary runs");
+    let written = child
+        .stdin
+        .take()
+        .expect("stdin")
+        .write_all(input.as_bytes());
+    (child.wait_with_output().expect("binary exits"), written)
+}
+
+/// Every line of standard output as JSON.
+pub fn json_lines(out: &Output) -> Vec<Value> {
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("every output line is JSON"))
         .collect()
 }
