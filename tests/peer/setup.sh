@@ -10,7 +10,7 @@
 #                             else python3 if it is 3.11; installed with apt-get when none is found)
 #
 # Idempotent and cached: the venv is reinstalled only when tests/peer/requirements.txt (or the base Python)
-# changes, the msg package is rebuilt only when msg/*.msg, srv/*.srv, package.xml or CMakeLists.txt change.
+# changes, the msg package is rebuilt only when msg/*.msg, srv/*.srv, meshes/*, package.xml or CMakeLists.txt change.
 # Needs: Debian 12 (or any glibc >= 2.28 x86_64 Linux with a C/C++ compiler, make and CPython 3.11 with
 # headers), network access to PyPI (and to the Debian mirror when packages are missing).
 set -euo pipefail
@@ -138,7 +138,7 @@ MSG_HASH="$(
     cd "$REPO_ROOT"
     {
         echo "req=$REQ_HASH peer=$PEER_DIR"
-        for f in CMakeLists.txt package.xml msg/*.msg srv/*.srv; do
+        for f in CMakeLists.txt package.xml msg/*.msg srv/*.srv meshes/*; do
             if [ -f "$f" ]; then printf '%s %s\n' "$f" "$(sha256sum <"$f" | cut -d' ' -f1)"; fi
         done
     } | sha256sum | cut -d' ' -f1
@@ -169,6 +169,7 @@ else
     cp "$REPO_ROOT/CMakeLists.txt" "$REPO_ROOT/package.xml" "$SRC/"
     cp "$REPO_ROOT"/msg/*.msg "$SRC/msg/"
     cp "$REPO_ROOT"/srv/*.srv "$SRC/srv/"
+    cp -r "$REPO_ROOT/meshes" "$SRC/"   # installed into share/grasp_orient: package://grasp_orient/meshes/...
     run_logged cmake-configure "${BUILD_ENV[@]}" "$VENV/bin/cmake" -S "$SRC" -B "$BUILD" \
         -G "Unix Makefiles" \
         -DCMAKE_BUILD_TYPE=Release \
@@ -252,7 +253,7 @@ mv "$ENV_SH.tmp" "$ENV_SH"
 # 6. Check that the result imports
 # ---------------------------------------------------------------------------------------------------
 # shellcheck disable=SC1090
-if ! ( source "$ENV_SH" && python -c 'import rclpy; from grasp_orient.msg import GraspCandidate, GripRecommendation, GraspCandidateSet, GripRecommendationSet; from grasp_orient.srv import Recommend' ) >"$LOGS/import-check.log" 2>&1; then
+if ! ( source "$ENV_SH" && python -c 'import rclpy; from grasp_orient.msg import GraspCandidate, GripRecommendation, GraspCandidateSet, GripRecommendationSet, PoseCandidate, PoseRecommendation, PoseCandidateSet, PoseRecommendationSet; from grasp_orient.srv import Recommend, RecommendPoses' ) >"$LOGS/import-check.log" 2>&1; then
     cat "$LOGS/import-check.log" >&2
     die "rclpy / grasp_orient.msg import check failed with $ENV_SH"
 fi
