@@ -296,6 +296,7 @@ fn mcap_seeds() -> Vec<Vec<u8>> {
         recommendations: "/grip_recommendations".into(),
         markers: None,
         sets: Some(SetTopics::default_names()),
+        poses: None,
     };
     let mut seeds = Vec::new();
     for n in [1usize, 2, 4, 9] {

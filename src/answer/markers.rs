@@ -8,17 +8,21 @@
 //! cone the planar problem in Π uses), the 3D contact forces, the current gravity and the
 //! recommended one (which lies in Π).
 //!
+//! A pose answer (`build_pose`) adds the object (its mesh as triangles, or its primitive) and the
+//! fingers' closing line to the markers of the spatial candidate its fingers make.
+//!
 //! The box of possible centres of mass (`center_of_mass_tolerance`, the node's where the
 //! candidate gives none) is drawn as its edges around the centre of mass, in z = 0 for a planar
 //! candidate (whose model ignores z); with no box the marker is a DELETE, so that a box drawn for
 //! an earlier candidate does not stay on screen.
 
 use crate::msg::{
-    ColorRgba, GraspCandidate, GripRecommendation, Marker, MarkerArray, Point, Pose, Quaternion,
-    Vector3,
+    ColorRgba, GraspCandidate, GripRecommendation, Marker, MarkerArray, Point, Pose, PoseCandidate,
+    PoseRecommendation, Quaternion, Vector3,
 };
-use crate::solver::SpatialRecommendation;
-use nalgebra::Vector3 as V3;
+use crate::solver::{Settings, SpatialRecommendation};
+use grasp_orient_geometry::{ClosingAxis, Object, Primitive, Shape};
+use nalgebra::{UnitQuaternion, Vector3 as V3};
 
 /// Namespaces of the markers, one marker id each.
 pub const NAMESPACES: [&str; 7] = [
@@ -253,6 +257,155 @@ fn draw(candidate: &GraspCandidate, s: &Scene) -> MarkerArray {
     }
 }
 
+/// Namespaces of the markers a pose answer adds, one marker id each.
+pub const POSE_NAMESPACES: [&str; 2] = ["object", "fingers"];
+
+/// How many sides a cone is drawn with.
+const CONE_SIDES: usize = 32;
+
+/// The markers for one answered pose candidate (status OK), in its header frame: those of the
+/// spatial candidate its fingers make ([`build`], with the 3D solution solved again for the
+/// drawing), then the object (`object`: a TRIANGLE_LIST for a mesh, inline or not, and for a
+/// cone; CUBE, SPHERE or CYLINDER for those primitives; none when `object` is `None`) and the
+/// fingers' closing line (a LINE_LIST from finger 1's start to finger 2's, the tool frame's
+/// `closing_axis` at the opening `width`). The contacts are the `contacts` marker of [`build`].
+pub fn build_pose(
+    pose: &PoseCandidate,
+    object: Option<&Object>,
+    closing_axis: ClosingAxis,
+    answer: &PoseRecommendation,
+    settings: &Settings,
+) -> MarkerArray {
+    let candidate = GraspCandidate {
+        header: pose.header.clone(),
+        id: pose.id.clone(),
+        contact_1: answer.contact_1.clone(),
+        contact_2: answer.contact_2.clone(),
+        normal_1: answer.normal_1.clone(),
+        normal_2: answer.normal_2.clone(),
+        friction_1: pose.object.friction,
+        friction_2: pose.object.friction,
+        center_of_mass: answer.center_of_mass.clone(),
+        mass: pose.object.mass,
+        gravity: pose.gravity.clone(),
+        model: GraspCandidate::MODEL_SPATIAL,
+        ..GraspCandidate::default()
+    };
+    let spatial = super::answer_in_full(&candidate, settings).spatial;
+    let mut array = build(&candidate, &answer.recommendation, spatial.as_deref());
+    if let Some(object) = object {
+        array.markers.push(object_marker(&candidate, object));
+    }
+    array
+        .markers
+        .push(fingers_marker(&candidate, pose, closing_axis));
+    array
+}
+
+/// The fingers' closing line: finger 1 starts at `c − (w/2)·b`, finger 2 at `c + (w/2)·b`
+/// (docs/poses.md, "The fingers").
+fn fingers_marker(candidate: &GraspCandidate, pose: &PoseCandidate, axis: ClosingAxis) -> Marker {
+    let (p, o) = (&pose.grasp_pose.position, &pose.grasp_pose.orientation);
+    let rotation = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(o.w, o.x, o.y, o.z));
+    let centre = V3::new(p.x, p.y, p.z);
+    let half = rotation * axis.unit().into_inner() * (0.5 * pose.width);
+    let mut m = marker(
+        candidate,
+        "fingers",
+        Marker::LINE_LIST,
+        0.01 * pose.width,
+        colour(0.9, 0.6, 0.0),
+    );
+    m.points = vec![at(&(centre - half)), at(&(centre + half))];
+    m
+}
+
+/// The object where it is: its pose, and its shape in the object frame.
+fn object_marker(candidate: &GraspCandidate, object: &Object) -> Marker {
+    let grey = ColorRgba {
+        r: 0.6,
+        g: 0.6,
+        b: 0.65,
+        a: 0.5,
+    };
+    let mut m = marker(candidate, "object", Marker::TRIANGLE_LIST, 1.0, grey);
+    let (t, q) = (&object.pose.translation, &object.pose.rotation);
+    m.pose = Pose {
+        position: Point {
+            x: t.x,
+            y: t.y,
+            z: t.z,
+        },
+        orientation: Quaternion {
+            x: q.i,
+            y: q.j,
+            z: q.k,
+            w: q.w,
+        },
+    };
+    let scale = |x: f64, y: f64, z: f64| Vector3 { x, y, z };
+    match &object.shape {
+        Shape::Mesh(mesh) => {
+            m.points = mesh
+                .corners()
+                .flat_map(|t| t.map(|[x, y, z]| Point { x, y, z }))
+                .collect();
+        }
+        Shape::Primitive(Primitive::Box { x, y, z }) => {
+            m.kind = Marker::CUBE;
+            m.scale = scale(*x, *y, *z);
+        }
+        Shape::Primitive(Primitive::Sphere { radius }) => {
+            m.kind = Marker::SPHERE;
+            m.scale = scale(2.0 * radius, 2.0 * radius, 2.0 * radius);
+        }
+        Shape::Primitive(Primitive::Cylinder { height, radius }) => {
+            m.kind = Marker::CYLINDER;
+            m.scale = scale(2.0 * radius, 2.0 * radius, *height);
+        }
+        Shape::Primitive(Primitive::Cone { height, radius }) => {
+            m.points = cone_triangles(*height, *radius);
+        }
+    }
+    m
+}
+
+/// A cone of [`CONE_SIDES`] sides as triangles wound outward: base disc at `z = −height/2`, tip
+/// at `+height/2` (docs/poses.md, "Shapes").
+fn cone_triangles(height: f64, radius: f64) -> Vec<Point> {
+    let base = |i: usize| {
+        let angle = std::f64::consts::TAU * (i % CONE_SIDES) as f64 / CONE_SIDES as f64;
+        let (s, c) = angle.sin_cos();
+        Point {
+            x: radius * c,
+            y: radius * s,
+            z: -0.5 * height,
+        }
+    };
+    let tip = Point {
+        x: 0.0,
+        y: 0.0,
+        z: 0.5 * height,
+    };
+    let centre = Point {
+        x: 0.0,
+        y: 0.0,
+        z: -0.5 * height,
+    };
+    (0..CONE_SIDES)
+        .flat_map(|i| {
+            [
+                base(i),
+                base(i + 1),
+                tip.clone(),
+                centre.clone(),
+                base(i + 1),
+                base(i),
+            ]
+        })
+        .collect()
+}
+
 /// The edges of the box of possible centres of mass around `centre`: a rectangle in z = 0 for a
 /// planar candidate, a box for a spatial one (degenerate sides drawn once); none without a
 /// tolerance or with one that is not a finite non-negative number.
@@ -475,5 +628,178 @@ mod tests {
             .iter()
             .flat_map(|x| &x.points)
             .any(|p| p.z.abs() > 0.1));
+    }
+
+    /// A pose candidate on `object` (JSON) at (0.5, 0, 0.1), the tool at the same place turned
+    /// by `yaw` about z, opening 0.09 m.
+    fn pose_on(object: &str, yaw: f64) -> PoseCandidate {
+        let (s, c) = (0.5 * yaw).sin_cos();
+        let line = format!(
+            r#"{{"header": {{"frame_id": "base_link"}}, "id": "p", "grasp_pose": {{"position": {{"x": 0.5, "y": 0.0, "z": 0.1}}, "orientation": {{"x": 0.0, "y": 0.0, "z": {s}, "w": {c}}}}}, "width": 0.09, "object": {{"pose": {{"position": {{"x": 0.5, "y": 0.0, "z": 0.1}}, "orientation": {{"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}}}, {object}, "mass": 0.25, "friction": 0.5}}, "gravity": {{"x": 0.0, "y": 0.0, "z": -9.81}}}}"#
+        );
+        serde_json::from_str(&line).expect("a PoseCandidate")
+    }
+
+    /// The pose answered, and its markers.
+    fn pose_markers(pose: &PoseCandidate) -> (PoseRecommendation, MarkerArray) {
+        let answerer = crate::answer::PoseAnswerer::new(ClosingAxis::Y, Default::default());
+        let settings = Settings::default();
+        let answer = answerer.answer(pose, &settings, &crate::answer::Rules::default());
+        assert_eq!(answer.recommendation.status, 0, "{answer:?}");
+        let object = answerer.object(&pose.object).expect("an object");
+        let m = build_pose(pose, Some(&object), ClosingAxis::Y, &answer, &settings);
+        (answer, m)
+    }
+
+    fn find<'a>(m: &'a MarkerArray, ns: &str) -> &'a Marker {
+        m.markers
+            .iter()
+            .find(|x| x.ns == ns)
+            .unwrap_or_else(|| panic!("no {ns} marker"))
+    }
+
+    /// A box: a CUBE of its sides at the object's pose; the fingers' closing line from
+    /// `c − (w/2)·b` to `c + (w/2)·b` with `b` the tool's y turned by the yaw; the contacts where
+    /// the answer puts them; every marker in the header frame.
+    #[test]
+    fn a_pose_on_a_box_draws_the_box_the_closing_line_and_the_contacts() {
+        let yaw = 0.3_f64;
+        let pose = pose_on(
+            r#""primitive": {"type": 1, "dimensions": [0.04, 0.06, 0.08]}"#,
+            yaw,
+        );
+        let (answer, m) = pose_markers(&pose);
+        let names: Vec<&str> = m.markers.iter().map(|x| x.ns.as_str()).collect();
+        assert!(NAMESPACES
+            .iter()
+            .chain(&POSE_NAMESPACES)
+            .all(|n| names.contains(n)));
+        assert!(m.markers.iter().all(|x| x.header.frame_id == "base_link"));
+        let object = find(&m, "object");
+        assert_eq!(object.kind, Marker::CUBE);
+        assert_eq!(
+            (object.scale.x, object.scale.y, object.scale.z),
+            (0.04, 0.06, 0.08)
+        );
+        assert_eq!((object.pose.position.x, object.pose.position.z), (0.5, 0.1));
+        let fingers = find(&m, "fingers");
+        assert_eq!(fingers.kind, Marker::LINE_LIST);
+        let b = V3::new(-yaw.sin(), yaw.cos(), 0.0);
+        let want = [
+            V3::new(0.5, 0.0, 0.1) - b * 0.045,
+            V3::new(0.5, 0.0, 0.1) + b * 0.045,
+        ];
+        assert_eq!(fingers.points.len(), 2);
+        for (p, w) in fingers.points.iter().zip(want) {
+            assert!((V3::new(p.x, p.y, p.z) - w).norm() < 1e-12, "{p:?} vs {w}");
+        }
+        let contacts = find(&m, "contacts");
+        let c1 = &answer.contact_1;
+        assert_eq!(
+            (
+                contacts.points[0].x,
+                contacts.points[0].y,
+                contacts.points[0].z
+            ),
+            (c1.x, c1.y, c1.z)
+        );
+        // The contacts lie on the closing line, on the box's faces y = ±0.03.
+        for p in &contacts.points {
+            assert!(((p.y).abs() - 0.03).abs() < 1e-12, "{p:?}");
+        }
+    }
+
+    /// A sphere and a cylinder take their marker types, scaled to their diameters and height.
+    #[test]
+    fn spheres_and_cylinders_are_their_marker_types() {
+        let sphere = pose_on(r#""primitive": {"type": 2, "dimensions": [0.035]}"#, 0.0);
+        let object = find(&pose_markers(&sphere).1, "object").clone();
+        assert_eq!(object.kind, Marker::SPHERE);
+        assert_eq!((object.scale.x, object.scale.z), (0.07, 0.07));
+        let cylinder = pose_on(
+            r#""primitive": {"type": 3, "dimensions": [0.12, 0.033]}"#,
+            0.0,
+        );
+        let object = find(&pose_markers(&cylinder).1, "object").clone();
+        assert_eq!(object.kind, Marker::CYLINDER);
+        assert_eq!(
+            (object.scale.x, object.scale.y, object.scale.z),
+            (0.066, 0.066, 0.12)
+        );
+    }
+
+    /// A cone is a TRIANGLE_LIST: its tip at +height/2, its base disc at −height/2 within the
+    /// radius, each triangle wound outward (its normal away from the axis or down).
+    #[test]
+    fn a_cone_is_drawn_as_triangles_wound_outward() {
+        let cone = pose_on(
+            r#""primitive": {"type": 4, "dimensions": [0.1, 0.04]}"#,
+            0.0,
+        );
+        let object = find(&pose_markers(&cone).1, "object").clone();
+        assert_eq!(object.kind, Marker::TRIANGLE_LIST);
+        assert_eq!(object.points.len(), 6 * CONE_SIDES);
+        let v = |p: &Point| V3::new(p.x, p.y, p.z);
+        for t in object.points.chunks(3) {
+            let [a, b, c] = [v(&t[0]), v(&t[1]), v(&t[2])];
+            for p in [a, b, c] {
+                assert!(p.z == 0.05 || (p.z == -0.05 && p.xy().norm() <= 0.04 + 1e-15));
+            }
+            let normal = (b - a).cross(&(c - a));
+            let centroid = (a + b + c) / 3.0;
+            assert!(
+                normal.dot(&(centroid - V3::new(0.0, 0.0, 0.0))) > 0.0,
+                "{t:?}"
+            );
+        }
+    }
+
+    /// An inline mesh is a TRIANGLE_LIST of its triangles' corners, scaled into metres, at the
+    /// object's pose.
+    #[test]
+    fn a_mesh_is_drawn_as_its_triangles_in_metres() {
+        let corners: Vec<String> = (0..8)
+            .map(|i| {
+                let c = |bit: usize, h: f64| if i & bit == 0 { -h } else { h };
+                format!(
+                    r#"{{"x": {}, "y": {}, "z": {}}}"#,
+                    c(4, 20.0),
+                    c(2, 30.0),
+                    c(1, 40.0)
+                )
+            })
+            .collect();
+        let faces = [
+            [0, 1, 3],
+            [0, 3, 2],
+            [4, 6, 7],
+            [4, 7, 5],
+            [0, 4, 5],
+            [0, 5, 1],
+            [2, 3, 7],
+            [2, 7, 6],
+            [0, 2, 6],
+            [0, 6, 4],
+            [1, 5, 7],
+            [1, 7, 3],
+        ];
+        let triangles: Vec<String> = faces
+            .iter()
+            .map(|f| format!(r#"{{"vertex_indices": [{}, {}, {}]}}"#, f[0], f[1], f[2]))
+            .collect();
+        let mesh = format!(
+            r#""inline_mesh": {{"vertices": [{}], "triangles": [{}]}}, "scale": {{"x": 0.001, "y": 0.001, "z": 0.001}}"#,
+            corners.join(", "),
+            triangles.join(", ")
+        );
+        let (_, m) = pose_markers(&pose_on(&mesh, 0.0));
+        let object = find(&m, "object");
+        assert_eq!(object.kind, Marker::TRIANGLE_LIST);
+        assert_eq!(object.points.len(), 36);
+        assert!(object
+            .points
+            .iter()
+            .all(|p| (p.x.abs(), p.y.abs(), p.z.abs()) == (0.02, 0.03, 0.04)));
+        assert_eq!((object.pose.position.x, object.pose.position.z), (0.5, 0.1));
     }
 }

@@ -20,7 +20,10 @@ mod pose;
 mod sets;
 
 pub use candidate::{answer, answer_in_full, Answered};
-pub use pose::{without_geometry, PoseAnswerer, PoseRefusal, MESH_CACHE_BYTES};
+pub use pose::{
+    pose_set_without_geometry, uncast, without_geometry, PoseAnswerer, PoseRefusal,
+    MESH_CACHE_BYTES,
+};
 pub use sets::{
     answer_one, answer_one_in_full, answer_set, answer_set_on, answer_set_within, apply_limit,
     busy, cut_like, echo_set, is_sorted_by, not_solved, rank, solver_pool, DefaultTolerances,

@@ -26,8 +26,8 @@ use super::{answer_one, answer_set, Rules};
 use crate::msg::convert::no_closure;
 use crate::msg::{
     invalid, CompactString, GraspCandidate, GraspCandidateSet, GraspObject, GripRecommendation,
-    Header, Point, Pose, PoseCandidate, PoseCandidateSet, PoseRecommendation,
-    PoseRecommendationSet, Vector3,
+    GripRecommendationSet, Header, Point, Pose, PoseCandidate, PoseCandidateSet,
+    PoseRecommendation, PoseRecommendationSet, Vector3,
 };
 use crate::solver::Settings;
 use grasp_orient_geometry::{
@@ -35,6 +35,7 @@ use grasp_orient_geometry::{
     MeshCache, Object, Primitive, Shape,
 };
 use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion};
+use std::sync::Arc;
 
 /// The most bytes of meshes a [`PoseAnswerer`] keeps loaded (least recently used dropped first).
 pub const MESH_CACHE_BYTES: usize = 512 << 20;
@@ -89,18 +90,27 @@ impl PoseRefusal {
 
 /// Answers pose candidates: the closing axis, and the meshes loaded so far (each file at each
 /// scale once, `package://` through the ament index it was made with).
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub struct PoseAnswerer {
     closing_axis: ClosingAxis,
-    meshes: MeshCache,
+    meshes: Arc<MeshCache>,
 }
 
 impl PoseAnswerer {
     /// Closing along `closing_axis`, `package://` resolved through `index`.
     pub fn new(closing_axis: ClosingAxis, index: AmentIndex) -> Self {
+        Self::sharing(
+            closing_axis,
+            Arc::new(MeshCache::new(index, MESH_CACHE_BYTES)),
+        )
+    }
+
+    /// Closing along `closing_axis`, with the meshes of `meshes` (shared: the node keeps one
+    /// cache for its thread and its set thread, whatever the closing axis in force).
+    pub fn sharing(closing_axis: ClosingAxis, meshes: Arc<MeshCache>) -> Self {
         Self {
             closing_axis,
-            meshes: MeshCache::new(index, MESH_CACHE_BYTES),
+            meshes,
         }
     }
 
@@ -153,6 +163,22 @@ impl PoseAnswerer {
         settings: &Settings,
         rules: &Rules,
     ) -> PoseRecommendationSet {
+        self.answer_set_with(set, rules, |candidates| {
+            answer_set(candidates, settings, rules)
+        })
+    }
+
+    /// [`PoseAnswerer::answer_set`] with the set of spatial candidates the poses make answered
+    /// by `answer` (the node's set thread answers it within `max_set_time`:
+    /// `answer_set_within`). `answer` gets a candidate per pose, a pose the geometry refused as
+    /// an empty candidate (refused by the solver, and then answered with the geometry's
+    /// refusal).
+    pub fn answer_set_with(
+        &self,
+        set: &PoseCandidateSet,
+        rules: &Rules,
+        answer: impl FnOnce(&GraspCandidateSet) -> GripRecommendationSet,
+    ) -> PoseRecommendationSet {
         let target = |id| Target {
             header: &set.header,
             id,
@@ -194,16 +220,12 @@ impl PoseAnswerer {
                 })
                 .collect()
         };
-        let answered = answer_set(
-            &GraspCandidateSet {
-                header: set.header.clone(),
-                id: set.id.clone(),
-                candidates,
-                max_grip_force: set.max_grip_force,
-            },
-            settings,
-            rules,
-        );
+        let answered = answer(&GraspCandidateSet {
+            header: set.header.clone(),
+            id: set.id.clone(),
+            candidates,
+            max_grip_force: set.max_grip_force,
+        });
         let recommendations = answered
             .recommendations
             .into_iter()
@@ -224,8 +246,8 @@ impl PoseAnswerer {
         }
     }
 
-    /// The object's pose and shape, checked.
-    fn object(&self, o: &GraspObject) -> Result<Object, PoseRefusal> {
+    /// The object's pose and shape, checked: for the markers that draw it.
+    pub fn object(&self, o: &GraspObject) -> Result<Object, PoseRefusal> {
         let pose = isometry(&o.pose, "object.pose")?;
         let scale = [o.scale.x, o.scale.y, o.scale.z];
         let mut given = Vec::new();
@@ -372,6 +394,51 @@ impl Target<'_> {
                 invalid(&stub, &why.message)
             },
         )
+    }
+}
+
+/// The answer to a pose set whose members were not cast (refused whole, busy, or echoed): `reply`,
+/// an answer to as many empty candidates as `set` has poses, with the poses' ids and no geometry.
+pub fn pose_set_without_geometry(
+    set: &PoseCandidateSet,
+    reply: GripRecommendationSet,
+) -> PoseRecommendationSet {
+    let recommendations = reply
+        .recommendations
+        .into_iter()
+        .zip(&set.poses)
+        .map(|(mut r, p)| {
+            r.candidate_id = p.id.clone();
+            without_geometry(r)
+        })
+        .collect();
+    PoseRecommendationSet {
+        header: reply.header,
+        set_id: reply.set_id,
+        recommendations,
+        ranking: reply.ranking,
+        ranked_by: reply.ranked_by,
+        status: reply.status,
+        message: reply.message,
+    }
+}
+
+/// The set of empty candidates, one per pose, that stands for `set` where its poses are not cast
+/// (see [`pose_set_without_geometry`]).
+pub fn uncast(set: &PoseCandidateSet) -> GraspCandidateSet {
+    GraspCandidateSet {
+        header: set.header.clone(),
+        id: set.id.clone(),
+        candidates: set
+            .poses
+            .iter()
+            .map(|p| GraspCandidate {
+                header: set.header.clone(),
+                id: p.id.clone(),
+                ..GraspCandidate::default()
+            })
+            .collect(),
+        max_grip_force: set.max_grip_force,
     }
 }
 

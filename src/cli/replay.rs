@@ -8,10 +8,13 @@
 use super::{Negative, SolveOptions};
 use anyhow::{bail, Context};
 use grasp_orient::config::Config;
-use grasp_orient::msg::{GraspCandidate, GraspCandidateSet, GripRecommendation, RosMessage};
+use grasp_orient::msg::{
+    GraspCandidate, GraspCandidateSet, GripRecommendation, PoseCandidate, PoseCandidateSet,
+    RosMessage,
+};
 use grasp_orient::record::bag::{self, Bag};
 use grasp_orient::record::output::{Pending, Replacement};
-use grasp_orient::record::{BagWriter, Entry, Payload, SetTopics, Topics};
+use grasp_orient::record::{BagWriter, Entry, Payload, PoseTopics, SetTopics, Topics};
 use grasp_orient::replay::{
     replay, replay_with_answers, Answers, Override, Plan, Summary, TOLERANCE,
 };
@@ -86,6 +89,7 @@ impl Output {
             recommendations: "/grip_recommendations".into(),
             markers: None,
             sets: Some(SetTopics::default_names()),
+            poses: Some(PoseTopics::default_names()),
         };
         let writer = BagWriter::on_file(file, &temp, &topics, 100)
             .with_context(|| format!("cannot write {}", path.display()))?;
@@ -125,12 +129,15 @@ fn replay_file(
     trouble: &mut Vec<String>,
 ) -> anyhow::Result<Summary> {
     let mut bag = bag::read(path)?;
-    if bag.candidates.is_empty() && bag.candidate_sets.is_empty() {
+    let poses = bag.pose_candidates.len() + bag.pose_sets.len();
+    if bag.candidates.is_empty() && bag.candidate_sets.is_empty() && poses == 0 {
         bail!(
-            "{}: no {} or {} messages (cdr) in it",
+            "{}: no {}, {}, {} or {} messages (cdr) in it",
             path.display(),
             GraspCandidate::TYPE_NAME,
-            GraspCandidateSet::TYPE_NAME
+            GraspCandidateSet::TYPE_NAME,
+            PoseCandidate::TYPE_NAME,
+            PoseCandidateSet::TYPE_NAME
         );
     }
     let missing = bag.fields.missing::<GripRecommendation>();
@@ -189,6 +196,18 @@ fn replay_file(
             "{}: {} candidate sets, {recorded_sets} recorded set answers",
             path.display(),
             bag.candidate_sets.len(),
+        )?;
+    }
+    if !bag.pose_candidates.is_empty() || !bag.pose_sets.is_empty() {
+        writeln!(
+            std::io::stdout(),
+            "{}: {} pose candidates, {} recorded pose answers, {} pose sets, {} recorded pose set \
+             answers",
+            path.display(),
+            bag.pose_candidates.len(),
+            bag.pose_recommendations.len(),
+            bag.pose_sets.len(),
+            bag.pose_recommendation_sets.len(),
         )?;
     }
     Ok(summary)
@@ -289,6 +308,14 @@ fn report(summary: &Summary, secs: f64, no_compare: bool) -> anyhow::Result<()> 
             } else {
                 String::new()
             }
+        )?;
+    }
+    if summary.pose_candidates + summary.pose_sets > 0 {
+        writeln!(
+            out,
+            "{} of the candidates were pose candidates and {} of the sets pose sets: their \
+             contacts, normals and centres of mass cast again from the recorded poses and objects",
+            summary.pose_candidates, summary.pose_sets
         )?;
     }
     if !summary.largest.is_empty() {

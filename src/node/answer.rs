@@ -8,16 +8,19 @@
 use super::params::Shared;
 use super::params::Version;
 use crate::answer::markers;
-use crate::answer::{answer_one_in_full, Answered};
+use crate::answer::{answer_one_in_full, Answered, PoseAnswerer};
 use crate::msg::{
-    short_id, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
-    MarkerArray,
+    short_id, CompactString, GraspCandidate, GraspCandidateSet, GripRecommendation,
+    GripRecommendationSet, MarkerArray, PoseCandidate, PoseCandidateSet, PoseRecommendation,
+    PoseRecommendationSet,
 };
 use crate::record::lifecycle::{Change, Recording, Wanted};
 use crate::record::settings::SettingsRecord;
 use crate::record::{Entry, OnStop, Payload, RecordError, Topics};
+use grasp_orient_geometry::MeshCache;
 use log::Level;
 use std::path::Path;
+use std::sync::Arc;
 
 /// A line for the log (stderr and `/rosout`).
 pub type Note = (Level, String);
@@ -60,14 +63,120 @@ pub struct Outcome {
     pub recorded: Recorded,
 }
 
-/// The messages of one answer for the recording, with the candidate's times.
+/// The answer to one pose candidate, to publish in this order: `reply`, then `markers`.
+#[derive(Debug)]
+pub struct PoseOutcome {
+    /// The answer.
+    pub reply: PoseRecommendation,
+    /// The markers, when they are on and the answer has status 0.
+    pub markers: Option<MarkerArray>,
+    /// Lines to log.
+    pub notes: Vec<Note>,
+    /// What goes to the recording once the answer is out.
+    pub recorded: Recorded,
+}
+
+/// The messages of one answer for the recording (a candidate or a pose candidate, and its
+/// answer), with the candidate's times.
 #[derive(Debug)]
 pub struct Recorded {
-    candidate: GraspCandidate,
+    candidate: Payload,
     received: u64,
     sent: u64,
-    reply: Option<GripRecommendation>,
+    reply: Option<Payload>,
     markers: Option<MarkerArray>,
+}
+
+/// A set as it came: of candidates (`grasp_candidate_sets`, `~/recommend`) or of gripper poses
+/// (`pose_candidate_sets`, `~/recommend_poses`).
+#[derive(Debug, Clone)]
+pub enum SetInput {
+    /// A `GraspCandidateSet`.
+    Candidates(GraspCandidateSet),
+    /// A `PoseCandidateSet` (boxed: its object is large).
+    Poses(Box<PoseCandidateSet>),
+}
+
+impl SetInput {
+    /// The message for the recording.
+    fn payload(self) -> Payload {
+        match self {
+            SetInput::Candidates(set) => Payload::CandidateSet(Box::new(set)),
+            SetInput::Poses(set) => Payload::PoseCandidateSet(set),
+        }
+    }
+}
+
+/// A set's answer, of the kind of its set.
+#[derive(Debug, Clone)]
+pub enum SetReply {
+    /// To a `GraspCandidateSet`.
+    Candidates(GripRecommendationSet),
+    /// To a `PoseCandidateSet`.
+    Poses(PoseRecommendationSet),
+}
+
+impl SetReply {
+    /// The set's id.
+    pub fn set_id(&self) -> &CompactString {
+        match self {
+            SetReply::Candidates(r) => &r.set_id,
+            SetReply::Poses(r) => &r.set_id,
+        }
+    }
+
+    /// The set's status.
+    pub fn status(&self) -> u8 {
+        match self {
+            SetReply::Candidates(r) => r.status,
+            SetReply::Poses(r) => r.status,
+        }
+    }
+
+    /// Why, when the status is not OK.
+    pub fn message(&self) -> &str {
+        match self {
+            SetReply::Candidates(r) => &r.message,
+            SetReply::Poses(r) => &r.message,
+        }
+    }
+
+    /// The members' recommendations, in order.
+    pub fn members(&self) -> Vec<&GripRecommendation> {
+        match self {
+            SetReply::Candidates(r) => r.recommendations.iter().collect(),
+            SetReply::Poses(r) => r
+                .recommendations
+                .iter()
+                .map(|p| &p.recommendation)
+                .collect(),
+        }
+    }
+
+    /// How many members are ranked, and by which field.
+    pub fn ranked(&self) -> (usize, &str) {
+        match self {
+            SetReply::Candidates(r) => (r.ranking.len(), &r.ranked_by),
+            SetReply::Poses(r) => (r.ranking.len(), &r.ranked_by),
+        }
+    }
+
+    /// The message for the recording.
+    fn payload(self) -> Payload {
+        match self {
+            SetReply::Candidates(r) => Payload::RecommendationSet(Box::new(r)),
+            SetReply::Poses(r) => Payload::PoseRecommendationSet(Box::new(r)),
+        }
+    }
+
+    /// The answer to a candidate set (tests).
+    #[cfg(test)]
+    pub fn candidates(&self) -> &GripRecommendationSet {
+        match self {
+            SetReply::Candidates(r) => r,
+            SetReply::Poses(_) => panic!("a pose set's answer"),
+        }
+    }
 }
 
 /// The answer to one set, to publish (or send as the service's response) in this order:
@@ -75,7 +184,7 @@ pub struct Recorded {
 #[derive(Debug)]
 pub struct SetOutcome {
     /// The answer to the set.
-    pub reply: GripRecommendationSet,
+    pub reply: SetReply,
     /// The markers of the best candidate, when they are on and one can be held.
     pub markers: Option<MarkerArray>,
     /// What goes to the recording once the answer is out.
@@ -85,10 +194,10 @@ pub struct SetOutcome {
 /// The messages of one set's answer for the recording, with the set's times.
 #[derive(Debug)]
 pub struct RecordedSet {
-    set: GraspCandidateSet,
+    set: SetInput,
     received: u64,
     sent: u64,
-    reply: Option<GripRecommendationSet>,
+    reply: Option<SetReply>,
     markers: Option<MarkerArray>,
 }
 
@@ -96,9 +205,9 @@ impl RecordedSet {
     /// What to record of a set received at `received` and sent at `sent` (ns since the epoch):
     /// the set, and its answer and markers when they are recorded.
     pub fn new(
-        reply: Option<GripRecommendationSet>,
+        reply: Option<SetReply>,
         markers: Option<MarkerArray>,
-        set: GraspCandidateSet,
+        set: SetInput,
         received: u64,
         sent: u64,
     ) -> Self {
@@ -118,8 +227,11 @@ pub struct Answerer {
     shared: Shared,
     echo: bool,
     node: String,
-    /// The candidates topic, whose undecodable messages count as candidates.
-    candidates_topic: String,
+    /// The candidates topics (of candidates and of pose candidates), whose undecodable messages
+    /// count as candidates.
+    candidates_topics: [String; 2],
+    /// The node's meshes, loaded once per resource and scale (shared with the set thread).
+    meshes: Arc<MeshCache>,
     counts: Counts,
     recording: Recording,
     /// The newest settings version the recording has heard of.
@@ -140,12 +252,20 @@ impl Answerer {
         topics: Topics,
         qos_depth: i64,
         on_stop: OnStop,
+        meshes: Arc<MeshCache>,
     ) -> Self {
         Self {
             shared,
             echo,
             node: node.to_string(),
-            candidates_topic: topics.candidates.clone(),
+            candidates_topics: [
+                topics.candidates.clone(),
+                topics
+                    .poses
+                    .as_ref()
+                    .map_or(String::new(), |p| p.candidates.clone()),
+            ],
+            meshes,
             counts: Counts::default(),
             recording: Recording::new(node, topics, qos_depth, on_stop),
             seen_version: 0,
@@ -276,6 +396,38 @@ impl Answerer {
         } else {
             answer_one_in_full(&candidate, &settings, &rules)
         };
+        self.count_one(&reply, &mut notes);
+        let markers = (markers_on && !self.echo && reply.status == GripRecommendation::STATUS_OK)
+            .then(|| {
+                markers::build(
+                    &rules.tolerances.apply(&candidate),
+                    &reply,
+                    spatial.as_deref(),
+                )
+            });
+        let recorded = Recorded {
+            reply: self
+                .recording
+                .is_on()
+                .then(|| Payload::Recommendation(Box::new(reply.clone()))),
+            markers: markers
+                .as_ref()
+                .filter(|_| self.recording.records_markers())
+                .cloned(),
+            candidate: Payload::Candidate(Box::new(candidate)),
+            received,
+            sent,
+        };
+        Outcome {
+            reply,
+            markers,
+            notes,
+            recorded,
+        }
+    }
+
+    /// Counts one answer; a line for a refusal as invalid.
+    fn count_one(&mut self, reply: &GripRecommendation, notes: &mut Vec<Note>) {
         match reply.status {
             GripRecommendation::STATUS_OK => {}
             GripRecommendation::STATUS_NO_FORCE_CLOSURE => self.counts.no_closure += 1,
@@ -294,25 +446,59 @@ impl Answerer {
             }
         }
         self.counts.answered += 1;
-        let markers = (markers_on && !self.echo && reply.status == GripRecommendation::STATUS_OK)
-            .then(|| {
-                markers::build(
-                    &rules.tolerances.apply(&candidate),
-                    &reply,
-                    spatial.as_deref(),
-                )
-            });
+    }
+
+    /// The answer to one pose candidate, received at `received` and sent at `sent` (ns since the
+    /// epoch), with the settings in force when it was received (`closing_axis` among them), on
+    /// the node's thread: a mesh named by resource and not yet in the cache is loaded here, once
+    /// (docs/node.md).
+    pub fn handle_pose(
+        &mut self,
+        candidate: PoseCandidate,
+        received: u64,
+        sent: u64,
+    ) -> PoseOutcome {
+        let mut notes = Vec::new();
+        let (settings, markers_on, rules, axis) = {
+            let live = self.shared.lock();
+            let version = live.version_at(received);
+            (
+                version.settings,
+                version.config.publish_markers,
+                version.config.rules(),
+                version.config.closing_axis,
+            )
+        };
+        let poses = PoseAnswerer::sharing(axis, self.meshes.clone());
+        let reply = if self.echo {
+            crate::answer::without_geometry(GripRecommendation {
+                header: candidate.header.clone(),
+                candidate_id: candidate.id.clone(),
+                ..GripRecommendation::default()
+            })
+        } else {
+            poses.answer(&candidate, &settings, &rules)
+        };
+        self.count_one(&reply.recommendation, &mut notes);
+        let ok = reply.recommendation.status == GripRecommendation::STATUS_OK;
+        let markers = (markers_on && !self.echo && ok).then(|| {
+            let object = poses.object(&candidate.object).ok();
+            markers::build_pose(&candidate, object.as_ref(), axis, &reply, &settings)
+        });
         let recorded = Recorded {
-            reply: self.recording.is_on().then(|| reply.clone()),
+            reply: self
+                .recording
+                .is_on()
+                .then(|| Payload::PoseRecommendation(Box::new(reply.clone()))),
             markers: markers
                 .as_ref()
                 .filter(|_| self.recording.records_markers())
                 .cloned(),
-            candidate,
+            candidate: Payload::PoseCandidate(Box::new(candidate)),
             received,
             sent,
         };
-        Outcome {
+        PoseOutcome {
             reply,
             markers,
             notes,
@@ -340,17 +526,9 @@ impl Answerer {
         if let Some(array) = markers {
             entries.push(entry(Payload::Markers(Box::new(array)), answered, answered));
         }
-        entries.push(entry(
-            Payload::Candidate(Box::new(candidate)),
-            received,
-            sent,
-        ));
+        entries.push(entry(candidate, received, sent));
         if let Some(r) = reply {
-            entries.push(entry(
-                Payload::Recommendation(Box::new(r)),
-                answered,
-                answered,
-            ));
+            entries.push(entry(r, answered, answered));
         }
         // Together: a flush (and so a file cut short by a kill or a full disk) never holds a
         // candidate without its answer.
@@ -365,20 +543,22 @@ impl Answerer {
     }
 
     /// Counts a set's answer; the lines that say what was refused or left unsolved in it.
-    pub fn count_set(&mut self, reply: &GripRecommendationSet) -> Vec<Note> {
+    pub fn count_set(&mut self, reply: &SetReply) -> Vec<Note> {
         let mut notes = Vec::new();
         self.counts.sets += 1;
-        let incomplete = reply.status == GripRecommendationSet::STATUS_INCOMPLETE;
-        if reply.status != GripRecommendationSet::STATUS_OK && !incomplete {
+        let (status, set_id, message) = (reply.status(), reply.set_id(), reply.message());
+        let members = reply.members();
+        let incomplete = status == GripRecommendationSet::STATUS_INCOMPLETE;
+        if status != GripRecommendationSet::STATUS_OK && !incomplete {
             self.counts.sets_refused += 1;
             notes.push((
                 Level::Warn,
-                format!("set {:?}: {}", short_id(&reply.set_id), reply.message),
+                format!("set {:?}: {}", short_id(set_id), message),
             ));
             return notes;
         }
         let (mut invalid, mut no_closure, mut exceeds, mut unsolved) = (0u64, 0u64, 0u64, 0u64);
-        for r in &reply.recommendations {
+        for r in &members {
             match r.status {
                 GripRecommendation::STATUS_OK => {}
                 GripRecommendation::STATUS_NO_FORCE_CLOSURE => no_closure += 1,
@@ -387,7 +567,7 @@ impl Answerer {
                 _ => invalid += 1,
             }
         }
-        self.counts.answered += reply.recommendations.len() as u64 - unsolved;
+        self.counts.answered += members.len() as u64 - unsolved;
         self.counts.invalid += invalid;
         self.counts.no_closure += no_closure;
         self.counts.exceeds_gripper += exceeds;
@@ -396,7 +576,7 @@ impl Answerer {
             self.counts.sets_incomplete += 1;
             notes.push((
                 Level::Warn,
-                format!("set {:?}: {}", short_id(&reply.set_id), reply.message),
+                format!("set {:?}: {}", short_id(set_id), message),
             ));
         }
         if invalid > 0 {
@@ -405,10 +585,9 @@ impl Answerer {
                 format!(
                     "set {:?}: {invalid} of {} candidates refused as invalid, e.g. {} ({} refused \
                      so far)",
-                    short_id(&reply.set_id),
-                    reply.recommendations.len(),
-                    reply
-                        .recommendations
+                    short_id(set_id),
+                    members.len(),
+                    members
                         .iter()
                         .find(|r| r.status == GripRecommendation::STATUS_INVALID_INPUT)
                         .map_or("", |r| r.message.as_str()),
@@ -439,13 +618,9 @@ impl Answerer {
         if let Some(array) = markers {
             entries.push(entry(Payload::Markers(Box::new(array)), answered, answered));
         }
-        entries.push(entry(Payload::CandidateSet(Box::new(set)), received, sent));
+        entries.push(entry(set.payload(), received, sent));
         if let Some(r) = reply {
-            entries.push(entry(
-                Payload::RecommendationSet(Box::new(r)),
-                answered,
-                answered,
-            ));
+            entries.push(entry(r.payload(), answered, answered));
         }
         self.recording.record_all(entries);
         self.recording.check().iter().map(note).collect()
@@ -454,7 +629,7 @@ impl Answerer {
     /// Counts a message on `topic` that did not decode (a candidate on the candidates topic, a
     /// set on any other topic or the service); the line to log.
     pub fn undecodable(&mut self, topic: &str, error: &dyn std::fmt::Debug) -> Note {
-        let (count, what) = if topic == self.candidates_topic {
+        let (count, what) = if self.candidates_topics.iter().any(|t| t == topic) {
             (&mut self.counts.undecodable, "")
         } else {
             (&mut self.counts.undecodable_sets, " sets")
@@ -527,6 +702,7 @@ mod tests {
             recommendations: "/grip_recommendations".into(),
             markers: Some("/grip_markers".into()),
             sets: Some(crate::record::SetTopics::default_names()),
+            poses: Some(crate::record::PoseTopics::default_names()),
         };
         Answerer::new(
             Shared::new(config, settings),
@@ -535,6 +711,10 @@ mod tests {
             topics,
             100,
             std::sync::Arc::new(|| {}),
+            std::sync::Arc::new(MeshCache::new(
+                grasp_orient_geometry::AmentIndex::default(),
+                1 << 20,
+            )),
         )
     }
 

@@ -1,7 +1,9 @@
 //! The ROS 2 node: subscribes `grasp_candidates`, answers on `grip_recommendations` and
 //! `grip_markers`; answers sets on `grasp_candidate_sets` → `grip_recommendation_sets` and through
-//! the service `~/recommend` ([`sets`]); with parameters, rosout, remapping and a clean exit on
-//! Ctrl-C and SIGTERM.
+//! the service `~/recommend` ([`sets`]); gripper poses on `pose_candidates` →
+//! `pose_recommendations`, their sets on `pose_candidate_sets` → `pose_recommendation_sets` and
+//! through `~/recommend_poses`; with parameters, rosout, remapping and a clean exit on Ctrl-C and
+//! SIGTERM.
 //!
 //! [`run`] reads the settings, opens the [`session::Session`], creates the endpoints and the
 //! parameter services, and then only moves messages: each candidate goes to
@@ -22,9 +24,11 @@ pub mod set_worker;
 pub mod sets;
 
 use crate::config::Config;
-use crate::msg::{short_id, GraspCandidate, GripRecommendation, MarkerArray};
-use crate::record::{now_ns, OnStop, Topics};
-use answer::{Answerer, Note};
+use crate::msg::{
+    short_id, GraspCandidate, GripRecommendation, MarkerArray, PoseCandidate, PoseRecommendation,
+};
+use crate::record::{now_ns, OnStop, PoseTopics, Topics};
+use answer::{Answerer, Note, SetInput};
 use anyhow::Context as _;
 use demo::Demo;
 use futures::{FutureExt, StreamExt};
@@ -48,12 +52,16 @@ pub const NODE_NAME: &str = "grasp_orient";
 
 /// The node's topics, as it names them before namespace and remapping (checked to stay apart
 /// before any DDS entity is made).
-const TOPICS: [&str; 5] = [
+const TOPICS: [&str; 9] = [
     "grasp_candidates",
     "grip_recommendations",
     "grip_markers",
     "grasp_candidate_sets",
     "grip_recommendation_sets",
+    "pose_candidates",
+    "pose_recommendations",
+    "pose_candidate_sets",
+    "pose_recommendation_sets",
 ];
 
 /// What else the node does besides answering.
@@ -101,33 +109,51 @@ fn load_config(ros: &RosArgs, node: &str) -> anyhow::Result<(Config, crate::solv
     Ok((config, settings))
 }
 
-/// The node's three topics and their endpoints.
+/// The node's topics and their endpoints.
 struct Endpoints {
     topics: Topics,
     candidates: Subscription<GraspCandidate>,
     answers: Publisher<GripRecommendation>,
     markers: Publisher<MarkerArray>,
     sets: SetEndpoints,
+    pose_candidates: Subscription<PoseCandidate>,
+    pose_answers: Publisher<PoseRecommendation>,
 }
 
 impl Endpoints {
     fn create(session: &mut Session, qos_depth: i64) -> anyhow::Result<Self> {
         let qos = qos(qos_depth);
         let set_topics = SetEndpoints::topics(session);
+        let pose_topics = PoseTopics {
+            candidates: session.topic_name("pose_candidates"),
+            recommendations: session.topic_name("pose_recommendations"),
+            sets: session.topic_name("pose_candidate_sets"),
+            set_recommendations: session.topic_name("pose_recommendation_sets"),
+        };
         let topics = Topics {
             candidates: session.topic_name("grasp_candidates"),
             recommendations: session.topic_name("grip_recommendations"),
             markers: Some(session.topic_name("grip_markers")),
             sets: Some(set_topics.clone()),
+            poses: Some(pose_topics.clone()),
         };
         let markers_name = topics.markers.clone().unwrap_or_default();
         let node = session.node_mut();
         let candidates = create_topic::<GraspCandidate>(node, &topics.candidates, &qos)?;
         let answers = create_topic::<GripRecommendation>(node, &topics.recommendations, &qos)?;
         let markers = create_topic::<MarkerArray>(node, &markers_name, &qos)?;
-        let sets = SetEndpoints::create(node, &set_topics, qos_depth)?;
+        let sets = SetEndpoints::create(node, &set_topics, &pose_topics, qos_depth)?;
+        let pose_candidates = create_topic::<PoseCandidate>(node, &pose_topics.candidates, &qos)?;
+        let pose_answers =
+            create_topic::<PoseRecommendation>(node, &pose_topics.recommendations, &qos)?;
         Ok(Self {
             sets,
+            pose_candidates: node
+                .create_subscription(&pose_candidates, None)
+                .context("cannot subscribe to pose candidates")?,
+            pose_answers: node
+                .create_publisher(&pose_answers, None)
+                .context("cannot publish pose recommendations")?,
             candidates: node
                 .create_subscription(&candidates, None)
                 .context("cannot subscribe")?,
@@ -161,8 +187,13 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
     let topics = &endpoints.topics;
     announce(&session, topics);
     let (on_stop, mut woken) = wake_on_change(&shared);
-    let mut worker =
-        SetWorker::start(shared.clone(), options.echo).context("cannot start the set thread")?;
+    // One mesh cache for the node: its thread (single pose candidates) and the set thread.
+    let meshes = std::sync::Arc::new(grasp_orient_geometry::MeshCache::new(
+        grasp_orient_geometry::AmentIndex::from_env(),
+        crate::answer::MESH_CACHE_BYTES,
+    ));
+    let mut worker = SetWorker::start(shared.clone(), options.echo, meshes.clone())
+        .context("cannot start the set thread")?;
     let mut answerer = Answerer::new(
         shared,
         options.echo,
@@ -170,6 +201,7 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
         topics.clone(),
         config.qos_depth,
         on_stop,
+        meshes,
     );
     let started = answerer
         .start()
@@ -219,12 +251,14 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
 
 /// The first line a user reads: where the node listens and answers, and how to try it.
 fn announce(session: &Session, topics: &Topics) {
+    let poses = topics.poses.as_ref();
     say(
         session.node(),
         log::Level::Info,
         &format!(
             "node {} on ROS_DOMAIN_ID={}{}: waiting for grasp_orient/msg/GraspCandidate on \
-             {}; answers on {}, markers on {}; sets on {} -> {} and the service {}/{}. \
+             {}; answers on {}, markers on {}; sets on {} -> {} and the service {}/{}; \
+             gripper poses on {} -> {}, their sets on {} -> {} and the service {}/{}. \
              Send a test grasp with: python3 examples/publish_test_grasp.py",
             session.node().fully_qualified_name(),
             session.graph.domain_id,
@@ -239,6 +273,12 @@ fn announce(session: &Session, topics: &Topics) {
                 .map_or("", |s| s.recommendations.as_str()),
             session.node().fully_qualified_name(),
             sets::SERVICE,
+            poses.map_or("", |p| p.candidates.as_str()),
+            poses.map_or("", |p| p.recommendations.as_str()),
+            poses.map_or("", |p| p.sets.as_str()),
+            poses.map_or("", |p| p.set_recommendations.as_str()),
+            session.node().fully_qualified_name(),
+            sets::POSE_SERVICE,
         ),
     );
 }
@@ -285,6 +325,9 @@ async fn serve(
     let mut stream = pin!(endpoints.candidates.async_stream());
     let mut set_stream = pin!(endpoints.sets.candidates.async_stream());
     let mut calls = pin!(endpoints.sets.service.receive_request_stream());
+    let mut poses = pin!(endpoints.pose_candidates.async_stream());
+    let mut pose_sets = pin!(endpoints.sets.pose_sets.async_stream());
+    let mut pose_calls = pin!(endpoints.sets.pose_service.receive_request_stream());
     let mut demo_done = pin!(async {
         match demo {
             Some(d) => d.finished().await,
@@ -310,16 +353,14 @@ async fn serve(
                 Ok((candidate, info)) => {
                     answer_one(node, endpoints, answerer, candidate, &info).await;
                 }
-                Err(e) => {
-                    let note = answerer.undecodable(&endpoints.topics.candidates, &e);
-                    tell(node, vec![note]);
-                }
+                Err(e) => tell(node, vec![answerer.undecodable(&endpoints.topics.candidates, &e)]),
             },
             done = worker.done.select_next_some() => {
                 sets::answer_done(node, sets, markers, answerer, done).await;
             }
             received = set_stream.select_next_some() => match received {
                 Ok((set, info)) => {
+                    let set = SetInput::Candidates(set);
                     sets::take_topic(node, sets, markers, answerer, worker, set, &info).await;
                 }
                 Err(e) => {
@@ -330,12 +371,38 @@ async fn serve(
             },
             call = calls.select_next_some() => match call {
                 Ok((id, request)) => {
-                    sets::take_call(node, sets, markers, answerer, worker, id, request).await;
+                    let set = SetInput::Candidates(request.candidate_set);
+                    sets::take_call(node, sets, markers, answerer, worker, id, set).await;
+                }
+                Err(e) => tell(node, vec![answerer.undecodable(sets::SERVICE, &e)]),
+            },
+            received = poses.select_next_some() => match received {
+                Ok((candidate, info)) => {
+                    answer_pose(node, endpoints, answerer, candidate, &info).await;
                 }
                 Err(e) => {
-                    let note = answerer.undecodable(sets::SERVICE, &e);
+                    let topic = endpoints.topics.poses.as_ref().map_or("", |p| &p.candidates);
+                    let note = answerer.undecodable(topic, &e);
                     tell(node, vec![note]);
                 }
+            },
+            received = pose_sets.select_next_some() => match received {
+                Ok((set, info)) => {
+                    let set = SetInput::Poses(Box::new(set));
+                    sets::take_topic(node, sets, markers, answerer, worker, set, &info).await;
+                }
+                Err(e) => {
+                    let topic = endpoints.topics.poses.as_ref().map_or("", |p| &p.sets);
+                    let note = answerer.undecodable(topic, &e);
+                    tell(node, vec![note]);
+                }
+            },
+            call = pose_calls.select_next_some() => match call {
+                Ok((id, request)) => {
+                    let set = SetInput::Poses(Box::new(request.pose_set));
+                    sets::take_call(node, sets, markers, answerer, worker, id, set).await;
+                }
+                Err(e) => tell(node, vec![answerer.undecodable(sets::POSE_SERVICE, &e)]),
             },
         }
     }
@@ -411,6 +478,41 @@ async fn answer_one(
             node,
             log::Level::Error,
             &format!("cannot publish an answer: {e:?}"),
+        );
+    }
+    let answered = now_ns();
+    if let Some(array) = outcome.markers {
+        if let Err(e) = endpoints.markers.async_publish(array).await {
+            log::warn!("cannot publish markers: {e:?}");
+        }
+    }
+    let notes = answerer.record(outcome.recorded, answered);
+    tell(node, notes);
+}
+
+/// Answers one pose candidate, as [`answer_one`] a candidate.
+async fn answer_pose(
+    node: &Node,
+    endpoints: &Endpoints,
+    answerer: &mut Answerer,
+    candidate: PoseCandidate,
+    info: &MessageInfo,
+) {
+    let (received, sent) = message_times(info);
+    let outcome = answerer.handle_pose(candidate, received, sent);
+    log::debug!(
+        "pose candidate {:?}: status {}, {} {} N",
+        short_id(&outcome.reply.recommendation.candidate_id),
+        outcome.reply.recommendation.status,
+        outcome.reply.recommendation.objective,
+        outcome.reply.recommendation.gripping_power
+    );
+    tell(node, outcome.notes);
+    if let Err(e) = endpoints.pose_answers.async_publish(outcome.reply).await {
+        say(
+            node,
+            log::Level::Error,
+            &format!("cannot publish a pose answer: {e:?}"),
         );
     }
     let answered = now_ns();

@@ -14,13 +14,15 @@
 //! solved get `STATUS_NOT_SOLVED` and the set `STATUS_INCOMPLETE` (`answer_set_within`). A set that
 //! arrives while `max_queued_sets` sets wait is answered at once with `STATUS_BUSY`.
 
-use super::answer::{RecordedSet, SetOutcome};
+use super::answer::{RecordedSet, SetInput, SetOutcome, SetReply};
 use super::params::Shared;
-use crate::answer::PARALLEL_FROM;
-use crate::answer::{answer_in_full, markers};
+use crate::answer::{answer_in_full, markers, Rules};
 use crate::answer::{answer_set_within, busy, echo_set, solver_pool, Halt, Interrupt};
-use crate::msg::{GraspCandidate, GraspCandidateSet};
+use crate::answer::{pose_set_without_geometry, uncast, PoseAnswerer, PARALLEL_FROM};
+use crate::msg::{GraspCandidate, GraspCandidateSet, MarkerArray, PoseCandidate, PoseCandidateSet};
+use crate::solver::Settings;
 use futures::channel::mpsc::{unbounded, UnboundedReceiver, UnboundedSender};
+use grasp_orient_geometry::{ClosingAxis, MeshCache};
 use ros2_client::RmwRequestId;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{mpsc, Arc, Condvar, Mutex, MutexGuard};
@@ -35,7 +37,8 @@ pub enum Via {
         /// From arrival to taken.
         taken: Duration,
     },
-    /// A call of `~/recommend`, answered to this request.
+    /// A call of `~/recommend` (a candidate set) or of `~/recommend_poses` (a pose set),
+    /// answered to this request.
     Service(RmwRequestId),
 }
 
@@ -43,7 +46,7 @@ pub enum Via {
 #[derive(Debug)]
 pub struct SetJob {
     /// The set.
-    pub set: GraspCandidateSet,
+    pub set: SetInput,
     /// When it was received and sent, ns since the epoch (its settings are those in force when
     /// it was received).
     pub received: u64,
@@ -86,8 +89,9 @@ pub struct SetWorker {
 
 impl SetWorker {
     /// Starts the set thread and its clock, answering with `shared`'s settings (with `echo`, an
-    /// empty answer per candidate, nothing solved).
-    pub fn start(shared: Shared, echo: bool) -> std::io::Result<Self> {
+    /// empty answer per candidate, nothing solved) and pose sets' meshes from `meshes` (the
+    /// node's cache: a mesh named by a set is loaded here, off the node's thread).
+    pub fn start(shared: Shared, echo: bool, meshes: Arc<MeshCache>) -> std::io::Result<Self> {
         let interrupt = Arc::new(Interrupt::default());
         let clock = Clock::start(interrupt.clone())?;
         let (jobs, queue) = mpsc::channel::<(SetJob, Instant)>();
@@ -99,6 +103,7 @@ impl SetWorker {
             pool: std::cell::OnceCell::new(),
             interrupt: interrupt.clone(),
             clock: clock.clone(),
+            meshes,
         };
         let counter = in_hand.clone();
         let thread = std::thread::Builder::new()
@@ -174,7 +179,13 @@ impl Drop for SetWorker {
 
 /// The answer to a set refused because the queue is full (or the set thread has ended).
 fn refused(job: SetJob, max_queued: usize, rules: &crate::answer::Rules) -> SetDone {
-    let reply = busy(&job.set, rules, max_queued);
+    let reply = match &job.set {
+        SetInput::Candidates(set) => SetReply::Candidates(busy(set, rules, max_queued)),
+        SetInput::Poses(set) => {
+            let reply = busy(&uncast(set), rules, max_queued);
+            SetReply::Poses(pose_set_without_geometry(set, reply))
+        }
+    };
     SetDone {
         via: job.via,
         outcome: SetOutcome {
@@ -202,6 +213,18 @@ struct Solver {
     pool: std::cell::OnceCell<Option<rayon::ThreadPool>>,
     interrupt: Arc<Interrupt>,
     clock: Arc<Clock>,
+    /// The node's meshes.
+    meshes: Arc<MeshCache>,
+}
+
+/// The settings a set is answered with: those in force when it was received.
+struct InForce {
+    settings: Settings,
+    markers_on: bool,
+    rules: Rules,
+    threads: i64,
+    budget: f64,
+    closing_axis: ClosingAxis,
 }
 
 impl Solver {
@@ -234,47 +257,22 @@ impl Solver {
             record,
             record_markers,
         } = job;
-        let (settings, markers_on, rules, threads, budget) = {
+        let now = {
             let live = self.shared.lock();
             let version = live.version_at(received);
-            (
-                version.settings,
-                version.config.publish_markers,
-                version.config.rules(),
-                version.config.solver_threads,
-                version.config.max_set_time,
-            )
+            InForce {
+                settings: version.settings,
+                markers_on: version.config.publish_markers,
+                rules: version.config.rules(),
+                threads: version.config.solver_threads,
+                budget: version.config.max_set_time,
+                closing_axis: version.config.closing_axis,
+            }
         };
-        let reply = if self.echo {
-            echo_set(&set)
-        } else {
-            let pool = if set.candidates.len() >= PARALLEL_FROM {
-                // `solver_threads` is fixed: the pool is started once, with the first large set.
-                self.pool.get_or_init(|| set_pool(threads)).as_ref()
-            } else {
-                None
-            };
-            self.interrupt.lower_time();
-            let _watched = self.clock.watch(budget);
-            answer_set_within(&set, &settings, &rules, pool, &self.interrupt, budget)
+        let (reply, markers) = match &set {
+            SetInput::Candidates(set) => self.candidates(set, &now),
+            SetInput::Poses(set) => self.poses(set, &now),
         };
-        let stopping = self.interrupt.halt() == Some(Halt::Stopping);
-        let best = reply.ranking.first().map(|&i| i as usize);
-        let markers = best
-            .filter(|_| markers_on && !self.echo && !stopping)
-            .and_then(|i| {
-                let candidate = set.candidates.get(i)?;
-                // A spatial best candidate is drawn in 3D: its 3D solution is solved again (one
-                // candidate; the set's answers keep only the message fields).
-                let spatial = (candidate.model == GraspCandidate::MODEL_SPATIAL)
-                    .then(|| answer_in_full(candidate, &settings).spatial)
-                    .flatten();
-                Some(markers::build(
-                    &rules.tolerances.apply(candidate),
-                    reply.recommendations.get(i)?,
-                    spatial.as_deref(),
-                ))
-            });
         let recorded = RecordedSet::new(
             record.then(|| reply.clone()),
             markers.as_ref().filter(|_| record_markers).cloned(),
@@ -292,6 +290,103 @@ impl Solver {
             waited,
             took: started.elapsed(),
         }
+    }
+
+    /// The pool for a set of `members`, when it is large (started with the first large set).
+    fn pool_for(&self, members: usize, threads: i64) -> Option<&rayon::ThreadPool> {
+        if members >= PARALLEL_FROM {
+            // `solver_threads` is fixed: the pool is started once, with the first large set.
+            self.pool.get_or_init(|| set_pool(threads)).as_ref()
+        } else {
+            None
+        }
+    }
+
+    /// Whether the best member is drawn: markers on, not echoing, not stopping.
+    fn draws(&self, now: &InForce) -> bool {
+        now.markers_on && !self.echo && self.interrupt.halt() != Some(Halt::Stopping)
+    }
+
+    /// A candidate set's answer and its best candidate's markers.
+    fn candidates(
+        &self,
+        set: &GraspCandidateSet,
+        now: &InForce,
+    ) -> (SetReply, Option<MarkerArray>) {
+        let reply = if self.echo {
+            echo_set(set)
+        } else {
+            let pool = self.pool_for(set.candidates.len(), now.threads);
+            self.interrupt.lower_time();
+            let _watched = self.clock.watch(now.budget);
+            answer_set_within(
+                set,
+                &now.settings,
+                &now.rules,
+                pool,
+                &self.interrupt,
+                now.budget,
+            )
+        };
+        let best = reply.ranking.first().map(|&i| i as usize);
+        let markers = best.filter(|_| self.draws(now)).and_then(|i| {
+            let candidate = set.candidates.get(i)?;
+            // A spatial best candidate is drawn in 3D: its 3D solution is solved again (one
+            // candidate; the set's answers keep only the message fields).
+            let spatial = (candidate.model == GraspCandidate::MODEL_SPATIAL)
+                .then(|| answer_in_full(candidate, &now.settings).spatial)
+                .flatten();
+            Some(markers::build(
+                &now.rules.tolerances.apply(candidate),
+                reply.recommendations.get(i)?,
+                spatial.as_deref(),
+            ))
+        });
+        (SetReply::Candidates(reply), markers)
+    }
+
+    /// A pose set's answer (its mesh loaded here when the cache does not hold it yet, within
+    /// the set's time) and its best pose's markers.
+    fn poses(&self, set: &PoseCandidateSet, now: &InForce) -> (SetReply, Option<MarkerArray>) {
+        let answerer = PoseAnswerer::sharing(now.closing_axis, self.meshes.clone());
+        let reply = if self.echo {
+            pose_set_without_geometry(set, echo_set(&uncast(set)))
+        } else {
+            let pool = self.pool_for(set.poses.len(), now.threads);
+            self.interrupt.lower_time();
+            let _watched = self.clock.watch(now.budget);
+            answerer.answer_set_with(set, &now.rules, |candidates| {
+                answer_set_within(
+                    candidates,
+                    &now.settings,
+                    &now.rules,
+                    pool,
+                    &self.interrupt,
+                    now.budget,
+                )
+            })
+        };
+        let best = reply.ranking.first().map(|&i| i as usize);
+        let markers = best.filter(|_| self.draws(now)).and_then(|i| {
+            let pose = set.poses.get(i)?;
+            let candidate = PoseCandidate {
+                header: set.header.clone(),
+                id: pose.id.clone(),
+                grasp_pose: pose.grasp_pose.clone(),
+                width: pose.width,
+                object: set.object.clone(),
+                gravity: set.gravity.clone(),
+            };
+            let object = answerer.object(&set.object).ok();
+            Some(markers::build_pose(
+                &candidate,
+                object.as_ref(),
+                now.closing_axis,
+                reply.recommendations.get(i)?,
+                &now.settings,
+            ))
+        });
+        (SetReply::Poses(reply), markers)
     }
 }
 
@@ -406,7 +501,14 @@ mod tests {
 
     fn worker(config: Config) -> SetWorker {
         let settings = config.solver_settings().expect("valid");
-        SetWorker::start(Shared::new(config, settings), false).expect("threads")
+        SetWorker::start(Shared::new(config, settings), false, meshes()).expect("threads")
+    }
+
+    fn meshes() -> Arc<MeshCache> {
+        Arc::new(MeshCache::new(
+            grasp_orient_geometry::AmentIndex::default(),
+            1 << 20,
+        ))
     }
 
     fn paper_case() -> GraspCandidate {
@@ -421,11 +523,11 @@ mod tests {
         let mut c = paper_case();
         c.center_of_mass_tolerance.x = 0.01;
         SetJob {
-            set: GraspCandidateSet {
+            set: SetInput::Candidates(GraspCandidateSet {
                 id: id.into(),
                 candidates: vec![c; n],
                 ..GraspCandidateSet::default()
-            },
+            }),
             received: crate::record::now_ns(),
             sent: 0,
             via: Via::Topic {
@@ -457,8 +559,11 @@ mod tests {
             ..Config::default()
         });
         let j = job("whole", 300);
+        let SetInput::Candidates(set) = &j.set else {
+            panic!("a candidate set")
+        };
         let want = crate::answer::answer_set(
-            &j.set,
+            set,
             &Config::default().solver_settings().expect("valid"),
             &Config::default().rules(),
         );
@@ -469,7 +574,10 @@ mod tests {
             "handing over waited"
         );
         let done = next(&mut w);
-        assert_eq!(format!("{:?}", done.outcome.reply), format!("{want:?}"));
+        assert_eq!(
+            format!("{:?}", done.outcome.reply.candidates()),
+            format!("{want:?}")
+        );
         assert!(
             done.outcome.markers.is_some(),
             "markers of the best candidate"
@@ -486,7 +594,7 @@ mod tests {
         });
         w.submit(job("slow", 100_000)).expect("taken");
         let done = next(&mut w);
-        let reply = &done.outcome.reply;
+        let reply = done.outcome.reply.candidates();
         assert_eq!(reply.status, GripRecommendationSet::STATUS_INCOMPLETE);
         assert!(
             reply.message.contains("max_set_time (0.02 s) ran out"),
@@ -497,7 +605,7 @@ mod tests {
         assert!(left > 0 && left < 100_000, "{left} not solved");
         // The next set has a budget of its own.
         w.submit(job("next", 10)).expect("taken");
-        assert_eq!(next(&mut w).outcome.reply.status, 0);
+        assert_eq!(next(&mut w).outcome.reply.status(), 0);
     }
 
     /// A set that arrives while max_queued_sets wait is refused at once, nothing solved.
@@ -513,10 +621,23 @@ mod tests {
         w.submit(job("waiting", 10)).expect("one may wait");
         let refused = w.submit(job("refused", 10)).expect_err("a full queue");
         assert_eq!(
-            refused.outcome.reply.status,
+            refused.outcome.reply.status(),
             GripRecommendationSet::STATUS_BUSY
         );
-        assert!(refused.outcome.reply.message.contains("max_queued_sets 1"));
+        assert!(refused
+            .outcome
+            .reply
+            .message()
+            .contains("max_queued_sets 1"));
+        // A pose set too, with one answer per pose (no geometry) and the poses' ids.
+        let poses = pose_job("poses refused", &["a", "b"]);
+        let refused = w.submit(poses).expect_err("a full queue");
+        let SetReply::Poses(reply) = &refused.outcome.reply else {
+            panic!("a pose set's answer")
+        };
+        assert_eq!(reply.status, GripRecommendationSet::STATUS_BUSY);
+        assert_eq!(reply.set_id, "poses refused");
+        assert!(reply.recommendations.is_empty(), "{reply:?}");
         w.stop();
     }
 
@@ -548,13 +669,77 @@ mod tests {
             }
         );
         for (done, id) in [(&long, "long"), (&waiting, "waiting")] {
-            let reply = &done.outcome.reply;
+            let reply = done.outcome.reply.candidates();
             assert_eq!((reply.set_id.as_str(), reply.status), (id, 3));
             assert!(reply.message.contains("stopping"), "{}", reply.message);
             assert!(done.outcome.markers.is_none());
         }
-        assert_eq!(unsolved(&waiting.outcome.reply), 1000);
+        assert_eq!(unsolved(waiting.outcome.reply.candidates()), 1000);
         assert!(w.submit(job("late", 1)).is_err(), "refused after a stop");
+    }
+
+    /// A set of gripper poses on a 66 mm can (a cylinder primitive), one per id, across it at
+    /// its middle, moved along the can's axis by 1 cm each.
+    fn pose_job(id: &str, ids: &[&str]) -> SetJob {
+        let line = format!(
+            r#"{{"header": {{"frame_id": "base_link"}}, "id": "{id}", "object": {{"pose": {{"position": {{"x": 0.5, "y": 0.0, "z": 0.06}}, "orientation": {{"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}}}, "primitive": {{"type": 3, "dimensions": [0.12, 0.033]}}, "mass": 0.35, "friction": 0.5}}, "poses": [], "gravity": {{"x": 0.0, "y": 0.0, "z": -9.81}}}}"#
+        );
+        let mut set: PoseCandidateSet = serde_json::from_str(&line).expect("a PoseCandidateSet");
+        for (k, pose_id) in ids.iter().enumerate() {
+            let mut pose = crate::msg::GraspPose {
+                id: (*pose_id).into(),
+                width: 0.085,
+                ..Default::default()
+            };
+            pose.grasp_pose.position.x = 0.5;
+            pose.grasp_pose.position.z = 0.05 + 0.01 * k as f64;
+            pose.grasp_pose.orientation.w = 1.0;
+            set.poses.push(pose);
+        }
+        SetJob {
+            set: SetInput::Poses(Box::new(set)),
+            received: crate::record::now_ns(),
+            sent: 0,
+            via: Via::Topic {
+                taken: Duration::ZERO,
+            },
+            record: true,
+            record_markers: false,
+        }
+    }
+
+    /// A pose set goes through the set thread as a candidate set does: the answer is the
+    /// answer layer's, with the best pose drawn (its object and its fingers among the markers).
+    #[test]
+    fn a_pose_set_is_solved_on_the_set_thread() {
+        let config = Config {
+            max_set_time: 0.0,
+            ..Config::default()
+        };
+        let mut w = worker(config.clone());
+        let j = pose_job("can", &["low", "mid", "high"]);
+        let SetInput::Poses(set) = &j.set else {
+            panic!("a pose set")
+        };
+        let settings = config.solver_settings().expect("valid");
+        let want = PoseAnswerer::sharing(ClosingAxis::Y, meshes()).answer_set(
+            set,
+            &settings,
+            &config.rules(),
+        );
+        w.submit(j).expect("taken");
+        let done = next(&mut w);
+        let SetReply::Poses(reply) = &done.outcome.reply else {
+            panic!("a pose set's answer")
+        };
+        assert_eq!(format!("{reply:?}"), format!("{want:?}"));
+        assert_eq!(reply.ranking.len(), 3, "{reply:?}");
+        let markers = done.outcome.markers.as_ref().expect("the best pose drawn");
+        let names: Vec<&str> = markers.markers.iter().map(|m| m.ns.as_str()).collect();
+        assert!(
+            names.contains(&"object") && names.contains(&"fingers"),
+            "{names:?}"
+        );
     }
 
     #[test]

@@ -1,18 +1,21 @@
 //! The node's set endpoints: `grasp_candidate_sets` in, `grip_recommendation_sets` out (the same QoS
 //! as the other topics), and the service `~/recommend` (`grasp_orient/srv/Recommend`), served
-//! through ros2-client. Each set is handed to the set thread ([`SetWorker::submit`]) and the node's
+//! through ros2-client; and the same for sets of gripper poses: `pose_candidate_sets` in,
+//! `pose_recommendation_sets` out, the service `~/recommend_poses`
+//! (`grasp_orient/srv/RecommendPoses`). Each set is handed to the set thread ([`SetWorker::submit`]) and the node's
 //! thread goes on; when its answer is back ([`answer_done`]) it is published (or sent back to the
 //! caller), then its markers, then it is counted and recorded. A set refused because the set
 //! thread's queue is full is answered the same way, at once.
 
-use super::answer::{Answerer, SetOutcome};
+use super::answer::{Answerer, SetInput, SetOutcome, SetReply};
 use super::session::{create_topic, qos, say, Session};
 use super::set_worker::{SetDone, SetJob, SetWorker, Via};
 use crate::msg::{
-    short_id, GraspCandidateSet, GripRecommendationSet, MarkerArray, RecommendRequest,
+    short_id, GraspCandidateSet, GripRecommendationSet, MarkerArray, PoseCandidateSet,
+    PoseRecommendationSet, RecommendPosesRequest, RecommendPosesResponse, RecommendRequest,
     RecommendResponse,
 };
-use crate::record::{now_ns, SetTopics};
+use crate::record::{now_ns, PoseTopics, SetTopics};
 use anyhow::Context as _;
 use ros2_client::{
     MessageInfo, Name, Node, Publisher, RmwRequestId, Server, ServiceMapping, ServiceTypeName,
@@ -23,6 +26,9 @@ use std::time::{Duration, Instant};
 /// The service's name under the node (`~/recommend`).
 pub const SERVICE: &str = "recommend";
 
+/// The pose service's name under the node (`~/recommend_poses`).
+pub const POSE_SERVICE: &str = "recommend_poses";
+
 /// The set topics and the service.
 pub struct SetEndpoints {
     /// `grasp_candidate_sets`.
@@ -31,6 +37,12 @@ pub struct SetEndpoints {
     pub answers: Publisher<GripRecommendationSet>,
     /// `~/recommend`.
     pub service: Server<RecommendRequest, RecommendResponse>,
+    /// `pose_candidate_sets`.
+    pub pose_sets: Subscription<PoseCandidateSet>,
+    /// `pose_recommendation_sets`.
+    pub pose_answers: Publisher<PoseRecommendationSet>,
+    /// `~/recommend_poses`.
+    pub pose_service: Server<RecommendPosesRequest, RecommendPosesResponse>,
 }
 
 impl std::fmt::Debug for SetEndpoints {
@@ -48,24 +60,29 @@ impl SetEndpoints {
         }
     }
 
-    /// Creates the endpoints on `topics` with QoS depth `qos_depth`.
-    pub fn create(node: &mut Node, topics: &SetTopics, qos_depth: i64) -> anyhow::Result<Self> {
+    /// Creates the endpoints on `topics` and `poses` with QoS depth `qos_depth`.
+    pub fn create(
+        node: &mut Node,
+        topics: &SetTopics,
+        poses: &PoseTopics,
+        qos_depth: i64,
+    ) -> anyhow::Result<Self> {
         let qos = qos(qos_depth);
         let sets = create_topic::<GraspCandidateSet>(node, &topics.candidates, &qos)?;
         let answers = create_topic::<GripRecommendationSet>(node, &topics.recommendations, &qos)?;
-        let fqn = node.fully_qualified_name();
-        let name = Name::new(&fqn, SERVICE)
-            .map_err(|e| anyhow::anyhow!("service {fqn}/{SERVICE}: {e:?}"))?;
-        let service = node
-            .create_server(
-                ServiceMapping::Enhanced,
-                &name,
-                &ServiceTypeName::new("grasp_orient", "Recommend"),
-                qos.clone(),
-                qos,
-            )
-            .with_context(|| format!("cannot offer the service {fqn}/{SERVICE}"))?;
+        let pose_sets = create_topic::<PoseCandidateSet>(node, &poses.sets, &qos)?;
+        let pose_answers =
+            create_topic::<PoseRecommendationSet>(node, &poses.set_recommendations, &qos)?;
+        let service = serve(node, SERVICE, "Recommend", &qos)?;
+        let pose_service = serve(node, POSE_SERVICE, "RecommendPoses", &qos)?;
         Ok(Self {
+            pose_sets: node
+                .create_subscription(&pose_sets, None)
+                .context("cannot subscribe to pose sets")?,
+            pose_answers: node
+                .create_publisher(&pose_answers, None)
+                .context("cannot publish pose set answers")?,
+            pose_service,
             candidates: node
                 .create_subscription(&sets, None)
                 .context("cannot subscribe to sets")?,
@@ -77,15 +94,38 @@ impl SetEndpoints {
     }
 }
 
-/// Takes one set from the topic: hands it to the set thread, or answers it at once when the set
-/// thread's queue is full.
+/// Offers the service `~/<name>` of type `grasp_orient/srv/<type_name>`.
+fn serve<Q, P>(
+    node: &mut Node,
+    name: &str,
+    type_name: &str,
+    qos: &ros2_client::QosProfile,
+) -> anyhow::Result<Server<Q, P>>
+where
+    Q: ros2_client::Message + Clone + 'static,
+    P: ros2_client::Message + Clone + 'static,
+{
+    let fqn = node.fully_qualified_name();
+    let full = Name::new(&fqn, name).map_err(|e| anyhow::anyhow!("service {fqn}/{name}: {e:?}"))?;
+    node.create_server(
+        ServiceMapping::Enhanced,
+        &full,
+        &ServiceTypeName::new("grasp_orient", type_name),
+        qos.clone(),
+        qos.clone(),
+    )
+    .with_context(|| format!("cannot offer the service {fqn}/{name}"))
+}
+
+/// Takes one set (of candidates or of poses) from its topic: hands it to the set thread, or
+/// answers it at once when the set thread's queue is full.
 pub async fn take_topic(
     node: &Node,
     endpoints: &SetEndpoints,
     markers: &Publisher<MarkerArray>,
     answerer: &mut Answerer,
     worker: &SetWorker,
-    set: GraspCandidateSet,
+    set: SetInput,
     info: &MessageInfo,
 ) {
     let (received, sent) = super::message_times(info);
@@ -106,7 +146,8 @@ pub async fn take_topic(
     }
 }
 
-/// Takes one call of `~/recommend` (its times are when it was taken), as [`take_topic`] does.
+/// Takes one call of `~/recommend` or `~/recommend_poses` (its times are when it was taken), as
+/// [`take_topic`] does.
 pub async fn take_call(
     node: &Node,
     endpoints: &SetEndpoints,
@@ -114,12 +155,12 @@ pub async fn take_call(
     answerer: &mut Answerer,
     worker: &SetWorker,
     id: RmwRequestId,
-    request: RecommendRequest,
+    set: SetInput,
 ) {
     let received = now_ns();
     let (record, record_markers) = answerer.records_sets();
     let job = SetJob {
-        set: request.candidate_set,
+        set,
         received,
         sent: received,
         via: Via::Service(id),
@@ -158,13 +199,30 @@ pub async fn answer_done(
     };
     let line = AnswerLine::new(&reply, how, taken, took, waited);
     let sending = Instant::now();
-    let sent = match via {
-        Via::Topic { .. } => endpoints
+    let sent = send(endpoints, via, reply).await;
+    line.log(sending.elapsed(), sent.is_ok());
+    if let Err(e) = sent {
+        say(node, log::Level::Error, &e);
+    }
+    let answered = now_ns();
+    publish_markers(markers, array).await;
+    super::tell(node, answerer.record_set(recorded, answered));
+}
+
+/// Sends a set's answer where its set came from: its topic, or the response to its call.
+async fn send(endpoints: &SetEndpoints, via: Via, reply: SetReply) -> Result<(), String> {
+    match (via, reply) {
+        (Via::Topic { .. }, SetReply::Candidates(reply)) => endpoints
             .answers
             .async_publish(reply)
             .await
             .map_err(|e| format!("cannot publish a set answer: {e:?}")),
-        Via::Service(id) => {
+        (Via::Topic { .. }, SetReply::Poses(reply)) => endpoints
+            .pose_answers
+            .async_publish(reply)
+            .await
+            .map_err(|e| format!("cannot publish a pose set answer: {e:?}")),
+        (Via::Service(id), SetReply::Candidates(reply)) => {
             let response = RecommendResponse {
                 recommendation_set: reply,
             };
@@ -174,14 +232,17 @@ pub async fn answer_done(
                 .await
                 .map_err(|e| format!("cannot send a {SERVICE} response: {e:?}"))
         }
-    };
-    line.log(sending.elapsed(), sent.is_ok());
-    if let Err(e) = sent {
-        say(node, log::Level::Error, &e);
+        (Via::Service(id), SetReply::Poses(reply)) => {
+            let response = RecommendPosesResponse {
+                recommendation_set: reply,
+            };
+            endpoints
+                .pose_service
+                .async_send_response(id, response)
+                .await
+                .map_err(|e| format!("cannot send a {POSE_SERVICE} response: {e:?}"))
+        }
     }
-    let answered = now_ns();
-    publish_markers(markers, array).await;
-    super::tell(node, answerer.record_set(recorded, answered));
 }
 
 /// One line at debug per set answered, as for single candidates, written once the answer is out:
@@ -201,7 +262,7 @@ struct AnswerLine {
 
 impl AnswerLine {
     fn new(
-        reply: &GripRecommendationSet,
+        reply: &SetReply,
         via: &str,
         taken: Option<Duration>,
         took: Duration,
@@ -219,11 +280,11 @@ impl AnswerLine {
                 format!(
                     "set {:?} ({via}): {} candidates, {} ranked by {}, status {}{taken}, answered \
                      in {:.3} ms",
-                    short_id(&reply.set_id),
-                    reply.recommendations.len(),
-                    reply.ranking.len(),
-                    reply.ranked_by,
-                    reply.status,
+                    short_id(reply.set_id()),
+                    reply.members().len(),
+                    reply.ranked().0,
+                    reply.ranked().1,
+                    reply.status(),
                     ms(took)
                 ),
                 waited,

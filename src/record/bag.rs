@@ -11,6 +11,7 @@ use super::channels::{Carried, Channels, RecordedFields};
 use super::scan::{self, Damage, Parsed, Table};
 use crate::msg::{
     cdr, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
+    PoseCandidate, PoseCandidateSet, PoseRecommendation, PoseRecommendationSet,
 };
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -115,6 +116,14 @@ pub struct Bag {
     pub candidate_sets: Vec<Recorded<GraspCandidateSet>>,
     /// Every answer to a set.
     pub recommendation_sets: Vec<Recorded<GripRecommendationSet>>,
+    /// Every pose candidate.
+    pub pose_candidates: Vec<Recorded<PoseCandidate>>,
+    /// Every answer to a pose candidate.
+    pub pose_recommendations: Vec<Recorded<PoseRecommendation>>,
+    /// Every pose set.
+    pub pose_sets: Vec<Recorded<PoseCandidateSet>>,
+    /// Every answer to a pose set.
+    pub pose_recommendation_sets: Vec<Recorded<PoseRecommendationSet>>,
     /// Which fields of our types the recording has (recordings made before a type grew lack its
     /// trailing fields, which decode at their defaults).
     pub fields: RecordedFields,
@@ -138,6 +147,11 @@ impl Bag {
         self.recommendations.extend(next.recommendations);
         self.candidate_sets.extend(next.candidate_sets);
         self.recommendation_sets.extend(next.recommendation_sets);
+        self.pose_candidates.extend(next.pose_candidates);
+        self.pose_recommendations.extend(next.pose_recommendations);
+        self.pose_sets.extend(next.pose_sets);
+        self.pose_recommendation_sets
+            .extend(next.pose_recommendation_sets);
         self.fields.merge(&next.fields);
         for why in next.incompatible {
             if !self.incompatible.contains(&why) {
@@ -158,6 +172,10 @@ impl Bag {
             + self.recommendations.len() as u64
             + self.candidate_sets.len() as u64
             + self.recommendation_sets.len() as u64
+            + self.pose_candidates.len() as u64
+            + self.pose_recommendations.len() as u64
+            + self.pose_sets.len() as u64
+            + self.pose_recommendation_sets.len() as u64
             + self.other
             + self.undecodable_count
     }
@@ -442,6 +460,10 @@ fn take(
         Carried::Recommendation => push!(recommendations),
         Carried::CandidateSet => push!(candidate_sets),
         Carried::RecommendationSet => push!(recommendation_sets),
+        Carried::PoseCandidate => push!(pose_candidates),
+        Carried::PoseRecommendation => push!(pose_recommendations),
+        Carried::PoseCandidateSet => push!(pose_sets),
+        Carried::PoseRecommendationSet => push!(pose_recommendation_sets),
         Carried::Other => out.other += 1,
     }
     Ok(())
@@ -458,6 +480,7 @@ mod tests {
             recommendations: "/grip_recommendations".into(),
             markers: None,
             sets: Some(crate::record::SetTopics::default_names()),
+            poses: None,
         }
     }
 

@@ -8,7 +8,8 @@ use super::scan::{Channel, KnownSchema, Table};
 use crate::msg::definitions::split_type_name;
 use crate::msg::schema::RecordedType;
 use crate::msg::{
-    cdr, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet, RosMessage,
+    cdr, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
+    PoseCandidate, PoseCandidateSet, PoseRecommendation, PoseRecommendationSet, RosMessage,
 };
 use serde::de::DeserializeOwned;
 use std::collections::hash_map::Entry;
@@ -26,6 +27,14 @@ pub(crate) enum Carried {
     CandidateSet,
     /// `GripRecommendationSet`.
     RecommendationSet,
+    /// `PoseCandidate`.
+    PoseCandidate,
+    /// `PoseRecommendation`.
+    PoseRecommendation,
+    /// `PoseCandidateSet`.
+    PoseCandidateSet,
+    /// `PoseRecommendationSet`.
+    PoseRecommendationSet,
     /// Anything else.
     Other,
 }
@@ -50,6 +59,17 @@ impl Carried {
             (Carried::CandidateSet, GraspCandidateSet::TYPE_NAME)
         } else if is(GripRecommendationSet::PACKAGE, GripRecommendationSet::NAME) {
             (Carried::RecommendationSet, GripRecommendationSet::TYPE_NAME)
+        } else if is(PoseCandidate::PACKAGE, PoseCandidate::NAME) {
+            (Carried::PoseCandidate, PoseCandidate::TYPE_NAME)
+        } else if is(PoseRecommendation::PACKAGE, PoseRecommendation::NAME) {
+            (Carried::PoseRecommendation, PoseRecommendation::TYPE_NAME)
+        } else if is(PoseCandidateSet::PACKAGE, PoseCandidateSet::NAME) {
+            (Carried::PoseCandidateSet, PoseCandidateSet::TYPE_NAME)
+        } else if is(PoseRecommendationSet::PACKAGE, PoseRecommendationSet::NAME) {
+            (
+                Carried::PoseRecommendationSet,
+                PoseRecommendationSet::TYPE_NAME,
+            )
         } else {
             (Carried::Other, "")
         }

@@ -62,6 +62,17 @@ impl fmt::Display for Change {
                         written.candidate_sets, written.recommendation_sets
                     )?;
                 }
+                let poses = written.pose_candidates + written.pose_sets;
+                if poses + written.pose_recommendations + written.pose_recommendation_sets > 0 {
+                    write!(
+                        f,
+                        ", {} pose candidates, {} pose answers, {} pose sets, {} pose set answers",
+                        written.pose_candidates,
+                        written.pose_recommendations,
+                        written.pose_sets,
+                        written.pose_recommendation_sets
+                    )?;
+                }
                 Ok(())
             }
             Change::Failed(e) => write!(
@@ -213,6 +224,7 @@ mod tests {
             recommendations: "/grip_recommendations".into(),
             markers: Some("/grip_markers".into()),
             sets: None,
+            poses: None,
         }
     }
 

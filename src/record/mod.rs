@@ -31,7 +31,8 @@ pub(crate) mod summary;
 
 use crate::msg::{
     cdr, definitions, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
-    MarkerArray, RosMessage,
+    MarkerArray, PoseCandidate, PoseCandidateSet, PoseRecommendation, PoseRecommendationSet,
+    RosMessage,
 };
 use settings::{SettingsRecord, METADATA_NAME};
 use std::collections::BTreeMap;
@@ -143,6 +144,14 @@ pub enum Payload {
     CandidateSet(Box<GraspCandidateSet>),
     /// On the set answers topic.
     RecommendationSet(Box<GripRecommendationSet>),
+    /// On the pose candidates topic.
+    PoseCandidate(Box<PoseCandidate>),
+    /// On the pose answers topic.
+    PoseRecommendation(Box<PoseRecommendation>),
+    /// On the pose sets topic (or a call of `~/recommend_poses`).
+    PoseCandidateSet(Box<PoseCandidateSet>),
+    /// On the pose set answers topic (or the response to a call).
+    PoseRecommendationSet(Box<PoseRecommendationSet>),
     /// The settings in force from a time on, written as a metadata record (the entry's times
     /// are not used).
     Settings(Box<SettingsRecord>),
@@ -170,6 +179,33 @@ pub struct Topics {
     pub markers: Option<String>,
     /// Candidate sets and their answers; `None` leaves them out.
     pub sets: Option<SetTopics>,
+    /// Pose candidates, pose sets and their answers; `None` leaves them out.
+    pub poses: Option<PoseTopics>,
+}
+
+/// Topic names of the four pose channels (docs/poses.md).
+#[derive(Debug, Clone)]
+pub struct PoseTopics {
+    /// Pose candidates, e.g. `/pose_candidates`.
+    pub candidates: String,
+    /// Their answers, e.g. `/pose_recommendations`.
+    pub recommendations: String,
+    /// Pose sets, e.g. `/pose_candidate_sets`.
+    pub sets: String,
+    /// Their answers, e.g. `/pose_recommendation_sets`.
+    pub set_recommendations: String,
+}
+
+impl PoseTopics {
+    /// The node's default names.
+    pub fn default_names() -> Self {
+        Self {
+            candidates: "/pose_candidates".into(),
+            recommendations: "/pose_recommendations".into(),
+            sets: "/pose_candidate_sets".into(),
+            set_recommendations: "/pose_recommendation_sets".into(),
+        }
+    }
 }
 
 /// Topic names of the two set channels.
@@ -204,6 +240,14 @@ pub struct Written {
     pub candidate_sets: u64,
     /// Answers to sets.
     pub recommendation_sets: u64,
+    /// Pose candidates.
+    pub pose_candidates: u64,
+    /// Answers to pose candidates.
+    pub pose_recommendations: u64,
+    /// Pose sets.
+    pub pose_sets: u64,
+    /// Answers to pose sets.
+    pub pose_recommendation_sets: u64,
     /// Settings metadata records.
     pub settings: u64,
 }
@@ -259,8 +303,9 @@ pub fn qos_yaml(depth: i64) -> String {
     )
 }
 
-/// Channels of a recording: candidates, recommendations, markers, candidate sets, set answers.
-const CHANNELS: usize = 5;
+/// Channels of a recording: candidates, recommendations, markers, candidate sets, set answers,
+/// pose candidates, their answers, pose sets, their answers.
+const CHANNELS: usize = 9;
 
 /// An MCAP writer with the channels of a grasp_orient recording. It never truncates a file:
 /// [`BagWriter::create`] makes a new one, [`BagWriter::on_file`] takes an open one (a temporary
@@ -272,6 +317,8 @@ pub struct BagWriter {
     sink: Arc<sink::State>,
     /// The set channels' topics, until their channels are made.
     sets: Option<SetTopics>,
+    /// The pose channels' topics, until their channels are made.
+    poses: Option<PoseTopics>,
     /// Channel metadata (`offered_qos_profiles`).
     metadata: BTreeMap<String, String>,
     channels: [Option<u16>; CHANNELS],
@@ -374,8 +421,12 @@ impl BagWriter {
                 Some(t) => Some(channel(t, MarkerArray::TYPE_NAME)?),
                 None => None,
             },
-            // The set channels are made by their first message, as rosbag2 adds a topic when it
-            // first sees a publisher: a run without sets records no set channels.
+            // The set and pose channels are made by their first message, as rosbag2 adds a topic
+            // when it first sees a publisher: a run without sets records no set channels.
+            None,
+            None,
+            None,
+            None,
             None,
             None,
         ];
@@ -387,6 +438,7 @@ impl BagWriter {
             writer: Some(writer),
             sink: state,
             sets: topics.sets.clone(),
+            poses: topics.poses.clone(),
             metadata,
             channels,
             sequence: [0; CHANNELS],
@@ -443,6 +495,10 @@ impl BagWriter {
             Payload::Markers(m) => (2, cdr::encode(m.as_ref())?),
             Payload::CandidateSet(m) => (3, cdr::encode(m.as_ref())?),
             Payload::RecommendationSet(m) => (4, cdr::encode(m.as_ref())?),
+            Payload::PoseCandidate(m) => (5, cdr::encode(m.as_ref())?),
+            Payload::PoseRecommendation(m) => (6, cdr::encode(m.as_ref())?),
+            Payload::PoseCandidateSet(m) => (7, cdr::encode(m.as_ref())?),
+            Payload::PoseRecommendationSet(m) => (8, cdr::encode(m.as_ref())?),
             Payload::Settings(s) => return self.write_settings(s),
         };
         if index >= 3 && self.channels[index].is_none() {
@@ -466,24 +522,42 @@ impl BagWriter {
             1 => self.written.recommendations += 1,
             2 => self.written.markers += 1,
             3 => self.written.candidate_sets += 1,
-            _ => self.written.recommendation_sets += 1,
+            4 => self.written.recommendation_sets += 1,
+            5 => self.written.pose_candidates += 1,
+            6 => self.written.pose_recommendations += 1,
+            7 => self.written.pose_sets += 1,
+            _ => self.written.pose_recommendation_sets += 1,
         }
         Ok(())
     }
 
-    /// Makes set channel `index` (3: candidate sets, 4: their answers), if the recording has
-    /// sets; it joins the definitions a file closed after a failure is summarised with.
+    /// The topic and type of channel `index` made by its first message (3 and 4: candidate sets
+    /// and their answers; 5 to 8: pose candidates, their answers, pose sets, their answers), if
+    /// the recording has them.
+    fn lazy_channel(&self, index: usize) -> Option<(String, &'static str)> {
+        let sets = self.sets.as_ref();
+        let poses = self.poses.as_ref();
+        match index {
+            3 => sets.map(|t| (t.candidates.clone(), GraspCandidateSet::TYPE_NAME)),
+            4 => sets.map(|t| (t.recommendations.clone(), GripRecommendationSet::TYPE_NAME)),
+            5 => poses.map(|t| (t.candidates.clone(), PoseCandidate::TYPE_NAME)),
+            6 => poses.map(|t| (t.recommendations.clone(), PoseRecommendation::TYPE_NAME)),
+            7 => poses.map(|t| (t.sets.clone(), PoseCandidateSet::TYPE_NAME)),
+            8 => poses.map(|t| {
+                (
+                    t.set_recommendations.clone(),
+                    PoseRecommendationSet::TYPE_NAME,
+                )
+            }),
+            _ => None,
+        }
+    }
+
+    /// Makes channel `index` on its first message ([`Self::lazy_channel`]), if the recording has
+    /// it; it joins the definitions a file closed after a failure is summarised with.
     fn add_set_channel(&mut self, index: usize) -> Result<(), RecordError> {
-        let Some(topics) = &self.sets else {
+        let Some((topic, type_name)) = self.lazy_channel(index) else {
             return Ok(());
-        };
-        let (topic, type_name) = if index == 3 {
-            (topics.candidates.clone(), GraspCandidateSet::TYPE_NAME)
-        } else {
-            (
-                topics.recommendations.clone(),
-                GripRecommendationSet::TYPE_NAME,
-            )
         };
         let text = definitions::full_text(type_name).ok_or(RecordError::UnknownType(type_name))?;
         let metadata = self.metadata.clone();
@@ -767,6 +841,7 @@ mod tests {
             recommendations: "/grip_recommendations".into(),
             markers: None,
             sets: None,
+            poses: None,
         }
     }
 

@@ -816,6 +816,7 @@ mod tests {
             recommendations: "/grip_recommendations".into(),
             markers: None,
             sets: None,
+            poses: None,
         };
         let mut w = BagWriter::create(&path, &topics, 100).expect("create");
         let settings = SettingsRecord {

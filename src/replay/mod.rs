@@ -4,6 +4,7 @@
 //! compared: a recording made before a message grew decodes with the new trailing fields at their
 //! defaults, which say nothing.
 
+mod poses;
 mod sets;
 
 use crate::answer::{answer_one, Rules};
@@ -13,6 +14,7 @@ use crate::record::bag::{keep_example, Bag, Recorded};
 use crate::record::channels::RecordedFields;
 use crate::record::settings::{SettingsError, SettingsRecord, METADATA_NAME};
 use crate::solver::{Objective, Settings};
+use grasp_orient_geometry::ClosingAxis;
 use serde_yaml_ng::Value;
 use std::collections::{BTreeMap, HashMap, VecDeque};
 
@@ -45,6 +47,10 @@ pub struct Summary {
     /// Candidates of sets refused as a whole, again and in the recording: compared through the
     /// set's status and message, having no recommendations of their own.
     pub in_refused_sets: u64,
+    /// Pose candidates answered again (counted in `candidates` too).
+    pub pose_candidates: u64,
+    /// Pose sets answered again (counted in `sets` too).
+    pub pose_sets: u64,
 }
 
 impl Summary {
@@ -59,6 +65,8 @@ impl Summary {
         self.sets_differing += other.sets_differing;
         self.unmatched_set_answers += other.unmatched_set_answers;
         self.in_refused_sets += other.in_refused_sets;
+        self.pose_candidates += other.pose_candidates;
+        self.pose_sets += other.pose_sets;
         for (field, gap) in other.largest {
             self.note_gap(field, gap);
         }
@@ -250,6 +258,17 @@ pub enum ReplayError {
     /// A thread solving a share of the candidates failed.
     #[error("a replay worker failed: {0}")]
     Worker(String),
+    /// A mesh a recorded pose was answered with cannot be read here.
+    #[error(
+        "mesh {resource} of a recorded pose cannot be read at replay time (package:// resolves \
+         through AMENT_PREFIX_PATH): {why}"
+    )]
+    Mesh {
+        /// The resource named in the recording.
+        resource: String,
+        /// Why it cannot be read.
+        why: Box<grasp_orient_geometry::GeometryError>,
+    },
 }
 
 /// A parameter set on the command line: its name and value.
@@ -267,6 +286,9 @@ pub struct Plan {
     timeline: Vec<(u64, Settings, Rules)>,
     /// For a recording without settings records.
     fallback: (Settings, Rules),
+    /// The closing axis of pose candidates, in force from each time of `timeline`, and the
+    /// fallback's.
+    closing_axes: (Vec<ClosingAxis>, ClosingAxis),
     /// Whether each candidate is solved with the objective its recorded answer names.
     objective_from_answer: bool,
     /// The bag's settings records, overrides applied.
@@ -299,9 +321,11 @@ impl Plan {
         // In time order; records of one time keep their file order, the last one winning.
         recorded.sort_by_key(|r| r.since);
         let mut timeline = Vec::with_capacity(recorded.len());
+        let mut axes = Vec::with_capacity(recorded.len());
         for record in &mut recorded {
             let (config, settings) = apply(&record.config)?;
             let rules = config.rules();
+            axes.push(config.closing_axis);
             record.config = config;
             timeline.push((record.since, settings, rules));
         }
@@ -310,6 +334,7 @@ impl Plan {
             objective_from_answer: timeline.is_empty()
                 && !overridden.iter().any(|n| n == "objective"),
             fallback: (base_settings, base.rules()),
+            closing_axes: (axes, base.closing_axis),
             timeline,
             recorded,
             overridden,
@@ -326,6 +351,7 @@ impl Plan {
         Self {
             timeline: Vec::new(),
             fallback: (settings, rules),
+            closing_axes: (Vec::new(), ClosingAxis::default()),
             objective_from_answer: true,
             recorded: Vec::new(),
             overridden: Vec::new(),
@@ -354,6 +380,14 @@ impl Plan {
         }
     }
 
+    /// The closing axis for a pose candidate (or pose set) received at `log_time`, as
+    /// [`Plan::settings_at`].
+    pub fn closing_axis_at(&self, log_time: u64) -> ClosingAxis {
+        self.index_at(log_time)
+            .and_then(|i| self.closing_axes.0.get(i).copied())
+            .unwrap_or(self.closing_axes.1)
+    }
+
     /// The timeline entry in force at `log_time`: the last from before it, the first for earlier
     /// times; `None` without a timeline.
     fn index_at(&self, log_time: u64) -> Option<usize> {
@@ -373,7 +407,17 @@ pub fn replay(
 ) -> Result<Summary, ReplayError> {
     let (mut summary, _) = replay_on_cores(bag, plan, false, &progress)?;
     summary.merge(sets::replay_sets(bag, plan, false).0);
+    summary.merge(poses::replay_poses(bag, plan, &pose_meshes())?);
     Ok(summary)
+}
+
+/// The meshes of a replay's pose candidates: `package://` through this process's
+/// `AMENT_PREFIX_PATH`.
+fn pose_meshes() -> std::sync::Arc<grasp_orient_geometry::MeshCache> {
+    std::sync::Arc::new(grasp_orient_geometry::MeshCache::new(
+        grasp_orient_geometry::AmentIndex::from_env(),
+        crate::answer::MESH_CACHE_BYTES,
+    ))
 }
 
 /// The new answers of a replay, each with its candidate's (or set's) times.
@@ -394,6 +438,7 @@ pub fn replay_with_answers(
     let (mut summary, recommendations) = replay_on_cores(bag, plan, true, &progress)?;
     let (of_sets, sets) = sets::replay_sets(bag, plan, true);
     summary.merge(of_sets);
+    summary.merge(poses::replay_poses(bag, plan, &pose_meshes())?);
     Ok((
         summary,
         Answers {

@@ -42,7 +42,7 @@ fn pair(bag: &Bag) -> (Vec<Option<usize>>, u64) {
 }
 
 /// `rules` with the drive and ranking a recorded answer's `ranked_by` names.
-fn rules_like(rules: &Rules, recorded: Option<&GripRecommendationSet>) -> Rules {
+pub(super) fn rules_like(rules: &Rules, recorded: Option<&GripRecommendationSet>) -> Rules {
     let (rank_by, drive) = match recorded.map(|r| r.ranked_by.as_str()) {
         Some("internal_force") => (RankBy::GripForce, GripperDrive::Coupled),
         Some("finger_force") => (RankBy::GripForce, GripperDrive::Independent),
@@ -108,7 +108,7 @@ pub(super) fn replay_sets(
 }
 
 /// Compares a set's new answer with its recorded one; true when anything differs.
-fn compare_set(
+pub(super) fn compare_set(
     set: &GraspCandidateSet,
     ours: &GripRecommendationSet,
     theirs: &GripRecommendationSet,

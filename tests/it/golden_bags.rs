@@ -150,6 +150,7 @@ fn a_changed_answer_fails_the_replay() {
         recommendations: "/grip_recommendations".into(),
         markers: None,
         sets: None,
+        poses: None,
     };
     let mut w = BagWriter::create(&out, &topics, 100).expect("create");
     for c in &recorded.candidates {

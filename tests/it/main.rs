@@ -14,6 +14,7 @@ mod msg_contract;
 mod node_start;
 mod paper;
 mod play;
+mod pose_replay;
 mod poses;
 mod recordings;
 mod recover;

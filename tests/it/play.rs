@@ -88,6 +88,7 @@ fn write_candidates_and_sets(path: &std::path::Path) {
         recommendations: "/grip_recommendations".into(),
         markers: None,
         sets: Some(SetTopics::default_names()),
+        poses: None,
     };
     let mut w = BagWriter::create(path, &topics, 100).expect("create");
     for k in 0..3usize {
@@ -240,6 +241,7 @@ fn played_spatial_candidates_are_answered_in_3d_and_replay_unchanged() {
         recommendations: "/grip_recommendations".into(),
         markers: None,
         sets: Some(SetTopics::default_names()),
+        poses: None,
     };
     let mut w = BagWriter::create(&source, &topics, 100).expect("create");
     let entry = |payload, at| Entry {

@@ -20,6 +20,7 @@ fn topics() -> Topics {
         recommendations: "/grip_recommendations".into(),
         markers: None,
         sets: None,
+        poses: None,
     }
 }
 

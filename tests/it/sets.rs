@@ -176,6 +176,7 @@ fn topics() -> Topics {
         recommendations: "/grip_recommendations".into(),
         markers: None,
         sets: Some(SetTopics::default_names()),
+        poses: None,
     }
 }
 

@@ -159,6 +159,18 @@ impl Mesh {
         &self.trimesh
     }
 
+    /// The corners of each triangle, object frame, metres (after merging and scaling), in the
+    /// mesh's winding: for drawing it.
+    pub fn corners(&self) -> impl Iterator<Item = [[f64; 3]; 3]> + '_ {
+        let points = self.trimesh.vertices();
+        self.trimesh.indices().iter().map(move |t| {
+            t.map(|i| {
+                let p = points[i as usize];
+                [p.x, p.y, p.z]
+            })
+        })
+    }
+
     fn triangles_at(&self, vertex: u32) -> impl Iterator<Item = u32> + '_ {
         let v = vertex as usize;
         self.at_vertex[self.first[v] as usize..self.first[v + 1] as usize]

@@ -1,0 +1,243 @@
+//! Replaying recorded pose candidates and pose sets: each is answered again from the recorded
+//! pose and object (the contacts, normals and centre of mass cast again, then the spatial
+//! candidate they make solved again, `crate::answer::PoseAnswerer`) and compared with its
+//! recorded answer: the recommendation exactly as a candidate's ([`compare_one`]), the geometry
+//! within [`TOLERANCE`], and a set's ranking and fields as a candidate set's
+//! ([`super::sets`]).
+//!
+//! The closing axis is the recorded `closing_axis` in force when the pose was received. A mesh
+//! named by resource is read again at replay time (`package://` through this process's
+//! `AMENT_PREFIX_PATH`): one that cannot be read where the recording answered its pose is an
+//! error ([`ReplayError::Mesh`]), not a difference.
+
+use super::sets::{compare_set, rules_like};
+use super::{compare_one, key, number_gap, Key, Plan, ReplayError, Summary, TOLERANCE};
+use crate::answer::{cut_like, uncast, PoseAnswerer};
+use crate::msg::{
+    short_id, GraspObject, GripRecommendation, GripRecommendationSet, Point, PoseRecommendation,
+    PoseRecommendationSet, Vector3,
+};
+use crate::record::bag::{keep_example, Bag};
+use grasp_orient_geometry::MeshCache;
+use std::collections::{HashMap, VecDeque};
+use std::sync::Arc;
+
+/// For each recorded item, the index of its recorded answer (matched by key, in order), and how
+/// many answers matched none.
+fn pair<'a>(
+    items: impl Iterator<Item = Key<'a>>,
+    answers: impl Iterator<Item = Key<'a>>,
+) -> (Vec<Option<usize>>, u64) {
+    let mut by_key: HashMap<Key<'a>, VecDeque<usize>> = HashMap::new();
+    for (i, k) in answers.enumerate() {
+        by_key.entry(k).or_default().push_back(i);
+    }
+    let pairs = items
+        .map(|k| by_key.get_mut(&k).and_then(VecDeque::pop_front))
+        .collect();
+    let unmatched = by_key.values().map(|q| q.len() as u64).sum();
+    (pairs, unmatched)
+}
+
+/// Replays every pose candidate and pose set of `bag` with the meshes of `meshes`.
+pub(super) fn replay_poses(
+    bag: &Bag,
+    plan: &Plan,
+    meshes: &Arc<MeshCache>,
+) -> Result<Summary, ReplayError> {
+    let mut summary = Summary::default();
+    let (pairs, unmatched) = pair(
+        bag.pose_candidates
+            .iter()
+            .map(|c| key(&c.message.id, &c.message.header)),
+        bag.pose_recommendations.iter().map(|r| {
+            let r = &r.message.recommendation;
+            key(&r.candidate_id, &r.header)
+        }),
+    );
+    summary.unmatched_recommendations += unmatched;
+    for (c, p) in bag.pose_candidates.iter().zip(pairs) {
+        let theirs = p.map(|i| &bag.pose_recommendations[i].message);
+        let answered = theirs.is_some_and(|t| answered(&t.recommendation));
+        check_mesh(&c.message.object, answered, meshes)?;
+        let poses = PoseAnswerer::sharing(plan.closing_axis_at(c.log_time), meshes.clone());
+        let (settings, rules) = (plan.settings_at(c.log_time), plan.rules_at(c.log_time));
+        let ours = poses.answer(&c.message, settings, rules);
+        summary.candidates += 1;
+        summary.pose_candidates += 1;
+        if let Some(theirs) = theirs {
+            let label = || format!("pose candidate {:?}", short_id(&c.message.id));
+            let a = (&ours.recommendation, &theirs.recommendation);
+            let differ = compare_one(label, a.0, a.1, &bag.fields, &mut summary);
+            if !differ && compare_geometry(label, &ours, theirs, &mut summary) {
+                summary.differing += 1;
+            }
+        }
+    }
+    replay_pose_sets(bag, plan, meshes, &mut summary)?;
+    Ok(summary)
+}
+
+/// Replays every pose set of `bag` into `summary`.
+fn replay_pose_sets(
+    bag: &Bag,
+    plan: &Plan,
+    meshes: &Arc<MeshCache>,
+    summary: &mut Summary,
+) -> Result<(), ReplayError> {
+    let (pairs, unmatched) = pair(
+        bag.pose_sets
+            .iter()
+            .map(|s| key(&s.message.id, &s.message.header)),
+        bag.pose_recommendation_sets
+            .iter()
+            .map(|r| key(&r.message.set_id, &r.message.header)),
+    );
+    summary.unmatched_set_answers += unmatched;
+    for (set, p) in bag.pose_sets.iter().zip(pairs) {
+        let theirs = p.map(|i| &bag.pose_recommendation_sets[i].message);
+        let answered = theirs.is_some_and(|t| {
+            t.recommendations
+                .iter()
+                .any(|r| answered(&r.recommendation))
+        });
+        check_mesh(&set.message.object, answered, meshes)?;
+        let poses = PoseAnswerer::sharing(plan.closing_axis_at(set.log_time), meshes.clone());
+        let (settings, rules) = (plan.settings_at(set.log_time), plan.rules_at(set.log_time));
+        let theirs_grip = theirs.map(as_grip);
+        let rules = if plan.objective_from_answer {
+            rules_like(rules, theirs_grip.as_ref())
+        } else {
+            *rules
+        };
+        let ours = poses.answer_set(&set.message, settings, &rules);
+        summary.sets += 1;
+        summary.pose_sets += 1;
+        summary.candidates += set.message.poses.len() as u64;
+        let (Some(theirs), Some(theirs_grip)) = (theirs, theirs_grip) else {
+            continue;
+        };
+        summary.sets_compared += 1;
+        // A set cut short (max_set_time, or the node stopping): its unsolved members as recorded.
+        let ours_grip = as_grip(&ours);
+        let ours_grip = cut_like(&ours_grip, &theirs_grip);
+        let stand_in = uncast(&set.message);
+        let mut differ = compare_set(&stand_in, &ours_grip, &theirs_grip, bag, summary);
+        for (k, (a, b)) in ours
+            .recommendations
+            .iter()
+            .zip(&theirs.recommendations)
+            .enumerate()
+        {
+            let label = || {
+                let id = set.message.poses.get(k).map_or("", |p| p.id.as_str());
+                format!(
+                    "pose set {:?} pose {k} {:?}",
+                    short_id(&set.message.id),
+                    short_id(id)
+                )
+            };
+            differ |= compare_geometry(label, a, b, summary);
+        }
+        if differ {
+            summary.sets_differing += 1;
+        }
+        if ours_grip.status != GripRecommendationSet::STATUS_OK
+            && ours_grip.recommendations.is_empty()
+        {
+            summary.in_refused_sets += set.message.poses.len() as u64;
+        }
+    }
+    Ok(())
+}
+
+/// Whether a recorded answer got as far as the geometry: anything but a refusal as invalid input
+/// (an unreadable mesh among them).
+fn answered(r: &GripRecommendation) -> bool {
+    r.status != GripRecommendation::STATUS_INVALID_INPUT
+}
+
+/// A mesh named by resource, read again here: when the recording answered with it (`answered`),
+/// it must still be readable.
+fn check_mesh(object: &GraspObject, answered: bool, meshes: &MeshCache) -> Result<(), ReplayError> {
+    if !answered || object.mesh.is_empty() {
+        return Ok(());
+    }
+    let scale = [object.scale.x, object.scale.y, object.scale.z];
+    meshes
+        .get(&object.mesh, scale)
+        .map(|_| ())
+        .map_err(|why| ReplayError::Mesh {
+            resource: object.mesh.to_string(),
+            why: Box::new(why),
+        })
+}
+
+/// A pose set's answer as a candidate set's: the members' recommendations.
+fn as_grip(r: &PoseRecommendationSet) -> GripRecommendationSet {
+    GripRecommendationSet {
+        header: r.header.clone(),
+        set_id: r.set_id.clone(),
+        recommendations: r
+            .recommendations
+            .iter()
+            .map(|p| p.recommendation.clone())
+            .collect(),
+        ranking: r.ranking.clone(),
+        ranked_by: r.ranked_by.clone(),
+        status: r.status,
+        message: r.message.clone(),
+    }
+}
+
+/// The contacts, normals and centre of mass of a new answer against the recorded ones (NaN
+/// equals NaN: a refused pose has none); true when any differs beyond [`TOLERANCE`].
+fn compare_geometry(
+    label: impl FnOnce() -> String,
+    ours: &PoseRecommendation,
+    theirs: &PoseRecommendation,
+    summary: &mut Summary,
+) -> bool {
+    let point = |p: &Point| [p.x, p.y, p.z];
+    let vector = |v: &Vector3| [v.x, v.y, v.z];
+    let fields: [(&'static str, [f64; 3], [f64; 3]); 5] = [
+        (
+            "contact_1",
+            point(&ours.contact_1),
+            point(&theirs.contact_1),
+        ),
+        (
+            "contact_2",
+            point(&ours.contact_2),
+            point(&theirs.contact_2),
+        ),
+        ("normal_1", vector(&ours.normal_1), vector(&theirs.normal_1)),
+        ("normal_2", vector(&ours.normal_2), vector(&theirs.normal_2)),
+        (
+            "center_of_mass",
+            point(&ours.center_of_mass),
+            point(&theirs.center_of_mass),
+        ),
+    ];
+    let mut beyond = Vec::new();
+    for (field, a, b) in fields {
+        let gap = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| number_gap(*x, *y))
+            .fold(0.0, f64::max);
+        if gap > 0.0 {
+            summary.note_gap(field, gap);
+        }
+        if gap > TOLERANCE {
+            beyond.push(format!("{field} (gap {gap:.3e})"));
+        }
+    }
+    if beyond.is_empty() {
+        return false;
+    }
+    keep_example(&mut summary.examples, || {
+        format!("{}: {}", label(), beyond.join(", "))
+    });
+    true
+}

@@ -1,0 +1,126 @@
+"""Gripper poses from a real rclpy peer over Fast DDS (docs/poses.md): single pose candidates on
+`pose_candidates` -> `pose_recommendations`, pose sets on `pose_candidate_sets` -> `pose_recommendation_sets`,
+and the service `~/recommend_poses`, on an inline mesh, on a mesh named by `package://grasp_orient/...` (the
+peer's install of this package holds meshes/), on primitives, and refused ones (tests/ros/pose_cases.py).
+
+Every answer must equal `grasp_orient solve`'s (or `rank --json`'s) on the same JSON: ids, status, the
+recommendation (rotation, forces: REL_TOL, as every rclpy test), the contacts, normals and centre of mass. See
+conftest.py for how to run.
+"""
+from __future__ import annotations
+
+import json
+import subprocess
+
+import pytest
+
+from conftest import LINE_PREFIX, Peer, binary_path, compare, reliable_qos, run_solve, to_plain
+import pose_cases as pc
+
+from grasp_orient.msg import (  # noqa: E402
+    PoseCandidate, PoseCandidateSet, PoseRecommendation, PoseRecommendationSet,
+)
+from grasp_orient.srv import RecommendPoses  # noqa: E402
+
+
+class PoseClient:
+    """Publishers on pose_candidates and pose_candidate_sets, subscribers on their answers (by id), and a client
+    of ~/recommend_poses."""
+
+    def __init__(self, peer: Peer):
+        self.peer = peer
+        node = peer.node
+        self.pub = node.create_publisher(PoseCandidate, "pose_candidates", reliable_qos(100))
+        self.set_pub = node.create_publisher(PoseCandidateSet, "pose_candidate_sets", reliable_qos(10))
+        self.answers: dict[str, object] = {}
+        self.set_answers: dict[str, object] = {}
+        node.create_subscription(PoseRecommendation, "pose_recommendations",
+                                 lambda m: self.answers.setdefault(m.recommendation.candidate_id, m),
+                                 reliable_qos(100))
+        node.create_subscription(PoseRecommendationSet, "pose_recommendation_sets",
+                                 lambda m: self.set_answers.setdefault(m.set_id, m), reliable_qos(10))
+        self.srv = node.create_client(RecommendPoses, "/grasp_orient/recommend_poses")
+
+    def wait_matched(self):
+        ok = self.peer.spin_until(lambda: self.pub.get_subscription_count() > 0
+                                  and self.set_pub.get_subscription_count() > 0, 15.0)
+        assert ok, "no match on the pose topics"
+        self.peer.spin_for(0.5)  # the answers' direction too
+
+    def send(self, cands: list[dict]) -> dict[str, dict]:
+        for c in cands:
+            self.pub.publish(pc.fill(PoseCandidate(), c))
+        ids = [c["id"] for c in cands]
+        ok = self.peer.spin_until(lambda: all(i in self.answers for i in ids), 60.0)
+        assert ok, f"not answered: {[i for i in ids if i not in self.answers]}"
+        return {i: to_plain(self.answers[i]) for i in ids}
+
+    def send_set(self, s: dict) -> dict:
+        self.set_pub.publish(pc.fill(PoseCandidateSet(), s))
+        ok = self.peer.spin_until(lambda: s["id"] in self.set_answers, 60.0)
+        assert ok, f"no answer to pose set {s['id']}"
+        return to_plain(self.set_answers[s["id"]])
+
+    def call(self, s: dict) -> dict:
+        req = RecommendPoses.Request()
+        req.pose_set = pc.fill(PoseCandidateSet(), s)
+        return to_plain(self.peer.call(self.srv, req, timeout=60.0).recommendation_set)
+
+
+@pytest.fixture(scope="module")
+def poses(peer, grasp_node) -> PoseClient:
+    c = PoseClient(peer)
+    c.wait_matched()
+    return c
+
+
+def rank_json(s: dict) -> dict:
+    """`grasp_orient rank --json` of one PoseCandidateSet line."""
+    r = subprocess.run([str(binary_path()), "rank", "--json"], input=json.dumps(s) + "\n", capture_output=True,
+                       text=True, timeout=120)
+    assert r.returncode in (0, 1), f"rank exited {r.returncode}: {r.stderr[-2000:]}"
+    return json.loads(r.stdout)
+
+
+def test_pose_topics_and_service_in_the_ros_graph(peer, poses):
+    topics = dict(peer.node.get_topic_names_and_types())
+    for name, typ in [("/pose_candidates", "PoseCandidate"), ("/pose_recommendations", "PoseRecommendation"),
+                      ("/pose_candidate_sets", "PoseCandidateSet"),
+                      ("/pose_recommendation_sets", "PoseRecommendationSet")]:
+        assert f"grasp_orient/msg/{typ}" in topics.get(name, []), (name, topics.get(name))
+    services = dict(peer.node.get_service_names_and_types())
+    assert "grasp_orient/srv/RecommendPoses" in services.get("/grasp_orient/recommend_poses", [])
+
+
+def test_single_pose_candidates_equal_solves(poses):
+    cands = pc.singles()
+    got = poses.send(cands)
+    want = run_solve(cands)
+    statuses = {}
+    for c, ref in zip(cands, want):
+        ours = got[c["id"]]
+        # solve names the line of a refusal; the node has no lines
+        ref["recommendation"]["message"] = LINE_PREFIX.sub("", ref["recommendation"]["message"])
+        diffs = compare(ours, ref)
+        assert not diffs, f"{c['id']}: {diffs[:5]}"
+        statuses[c["id"]] = ours["recommendation"]["status"]
+    # every object answered somewhere, the refusals refused
+    for name in pc.objects():
+        assert any(statuses[f"{name}-{g}"] in (0, 3) for g, _, _ in pc.grasps()), (name, statuses)
+    assert statuses["refused-nothing"] == 1
+    for k in ("refused-inside", "refused-scale", "refused-primitive-scale", "refused-type"):
+        assert statuses[k] == 2, (k, statuses[k])
+    block = got["package-mid"]
+    assert block["contact_1"] is not None and block["recommendation"]["status"] == 0, block
+
+
+@pytest.mark.parametrize("index", range(len(pc.sets())), ids=[s["id"] for s in pc.sets()])
+def test_pose_sets_on_the_topic_and_the_service_equal_rank(poses, index):
+    s = pc.sets()[index]
+    want = rank_json(s)
+    for how, got in [("topic", poses.send_set(s)), ("service", poses.call(s))]:
+        diffs = compare(got, want)
+        assert not diffs, f"{s['id']} ({how}): {diffs[:5]}"
+    if s["id"] != "set-refused":
+        assert want["recommendations"][-1]["recommendation"]["status"] == 1, "miss closes on nothing"
+        assert want["ranking"], f"{s['id']}: nothing ranked"
