@@ -103,6 +103,31 @@ fn random_grasps_with_refused_ones_replay_unchanged() {
     );
 }
 
+/// `bags/node_poses.mcap`, recorded from `grasp_orient node` by `bags/record_node_poses.py`:
+/// its pose candidates and pose sets (an inline mesh, a mesh by `package://`, primitives,
+/// refusals, a set through the service) cast and solved again, without a difference, with
+/// `package://grasp_orient` found in the test prefix `tests/prefix`.
+#[test]
+fn the_pose_bag_the_node_recorded_replays() {
+    let path = format!("{}/bags/node_poses.mcap", env!("CARGO_MANIFEST_DIR"));
+    let prefix = format!("{}/tests/prefix", env!("CARGO_MANIFEST_DIR"));
+    let out = bin()
+        .args(["replay", &path])
+        .env("AMENT_PREFIX_PATH", &prefix)
+        .output()
+        .expect("binary runs");
+    let text =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert!(
+        text.contains("29 pose candidates, 29 recorded pose answers, 5 pose sets, 5 recorded pose set answers")
+            && text.contains("54 compared with a recorded recommendation, 0 differ")
+            && text.contains("5 compared with a recorded answer, 0 differ")
+            && text.contains("0 recorded recommendations unmatched"),
+        "{text}"
+    );
+}
+
 #[test]
 fn the_bag_the_node_recorded_replays_with_its_settings() {
     let (ok, text) = replay("node_recorded.mcap");

@@ -1,0 +1,150 @@
+#!/usr/bin/env python3
+"""Records bags/node_poses.mcap with `grasp_orient node` itself: pose candidates and pose sets (docs/poses.md)
+through the code path users run (see bags/README.md).
+
+    cargo build && source "$(bash tests/peer/setup.sh | tail -n 1)" && python bags/record_node_poses.py [--bin PATH] [--out PATH]
+
+The node runs in namespace /golden with record_markers:=true. From rclpy (Fast DDS, on a private ROS domain) it is
+sent, one at a time, each answer awaited, the pose candidates and pose sets of tests/ros/pose_cases.py: every grasp
+on a block given inline, on the same block named by package://grasp_orient/meshes/block_mm.obj (found through
+AMENT_PREFIX_PATH, which the peer's environment sets to its install of this package, meshes/ included), and on
+the four primitives; refused ones (a finger closing on nothing, a finger starting inside, a scale of 0, a
+primitive with a scale, an unknown primitive type); the sets on pose_candidate_sets, and the first set once more
+through the service ~/recommend_poses (with another id). SIGINT ends the node, which closes the file; it is copied
+to --out.
+
+Header stamps are fixed; log and publish times are the real ones of the run, so a rerun writes other bytes with
+the same messages. Rerun it when the node's recording format or the answers change.
+"""
+from __future__ import annotations
+
+import argparse
+import copy
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+REPO_ROOT = HERE.parent
+sys.path.insert(0, str(REPO_ROOT / "tests" / "ros"))
+
+import pose_cases as pc  # noqa: E402
+
+NS = "/golden"
+NODE = f"{NS}/grasp_orient"
+
+
+def die(msg: str):
+    print(f"record_node_poses.py: {msg}", file=sys.stderr)
+    sys.exit(1)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--bin", type=Path, default=REPO_ROOT / "target" / "debug" / "grasp_orient")
+    ap.add_argument("--out", type=Path, default=HERE / "node_poses.mcap")
+    args = ap.parse_args()
+    if not args.bin.is_file():
+        die(f"no binary at {args.bin} (cargo build, or --bin)")
+    os.environ["ROS_DOMAIN_ID"] = os.environ.get("GRASP_ORIENT_TEST_DOMAIN_ID") or str(200 + os.getpid() % 30)
+    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+    os.environ.pop("ROS_LOCALHOST_ONLY", None)
+    os.environ.setdefault("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
+    try:
+        import rclpy
+        from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+        from grasp_orient.msg import PoseCandidate, PoseCandidateSet, PoseRecommendation, PoseRecommendationSet
+        from grasp_orient.srv import RecommendPoses
+    except ImportError as e:
+        die(f"cannot import rclpy / grasp_orient.msg ({e}); source \"$(bash tests/peer/setup.sh | tail -n 1)\" first")
+
+    singles, sets = pc.singles(), pc.sets()
+    by_service = copy.deepcopy(sets[0])
+    by_service["id"] += "-service"
+    with tempfile.TemporaryDirectory() as tmp:
+        record_dir = Path(tmp) / "runs"
+        lines: list[str] = []
+        ready = threading.Event()
+        proc = subprocess.Popen(
+            [str(args.bin), "node", "--ros-args", "-r", f"__ns:={NS}", "-p", f"record_dir:={record_dir}",
+             "-p", "record_markers:=true"],
+            cwd=tmp, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+            errors="replace")
+
+        def pump():
+            for line in proc.stdout:
+                lines.append(line.rstrip("\n"))
+                if "waiting for" in line:
+                    ready.set()
+
+        threading.Thread(target=pump, daemon=True).start()
+        try:
+            if not ready.wait(30):
+                die("the node did not come up within 30 s:\n" + "\n".join(lines[-30:]))
+            rclpy.init()
+            node = rclpy.create_node("grasp_orient_record_node_poses")
+            qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST,
+                             durability=DurabilityPolicy.VOLATILE)
+            got: dict[str, object] = {}
+            pub = node.create_publisher(PoseCandidate, f"{NS}/pose_candidates", qos)
+            set_pub = node.create_publisher(PoseCandidateSet, f"{NS}/pose_candidate_sets", qos)
+            node.create_subscription(PoseRecommendation, f"{NS}/pose_recommendations",
+                                     lambda m: got.setdefault(m.recommendation.candidate_id, m), qos)
+            node.create_subscription(PoseRecommendationSet, f"{NS}/pose_recommendation_sets",
+                                     lambda m: got.setdefault(m.set_id, m), qos)
+            deadline = time.monotonic() + 20
+            while not (pub.get_subscription_count() and set_pub.get_subscription_count()
+                       and node.count_publishers(f"{NS}/pose_recommendations")
+                       and node.count_publishers(f"{NS}/pose_recommendation_sets")):
+                rclpy.spin_once(node, timeout_sec=0.05)
+                if time.monotonic() > deadline:
+                    die("no match with the node within 20 s")
+            time.sleep(0.5)  # both directions discovered
+
+            def await_answer(key: str):
+                deadline = time.monotonic() + 20
+                while key not in got:
+                    rclpy.spin_once(node, timeout_sec=0.05)
+                    if time.monotonic() > deadline:
+                        die(f"no answer to {key} within 20 s:\n" + "\n".join(lines[-20:]))
+
+            for c in singles:
+                pub.publish(pc.fill(PoseCandidate(), c))
+                await_answer(c["id"])
+            for s in sets:
+                set_pub.publish(pc.fill(PoseCandidateSet(), s))
+                await_answer(s["id"])
+            client = node.create_client(RecommendPoses, f"{NODE}/recommend_poses")
+            if not client.wait_for_service(timeout_sec=10):
+                die(f"no {NODE}/recommend_poses service")
+            req = RecommendPoses.Request()
+            req.pose_set = pc.fill(PoseCandidateSet(), by_service)
+            future = client.call_async(req)
+            rclpy.spin_until_future_complete(node, future, timeout_sec=20)
+            if not (future.done() and future.result().recommendation_set.set_id == by_service["id"]):
+                die("no answer from the service")
+            node.destroy_node()
+            rclpy.shutdown()
+        finally:
+            proc.send_signal(signal.SIGINT)
+            try:
+                proc.wait(15)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+        if proc.returncode != 0:
+            die(f"the node exited with {proc.returncode}:\n" + "\n".join(lines[-30:]))
+        files = sorted(record_dir.glob("*.mcap"))
+        if len(files) != 1:
+            die(f"expected one recording, found {files}")
+        shutil.copyfile(files[0], args.out)
+    print(f"wrote {args.out}: {len(singles)} pose candidates and {len(sets) + 1} pose sets from {files[0].name}")
+
+
+if __name__ == "__main__":
+    main()
