@@ -180,22 +180,27 @@ impl MeshCache {
     }
 
     /// The mesh of a resource at a scale, loaded if it is not kept yet.
+    ///
+    /// The cache is not locked while a mesh loads, so a thread that loads one (a large mesh
+    /// takes a tenth of a second and more) holds up no other thread's use of the meshes kept;
+    /// two threads that load the same mesh at once both parse it, and the first kept is kept.
     pub fn get(&self, resource: &str, scale: [f64; 3]) -> Result<Arc<Mesh>, GeometryError> {
         let path = resolve(resource, &self.index)?;
         let key_path = std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone());
         let key = (key_path, scale.map(|s| (s + 0.0).to_bits()));
-        let mut inner = self.inner.lock().unwrap_or_else(|e| e.into_inner());
-        inner.clock += 1;
-        let now = inner.clock;
-        if let Some(entry) = inner.entries.get_mut(&key) {
-            entry.last_used = now;
-            return Ok(Arc::clone(&entry.mesh));
+        if let Some(mesh) = self.lock().take(&key) {
+            return Ok(mesh);
         }
         let (vertices, triangles) = parse(resource, &path)?;
         let mesh = Arc::new(Mesh::from_triangles(
             resource, &vertices, &triangles, scale,
         )?);
+        let mut inner = self.lock();
         inner.loads += 1;
+        if let Some(kept) = inner.take(&key) {
+            return Ok(kept);
+        }
+        let now = inner.clock;
         let size = mesh.bytes();
         if size <= self.max_bytes {
             while inner.bytes + size > self.max_bytes {
@@ -237,6 +242,15 @@ impl MeshCache {
 }
 
 impl CacheInner {
+    /// The mesh kept under `key`, marked as used now.
+    fn take(&mut self, key: &(PathBuf, [u64; 3])) -> Option<Arc<Mesh>> {
+        self.clock += 1;
+        let now = self.clock;
+        let entry = self.entries.get_mut(key)?;
+        entry.last_used = now;
+        Some(Arc::clone(&entry.mesh))
+    }
+
     fn evict_oldest(&mut self) {
         let oldest = self
             .entries

@@ -263,3 +263,45 @@ fn meshes_and_the_cache_can_be_shared_across_threads() {
     shared::<grasp_orient_geometry::Shape>();
     shared::<grasp_orient_geometry::Object>();
 }
+
+/// A thread loading a mesh holds up no other thread's kept meshes: the load here reads a FIFO
+/// that nothing writes to until the kept mesh has been served (before, `get` held the cache's
+/// lock while it parsed, and the second `get` waited for the load).
+#[test]
+fn a_load_does_not_hold_up_the_meshes_kept() {
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let m = l_mm();
+    let kept = dir.path().join("kept.stl");
+    write_binary_stl(&kept, &m);
+    let slow = dir.path().join("slow.stl");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&slow)
+        .status()
+        .expect("mkfifo runs");
+    assert!(made.success());
+    let cache = std::sync::Arc::new(MeshCache::new(AmentIndex::default(), usize::MAX));
+    let kept = kept.display().to_string();
+    cache.get(&kept, [0.001; 3]).expect("loads");
+    let loading = {
+        let (cache, slow) = (cache.clone(), slow.display().to_string());
+        std::thread::spawn(move || cache.get(&slow, [0.001; 3]).map(|_| ()))
+    };
+    std::thread::sleep(std::time::Duration::from_millis(100)); // the load is waiting on the FIFO
+    let (tx, rx) = std::sync::mpsc::channel();
+    {
+        let cache = cache.clone();
+        std::thread::spawn(move || tx.send(cache.get(&kept, [0.001; 3]).is_ok()));
+    }
+    let served = rx.recv_timeout(std::time::Duration::from_secs(5));
+    // Release the load whatever happened, so that no thread is left waiting.
+    let mut bytes = Vec::new();
+    let tmp = dir.path().join("data.stl");
+    write_binary_stl(&tmp, &m);
+    bytes.extend(fs::read(&tmp).expect("read"));
+    fs::write(&slow, bytes).expect("write into the FIFO");
+    assert_eq!(served, Ok(true), "the kept mesh waited for another's load");
+    loading
+        .join()
+        .expect("no panic")
+        .expect("the FIFO's mesh loads");
+}
