@@ -131,10 +131,30 @@ impl PoseAnswerer {
         settings: &Settings,
         rules: &Rules,
     ) -> PoseRecommendation {
-        match self.place(m) {
-            Ok((candidate, grasp)) => finish(answer_one(&candidate, settings, rules), &grasp),
-            Err(why) => target_of(m).refused(&why),
-        }
+        self.answer_with_object(m, settings, rules).0
+    }
+
+    /// [`PoseAnswerer::answer`], and the object with its shape when it could be made (for the
+    /// markers that draw it, without making it twice).
+    pub fn answer_with_object(
+        &self,
+        m: &PoseCandidate,
+        settings: &Settings,
+        rules: &Rules,
+    ) -> (PoseRecommendation, Option<Object>) {
+        let target = target_of(m);
+        let object = match self.object(&m.object) {
+            Ok(object) => object,
+            Err(why) => return (target.refused(&why.into()), None),
+        };
+        let answer = match self.grasp(&m.grasp_pose, "grasp_pose", m.width, &object, &m.object) {
+            Ok(grasp) => finish(
+                answer_one(&target.candidate(&grasp), settings, rules),
+                &grasp,
+            ),
+            Err(why) => target.refused(&why.into()),
+        };
+        (answer, Some(object))
     }
 
     /// The spatial candidate a pose candidate's fingers make, or the answer that refuses it
@@ -166,19 +186,20 @@ impl PoseAnswerer {
         self.answer_set_with(set, rules, |candidates| {
             answer_set(candidates, settings, rules)
         })
+        .0
     }
 
     /// [`PoseAnswerer::answer_set`] with the set of spatial candidates the poses make answered
     /// by `answer` (the node's set thread answers it within `max_set_time`:
     /// `answer_set_within`). `answer` gets a candidate per pose, a pose the geometry refused as
     /// an empty candidate (refused by the solver, and then answered with the geometry's
-    /// refusal).
+    /// refusal). The object comes back too when it could be made, for the markers.
     pub fn answer_set_with(
         &self,
         set: &PoseCandidateSet,
         rules: &Rules,
         answer: impl FnOnce(&GraspCandidateSet) -> GripRecommendationSet,
-    ) -> PoseRecommendationSet {
+    ) -> (PoseRecommendationSet, Option<Object>) {
         let target = |id| Target {
             header: &set.header,
             id,
@@ -186,11 +207,12 @@ impl PoseAnswerer {
             gravity: &set.gravity,
         };
         // A set refused whole (too large) is not worth the geometry.
-        let placed: Vec<Result<Grasp, Refused>> = if set.poses.len() > rules.max_set_size {
-            Vec::new()
-        } else {
-            let object = self.object(&set.object).map_err(Refused::from);
-            set.poses
+        let object = (set.poses.len() <= rules.max_set_size)
+            .then(|| self.object(&set.object).map_err(Refused::from));
+        let placed: Vec<Result<Grasp, Refused>> = match &object {
+            None => Vec::new(),
+            Some(object) => set
+                .poses
                 .iter()
                 .enumerate()
                 .map(|(i, p)| {
@@ -199,7 +221,7 @@ impl PoseAnswerer {
                     self.grasp(&p.grasp_pose, &field, p.width, object, &set.object)
                         .map_err(Refused::from)
                 })
-                .collect()
+                .collect(),
         };
         let candidates = if placed.is_empty() {
             // As many as the poses, for answer_set to refuse the set as too large (or to answer
@@ -235,7 +257,7 @@ impl PoseAnswerer {
                 Err(why) => target(&p.id).refused(why),
             })
             .collect();
-        PoseRecommendationSet {
+        let reply = PoseRecommendationSet {
             header: answered.header,
             set_id: answered.set_id,
             recommendations,
@@ -243,7 +265,8 @@ impl PoseAnswerer {
             ranked_by: answered.ranked_by,
             status: answered.status,
             message: answered.message,
-        }
+        };
+        (reply, object.and_then(Result::ok))
     }
 
     /// The object's pose and shape, checked: for the markers that draw it.

@@ -470,21 +470,20 @@ impl Answerer {
             )
         };
         let poses = PoseAnswerer::sharing(axis, self.meshes.clone());
-        let reply = if self.echo {
-            crate::answer::without_geometry(GripRecommendation {
+        let (reply, object) = if self.echo {
+            let empty = GripRecommendation {
                 header: candidate.header.clone(),
                 candidate_id: candidate.id.clone(),
                 ..GripRecommendation::default()
-            })
+            };
+            (crate::answer::without_geometry(empty), None)
         } else {
-            poses.answer(&candidate, &settings, &rules)
+            poses.answer_with_object(&candidate, &settings, &rules)
         };
         self.count_one(&reply.recommendation, &mut notes);
         let ok = reply.recommendation.status == GripRecommendation::STATUS_OK;
-        let markers = (markers_on && !self.echo && ok).then(|| {
-            let object = poses.object(&candidate.object).ok();
-            markers::build_pose(&candidate, object.as_ref(), axis, &reply, &settings)
-        });
+        let markers = (markers_on && !self.echo && ok)
+            .then(|| markers::build_pose(&candidate, object.as_ref(), axis, &reply, &settings));
         let recorded = Recorded {
             reply: self
                 .recording

@@ -349,13 +349,13 @@ impl Solver {
     /// the set's time) and its best pose's markers.
     fn poses(&self, set: &PoseCandidateSet, now: &InForce) -> (SetReply, Option<MarkerArray>) {
         let answerer = PoseAnswerer::sharing(now.closing_axis, self.meshes.clone());
-        let reply = if self.echo {
-            pose_set_without_geometry(set, echo_set(&uncast(set)))
+        let (reply, object) = if self.echo {
+            (pose_set_without_geometry(set, echo_set(&uncast(set))), None)
         } else {
             let pool = self.pool_for(set.poses.len(), now.threads);
             self.interrupt.lower_time();
             let _watched = self.clock.watch(now.budget);
-            answerer.answer_set_with(set, &now.rules, |candidates| {
+            let (reply, object) = answerer.answer_set_with(set, &now.rules, |candidates| {
                 answer_set_within(
                     candidates,
                     &now.settings,
@@ -364,7 +364,8 @@ impl Solver {
                     &self.interrupt,
                     now.budget,
                 )
-            })
+            });
+            (reply, object)
         };
         let best = reply.ranking.first().map(|&i| i as usize);
         let markers = best.filter(|_| self.draws(now)).and_then(|i| {
@@ -377,7 +378,6 @@ impl Solver {
                 object: set.object.clone(),
                 gravity: set.gravity.clone(),
             };
-            let object = answerer.object(&set.object).ok();
             Some(markers::build_pose(
                 &candidate,
                 object.as_ref(),
