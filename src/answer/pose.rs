@@ -119,6 +119,11 @@ impl PoseAnswerer {
         Self::new(closing_axis, AmentIndex::from_env())
     }
 
+    /// The axis the fingers close along.
+    pub fn closing_axis(&self) -> ClosingAxis {
+        self.closing_axis
+    }
+
     /// The meshes loaded so far.
     pub fn meshes(&self) -> &MeshCache {
         &self.meshes

@@ -76,6 +76,40 @@ pub struct PoseOutcome {
     pub recorded: Recorded,
 }
 
+/// Answering one pose candidate, apart from the node's counts and recording: the settings in
+/// force when it was received, and the node's meshes. It may run on another thread.
+#[derive(Debug, Clone)]
+pub struct PoseWork {
+    settings: crate::solver::Settings,
+    rules: crate::answer::Rules,
+    markers_on: bool,
+    echo: bool,
+    poses: PoseAnswerer,
+}
+
+impl PoseWork {
+    /// The answer, and its markers when they are on and the answer has status 0.
+    pub fn run(&self, candidate: &PoseCandidate) -> (PoseRecommendation, Option<MarkerArray>) {
+        if self.echo {
+            let empty = GripRecommendation {
+                header: candidate.header.clone(),
+                candidate_id: candidate.id.clone(),
+                ..GripRecommendation::default()
+            };
+            return (crate::answer::without_geometry(empty), None);
+        }
+        let (reply, object) = self
+            .poses
+            .answer_with_object(candidate, &self.settings, &self.rules);
+        let ok = reply.recommendation.status == GripRecommendation::STATUS_OK;
+        let markers = (self.markers_on && ok).then(|| {
+            let axis = self.poses.closing_axis();
+            markers::build_pose(candidate, object.as_ref(), axis, &reply, &self.settings)
+        });
+        (reply, markers)
+    }
+}
+
 /// The messages of one answer for the recording (a candidate or a pose candidate, and its
 /// answer), with the candidate's times.
 #[derive(Debug)]
@@ -450,40 +484,54 @@ impl Answerer {
 
     /// The answer to one pose candidate, received at `received` and sent at `sent` (ns since the
     /// epoch), with the settings in force when it was received (`closing_axis` among them), on
-    /// the node's thread: a mesh named by resource and not yet in the cache is loaded here, once
-    /// (docs/node.md).
+    /// the calling thread: [`Answerer::pose_work`], run, then [`Answerer::account_pose`].
     pub fn handle_pose(
         &mut self,
         candidate: PoseCandidate,
         received: u64,
         sent: u64,
     ) -> PoseOutcome {
+        let work = self.pose_work(received);
+        let (reply, markers) = work.run(&candidate);
+        self.account_pose(candidate, reply, markers, received, sent)
+    }
+
+    /// What answering a pose candidate received at `received` needs (the settings then in force
+    /// and the node's meshes), to run on any thread ([`PoseWork::run`]).
+    pub fn pose_work(&self, received: u64) -> PoseWork {
+        let live = self.shared.lock();
+        let version = live.version_at(received);
+        PoseWork {
+            settings: version.settings,
+            rules: version.config.rules(),
+            markers_on: version.config.publish_markers && !self.echo,
+            echo: self.echo,
+            poses: PoseAnswerer::sharing(version.config.closing_axis, self.meshes.clone()),
+        }
+    }
+
+    /// Whether answering `candidate` would load a mesh file first (one named by resource and not
+    /// in the node's cache yet).
+    pub fn loads_a_mesh(&self, candidate: &PoseCandidate) -> bool {
+        let o = &candidate.object;
+        !self.echo
+            && !o.mesh.is_empty()
+            && !self
+                .meshes
+                .holds(&o.mesh, [o.scale.x, o.scale.y, o.scale.z])
+    }
+
+    /// Counts a pose candidate's answer and readies what is recorded of it.
+    pub fn account_pose(
+        &mut self,
+        candidate: PoseCandidate,
+        reply: PoseRecommendation,
+        markers: Option<MarkerArray>,
+        received: u64,
+        sent: u64,
+    ) -> PoseOutcome {
         let mut notes = Vec::new();
-        let (settings, markers_on, rules, axis) = {
-            let live = self.shared.lock();
-            let version = live.version_at(received);
-            (
-                version.settings,
-                version.config.publish_markers,
-                version.config.rules(),
-                version.config.closing_axis,
-            )
-        };
-        let poses = PoseAnswerer::sharing(axis, self.meshes.clone());
-        let (reply, object) = if self.echo {
-            let empty = GripRecommendation {
-                header: candidate.header.clone(),
-                candidate_id: candidate.id.clone(),
-                ..GripRecommendation::default()
-            };
-            (crate::answer::without_geometry(empty), None)
-        } else {
-            poses.answer_with_object(&candidate, &settings, &rules)
-        };
         self.count_one(&reply.recommendation, &mut notes);
-        let ok = reply.recommendation.status == GripRecommendation::STATUS_OK;
-        let markers = (markers_on && !self.echo && ok)
-            .then(|| markers::build_pose(&candidate, object.as_ref(), axis, &reply, &settings));
         let recorded = Recorded {
             reply: self
                 .recording

@@ -219,10 +219,12 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
         // The parameter services run as a task of their own, woken only by their requests.
         let local = smol::LocalExecutor::new();
         let _services = local.spawn(services.serve(node));
+        let mut loading = Loading::new();
         let mut loop_state = Loop {
             answerer: &mut answerer,
             worker: &mut worker,
             woken: &mut woken,
+            loading: &mut loading,
         };
         let outcome = local
             .run(serve(
@@ -234,6 +236,7 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
             ))
             .await;
         finish_sets(node, &endpoints, &mut answerer, &mut worker).await;
+        finish_loads(node, &endpoints, &mut answerer, &mut loading).await;
         tell(node, answerer.finish());
         outcome
     });
@@ -305,6 +308,24 @@ struct Loop<'a> {
     answerer: &'a mut Answerer,
     worker: &'a mut SetWorker,
     woken: &'a mut futures::channel::mpsc::UnboundedReceiver<()>,
+    loading: &'a mut Loading,
+}
+
+/// Single pose candidates answered off the node's thread because their mesh was not loaded yet
+/// (at most [`MAX_LOADING`] at a time).
+type Loading = futures::stream::FuturesUnordered<smol::Task<Loaded>>;
+
+/// How many single pose candidates may load their meshes off the node's thread at once; one
+/// more is answered on the node's thread.
+const MAX_LOADING: usize = 4;
+
+/// A single pose candidate answered off the node's thread, with its times.
+struct Loaded {
+    candidate: PoseCandidate,
+    reply: PoseRecommendation,
+    markers: Option<MarkerArray>,
+    received: u64,
+    sent: u64,
 }
 
 /// Answers every candidate until a signal, or until the demo is done; acts on parameter sets
@@ -321,6 +342,7 @@ async fn serve(
         answerer,
         worker,
         woken,
+        loading,
     } = state;
     let mut stream = pin!(endpoints.candidates.async_stream());
     let mut set_stream = pin!(endpoints.sets.candidates.async_stream());
@@ -355,6 +377,7 @@ async fn serve(
                 }
                 Err(e) => tell(node, vec![answerer.undecodable(&endpoints.topics.candidates, &e)]),
             },
+            loaded = loading.select_next_some() => send_loaded(node, endpoints, answerer, loaded).await,
             done = worker.done.select_next_some() => {
                 sets::answer_done(node, sets, markers, answerer, done).await;
             }
@@ -378,7 +401,7 @@ async fn serve(
             },
             received = poses.select_next_some() => match received {
                 Ok((candidate, info)) => {
-                    answer_pose(node, endpoints, answerer, candidate, &info).await;
+                    take_pose(node, endpoints, answerer, loading, candidate, &info).await;
                 }
                 Err(e) => {
                     let topic = endpoints.topics.poses.as_ref().map_or("", |p| &p.candidates);
@@ -490,16 +513,74 @@ async fn answer_one(
     tell(node, notes);
 }
 
-/// Answers one pose candidate, as [`answer_one`] a candidate.
-async fn answer_pose(
+/// Takes one pose candidate: answered on the node's thread when its mesh is loaded already (or
+/// it names none); otherwise off it ([`smol::unblock`]), its answer sent when it is back, so that
+/// a first load (a tenth of a second and more for a large mesh) holds up no other topic. Answers
+/// may then come back in another order than their candidates.
+async fn take_pose(
     node: &Node,
     endpoints: &Endpoints,
     answerer: &mut Answerer,
+    loading: &mut Loading,
     candidate: PoseCandidate,
     info: &MessageInfo,
 ) {
     let (received, sent) = message_times(info);
+    if loading.len() < MAX_LOADING && answerer.loads_a_mesh(&candidate) {
+        let work = answerer.pose_work(received);
+        loading.push(smol::unblock(move || {
+            let (reply, markers) = work.run(&candidate);
+            Loaded {
+                candidate,
+                reply,
+                markers,
+                received,
+                sent,
+            }
+        }));
+        return;
+    }
     let outcome = answerer.handle_pose(candidate, received, sent);
+    send_pose(node, endpoints, answerer, outcome).await;
+}
+
+/// Counts, sends and records a pose candidate answered off the node's thread.
+async fn send_loaded(node: &Node, endpoints: &Endpoints, answerer: &mut Answerer, l: Loaded) {
+    let outcome = answerer.account_pose(l.candidate, l.reply, l.markers, l.received, l.sent);
+    send_pose(node, endpoints, answerer, outcome).await;
+}
+
+/// On a stop request: for at most [`STOP_GRACE`], sends the answers of the pose candidates still
+/// loading their meshes.
+async fn finish_loads(
+    node: &Node,
+    endpoints: &Endpoints,
+    answerer: &mut Answerer,
+    loading: &mut Loading,
+) {
+    let mut grace = FutureExt::fuse(smol::Timer::after(STOP_GRACE));
+    loop {
+        futures::select_biased! {
+            loaded = loading.next() => match loaded {
+                Some(l) => send_loaded(node, endpoints, answerer, l).await,
+                None => return,
+            },
+            _ = grace => {
+                say(node, log::Level::Warn, "a pose candidate's mesh was still loading; leaving without its answer");
+                return;
+            }
+        }
+    }
+}
+
+/// Sends one pose candidate's answer, as [`answer_one`] a candidate's: the answer, its markers,
+/// then the recording.
+async fn send_pose(
+    node: &Node,
+    endpoints: &Endpoints,
+    answerer: &mut Answerer,
+    outcome: answer::PoseOutcome,
+) {
     log::debug!(
         "pose candidate {:?}: status {}, {} {} N",
         short_id(&outcome.reply.recommendation.candidate_id),

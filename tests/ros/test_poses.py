@@ -10,11 +10,15 @@ conftest.py for how to run.
 from __future__ import annotations
 
 import json
+import os
 import subprocess
+import time
 
 import pytest
 
-from conftest import LINE_PREFIX, Peer, binary_path, compare, reliable_qos, run_solve, to_plain
+from conftest import (
+    LINE_PREFIX, Peer, binary_path, compare, load_paper_cases, reliable_qos, run_solve, to_plain,
+)
 import pose_cases as pc
 
 from grasp_orient.msg import (  # noqa: E402
@@ -124,3 +128,50 @@ def test_pose_sets_on_the_topic_and_the_service_equal_rank(poses, index):
     if s["id"] != "set-refused":
         assert want["recommendations"][-1]["recommendation"]["status"] == 1, "miss closes on nothing"
         assert want["ranking"], f"{s['id']}: nothing ranked"
+
+
+def binary_stl(mesh: dict, scale: float) -> bytes:
+    """A shape_msgs/Mesh dict as binary STL bytes, its vertices multiplied by `scale`."""
+    import struct
+    tris = mesh["triangles"]
+    out = bytearray(80) + struct.pack("<I", len(tris))
+    for t in tris:
+        out += struct.pack("<3f", 0.0, 0.0, 0.0)
+        for i in t["vertex_indices"]:
+            v = mesh["vertices"][i]
+            out += struct.pack("<3f", v["x"] * scale, v["y"] * scale, v["z"] * scale)
+        out += b"\0\0"
+    return bytes(out)
+
+
+def test_a_first_mesh_load_holds_up_no_other_topic(poses, client, tmp_path):
+    """A single pose candidate whose mesh is not loaded yet is answered off the node's thread: its mesh file here
+    is a FIFO that nothing writes until a GraspCandidate sent after it has been answered. Then the pose's answer
+    comes, equal to solve's on the same file."""
+    fifo = tmp_path / "slow_block.stl"
+    os.mkfifo(fifo)
+    cand = next(c for c in pc.singles() if c["id"] == "package-mid")
+    cand["id"] = "fifo-mid"
+    cand["object"]["mesh"] = f"file://{fifo}"
+    cand["object"]["scale"] = {"x": 1.0, "y": 1.0, "z": 1.0}
+    poses.pub.publish(pc.fill(PoseCandidate(), cand))
+    time.sleep(0.3)  # the node has taken it, and is waiting on the FIFO
+    probe = json.loads(json.dumps(load_paper_cases()[0]))
+    probe["id"] = "while-loading"
+    answer = client.send_one(probe, timeout=5.0)
+    assert answer.status == 0
+    assert "fifo-mid" not in poses.answers, "the pose was answered before its mesh was written"
+    data = binary_stl(pc.block_mesh(), 0.001)
+    with open(fifo, "wb") as f:
+        f.write(data)
+    ok = poses.peer.spin_until(lambda: "fifo-mid" in poses.answers, 10.0)
+    assert ok, "no answer to the pose candidate once its mesh was written"
+    got = to_plain(poses.answers["fifo-mid"])
+    fifo.unlink()
+    stl = tmp_path / "block.stl"
+    stl.write_bytes(data)
+    cand["object"]["mesh"] = f"file://{stl}"
+    (want,) = run_solve([cand])
+    diffs = compare(got, want)
+    assert not diffs, diffs[:5]
+    assert got["recommendation"]["status"] == 0

@@ -216,6 +216,17 @@ impl MeshCache {
         Ok(mesh)
     }
 
+    /// Whether the mesh of a resource at a scale is kept (a `get` would not load it); false for
+    /// a resource that does not resolve.
+    pub fn holds(&self, resource: &str, scale: [f64; 3]) -> bool {
+        let Ok(path) = resolve(resource, &self.index) else {
+            return false;
+        };
+        let key_path = std::fs::canonicalize(&path).unwrap_or(path);
+        let key = (key_path, scale.map(|s| (s + 0.0).to_bits()));
+        self.lock().entries.contains_key(&key)
+    }
+
     /// The bytes the kept meshes hold.
     pub fn bytes(&self) -> usize {
         self.lock().bytes
