@@ -936,4 +936,101 @@ mod tests {
         let second = crate::record::bag::read(&files[1]).expect("whole");
         assert!(second.metadata.len() >= 2, "{:?}", second.metadata.len());
     }
+
+    /// A pose candidate on a box (or with `shape` instead), the tool across it.
+    fn pose_on(id: &str, shape: &str) -> PoseCandidate {
+        let line = format!(
+            r#"{{"header": {{"frame_id": "base_link"}}, "id": "{id}", "grasp_pose": {{"position": {{"x": 0.0, "y": 0.0, "z": 0.0}}, "orientation": {{"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}}}, "width": 0.09, "object": {{"pose": {{"position": {{"x": 0.0, "y": 0.0, "z": 0.0}}, "orientation": {{"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}}}, {shape}, "mass": 0.25, "friction": 0.5}}, "gravity": {{"x": 0.0, "y": 0.0, "z": -9.81}}}}"#
+        );
+        serde_json::from_str(&line).expect("a PoseCandidate")
+    }
+
+    /// Pose candidates are answered, counted and drawn as candidates are; a mesh file not yet
+    /// loaded is told apart (the node answers such a candidate off its thread), and is kept
+    /// once answered.
+    #[test]
+    fn pose_candidates_answer_count_and_mark_without_dds() {
+        let mut a = answerer(no_recording(), false);
+        let out = a.handle_pose(
+            pose_on(
+                "box",
+                r#""primitive": {"type": 1, "dimensions": [0.04, 0.06, 0.08]}"#,
+            ),
+            10,
+            5,
+        );
+        assert_eq!(out.reply.recommendation.status, 0, "{:?}", out.reply);
+        assert_eq!(out.reply.contact_1.y, -0.03);
+        let names: Vec<&str> = out
+            .markers
+            .as_ref()
+            .expect("markers")
+            .markers
+            .iter()
+            .map(|m| m.ns.as_str())
+            .collect();
+        assert!(
+            names.contains(&"object") && names.contains(&"fingers"),
+            "{names:?}"
+        );
+        let refused = a.handle_pose(
+            pose_on(
+                "type 7",
+                r#""primitive": {"type": 7, "dimensions": [0.04]}"#,
+            ),
+            11,
+            6,
+        );
+        assert_eq!(refused.reply.recommendation.status, 2);
+        assert!(refused.markers.is_none());
+        assert_eq!(refused.notes.len(), 1, "{:?}", refused.notes);
+        let c = a.counts();
+        assert_eq!((c.answered, c.invalid), (2, 1));
+
+        let dir = tempfile::tempdir().expect("a temporary folder");
+        let obj = dir.path().join("block.obj");
+        let text: String = [
+            "v -20 -30 -40",
+            "v -20 -30 40",
+            "v -20 30 -40",
+            "v -20 30 40",
+            "v 20 -30 -40",
+            "v 20 -30 40",
+            "v 20 30 -40",
+            "v 20 30 40",
+            "f 1 2 4",
+            "f 1 4 3",
+            "f 5 7 8",
+            "f 5 8 6",
+            "f 1 5 6",
+            "f 1 6 2",
+            "f 3 4 8",
+            "f 3 8 7",
+            "f 1 3 7",
+            "f 1 7 5",
+            "f 2 6 8",
+            "f 2 8 4",
+        ]
+        .map(|l| format!("{l}\n"))
+        .concat();
+        std::fs::write(&obj, text).expect("write");
+        let shape = format!(
+            r#""mesh": "{}", "scale": {{"x": 0.001, "y": 0.001, "z": 0.001}}"#,
+            obj.display()
+        );
+        let block = pose_on("block", &shape);
+        assert!(a.loads_a_mesh(&block), "not loaded yet");
+        let work = a.pose_work(12);
+        let (reply, markers) = work.run(&block);
+        assert_eq!(reply.recommendation.status, 0, "{reply:?}");
+        assert!(!a.loads_a_mesh(&block), "kept once answered");
+        let out = a.account_pose(block, reply, markers, 12, 7);
+        assert!(out.markers.is_some());
+        assert_eq!(a.counts().answered, 3);
+        let inline = pose_on(
+            "inline",
+            r#""inline_mesh": {"vertices": [], "triangles": []}"#,
+        );
+        assert!(!a.loads_a_mesh(&inline), "no file to load");
+    }
 }
