@@ -219,9 +219,10 @@ impl MeshCache {
         let path = resolve(resource, &self.index)?;
         let key_path = std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone());
         let key = (key_path, scale.map(|s| (s + 0.0).to_bits()));
+        let stamp = Stamp::of(&path);
         let turn = {
             let mut inner = self.lock();
-            if let Some(mesh) = inner.kept(&key, Stamp::of(&path)) {
+            if let Some(mesh) = inner.kept(&key, stamp) {
                 return Ok(mesh);
             }
             Arc::clone(inner.loading.entry(key.clone()).or_default())
@@ -229,20 +230,18 @@ impl MeshCache {
         let held = turn.lock().unwrap_or_else(|e| e.into_inner());
         // Another caller may have loaded it while this one waited its turn.
         let stamp = Stamp::of(&path);
-        if let Some(mesh) = self.lock().kept(&key, stamp) {
-            return Ok(mesh);
+        {
+            let mut inner = self.lock();
+            if let Some(mesh) = inner.kept(&key, stamp) {
+                inner.end_turn(&key, &turn);
+                return Ok(mesh);
+            }
         }
         let loaded = parse(resource, &path)
             .and_then(|(v, t)| Mesh::from_triangles(resource, &v, &t, scale))
             .map(Arc::new);
         let mut inner = self.lock();
-        if inner
-            .loading
-            .get(&key)
-            .is_some_and(|t| Arc::ptr_eq(t, &turn))
-        {
-            inner.loading.remove(&key);
-        }
+        inner.end_turn(&key, &turn);
         let mesh = loaded?;
         inner.loads += 1;
         inner.keep(key, &mesh, stamp, self.max_bytes);
@@ -289,6 +288,14 @@ impl CacheInner {
         }
         self.remove(key);
         None
+    }
+
+    /// The resource's lock is no longer the one to queue on, if it still is `turn` (callers
+    /// already queued on it find the mesh kept, or load it in turn).
+    fn end_turn(&mut self, key: &Key, turn: &Arc<Mutex<()>>) {
+        if self.loading.get(key).is_some_and(|t| Arc::ptr_eq(t, turn)) {
+            self.loading.remove(key);
+        }
     }
 
     /// Keeps a mesh just loaded, dropping the least recently used ones to make room; not at all
