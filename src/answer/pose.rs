@@ -173,10 +173,22 @@ impl PoseAnswerer {
             .map_err(|why| Box::new(target_of(m).refused(&why).recommendation))
     }
 
+    /// [`Self::spatial_candidate`], with what the answer's `message` would say of a contact on
+    /// an edge or a vertex (none for faces): for a caller that shows the candidate (`plot`).
+    pub fn spatial_candidate_noted(
+        &self,
+        m: &PoseCandidate,
+    ) -> Result<(GraspCandidate, Vec<String>), Box<GripRecommendation>> {
+        match self.place(m) {
+            Ok((candidate, grasp)) => Ok((candidate, feature_notes(&grasp))),
+            Err(why) => Err(Box::new(target_of(m).refused(&why).recommendation)),
+        }
+    }
+
     /// The candidate and the grasp of a pose candidate.
     fn place(&self, m: &PoseCandidate) -> Result<(GraspCandidate, Grasp), Refused> {
         let object = self.object(&m.object)?;
-        let grasp = self.grasp(&m.grasp_pose, "grasp_pose", m.width, &object, &m.object)?;
+        let grasp = self.grasp(&m.grasp_pose, &"grasp_pose", m.width, &object, &m.object)?;
         Ok((target_of(m).candidate(&grasp), grasp))
     }
 
@@ -222,8 +234,9 @@ impl PoseAnswerer {
                 .enumerate()
                 .map(|(i, p)| {
                     let object = object.as_ref().map_err(Refused::clone)?;
-                    let field = format!("poses[{i}].grasp_pose");
-                    self.grasp(&p.grasp_pose, &field, p.width, object, &set.object)
+                    // The field's name is written out only for a refusal, not for every pose.
+                    let field = &format_args!("poses[{i}].grasp_pose");
+                    self.grasp(&p.grasp_pose, field, p.width, object, &set.object)
                         .map_err(Refused::from)
                 })
                 .collect(),
@@ -276,7 +289,7 @@ impl PoseAnswerer {
 
     /// The object's pose and shape, checked: for the markers that draw it.
     pub fn object(&self, o: &GraspObject) -> Result<Object, PoseRefusal> {
-        let pose = isometry(&o.pose, "object.pose")?;
+        let pose = isometry(&o.pose, &"object.pose")?;
         let scale = [o.scale.x, o.scale.y, o.scale.z];
         let mut given = Vec::new();
         if !o.mesh.is_empty() {
@@ -330,7 +343,7 @@ impl PoseAnswerer {
     fn grasp(
         &self,
         tool: &Pose,
-        field: &str,
+        field: &dyn std::fmt::Display,
         width: f64,
         object: &Object,
         o: &GraspObject,
@@ -496,10 +509,7 @@ pub fn without_geometry(recommendation: GripRecommendation) -> PoseRecommendatio
 /// The answer with the grasp's geometry, and a note on a contact at an edge or a vertex.
 fn finish(mut reply: GripRecommendation, grasp: &Grasp) -> PoseRecommendation {
     let [c1, c2] = &grasp.contacts;
-    let notes: Vec<String> = [("contact_1", c1), ("contact_2", c2)]
-        .into_iter()
-        .filter_map(|(name, c)| feature_note(name, c))
-        .collect();
+    let notes = feature_notes(grasp);
     if !notes.is_empty() {
         let mut message = reply.message.to_string();
         for note in notes {
@@ -520,6 +530,15 @@ fn finish(mut reply: GripRecommendation, grasp: &Grasp) -> PoseRecommendation {
     }
 }
 
+/// What `message` says of the contacts on an edge or a vertex, `contact_1` first.
+fn feature_notes(grasp: &Grasp) -> Vec<String> {
+    let [c1, c2] = &grasp.contacts;
+    [("contact_1", c1), ("contact_2", c2)]
+        .into_iter()
+        .filter_map(|(name, c)| feature_note(name, c))
+        .collect()
+}
+
 /// What `message` says of a contact on an edge or a vertex.
 fn feature_note(name: &str, c: &Contact) -> Option<String> {
     let feature = match c.feature {
@@ -535,7 +554,7 @@ fn feature_note(name: &str, c: &Contact) -> Option<String> {
 
 /// A pose as an isometry, its quaternion normalised; `field` names it when the quaternion is no
 /// rotation. A translation not finite is left to the geometry, which names it.
-fn isometry(p: &Pose, field: &str) -> Result<Isometry3<f64>, PoseRefusal> {
+fn isometry(p: &Pose, field: &dyn std::fmt::Display) -> Result<Isometry3<f64>, PoseRefusal> {
     let o = &p.orientation;
     let q = Quaternion::new(o.w, o.x, o.y, o.z);
     let norm = q.norm();

@@ -9,10 +9,18 @@
 //! mass) and their upper envelope, the worst case that `solve_robust` minimises (same θ for every
 //! vertex: the paper frame's axes are the contacts', `crates/solver/src/planar/robust/mod.rs`
 //! section 2), with the robust recommendation on it.
+//!
+//! A pose candidate (a file holding a `PoseCandidate`, a JSON object with `grasp_pose`,
+//! `docs/poses.md`) is cast by the answer layer (`PoseAnswerer`, `src/answer/pose.rs`) into the
+//! spatial candidate its fingers make, and that candidate is drawn; the figure's title and the
+//! printed line name the pose and its derived contacts. A pose the geometry refuses is refused as
+//! a candidate is, with the answer's message.
 
 use super::SolveOptions;
 use anyhow::{anyhow, Context};
-use grasp_orient::msg::{GraspCandidate, MessageLimits};
+use grasp_orient::answer::PoseAnswerer;
+use grasp_orient::geometry::ClosingAxis;
+use grasp_orient::msg::{GraspCandidate, GripRecommendation, MessageLimits, PoseCandidate};
 use grasp_orient::record::output::Replacement;
 use grasp_orient::solver::{
     analyse, analyse_spatial, solve_robust, Analysis, AxisRelation, Candidate, CurrentPose,
@@ -26,8 +34,14 @@ use std::path::PathBuf;
 /// Arguments of `plot`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
-    /// One GraspCandidate as JSON (a single object; the fields of msg/GraspCandidate.msg).
+    /// One GraspCandidate as JSON (a single object; the fields of msg/GraspCandidate.msg), or one
+    /// PoseCandidate (msg/PoseCandidate.msg: an object with grasp_pose; docs/poses.md), drawn as
+    /// the spatial candidate its fingers make.
     pub candidate: PathBuf,
+    /// The axis of the gripper's tool frame that the fingers of a pose candidate close along:
+    /// x, y or z (parameter closing_axis, default y).
+    #[arg(long, value_name = "AXIS", value_parser = super::parse_name::<ClosingAxis>)]
+    pub closing_axis: Option<ClosingAxis>,
     /// Where to write the SVG.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -61,6 +75,8 @@ struct Figure {
     summary: String,
     /// With tolerances: the worst case over the region of centres of mass.
     robust: Option<Robust>,
+    /// Above both charts: the pose a candidate was cast from, and its contacts.
+    title: Option<String>,
 }
 
 /// The worst case of a planar candidate with tolerances, for the power chart.
@@ -73,19 +89,30 @@ struct Robust {
 
 /// Draws the figure.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let (_, settings, rules) = args.options.configured()?;
+    let (config, settings, rules) = args.options.configured()?;
     let text =
         grasp_orient::config::read_text(&args.candidate, grasp_orient::config::MAX_FILE_BYTES)
             .with_context(|| format!("cannot read {}", args.candidate.display()))?;
-    let message: GraspCandidate = grasp_orient::jsonl::parse(&text)
-        .with_context(|| format!("{} is not a GraspCandidate", args.candidate.display()))?;
-    let figure = match message.model {
+    let (message, pose) = if grasp_orient::jsonl::is_pose_candidate(&text) {
+        let closing_axis = args.closing_axis.unwrap_or(config.closing_axis);
+        let (message, pose) = cast_pose(&text, args, closing_axis)?;
+        (message, Some(pose))
+    } else {
+        let message: GraspCandidate = grasp_orient::jsonl::parse(&text)
+            .with_context(|| format!("{} is not a GraspCandidate", args.candidate.display()))?;
+        (message, None)
+    };
+    let mut figure = match message.model {
         GraspCandidate::MODEL_PLANAR => {
             planar_figure(&rules.tolerances.apply(&message), &settings)?
         }
         GraspCandidate::MODEL_SPATIAL => spatial_figure(&message, &settings)?,
         value => return Err(refused(MessageLimits::Model { value })),
     };
+    if let Some(pose) = pose {
+        figure.summary = format!("{}; {}", pose.summary, figure.summary);
+        figure.title = Some(pose.title);
+    }
     draw(&figure, args)?;
     writeln!(
         std::io::stdout(),
@@ -98,6 +125,60 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 
 fn refused(e: impl std::fmt::Display) -> anyhow::Error {
     anyhow!("invalid input: {e}")
+}
+
+/// What the figure says of the pose a candidate was cast from.
+struct PoseNote {
+    /// The figure's title: the pose's id and its contacts.
+    title: String,
+    /// Put before the printed line: the contacts, their inward normals, the centre of mass, and
+    /// any contact on an edge or a vertex.
+    summary: String,
+}
+
+/// A pose candidate's file cast into the spatial candidate its fingers make, through the answer
+/// layer; a refused pose is the error its answer's message gives (status 2 words start with
+/// "invalid input", as a refused candidate's here).
+fn cast_pose(
+    text: &str,
+    args: &Args,
+    closing_axis: ClosingAxis,
+) -> anyhow::Result<(GraspCandidate, PoseNote)> {
+    let pose: PoseCandidate = grasp_orient::jsonl::parse(text)
+        .with_context(|| format!("{} is not a PoseCandidate", args.candidate.display()))?;
+    let answerer = PoseAnswerer::from_env(closing_axis);
+    let (candidate, notes) = answerer
+        .spatial_candidate_noted(&pose)
+        .map_err(|answer| refused_pose(&answer))?;
+    // `+ 0.0` prints a negative zero as 0.
+    let p = |x: f64, y: f64, z: f64| format!("({:.6}, {:.6}, {:.6})", x + 0.0, y + 0.0, z + 0.0);
+    let (c1, c2) = (&candidate.contact_1, &candidate.contact_2);
+    let (n1, n2) = (&candidate.normal_1, &candidate.normal_2);
+    let com = &candidate.center_of_mass;
+    let contacts = format!(
+        "contact_1 {}, contact_2 {}",
+        p(c1.x, c1.y, c1.z),
+        p(c2.x, c2.y, c2.z)
+    );
+    let mut summary = format!(
+        "pose {:?}: {contacts}, inward normals {} and {}, center_of_mass {}",
+        pose.id.as_str(),
+        p(n1.x, n1.y, n1.z),
+        p(n2.x, n2.y, n2.z),
+        p(com.x, com.y, com.z)
+    );
+    for note in notes {
+        summary.push_str("; ");
+        summary.push_str(&note);
+    }
+    let title = format!("pose {:?}: {contacts}", pose.id.as_str());
+    Ok((candidate, PoseNote { title, summary }))
+}
+
+/// The error of a pose the geometry refuses: its answer's message, which starts with "invalid
+/// input" for status 2 and names the finger for status 1.
+fn refused_pose(answer: &GripRecommendation) -> anyhow::Error {
+    anyhow!("{}", answer.message)
 }
 
 /// A planar candidate: its x-y plane.
@@ -121,6 +202,7 @@ fn planar_figure(message: &GraspCandidate, settings: &Settings) -> anyhow::Resul
         plane: "",
         summary,
         robust: None,
+        title: None,
     };
     add_worst_case(&mut figure, message, &candidate, settings)?;
     Ok(figure)
@@ -219,6 +301,7 @@ fn spatial_figure(message: &GraspCandidate, settings: &Settings) -> anyhow::Resu
         plane: ", in the grasp plane",
         summary,
         robust: None,
+        title: None,
     })
 }
 
@@ -391,9 +474,16 @@ fn draw(figure: &Figure, args: &Args) -> anyhow::Result<()> {
     );
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (1400, 560)).into_drawing_area();
+        let height = if figure.title.is_some() { 600 } else { 560 };
+        let root = SVGBackend::with_string(&mut svg, (1400, height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
-        let (left, right) = root.split_horizontally(700);
+        let charts = match &figure.title {
+            Some(title) => root
+                .titled(title, ("sans-serif", 22))
+                .map_err(drawing_failed)?,
+            None => root.clone(),
+        };
+        let (left, right) = charts.split_horizontally(700);
         draw_bounds(&left, &curves)?;
         draw_power(&right, figure, &curves)?;
         root.present().map_err(drawing_failed)?;

@@ -951,3 +951,89 @@ fn the_closing_axis_option_picks_the_tool_axis() {
     let c1 = point(&out[0]["contact_1"]);
     assert!((c1 - Vector3::new(0.0, -0.03, 0.01)).norm() < 1e-15, "{c1}");
 }
+
+/// Runs `plot FILE -o SVG` on a candidate written to `dir/name.json`: exit code, stdout, stderr,
+/// and the SVG when written.
+fn plot(dir: &Path, name: &str, candidate: &str) -> (Option<i32>, String, String, Option<String>) {
+    let input = dir.join(format!("{name}.json"));
+    std::fs::write(&input, candidate).expect("write the candidate");
+    let svg = dir.join(format!("{name}.svg"));
+    let out = bin()
+        .arg("plot")
+        .arg(&input)
+        .arg("-o")
+        .arg(&svg)
+        .output()
+        .expect("plot runs");
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+        std::fs::read_to_string(&svg).ok(),
+    )
+}
+
+/// `plot` draws a pose candidate as the spatial candidate its fingers make: its line is that
+/// candidate's, after the pose's id, contacts, normals and centre of mass, and the figure's title
+/// names the pose and its contacts. A pose the geometry refuses is refused as a candidate is:
+/// exit 2, the message `solve` answers it with, no figure.
+#[test]
+fn plot_draws_a_pose_as_the_spatial_candidate_of_its_contacts() {
+    let dir = temp_dir("plot-pose");
+    let line = cube_line("cube-side", json!({}), [0.01, 0.004, 0.012], 0.1);
+    let answer = &solve(&line)[0];
+    assert_eq!(answer["recommendation"]["status"], 0, "{answer}");
+    let candidate = json!({
+        "id": "cube-side",
+        "contact_1": answer["contact_1"], "contact_2": answer["contact_2"],
+        "normal_1": answer["normal_1"], "normal_2": answer["normal_2"],
+        "friction_1": FRICTION, "friction_2": FRICTION,
+        "center_of_mass": answer["center_of_mass"], "mass": MASS,
+        "gravity": {"x": 0.0, "y": 0.0, "z": -9.81}, "model": 1,
+    });
+    let (code, drawn, stderr, svg) = plot(dir.path(), "candidate", &candidate.to_string());
+    assert_eq!(code, Some(0), "{stderr}");
+    let (_, summary) = drawn.split_once(": ").expect("wrote …: summary");
+    let summary = summary.trim_end();
+    assert!(summary.starts_with("grasp plane normal"), "{summary}");
+    assert!(svg.is_some_and(|s| !s.contains("cube-side")));
+
+    let (code, drawn, stderr, svg) = plot(dir.path(), "pose", &line);
+    assert_eq!(code, Some(0), "{stderr}");
+    let contacts = "contact_1 (0.010000, -0.030000, 0.012000), contact_2 (0.010000, 0.030000, \
+                    0.012000)";
+    let expected = format!(
+        "pose \"cube-side\": {contacts}, inward normals (0.000000, 1.000000, 0.000000) and \
+         (0.000000, -1.000000, 0.000000), center_of_mass (0.000000, 0.000000, 0.000000); {summary}"
+    );
+    assert!(drawn.trim_end().ends_with(&expected), "{drawn}\n{expected}");
+    let svg = svg.expect("the figure is written");
+    assert!(svg.contains("cube-side") && svg.contains(contacts), "{svg}");
+
+    let mut unrotated: Value = serde_json::from_str(&line).expect("JSON");
+    unrotated["grasp_pose"]["orientation"] = json!({"x": 0.0, "y": 0.0, "z": 0.0, "w": 0.0});
+    for (name, refused, words) in [
+        (
+            "miss",
+            cube_line("miss", json!({}), [0.0, 0.0, 0.5], 0.1),
+            "finger 1 closes on nothing",
+        ),
+        (
+            "unrotated",
+            unrotated.to_string(),
+            "invalid input: grasp_pose.orientation is not a rotation",
+        ),
+    ] {
+        // `solve` puts the line's number before a status 2 message; `plot` reads one candidate.
+        let message = solve(&refused)[0]["recommendation"]["message"]
+            .as_str()
+            .expect("a message")
+            .trim_start_matches("line 1: ")
+            .to_string();
+        assert!(message.contains(words), "{message}");
+        let (code, _, stderr, svg) = plot(dir.path(), name, &refused);
+        assert_eq!(code, Some(2), "{name}: {stderr}");
+        assert!(stderr.contains(&message), "{name}: {stderr}");
+        assert!(svg.is_none(), "{name}: no figure");
+    }
+}

@@ -44,8 +44,9 @@ use std::str::FromStr;
 
 use nalgebra::{Isometry3, Point3, UnitVector3, Vector3};
 use parry3d_f64::math::Vector;
+use parry3d_f64::partitioning::BvhNode;
 use parry3d_f64::query::{Ray, RayCast};
-use parry3d_f64::shape::{Ball, Cuboid};
+use parry3d_f64::shape::{Ball, Cuboid, TriMesh};
 
 use crate::error::{Finger, GeometryError};
 use crate::mesh::Mesh;
@@ -520,23 +521,25 @@ fn cast_cone(half_height: f64, radius: f64, ray: &LocalRay) -> LocalCast {
 
 /// parry's BVH ray cast, from the tolerance behind the start, so that a start on the surface or
 /// inside it by less than the tolerance meets it at once (as the primitives' `t ≥ −tolerance`).
-/// For a closed mesh the ray runs on past `max`: a start inside meets a back face first (an
-/// exit). Where that first hit is on an edge or a vertex, or at the start itself, the back face
+/// For a closed mesh that the finger's way does not meet, the ray runs on past `max`: a start
+/// inside meets a back face first (an exit). Where that first hit is on an edge or a vertex, or at the start itself, the back face
 /// proves nothing, and rays in other directions decide ([`starts_inside`]).
 fn cast_mesh(mesh: &Mesh, ray: &LocalRay) -> LocalCast {
     let trimesh = mesh.trimesh();
     let closed = mesh.is_closed();
-    let reach = if closed {
-        f64::MAX
-    } else {
-        ray.max + ray.tolerance
-    };
     let behind = Ray::new(glam(&ray.at(-ray.tolerance)), glam(&ray.direction));
-    let Some(hit) = trimesh.cast_local_ray_and_get_normal(&behind, reach, false) else {
+    // The finger's way first: the first hit there is the first hit on the whole ray, found with
+    // the boxes beyond the way left out of the search. Only where the way meets nothing does a
+    // closed mesh need the ray beyond it.
+    let on_the_way = first_triangle(trimesh, &behind, ray.max + ray.tolerance);
+    let first = match on_the_way {
+        None if closed => first_triangle(trimesh, &behind, f64::MAX),
+        found => found,
+    };
+    let Some((id, time_of_impact)) = first else {
         return LocalCast::Miss;
     };
-    let t = (hit.time_of_impact - ray.tolerance).max(0.0);
-    let id = hit.subshape;
+    let t = (time_of_impact - ray.tolerance).max(0.0);
     let triangle = trimesh.triangle(id);
     let q = glam(&ray.at(t));
     let corners = [triangle.a, triangle.b, triangle.c];
@@ -612,19 +615,18 @@ fn starts_inside(mesh: &Mesh, ray: &LocalRay) -> bool {
     let origin = glam(&ray.origin);
     for d in DIRECTIONS {
         let d = Vector::from(d);
-        let Some(hit) =
-            trimesh.cast_local_ray_and_get_normal(&Ray::new(origin, d), f64::MAX, false)
+        let Some((id, time_of_impact)) = first_triangle(trimesh, &Ray::new(origin, d), f64::MAX)
         else {
             return false;
         };
-        let triangle = trimesh.triangle(hit.subshape);
-        let q = origin + d * hit.time_of_impact;
+        let triangle = trimesh.triangle(id);
+        let q = origin + d * time_of_impact;
         let corners = [triangle.a, triangle.b, triangle.c];
         let near_feature = (0..3).any(|i| {
             let (p, r) = (corners[i], corners[(i + 1) % 3]);
             (r - p).cross(q - p).length() <= ray.tolerance * (r - p).length()
         });
-        if !near_feature && hit.time_of_impact > ray.tolerance {
+        if !near_feature && time_of_impact > ray.tolerance {
             return (triangle.b - triangle.a)
                 .cross(triangle.c - triangle.a)
                 .dot(d)
@@ -632,4 +634,68 @@ fn starts_inside(mesh: &Mesh, ray: &LocalRay) -> bool {
         }
     }
     false
+}
+
+/// The first triangle a ray meets within `max`, and when: parry's best-first search of the mesh's
+/// BVH (`Bvh::find_best`), as `TriMesh::cast_local_ray_and_get_normal` runs it, with the same
+/// costs bit for bit (so the same nodes, in the same order, and the same triangle), but the
+/// inverse of the ray's direction computed once rather than at each of the nodes' boxes, and no
+/// normal computed for the triangles tried (the caller needs the hit one's only). Each box test
+/// was a fresh `Aabb` and three divisions; on a 100,000-triangle mesh the boxes were most of a
+/// cast (`docs/performance.md`).
+fn first_triangle(trimesh: &TriMesh, ray: &Ray, max: f64) -> Option<(u32, f64)> {
+    let slabs = Slabs::new(ray);
+    trimesh.bvh().find_best(
+        max,
+        |node: &BvhNode, best| slabs.entry(node, best),
+        |id, best| trimesh.triangle(id).cast_local_ray(ray, best, false),
+    )
+}
+
+/// A ray prepared for box tests: its origin, and per axis the inverse of its direction and
+/// which of a box's two planes it meets first (`None` where the direction is zero).
+struct Slabs {
+    origin: [f64; 3],
+    inverse: [Option<(f64, bool)>; 3],
+}
+
+impl Slabs {
+    fn new(ray: &Ray) -> Self {
+        let d = [ray.dir.x, ray.dir.y, ray.dir.z];
+        Slabs {
+            origin: [ray.origin.x, ray.origin.y, ray.origin.z],
+            inverse: d.map(|d| (d != 0.0).then(|| (1.0 / d, d < 0.0))),
+        }
+    }
+
+    /// When the ray enters a node's box (0 when it starts inside it), or `f64::MAX` when it
+    /// misses it before `max`: parry's `Aabb::cast_local_ray` with `solid`, term for term (its
+    /// two planes' times, the nearer kept, are the same numbers; it stops at the first axis
+    /// that empties the interval, and the interval then stays empty).
+    fn entry(&self, node: &BvhNode, max: f64) -> f64 {
+        let (mins, maxs) = (node.mins(), node.maxs());
+        let (mins, maxs) = ([mins.x, mins.y, mins.z], [maxs.x, maxs.y, maxs.z]);
+        let (mut near, mut far) = (0.0f64, max);
+        for i in 0..3 {
+            let o = self.origin[i];
+            match self.inverse[i] {
+                None if o < mins[i] || o > maxs[i] => return f64::MAX,
+                None => {}
+                Some((inverse, backwards)) => {
+                    let (first, last) = if backwards {
+                        (maxs[i], mins[i])
+                    } else {
+                        (mins[i], maxs[i])
+                    };
+                    near = near.max((first - o) * inverse);
+                    far = far.min((last - o) * inverse);
+                }
+            }
+        }
+        if near > far {
+            f64::MAX
+        } else {
+            near
+        }
+    }
 }

@@ -17,6 +17,7 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
+use std::time::SystemTime;
 
 use crate::error::GeometryError;
 use crate::mesh::Mesh;
@@ -144,10 +145,19 @@ pub fn load(resource: &str, scale: [f64; 3], index: &AmentIndex) -> Result<Mesh,
 /// Loaded meshes, each loaded once per resolved file and scale, holding at most a number of
 /// bytes ([`Mesh::bytes`]).
 ///
-/// When a new mesh does not fit, the least recently used ones are dropped until it does; a mesh
-/// larger than the whole bound is returned but not kept. Meshes handed out stay alive while a
-/// caller holds them. A file changed after it was loaded is not reloaded. Loading holds the
-/// cache's lock, so two callers asking for the same resource at once load it once.
+/// - **Bound.** When a new mesh does not fit, the least recently used ones are dropped until it
+///   does; a mesh larger than the whole bound is returned but not kept. Meshes handed out stay
+///   alive while a caller holds them.
+/// - **Changed files.** Each lookup reads the file's modification time and size (one `stat`);
+///   when either differs from what they were before the kept mesh was read, or the file is gone,
+///   the kept mesh is dropped and the file loaded again (or its error returned). A file
+///   rewritten with the same size within the file system's timestamp resolution is not noticed.
+/// - **Locking.** The cache's lock is held only to look up and to store, never while a file is
+///   read, parsed and indexed: a lookup of a kept mesh is not delayed by another resource's
+///   load. Callers asking at once for the same resource that is not kept queue on a lock of
+///   that resource's own: the first loads it, the others then find it kept. If the first fails,
+///   or its mesh is too large to keep, each of the others loads it in turn (and gets its own
+///   error): failures are quick, and a mesh beyond the bound is not worth a second mechanism.
 #[derive(Debug)]
 pub struct MeshCache {
     index: AmentIndex,
@@ -155,9 +165,14 @@ pub struct MeshCache {
     inner: Mutex<CacheInner>,
 }
 
+/// A file resolved, at a scale (the bits of each factor, `-0.0` as `0.0`).
+type Key = (PathBuf, [u64; 3]);
+
 #[derive(Debug, Default)]
 struct CacheInner {
-    entries: HashMap<(PathBuf, [u64; 3]), Entry>,
+    entries: HashMap<Key, Entry>,
+    /// The resources being loaded, each with the lock its loader holds while it loads.
+    loading: HashMap<Key, Arc<Mutex<()>>>,
     bytes: usize,
     clock: u64,
     loads: u64,
@@ -166,7 +181,26 @@ struct CacheInner {
 #[derive(Debug)]
 struct Entry {
     mesh: Arc<Mesh>,
+    stamp: Option<Stamp>,
     last_used: u64,
+}
+
+/// What tells a file changed: its modification time (when the platform has one) and its size.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Stamp {
+    modified: Option<SystemTime>,
+    len: u64,
+}
+
+impl Stamp {
+    /// The file's stamp, or `None` when it cannot be read (then no kept mesh matches it).
+    fn of(path: &Path) -> Option<Stamp> {
+        let metadata = std::fs::metadata(path).ok()?;
+        Some(Stamp {
+            modified: metadata.modified().ok(),
+            len: metadata.len(),
+        })
+    }
 }
 
 impl MeshCache {
@@ -179,40 +213,40 @@ impl MeshCache {
         }
     }
 
-    /// The mesh of a resource at a scale, loaded if it is not kept yet.
-    ///
-    /// The cache is not locked while a mesh loads, so a thread that loads one (a large mesh
-    /// takes a tenth of a second and more) holds up no other thread's use of the meshes kept;
-    /// two threads that load the same mesh at once both parse it, and the first kept is kept.
+    /// The mesh of a resource at a scale: the one kept if its file has not changed since, else
+    /// the file loaded (outside the cache's lock) and kept if it fits.
     pub fn get(&self, resource: &str, scale: [f64; 3]) -> Result<Arc<Mesh>, GeometryError> {
         let path = resolve(resource, &self.index)?;
         let key_path = std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone());
         let key = (key_path, scale.map(|s| (s + 0.0).to_bits()));
-        if let Some(mesh) = self.lock().take(&key) {
-            return Ok(mesh);
-        }
-        let (vertices, triangles) = parse(resource, &path)?;
-        let mesh = Arc::new(Mesh::from_triangles(
-            resource, &vertices, &triangles, scale,
-        )?);
-        let mut inner = self.lock();
-        inner.loads += 1;
-        if let Some(kept) = inner.take(&key) {
-            return Ok(kept);
-        }
-        let now = inner.clock;
-        let size = mesh.bytes();
-        if size <= self.max_bytes {
-            while inner.bytes + size > self.max_bytes {
-                inner.evict_oldest();
+        let stamp = Stamp::of(&path);
+        let turn = {
+            let mut inner = self.lock();
+            if let Some(mesh) = inner.kept(&key, stamp) {
+                return Ok(mesh);
             }
-            inner.bytes += size;
-            let entry = Entry {
-                mesh: Arc::clone(&mesh),
-                last_used: now,
-            };
-            inner.entries.insert(key, entry);
+            Arc::clone(inner.loading.entry(key.clone()).or_default())
+        };
+        let held = turn.lock().unwrap_or_else(|e| e.into_inner());
+        // Another caller may have loaded it while this one waited its turn.
+        let stamp = Stamp::of(&path);
+        {
+            let mut inner = self.lock();
+            if let Some(mesh) = inner.kept(&key, stamp) {
+                inner.end_turn(&key, &turn);
+                return Ok(mesh);
+            }
         }
+        let loaded = parse(resource, &path)
+            .and_then(|(v, t)| Mesh::from_triangles(resource, &v, &t, scale))
+            .map(Arc::new);
+        let mut inner = self.lock();
+        inner.end_turn(&key, &turn);
+        let mesh = loaded?;
+        inner.loads += 1;
+        inner.keep(key, &mesh, stamp, self.max_bytes);
+        drop(inner);
+        drop(held);
         Ok(mesh)
     }
 
@@ -253,13 +287,52 @@ impl MeshCache {
 }
 
 impl CacheInner {
-    /// The mesh kept under `key`, marked as used now.
-    fn take(&mut self, key: &(PathBuf, [u64; 3])) -> Option<Arc<Mesh>> {
+    /// The kept mesh of `key` if its file's stamp is still `stamp`; a kept mesh whose file
+    /// changed is dropped.
+    fn kept(&mut self, key: &Key, stamp: Option<Stamp>) -> Option<Arc<Mesh>> {
         self.clock += 1;
         let now = self.clock;
         let entry = self.entries.get_mut(key)?;
-        entry.last_used = now;
-        Some(Arc::clone(&entry.mesh))
+        if stamp.is_some() && entry.stamp == stamp {
+            entry.last_used = now;
+            return Some(Arc::clone(&entry.mesh));
+        }
+        self.remove(key);
+        None
+    }
+
+    /// The resource's lock is no longer the one to queue on, if it still is `turn` (callers
+    /// already queued on it find the mesh kept, or load it in turn).
+    fn end_turn(&mut self, key: &Key, turn: &Arc<Mutex<()>>) {
+        if self.loading.get(key).is_some_and(|t| Arc::ptr_eq(t, turn)) {
+            self.loading.remove(key);
+        }
+    }
+
+    /// Keeps a mesh just loaded, dropping the least recently used ones to make room; not at all
+    /// if it is larger than the whole bound.
+    fn keep(&mut self, key: Key, mesh: &Arc<Mesh>, stamp: Option<Stamp>, max_bytes: usize) {
+        self.remove(&key);
+        let size = mesh.bytes();
+        if size > max_bytes {
+            return;
+        }
+        while self.bytes + size > max_bytes && !self.entries.is_empty() {
+            self.evict_oldest();
+        }
+        self.bytes += size;
+        let entry = Entry {
+            mesh: Arc::clone(mesh),
+            stamp,
+            last_used: self.clock,
+        };
+        self.entries.insert(key, entry);
+    }
+
+    fn remove(&mut self, key: &Key) {
+        if let Some(entry) = self.entries.remove(key) {
+            self.bytes -= entry.mesh.bytes();
+        }
     }
 
     fn evict_oldest(&mut self) {
@@ -268,8 +341,8 @@ impl CacheInner {
             .iter()
             .min_by_key(|(_, e)| e.last_used)
             .map(|(k, _)| k.clone());
-        match oldest.and_then(|k| self.entries.remove(&k)) {
-            Some(entry) => self.bytes -= entry.mesh.bytes(),
+        match oldest {
+            Some(key) => self.remove(&key),
             None => self.bytes = 0,
         }
     }

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use grasp_orient_geometry::{load, AmentIndex, Mesh, MeshCache};
 use nalgebra::Point3;
 
-use crate::objects::{l_prism, TestMesh};
+use crate::objects::{faceted_cylinder, l_prism, TestMesh};
 use crate::reference::divergence_volume_centroid;
 
 /// An L prism in millimetres; every coordinate is exact in f32, as the formats store them.
@@ -252,6 +252,137 @@ fn the_cache_loads_a_resource_once_and_keeps_within_its_bound() {
     none.get(&a, [0.001; 3]).expect("loads");
     none.get(&a, [0.001; 3]).expect("loads");
     assert_eq!((none.len(), none.loads(), none.bytes()), (0, 2, 0));
+}
+
+/// Sets a file's modification time.
+fn set_modified(path: &Path, time: std::time::SystemTime) {
+    fs::File::options()
+        .write(true)
+        .open(path)
+        .and_then(|f| f.set_modified(time))
+        .expect("set the modification time");
+}
+
+/// A kept mesh whose file changed on disk (its modification time, or its size) is loaded again;
+/// an unchanged one is kept, and a file removed is an error, not the old mesh.
+#[test]
+fn the_cache_reloads_a_file_whose_time_or_size_changed() {
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let path = dir.path().join("l.stl");
+    let resource = path.display().to_string();
+    let (large, small) = (l_prism(64.0, 24.0), l_prism(32.0, 24.0));
+    let volume = |m: &Mesh| m.volume().expect("closed");
+    write_binary_stl(&path, &large);
+    let written = fs::metadata(&path)
+        .and_then(|m| m.modified())
+        .expect("a modification time");
+    let cache = MeshCache::new(AmentIndex::default(), 1 << 30);
+    let first = cache.get(&resource, [0.001; 3]).expect("loads");
+    let again = cache.get(&resource, [0.001; 3]).expect("kept");
+    assert!(std::sync::Arc::ptr_eq(&first, &again));
+    assert_eq!(cache.loads(), 1);
+
+    // The same size (binary STL: as many triangles), a later time.
+    write_binary_stl(&path, &small);
+    let later = written + std::time::Duration::from_secs(5);
+    set_modified(&path, later);
+    let changed = cache.get(&resource, [0.001; 3]).expect("loaded again");
+    assert_eq!(cache.loads(), 2);
+    assert!((volume(&changed) - volume(&first) / 4.0).abs() < 1e-12 * volume(&first));
+    assert_eq!((cache.len(), cache.bytes()), (1, changed.bytes()));
+
+    // Another size, the same time.
+    write_ascii_stl(&path, &large);
+    set_modified(&path, later);
+    let back = cache.get(&resource, [0.001; 3]).expect("loaded again");
+    assert_eq!(cache.loads(), 3);
+    assert_is_l(&back);
+    cache.get(&resource, [0.001; 3]).expect("kept");
+    assert_eq!(cache.loads(), 3);
+
+    fs::remove_file(&path).expect("remove");
+    assert!(cache.get(&resource, [0.001; 3]).is_err());
+    assert_eq!((cache.len(), cache.bytes()), (0, 0));
+}
+
+/// A named pipe as a mesh file: reading it waits until the test writes the mesh, so a load is
+/// held in the middle for as long as the test likes.
+#[cfg(unix)]
+fn fifo(path: &Path) {
+    let made = std::process::Command::new("mkfifo")
+        .arg(path)
+        .status()
+        .expect("mkfifo runs");
+    assert!(made.success());
+}
+
+/// While a file loads (a named pipe that the test writes only later), a kept mesh is still served
+/// at once: the cache's lock is not held while a file is read.
+#[cfg(unix)]
+#[test]
+fn the_cache_serves_a_kept_mesh_while_another_loads() {
+    use std::sync::mpsc;
+    use std::time::Duration;
+
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let kept = dir.path().join("kept.stl");
+    write_binary_stl(&kept, &l_mm());
+    let slow = dir.path().join("slow.stl");
+    fifo(&slow);
+    let (kept, slow) = (kept.display().to_string(), slow.display().to_string());
+    let cache = MeshCache::new(AmentIndex::default(), 1 << 30);
+    cache.get(&kept, [0.001; 3]).expect("loads");
+
+    std::thread::scope(|s| {
+        let (cache, slow_ref, kept) = (&cache, &slow, &kept);
+        let loading = s.spawn(move || cache.get(slow_ref, [0.001; 3]).map(|m| m.triangle_count()));
+        // The load is waiting in the pipe's open or read now.
+        std::thread::sleep(Duration::from_millis(200));
+        let (lookup, looked_up) = mpsc::channel();
+        s.spawn(move || {
+            let mesh = cache.get(kept, [0.001; 3]).map(|m| m.triangle_count());
+            lookup.send(mesh.is_ok()).expect("the test waits");
+        });
+        let served = looked_up.recv_timeout(Duration::from_secs(10));
+        // Unblock the load whatever happened, so that the scope ends.
+        write_binary_stl(Path::new(&slow), &l_mm());
+        assert_eq!(
+            served,
+            Ok(true),
+            "a kept mesh waited for another file's load"
+        );
+        assert_eq!(loading.join().expect("no panic").ok(), Some(20));
+    });
+    assert_eq!(cache.loads(), 2);
+}
+
+/// Callers asking at once for a resource not kept yet load it once: the others wait for that
+/// load (a mesh of 80,000 triangles, which takes a while to index).
+#[test]
+fn callers_asking_at_once_for_a_new_resource_load_it_once() {
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let path = dir.path().join("cylinder.stl");
+    write_binary_stl(&path, &faceted_cylinder(30.0, 100.0, 20_000));
+    let resource = path.display().to_string();
+    let cache = MeshCache::new(AmentIndex::default(), 1 << 30);
+    let callers = 4;
+    let start = std::sync::Barrier::new(callers);
+    let meshes: Vec<_> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..callers)
+            .map(|_| {
+                s.spawn(|| {
+                    start.wait();
+                    cache.get(&resource, [0.001; 3]).expect("loads")
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("no panic"))
+            .collect()
+    });
+    assert_eq!(cache.loads(), 1);
+    assert!(meshes.iter().all(|m| std::sync::Arc::ptr_eq(m, &meshes[0])));
 }
 
 /// The node will share meshes across its solver threads.
