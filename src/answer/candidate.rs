@@ -2,8 +2,8 @@
 //! which tolerances, and what its outcome becomes.
 //!
 //! A candidate with tolerances (`center_of_mass_tolerance`, `mass_tolerance`) is answered with the
-//! worst case over every object they allow ([`solve_robust`]; for a spatial one with a
-//! centre-of-mass box [`solve_spatial_robust`], whose answer fixes the tilt of the contact axis,
+//! worst case over every object they allow ([`planar::robust::solve`]; for a spatial one with a
+//! centre-of-mass box [`spatial::robust::solve`], whose answer fixes the tilt of the contact axis,
 //! the object swinging to hang in its own plane); with both zero the answer is the nominal one,
 //! bit for bit, with `gripping_power_nominal = gripping_power`.
 
@@ -12,10 +12,8 @@ use crate::msg::convert::{
 };
 use crate::msg::{CompactString, GraspCandidate, GripRecommendation};
 use crate::solver::{
-    analyse, solve_robust, solve_spatial, solve_spatial_robust, Candidate, InvalidInput,
-    Recommendation, RobustVerdict, Settings, SpatialCandidate, SpatialRecommendation,
-    SpatialRobustRecommendation, SpatialRobustVerdict, SpatialUncertainty, SpatialVerdict, Verdict,
-    MAX_COORDINATE,
+    planar::{self, analyse, Candidate, Recommendation, Verdict},
+    spatial, InvalidInput, Settings, MAX_COORDINATE,
 };
 use compact_str::ToCompactString as _;
 
@@ -26,7 +24,7 @@ pub struct Answered {
     /// The answer as published.
     pub reply: GripRecommendation,
     /// The spatial solver's answer, for a spatial candidate answered with status 0.
-    pub spatial: Option<Box<SpatialRecommendation>>,
+    pub spatial: Option<Box<spatial::Recommendation>>,
 }
 
 /// Solves one candidate message and builds its answer: status 0 with the recommendation, 1 when
@@ -72,7 +70,7 @@ fn solve_planar(
 ) -> Result<GripRecommendation, MessageLimits> {
     let candidate = Candidate::try_from(m)?;
     if is_exact(m) {
-        // `solve_orientation` without its `Box`: the answer is built from the recommendation at
+        // `planar::solve` without its `Box`: the answer is built from the recommendation at
         // once, and one heap block fewer is one of a handful per candidate.
         return match analyse(&candidate, settings) {
             Ok(Ok(analysis)) => analysis
@@ -84,21 +82,21 @@ fn solve_planar(
         };
     }
     let uncertainty = planar_uncertainty(m)?;
-    match solve_robust(&candidate, &uncertainty, settings) {
-        Ok(RobustVerdict::Exact(Verdict::Recommended(r))) => Ok(recommended(m, &r)),
-        Ok(RobustVerdict::Exact(Verdict::NoForceClosure(why))) => Ok(no_closure(m, &why)),
-        Ok(RobustVerdict::Recommended(r)) => {
+    match planar::robust::solve(&candidate, &uncertainty, settings) {
+        Ok(planar::robust::Verdict::Exact(Verdict::Recommended(r))) => Ok(recommended(m, &r)),
+        Ok(planar::robust::Verdict::Exact(Verdict::NoForceClosure(why))) => Ok(no_closure(m, &why)),
+        Ok(planar::robust::Verdict::Recommended(r)) => {
             let mut out = recommended(m, &r.to_recommendation());
             out.gripping_power_nominal = r.gripping_power_nominal;
             Ok(out)
         }
-        Ok(RobustVerdict::NoCommonOrientation { reason, nominal }) => {
+        Ok(planar::robust::Verdict::NoCommonOrientation { reason, nominal }) => {
             let mut out = recommended(m, &nominal);
             out.status = GripRecommendation::STATUS_NO_FORCE_CLOSURE;
             out.message = reason.to_compact_string();
             Ok(out)
         }
-        Ok(RobustVerdict::NoForceClosure(why)) => Ok(no_closure(m, &why)),
+        Ok(planar::robust::Verdict::NoForceClosure(why)) => Ok(no_closure(m, &why)),
         Err(e) => Err(e.into()),
     }
 }
@@ -124,50 +122,50 @@ fn planar_reply(m: &GraspCandidate, settings: &Settings) -> GripRecommendation {
 /// The answer to a candidate read in the spatial model. A mass tolerance alone scales every
 /// force of the nominal answer by `(m + Δm) / m`: at a fixed pose every force is proportional to
 /// the mass (`crates/solver/src/planar/robust/mod.rs`, section 1), so the largest mass is the
-/// worst and the pose does not change. A centre-of-mass box is answered by [`solve_spatial_robust`]: every object
+/// worst and the pose does not change. A centre-of-mass box is answered by [`spatial::robust::solve`]: every object
 /// swings about the contact axis to hang in its own plane, and the answer fixes the tilt of the
 /// axis whose worst case is least ([`spatial_robust_recommended`]).
 fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {
     let mut out = match spatial_tolerance(m)
         .map_err(|e| e.to_string())
         .and_then(|tolerance| {
-            SpatialCandidate::try_from(m)
+            spatial::Candidate::try_from(m)
                 .map(|c| (c, tolerance))
                 .map_err(|e| e.to_string())
         }) {
         Err(e) => invalid(m, &e),
         Ok((candidate, SpatialTolerance::Box(u))) => {
-            match solve_spatial_robust(&candidate, &u, settings) {
-                Ok(SpatialRobustVerdict::Recommended(r)) => {
+            match spatial::robust::solve(&candidate, &u, settings) {
+                Ok(spatial::robust::Verdict::Recommended(r)) => {
                     let (reply, nominal_hang) = spatial_robust_recommended(m, &r);
                     return Answered {
                         reply,
                         spatial: Some(Box::new(nominal_hang)),
                     };
                 }
-                Ok(SpatialRobustVerdict::NoCommonOrientation { reason, nominal }) => {
+                Ok(spatial::robust::Verdict::NoCommonOrientation { reason, nominal }) => {
                     let mut reply = spatial_recommended(m, &nominal);
                     reply.status = GripRecommendation::STATUS_NO_FORCE_CLOSURE;
                     reply.message = reason.to_compact_string();
                     reply
                 }
-                Ok(SpatialRobustVerdict::NoForceClosure(why)) => no_closure(m, &why),
+                Ok(spatial::robust::Verdict::NoForceClosure(why)) => no_closure(m, &why),
                 // Not reached: a box of zero size is not a `Box`.
-                Ok(SpatialRobustVerdict::Exact(SpatialVerdict::Recommended(r))) => {
+                Ok(spatial::robust::Verdict::Exact(spatial::Verdict::Recommended(r))) => {
                     return Answered {
                         reply: spatial_recommended(m, &r),
                         spatial: Some(r),
                     };
                 }
-                Ok(SpatialRobustVerdict::Exact(SpatialVerdict::NoForceClosure(why))) => {
+                Ok(spatial::robust::Verdict::Exact(spatial::Verdict::NoForceClosure(why))) => {
                     no_closure(m, &why)
                 }
                 Err(InvalidInput::Norm1SpatialTolerance) => invalid(m, &NORM1_WITH_BOX),
                 Err(e) => invalid(m, &e),
             }
         }
-        Ok((candidate, tolerance)) => match solve_spatial(&candidate, settings) {
-            Ok(SpatialVerdict::Recommended(r)) => {
+        Ok((candidate, tolerance)) => match spatial::solve(&candidate, settings) {
+            Ok(spatial::Verdict::Recommended(r)) => {
                 let mut reply = spatial_recommended(m, &r);
                 if let SpatialTolerance::Mass(k) = tolerance {
                     scale_forces(&mut reply, k);
@@ -177,7 +175,7 @@ fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {
                     spatial: Some(r),
                 };
             }
-            Ok(SpatialVerdict::NoForceClosure(why)) => no_closure(m, &why),
+            Ok(spatial::Verdict::NoForceClosure(why)) => no_closure(m, &why),
             Err(e) => invalid(m, &e),
         },
     };
@@ -196,8 +194,8 @@ fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {
 /// Also the nominal solution with that hang, from which the markers are drawn.
 fn spatial_robust_recommended(
     m: &GraspCandidate,
-    r: &SpatialRobustRecommendation,
-) -> (GripRecommendation, SpatialRecommendation) {
+    r: &spatial::robust::Recommendation,
+) -> (GripRecommendation, spatial::Recommendation) {
     let mut hang = r.nominal.clone();
     hang.planar = Recommendation {
         objective: r.objective,
@@ -239,7 +237,7 @@ enum SpatialTolerance {
     /// A mass tolerance alone: the nominal answer's forces times `(m + Δm) / m`.
     Mass(f64),
     /// A centre-of-mass box (and perhaps a mass tolerance): the spatial robust solver.
-    Box(SpatialUncertainty),
+    Box(spatial::robust::Uncertainty),
 }
 
 /// A spatial candidate's tolerances, or an error naming the field at fault (the robust solver
@@ -266,7 +264,7 @@ fn spatial_tolerance(m: &GraspCandidate) -> Result<SpatialTolerance, MessageLimi
         }
     }
     if t.x != 0.0 || t.y != 0.0 || t.z != 0.0 {
-        return Ok(SpatialTolerance::Box(SpatialUncertainty {
+        return Ok(SpatialTolerance::Box(spatial::robust::Uncertainty {
             center_of_mass_tolerance: nalgebra::Vector3::new(t.x, t.y, t.z),
             mass_tolerance: m.mass_tolerance,
         }));
@@ -379,7 +377,7 @@ mod spatial_tests {
     use super::*;
     use crate::msg::Header;
     use crate::msg::{Point, Vector3};
-    use crate::solver::Uncertainty;
+    use crate::solver::planar::robust::Uncertainty;
     use nalgebra::Vector2;
     use std::f64::consts::PI;
 
@@ -675,7 +673,8 @@ mod spatial_tests {
             center_of_mass_tolerance: Vector2::new(0.002, 0.001),
             mass_tolerance: 0.02,
         };
-        let Ok(RobustVerdict::Recommended(r)) = solve_robust(&candidate, &u, &Settings::default())
+        let Ok(planar::robust::Verdict::Recommended(r)) =
+            planar::robust::solve(&candidate, &u, &Settings::default())
         else {
             panic!("every object in the box can be held");
         };
@@ -801,13 +800,13 @@ mod spatial_tests {
             "{}",
             boxed.message
         );
-        let candidate = SpatialCandidate::try_from(&boxed_in).expect("a valid candidate");
-        let u = SpatialUncertainty {
+        let candidate = spatial::Candidate::try_from(&boxed_in).expect("a valid candidate");
+        let u = spatial::robust::Uncertainty {
             center_of_mass_tolerance: nalgebra::Vector3::new(0.01, 0.02, 0.0),
             mass_tolerance: 0.1,
         };
-        let Ok(SpatialRobustVerdict::Recommended(r)) =
-            solve_spatial_robust(&candidate, &u, &Settings::default())
+        let Ok(spatial::robust::Verdict::Recommended(r)) =
+            spatial::robust::solve(&candidate, &u, &Settings::default())
         else {
             panic!("the box can be held");
         };

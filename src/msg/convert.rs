@@ -3,7 +3,7 @@
 //! (`crate::answer`).
 //!
 //! A planar candidate (`model` 0) uses the x-y components of its points and vectors; a spatial one
-//! (`model` 1) all three ([`SpatialCandidate`]). The spatial answer fills the same fields in the
+//! (`model` 1) all three ([`spatial::Candidate`]). The spatial answer fills the same fields in the
 //! spatial reading of the message (`docs/spatial.md`): the smallest 3D rotation
 //! as `wrist_rotation` (its angle) and `rotation`, the recommended 3D gravity direction, the
 //! planar answer in the grasp plane Π for the rest, and in `message` what the caller must know
@@ -12,7 +12,8 @@
 
 use super::{CompactString, GraspCandidate, GripRecommendation, Point, Quaternion, Vector3};
 use crate::solver::{
-    Candidate, InvalidInput, Recommendation, SpatialCandidate, SpatialRecommendation, Uncertainty,
+    planar::{robust::Uncertainty, Candidate, Recommendation},
+    spatial, InvalidInput,
 };
 use compact_str::ToCompactString as _;
 use nalgebra::Vector2;
@@ -107,12 +108,12 @@ fn vector3(v: &Vector3) -> nalgebra::Vector3<f64> {
 }
 
 /// Every component as given: the spatial solver checks them all, naming each (`contact_1.z`).
-impl TryFrom<&GraspCandidate> for SpatialCandidate {
+impl TryFrom<&GraspCandidate> for spatial::Candidate {
     type Error = MessageLimits;
 
     fn try_from(m: &GraspCandidate) -> Result<Self, Self::Error> {
         check_texts(m)?;
-        Ok(SpatialCandidate {
+        Ok(spatial::Candidate {
             contact_1: point3(&m.contact_1),
             contact_2: point3(&m.contact_2),
             normal_1: vector3(&m.normal_1),
@@ -263,7 +264,7 @@ pub(crate) fn recommended(m: &GraspCandidate, r: &Recommendation) -> GripRecomme
 }
 
 /// A paper candidate's name, `""` for none; inline, without a heap block.
-fn label(l: Option<crate::solver::PaperCandidate>) -> CompactString {
+fn label(l: Option<crate::solver::planar::PaperCandidate>) -> CompactString {
     l.map_or(CompactString::default(), |x| {
         CompactString::const_new(x.name())
     })
@@ -273,7 +274,7 @@ fn label(l: Option<crate::solver::PaperCandidate>) -> CompactString {
 /// recommended 3D gravity direction, and the notes on the current pose and the centre of mass.
 pub(crate) fn spatial_recommended(
     m: &GraspCandidate,
-    r: &SpatialRecommendation,
+    r: &spatial::Recommendation,
 ) -> GripRecommendation {
     let mut out = recommended(m, &r.planar);
     let [x, y, z, w] = r.quaternion();
