@@ -7,9 +7,9 @@
 //! the object swinging to hang in its own plane); with both zero the answer is the nominal one,
 //! bit for bit, with `gripping_power_nominal = gripping_power`.
 
-use crate::msg::convert::{
-    invalid, no_closure, planar_uncertainty, recommended, spatial_recommended, MessageLimits,
-};
+use super::forces::Forces;
+use super::reply::{no_closure, recommended, spatial_recommended};
+use crate::msg::convert::{invalid, planar_uncertainty, MessageLimits};
 use crate::msg::{CompactString, GraspCandidate, GripRecommendation};
 use crate::solver::{
     planar::{self, analyse, Candidate, Recommendation, Verdict},
@@ -75,7 +75,7 @@ fn solve_planar(
         return match analyse(&candidate, settings) {
             Ok(Ok(analysis)) => analysis
                 .recommend(&settings.range)
-                .map(|r| recommended(m, &r))
+                .map(|r| recommended(m, &r, &Forces::from(&r)))
                 .map_err(MessageLimits::from),
             Ok(Err(why)) => Ok(no_closure(m, &why)),
             Err(e) => Err(e.into()),
@@ -83,15 +83,15 @@ fn solve_planar(
     }
     let uncertainty = planar_uncertainty(m)?;
     match planar::robust::solve(&candidate, &uncertainty, settings) {
-        Ok(planar::robust::Verdict::Exact(Verdict::Recommended(r))) => Ok(recommended(m, &r)),
+        Ok(planar::robust::Verdict::Exact(Verdict::Recommended(r))) => {
+            Ok(recommended(m, &r, &Forces::from(&*r)))
+        }
         Ok(planar::robust::Verdict::Exact(Verdict::NoForceClosure(why))) => Ok(no_closure(m, &why)),
         Ok(planar::robust::Verdict::Recommended(r)) => {
-            let mut out = recommended(m, &r.to_recommendation());
-            out.gripping_power_nominal = r.gripping_power_nominal;
-            Ok(out)
+            Ok(recommended(m, &r.to_recommendation(), &Forces::from(&*r)))
         }
         Ok(planar::robust::Verdict::NoCommonOrientation { reason, nominal }) => {
-            let mut out = recommended(m, &nominal);
+            let mut out = recommended(m, &nominal, &Forces::from(&*nominal));
             out.status = GripRecommendation::STATUS_NO_FORCE_CLOSURE;
             out.message = reason.to_compact_string();
             Ok(out)
@@ -144,7 +144,8 @@ fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {
                     };
                 }
                 Ok(spatial::robust::Verdict::NoCommonOrientation { reason, nominal }) => {
-                    let mut reply = spatial_recommended(m, &nominal);
+                    let mut reply =
+                        spatial_recommended(m, &nominal, &Forces::from(&nominal.planar));
                     reply.status = GripRecommendation::STATUS_NO_FORCE_CLOSURE;
                     reply.message = reason.to_compact_string();
                     reply
@@ -153,7 +154,7 @@ fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {
                 // Not reached: a box of zero size is not a `Box`.
                 Ok(spatial::robust::Verdict::Exact(spatial::Verdict::Recommended(r))) => {
                     return Answered {
-                        reply: spatial_recommended(m, &r),
+                        reply: spatial_recommended(m, &r, &Forces::from(&r.planar)),
                         spatial: Some(r),
                     };
                 }
@@ -166,10 +167,17 @@ fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {
         }
         Ok((candidate, tolerance)) => match spatial::solve(&candidate, settings) {
             Ok(spatial::Verdict::Recommended(r)) => {
-                let mut reply = spatial_recommended(m, &r);
-                if let SpatialTolerance::Mass(k) = tolerance {
-                    scale_forces(&mut reply, k);
-                }
+                let forces = Forces::from(&r.planar);
+                let reply = match tolerance {
+                    SpatialTolerance::Mass(k) => {
+                        let mut reply = spatial_recommended(m, &r, &forces.scaled(k));
+                        for p in &mut reply.local_minima_power {
+                            *p *= k;
+                        }
+                        reply
+                    }
+                    _ => spatial_recommended(m, &r, &forces),
+                };
                 return Answered {
                     reply,
                     spatial: Some(r),
@@ -216,9 +224,7 @@ fn spatial_robust_recommended(
     hang.rotation_axis = r.rotation_axis;
     hang.rotation_angle = r.rotation_angle;
     hang.force_vectors = r.force_vectors;
-    let mut out = spatial_recommended(m, &hang);
-    out.gripping_power_nominal = r.gripping_power_nominal;
-    (out, hang)
+    (spatial_recommended(m, &hang, &Forces::from(r)), hang)
 }
 
 /// The refusal of a spatial candidate with a centre-of-mass box under objective norm1, naming
@@ -287,20 +293,6 @@ fn spatial_tolerance(m: &GraspCandidate) -> Result<SpatialTolerance, MessageLimi
         .into());
     }
     Ok(SpatialTolerance::Mass((m.mass + dm) / m.mass))
-}
-
-/// Every force of an answer but the nominal object's (`contact_forces`,
-/// `gripping_power_nominal`) times `k`.
-fn scale_forces(r: &mut GripRecommendation, k: f64) {
-    r.gripping_power *= k;
-    r.internal_force *= k;
-    r.finger_force *= k;
-    r.gripping_power_current *= k;
-    r.internal_force_current *= k;
-    r.finger_force_current *= k;
-    for p in &mut r.local_minima_power {
-        *p *= k;
-    }
 }
 
 #[cfg(test)]

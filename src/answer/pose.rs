@@ -22,8 +22,8 @@
 //!   ranked by [`answer_set`] exactly as a [`GraspCandidateSet`]'s (the gripper's limit, the
 //!   set's `max_grip_force`, `max_set_size`), a pose refused by the geometry never ranked.
 
+use super::reply::no_closure;
 use super::{answer_one, answer_set, Rules};
-use crate::msg::convert::no_closure;
 use crate::msg::{
     invalid, CompactString, GraspCandidate, GraspCandidateSet, GraspObject, GripRecommendation,
     Header, Point, Pose, PoseCandidate, PoseCandidateSet, PoseRecommendation,
