@@ -408,6 +408,30 @@ mod tests {
         assert_eq!(s.lock().config.objective, crate::solver::Objective::Norm1);
     }
 
+    /// A refusal names what is wrong in its type, and its words are those ROS clients have
+    /// always been given.
+    #[test]
+    fn refusals_are_typed_and_keep_their_words() {
+        let s = shared();
+        let deleted = s
+            .check("objective", &ParameterValue::NotSet)
+            .expect_err("parameters are not deleted");
+        assert!(matches!(&deleted, ParameterRefused::Deleted { name } if name == "objective"));
+        assert_eq!(deleted.to_string(), "parameter objective cannot be deleted");
+        let fixed = s
+            .check("qos_depth", &ParameterValue::Integer(7))
+            .expect_err("fixed while running");
+        assert!(matches!(&fixed, ParameterRefused::Fixed { name } if name == "qos_depth"));
+        assert_eq!(
+            fixed.to_string(),
+            "qos_depth is fixed while the node runs; restart it with -p qos_depth:=VALUE"
+        );
+        let below = s
+            .check("friction_safety_factor", &ParameterValue::Double(0.5))
+            .expect_err("below one");
+        assert!(matches!(below, ParameterRefused::Config(_)));
+    }
+
     #[test]
     fn every_parameter_has_a_ros_type() {
         for (name, value) in Config::default().parameters() {
