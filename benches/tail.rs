@@ -230,8 +230,8 @@ fn report_heavy_sets(rng: &mut ChaCha8Rng) {
         black_box(spatial::robust::solve(c, u, &Settings::default()).ok());
     });
     println!("ordinary heavy sets of 10,000, one core, best of 3 passes:");
-    println!("  centre of mass on the axis, norm1 (solve_spatial): {t_axis:.3} s");
-    println!("  centre-of-mass boxes, norm2 (solve_spatial_robust): {t_boxes:.3} s");
+    println!("  centre of mass on the axis, norm1 (spatial::solve): {t_axis:.3} s");
+    println!("  centre-of-mass boxes, norm2 (spatial::robust::solve): {t_boxes:.3} s");
 }
 
 fn main() {

@@ -351,7 +351,7 @@ fn analysis_in_the_plane_is_the_objective_over_the_plane() {
         let c = random_spatial_grasp(&mut rng, kind);
         let (analysis, r) = match spatial::analyse(&c, &settings) {
             Ok(Ok(pair)) => pair,
-            other => panic!("analyse_spatial refused a force-closure grasp {c:?}: {other:?}"),
+            other => panic!("spatial::analyse refused a force-closure grasp {c:?}: {other:?}"),
         };
         assert_eq!(r, spatial(&c, &settings));
         let again = analysis.recommend(&settings.range).expect("the same range");
