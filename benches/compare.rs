@@ -16,7 +16,10 @@ use clarabel::solver::{
     SupportedConeT, ZeroConeT,
 };
 use common::{random_grasp, wrap, RefObjective, RefRange, Reference};
-use grasp_orient::solver::{solve_orientation, Candidate, Settings, Verdict};
+use grasp_orient::solver::{
+    planar::{self, Candidate, Verdict},
+    Settings,
+};
 use nalgebra::Vector2;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -110,7 +113,7 @@ fn main() {
     for _ in 0..7 {
         let t = Instant::now();
         for g in &grasps {
-            black_box(solve_orientation(black_box(g), &settings).ok());
+            black_box(planar::solve(black_box(g), &settings).ok());
         }
         exact_ns = exact_ns.min(t.elapsed().as_nanos() as f64 / grasps.len() as f64);
     }
@@ -125,7 +128,7 @@ fn main() {
     for (g, (bw, bp)) in grasps[..n_base].iter().zip(&base) {
         let reference = Reference::new(g, 1.0, RefObjective::Norm2);
         let (rw, rp) = reference.minimise(RefRange::FromAbove, g.gravity, 20_000);
-        let Ok(Verdict::Recommended(r)) = solve_orientation(g, &settings) else {
+        let Ok(Verdict::Recommended(r)) = planar::solve(g, &settings) else {
             panic!("force-closure grasp refused")
         };
         e_angle = e_angle.max(wrap(r.wrist_rotation - rw).abs());

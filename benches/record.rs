@@ -29,7 +29,7 @@ fn topics() -> Topics {
     }
 }
 
-fn message(i: usize, c: &grasp_orient::solver::Candidate) -> GraspCandidate {
+fn message(i: usize, c: &grasp_orient::solver::planar::Candidate) -> GraspCandidate {
     let p = |v: nalgebra::Vector2<f64>| Point {
         x: v.x,
         y: v.y,

@@ -17,8 +17,8 @@ mod common;
 
 use common::random_grasp;
 use grasp_orient::solver::{
-    solve_orientation, solve_robust, AllowedRange, Candidate, Objective, RobustVerdict, Settings,
-    Uncertainty,
+    planar::{self, robust::Uncertainty, Candidate},
+    AllowedRange, Objective, Settings,
 };
 use nalgebra::Vector2;
 use rand::{Rng, SeedableRng};
@@ -64,8 +64,8 @@ fn main() {
             mass_tolerance: rng.gen_range(0.05..0.5) * c.mass,
         };
         tried += 1;
-        match solve_robust(&c, &u, &Settings::default()) {
-            Ok(RobustVerdict::Recommended(_)) => cases.push((c, u)),
+        match planar::robust::solve(&c, &u, &Settings::default()) {
+            Ok(planar::robust::Verdict::Recommended(_)) => cases.push((c, u)),
             _ => refused += 1,
         }
     }
@@ -111,7 +111,9 @@ fn main() {
         let mut vertices = 0usize;
         let mut timed = 0usize;
         for (c, u) in &cases {
-            if let Ok(RobustVerdict::Recommended(r)) = solve_robust(c, u, &settings) {
+            if let Ok(planar::robust::Verdict::Recommended(r)) =
+                planar::robust::solve(c, u, &settings)
+            {
                 vertices += r.region.len();
                 timed += 1;
             }
@@ -122,12 +124,12 @@ fn main() {
             n,
             || {
                 for (c, _) in &cases {
-                    black_box(solve_orientation(black_box(c), &settings).ok());
+                    black_box(planar::solve(black_box(c), &settings).ok());
                 }
             },
             || {
                 for (c, u) in &cases {
-                    black_box(solve_robust(black_box(c), black_box(u), &settings).ok());
+                    black_box(planar::robust::solve(black_box(c), black_box(u), &settings).ok());
                 }
             },
         );

@@ -32,7 +32,7 @@ use rand_chacha::ChaCha8Rng;
 use std::hint::black_box;
 use std::time::Instant;
 
-fn message(i: usize, c: &grasp_orient::solver::Candidate) -> GraspCandidate {
+fn message(i: usize, c: &grasp_orient::solver::planar::Candidate) -> GraspCandidate {
     let p = |v: nalgebra::Vector2<f64>| Point {
         x: v.x,
         y: v.y,

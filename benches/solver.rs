@@ -5,7 +5,7 @@
 mod common;
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
-use grasp_orient::solver::{solve_orientation, AllowedRange, Objective, Settings};
+use grasp_orient::solver::{planar, AllowedRange, Objective, Settings};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -34,7 +34,7 @@ fn bench(c: &mut Criterion) {
         group.bench_function(name, |b| {
             b.iter(|| {
                 for g in &grasps {
-                    black_box(solve_orientation(black_box(g), &settings).ok());
+                    black_box(planar::solve(black_box(g), &settings).ok());
                 }
             })
         });

@@ -14,9 +14,7 @@ mod common;
 
 use common::random_grasp;
 use common::spatial::{random_spatial_grasp, Kind};
-use grasp_orient::solver::{
-    solve_orientation, solve_spatial, Objective, Settings, SpatialCandidate,
-};
+use grasp_orient::solver::{planar, spatial, Objective, Settings};
 use nalgebra::Vector3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -42,11 +40,11 @@ fn main() {
     let settings = Settings::default();
     let mut rng = ChaCha8Rng::seed_from_u64(2026);
     let planar: Vec<_> = (0..10_000).map(|_| random_grasp(&mut rng)).collect();
-    let lifted: Vec<SpatialCandidate> = planar
+    let lifted: Vec<spatial::Candidate> = planar
         .iter()
         .map(|p| {
             let lift = |v: nalgebra::Vector2<f64>, z: f64| Vector3::new(v.x, v.y, z);
-            SpatialCandidate {
+            spatial::Candidate {
                 contact_1: lift(p.contact_1, 0.25),
                 contact_2: lift(p.contact_2, 0.25),
                 normal_1: lift(p.normal_1, 0.0),
@@ -83,13 +81,13 @@ fn main() {
         let (mut bp, mut bl, mut b3) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
         for _ in 0..rounds {
             bp = bp.min(time_per(&planar[start..end], 1, |g| {
-                black_box(solve_orientation(g, &settings).ok());
+                black_box(planar::solve(g, &settings).ok());
             }));
             bl = bl.min(time_per(&lifted[start..end], 1, |g| {
-                black_box(solve_spatial(g, &settings).ok());
+                black_box(spatial::solve(g, &settings).ok());
             }));
             b3 = b3.min(time_per(&spatial_3d[start..end], 1, |g| {
-                black_box(solve_spatial(g, &settings).ok());
+                black_box(spatial::solve(g, &settings).ok());
             }));
         }
         let share = chunk as f64 / planar.len() as f64;
@@ -98,21 +96,21 @@ fn main() {
         t_3d += b3 * share;
     }
     let t_axis = time_per(&on_axis, 3, |g| {
-        black_box(solve_spatial(g, &settings).ok());
+        black_box(spatial::solve(g, &settings).ok());
     });
     let internal = Settings {
         objective: Objective::InternalForce,
         ..settings
     };
     let t_axis_internal = time_per(&on_axis, 3, |g| {
-        black_box(solve_spatial(g, &internal).ok());
+        black_box(spatial::solve(g, &internal).ok());
     });
     let norm1 = Settings {
         objective: Objective::Norm1,
         ..settings
     };
     let t_axis_norm1 = time_per(&on_axis[..300], 1, |g| {
-        black_box(solve_spatial(g, &norm1).ok());
+        black_box(spatial::solve(g, &norm1).ok());
     });
 
     println!("grasp_orient: spatial candidates against planar ones (2-norm, from-above range)");

@@ -24,10 +24,7 @@
 mod common;
 
 use common::spatial::{random_spatial_grasp, Kind};
-use grasp_orient::solver::{
-    solve_spatial, solve_spatial_robust, AllowedRange, Objective, Settings, SpatialCandidate,
-    SpatialRobustVerdict, SpatialUncertainty,
-};
+use grasp_orient::solver::{spatial, AllowedRange, Objective, Settings};
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -36,8 +33,8 @@ use std::time::{Duration, Instant};
 
 /// One robust spatial candidate with the settings it is solved under.
 struct Case {
-    candidate: SpatialCandidate,
-    uncertainty: SpatialUncertainty,
+    candidate: spatial::Candidate,
+    uncertainty: spatial::robust::Uncertainty,
     settings: Settings,
 }
 
@@ -75,7 +72,7 @@ fn random_case(rng: &mut ChaCha8Rng, k: usize) -> Case {
     };
     Case {
         candidate,
-        uncertainty: SpatialUncertainty {
+        uncertainty: spatial::robust::Uncertainty {
             center_of_mass_tolerance,
             mass_tolerance,
         },
@@ -89,12 +86,12 @@ fn random_case(rng: &mut ChaCha8Rng, k: usize) -> Case {
 
 fn solve(case: &Case) -> bool {
     matches!(
-        black_box(solve_spatial_robust(
+        black_box(spatial::robust::solve(
             black_box(&case.candidate),
             &case.uncertainty,
             &case.settings
         )),
-        Ok(SpatialRobustVerdict::Recommended(_))
+        Ok(spatial::robust::Verdict::Recommended(_))
     )
 }
 
@@ -134,8 +131,8 @@ fn quantile(sorted: &[Duration], q: f64) -> Duration {
 fn work(cases: &[Case]) -> (usize, usize, usize) {
     let (mut n, mut splits, mut samples) = (0, 0, 0);
     for c in cases {
-        if let Ok(SpatialRobustVerdict::Recommended(r)) =
-            solve_spatial_robust(&c.candidate, &c.uncertainty, &c.settings)
+        if let Ok(spatial::robust::Verdict::Recommended(r)) =
+            spatial::robust::solve(&c.candidate, &c.uncertainty, &c.settings)
         {
             n += 1;
             splits = splits.max(r.splits);
@@ -179,8 +176,8 @@ fn report_tail(cases: &[Case]) {
     println!("  the slowest five:");
     for &k in &order[..5] {
         let c = &cases[k];
-        let work = match solve_spatial_robust(&c.candidate, &c.uncertainty, &c.settings) {
-            Ok(SpatialRobustVerdict::Recommended(r)) => {
+        let work = match spatial::robust::solve(&c.candidate, &c.uncertainty, &c.settings) {
+            Ok(spatial::robust::Verdict::Recommended(r)) => {
                 format!("{} sample points, {} splits", r.samples, r.splits)
             }
             _ => "refused".to_string(),
@@ -212,17 +209,17 @@ fn report_heavy_sets(rng: &mut ChaCha8Rng) {
         objective: Objective::Norm1,
         ..Settings::default()
     };
-    let on_axis: Vec<SpatialCandidate> = (0..10_000)
+    let on_axis: Vec<spatial::Candidate> = (0..10_000)
         .map(|_| random_spatial_grasp(rng, Kind::OnAxis))
         .collect();
     let t_axis = time_set(&on_axis, 3, |c| {
-        black_box(solve_spatial(c, &norm1).ok());
+        black_box(spatial::solve(c, &norm1).ok());
     });
-    let boxes: Vec<(SpatialCandidate, SpatialUncertainty)> = (0..10_000)
+    let boxes: Vec<(spatial::Candidate, spatial::robust::Uncertainty)> = (0..10_000)
         .map(|k| {
             let c = random_spatial_grasp(rng, KINDS[k % 4]);
             let d = (c.contact_1 - c.contact_2).norm();
-            let u = SpatialUncertainty {
+            let u = spatial::robust::Uncertainty {
                 center_of_mass_tolerance: random_box(rng, d),
                 mass_tolerance: 0.1 * c.mass,
             };
@@ -230,11 +227,11 @@ fn report_heavy_sets(rng: &mut ChaCha8Rng) {
         })
         .collect();
     let t_boxes = time_set(&boxes, 3, |(c, u)| {
-        black_box(solve_spatial_robust(c, u, &Settings::default()).ok());
+        black_box(spatial::robust::solve(c, u, &Settings::default()).ok());
     });
     println!("ordinary heavy sets of 10,000, one core, best of 3 passes:");
-    println!("  centre of mass on the axis, norm1 (solve_spatial): {t_axis:.3} s");
-    println!("  centre-of-mass boxes, norm2 (solve_spatial_robust): {t_boxes:.3} s");
+    println!("  centre of mass on the axis, norm1 (spatial::solve): {t_axis:.3} s");
+    println!("  centre-of-mass boxes, norm2 (spatial::robust::solve): {t_boxes:.3} s");
 }
 
 fn main() {

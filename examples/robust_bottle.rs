@@ -3,7 +3,8 @@
 //! `cargo run --example robust_bottle`
 
 use grasp_orient::solver::{
-    solve_orientation, solve_robust, Candidate, RobustVerdict, Settings, Uncertainty, Verdict,
+    planar::{self, robust::Uncertainty, Candidate, Verdict},
+    Settings,
 };
 use nalgebra::{Rotation2, Vector2};
 
@@ -22,14 +23,15 @@ fn main() {
         gravity: Vector2::new(0.0, -9.81),
     };
     let settings = Settings::default();
-    let Ok(Verdict::Recommended(nominal)) = solve_orientation(&bottle, &settings) else {
+    let Ok(Verdict::Recommended(nominal)) = planar::solve(&bottle, &settings) else {
         panic!("the bottle can be held");
     };
     let tolerance = Uncertainty {
         center_of_mass_tolerance: Vector2::new(0.02, 0.02),
         mass_tolerance: 0.0,
     };
-    let Ok(RobustVerdict::Recommended(robust)) = solve_robust(&bottle, &tolerance, &settings)
+    let Ok(planar::robust::Verdict::Recommended(robust)) =
+        planar::robust::solve(&bottle, &tolerance, &settings)
     else {
         panic!("every bottle in the box can be held from above");
     };
@@ -39,7 +41,8 @@ fn main() {
         gravity: Rotation2::new(-nominal.wrist_rotation) * bottle.gravity,
         ..bottle
     };
-    let Ok(RobustVerdict::Recommended(at_nominal)) = solve_robust(&posed, &tolerance, &settings)
+    let Ok(planar::robust::Verdict::Recommended(at_nominal)) =
+        planar::robust::solve(&posed, &tolerance, &settings)
     else {
         panic!("every bottle in the box can be held from above");
     };

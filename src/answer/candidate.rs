@@ -2,20 +2,18 @@
 //! which tolerances, and what its outcome becomes.
 //!
 //! A candidate with tolerances (`center_of_mass_tolerance`, `mass_tolerance`) is answered with the
-//! worst case over every object they allow ([`solve_robust`]; for a spatial one with a
-//! centre-of-mass box [`solve_spatial_robust`], whose answer fixes the tilt of the contact axis,
+//! worst case over every object they allow ([`planar::robust::solve`]; for a spatial one with a
+//! centre-of-mass box [`spatial::robust::solve`], whose answer fixes the tilt of the contact axis,
 //! the object swinging to hang in its own plane); with both zero the answer is the nominal one,
 //! bit for bit, with `gripping_power_nominal = gripping_power`.
 
-use crate::msg::convert::{
-    invalid, no_closure, planar_uncertainty, recommended, spatial_recommended, MessageLimits,
-};
+use super::forces::Forces;
+use super::reply::{no_closure, recommended, spatial_recommended};
+use crate::msg::convert::{invalid, planar_uncertainty, MessageLimits};
 use crate::msg::{CompactString, GraspCandidate, GripRecommendation};
 use crate::solver::{
-    analyse, solve_robust, solve_spatial, solve_spatial_robust, Candidate, InvalidInput,
-    Recommendation, RobustVerdict, Settings, SpatialCandidate, SpatialRecommendation,
-    SpatialRobustRecommendation, SpatialRobustVerdict, SpatialUncertainty, SpatialVerdict, Verdict,
-    MAX_COORDINATE,
+    planar::{self, analyse, Candidate, Recommendation, Verdict},
+    spatial, InvalidInput, Settings, MAX_COORDINATE,
 };
 use compact_str::ToCompactString as _;
 
@@ -26,7 +24,7 @@ pub struct Answered {
     /// The answer as published.
     pub reply: GripRecommendation,
     /// The spatial solver's answer, for a spatial candidate answered with status 0.
-    pub spatial: Option<Box<SpatialRecommendation>>,
+    pub spatial: Option<Box<spatial::Recommendation>>,
 }
 
 /// Solves one candidate message and builds its answer: status 0 with the recommendation, 1 when
@@ -72,33 +70,33 @@ fn solve_planar(
 ) -> Result<GripRecommendation, MessageLimits> {
     let candidate = Candidate::try_from(m)?;
     if is_exact(m) {
-        // `solve_orientation` without its `Box`: the answer is built from the recommendation at
+        // `planar::solve` without its `Box`: the answer is built from the recommendation at
         // once, and one heap block fewer is one of a handful per candidate.
         return match analyse(&candidate, settings) {
             Ok(Ok(analysis)) => analysis
                 .recommend(&settings.range)
-                .map(|r| recommended(m, &r))
+                .map(|r| recommended(m, &r, &Forces::from(&r)))
                 .map_err(MessageLimits::from),
             Ok(Err(why)) => Ok(no_closure(m, &why)),
             Err(e) => Err(e.into()),
         };
     }
     let uncertainty = planar_uncertainty(m)?;
-    match solve_robust(&candidate, &uncertainty, settings) {
-        Ok(RobustVerdict::Exact(Verdict::Recommended(r))) => Ok(recommended(m, &r)),
-        Ok(RobustVerdict::Exact(Verdict::NoForceClosure(why))) => Ok(no_closure(m, &why)),
-        Ok(RobustVerdict::Recommended(r)) => {
-            let mut out = recommended(m, &r.to_recommendation());
-            out.gripping_power_nominal = r.gripping_power_nominal;
-            Ok(out)
+    match planar::robust::solve(&candidate, &uncertainty, settings) {
+        Ok(planar::robust::Verdict::Exact(Verdict::Recommended(r))) => {
+            Ok(recommended(m, &r, &Forces::from(&*r)))
         }
-        Ok(RobustVerdict::NoCommonOrientation { reason, nominal }) => {
-            let mut out = recommended(m, &nominal);
+        Ok(planar::robust::Verdict::Exact(Verdict::NoForceClosure(why))) => Ok(no_closure(m, &why)),
+        Ok(planar::robust::Verdict::Recommended(r)) => {
+            Ok(recommended(m, &r.to_recommendation(), &Forces::from(&*r)))
+        }
+        Ok(planar::robust::Verdict::NoCommonOrientation { reason, nominal }) => {
+            let mut out = recommended(m, &nominal, &Forces::from(&*nominal));
             out.status = GripRecommendation::STATUS_NO_FORCE_CLOSURE;
             out.message = reason.to_compact_string();
             Ok(out)
         }
-        Ok(RobustVerdict::NoForceClosure(why)) => Ok(no_closure(m, &why)),
+        Ok(planar::robust::Verdict::NoForceClosure(why)) => Ok(no_closure(m, &why)),
         Err(e) => Err(e.into()),
     }
 }
@@ -124,60 +122,68 @@ fn planar_reply(m: &GraspCandidate, settings: &Settings) -> GripRecommendation {
 /// The answer to a candidate read in the spatial model. A mass tolerance alone scales every
 /// force of the nominal answer by `(m + Δm) / m`: at a fixed pose every force is proportional to
 /// the mass (`crates/solver/src/planar/robust/mod.rs`, section 1), so the largest mass is the
-/// worst and the pose does not change. A centre-of-mass box is answered by [`solve_spatial_robust`]: every object
+/// worst and the pose does not change. A centre-of-mass box is answered by [`spatial::robust::solve`]: every object
 /// swings about the contact axis to hang in its own plane, and the answer fixes the tilt of the
 /// axis whose worst case is least ([`spatial_robust_recommended`]).
 fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {
     let mut out = match spatial_tolerance(m)
         .map_err(|e| e.to_string())
         .and_then(|tolerance| {
-            SpatialCandidate::try_from(m)
+            spatial::Candidate::try_from(m)
                 .map(|c| (c, tolerance))
                 .map_err(|e| e.to_string())
         }) {
         Err(e) => invalid(m, &e),
         Ok((candidate, SpatialTolerance::Box(u))) => {
-            match solve_spatial_robust(&candidate, &u, settings) {
-                Ok(SpatialRobustVerdict::Recommended(r)) => {
+            match spatial::robust::solve(&candidate, &u, settings) {
+                Ok(spatial::robust::Verdict::Recommended(r)) => {
                     let (reply, nominal_hang) = spatial_robust_recommended(m, &r);
                     return Answered {
                         reply,
                         spatial: Some(Box::new(nominal_hang)),
                     };
                 }
-                Ok(SpatialRobustVerdict::NoCommonOrientation { reason, nominal }) => {
-                    let mut reply = spatial_recommended(m, &nominal);
+                Ok(spatial::robust::Verdict::NoCommonOrientation { reason, nominal }) => {
+                    let mut reply =
+                        spatial_recommended(m, &nominal, &Forces::from(&nominal.planar));
                     reply.status = GripRecommendation::STATUS_NO_FORCE_CLOSURE;
                     reply.message = reason.to_compact_string();
                     reply
                 }
-                Ok(SpatialRobustVerdict::NoForceClosure(why)) => no_closure(m, &why),
+                Ok(spatial::robust::Verdict::NoForceClosure(why)) => no_closure(m, &why),
                 // Not reached: a box of zero size is not a `Box`.
-                Ok(SpatialRobustVerdict::Exact(SpatialVerdict::Recommended(r))) => {
+                Ok(spatial::robust::Verdict::Exact(spatial::Verdict::Recommended(r))) => {
                     return Answered {
-                        reply: spatial_recommended(m, &r),
+                        reply: spatial_recommended(m, &r, &Forces::from(&r.planar)),
                         spatial: Some(r),
                     };
                 }
-                Ok(SpatialRobustVerdict::Exact(SpatialVerdict::NoForceClosure(why))) => {
+                Ok(spatial::robust::Verdict::Exact(spatial::Verdict::NoForceClosure(why))) => {
                     no_closure(m, &why)
                 }
                 Err(InvalidInput::Norm1SpatialTolerance) => invalid(m, &NORM1_WITH_BOX),
                 Err(e) => invalid(m, &e),
             }
         }
-        Ok((candidate, tolerance)) => match solve_spatial(&candidate, settings) {
-            Ok(SpatialVerdict::Recommended(r)) => {
-                let mut reply = spatial_recommended(m, &r);
-                if let SpatialTolerance::Mass(k) = tolerance {
-                    scale_forces(&mut reply, k);
-                }
+        Ok((candidate, tolerance)) => match spatial::solve(&candidate, settings) {
+            Ok(spatial::Verdict::Recommended(r)) => {
+                let forces = Forces::from(&r.planar);
+                let reply = match tolerance {
+                    SpatialTolerance::Mass(k) => {
+                        let mut reply = spatial_recommended(m, &r, &forces.scaled(k));
+                        for p in &mut reply.local_minima_power {
+                            *p *= k;
+                        }
+                        reply
+                    }
+                    _ => spatial_recommended(m, &r, &forces),
+                };
                 return Answered {
                     reply,
                     spatial: Some(r),
                 };
             }
-            Ok(SpatialVerdict::NoForceClosure(why)) => no_closure(m, &why),
+            Ok(spatial::Verdict::NoForceClosure(why)) => no_closure(m, &why),
             Err(e) => invalid(m, &e),
         },
     };
@@ -196,8 +202,8 @@ fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {
 /// Also the nominal solution with that hang, from which the markers are drawn.
 fn spatial_robust_recommended(
     m: &GraspCandidate,
-    r: &SpatialRobustRecommendation,
-) -> (GripRecommendation, SpatialRecommendation) {
+    r: &spatial::robust::Recommendation,
+) -> (GripRecommendation, spatial::Recommendation) {
     let mut hang = r.nominal.clone();
     hang.planar = Recommendation {
         objective: r.objective,
@@ -218,9 +224,7 @@ fn spatial_robust_recommended(
     hang.rotation_axis = r.rotation_axis;
     hang.rotation_angle = r.rotation_angle;
     hang.force_vectors = r.force_vectors;
-    let mut out = spatial_recommended(m, &hang);
-    out.gripping_power_nominal = r.gripping_power_nominal;
-    (out, hang)
+    (spatial_recommended(m, &hang, &Forces::from(r)), hang)
 }
 
 /// The refusal of a spatial candidate with a centre-of-mass box under objective norm1, naming
@@ -239,7 +243,7 @@ enum SpatialTolerance {
     /// A mass tolerance alone: the nominal answer's forces times `(m + Δm) / m`.
     Mass(f64),
     /// A centre-of-mass box (and perhaps a mass tolerance): the spatial robust solver.
-    Box(SpatialUncertainty),
+    Box(spatial::robust::Uncertainty),
 }
 
 /// A spatial candidate's tolerances, or an error naming the field at fault (the robust solver
@@ -266,7 +270,7 @@ fn spatial_tolerance(m: &GraspCandidate) -> Result<SpatialTolerance, MessageLimi
         }
     }
     if t.x != 0.0 || t.y != 0.0 || t.z != 0.0 {
-        return Ok(SpatialTolerance::Box(SpatialUncertainty {
+        return Ok(SpatialTolerance::Box(spatial::robust::Uncertainty {
             center_of_mass_tolerance: nalgebra::Vector3::new(t.x, t.y, t.z),
             mass_tolerance: m.mass_tolerance,
         }));
@@ -289,20 +293,6 @@ fn spatial_tolerance(m: &GraspCandidate) -> Result<SpatialTolerance, MessageLimi
         .into());
     }
     Ok(SpatialTolerance::Mass((m.mass + dm) / m.mass))
-}
-
-/// Every force of an answer but the nominal object's (`contact_forces`,
-/// `gripping_power_nominal`) times `k`.
-fn scale_forces(r: &mut GripRecommendation, k: f64) {
-    r.gripping_power *= k;
-    r.internal_force *= k;
-    r.finger_force *= k;
-    r.gripping_power_current *= k;
-    r.internal_force_current *= k;
-    r.finger_force_current *= k;
-    for p in &mut r.local_minima_power {
-        *p *= k;
-    }
 }
 
 #[cfg(test)]
@@ -379,7 +369,7 @@ mod spatial_tests {
     use super::*;
     use crate::msg::Header;
     use crate::msg::{Point, Vector3};
-    use crate::solver::Uncertainty;
+    use crate::solver::planar::robust::Uncertainty;
     use nalgebra::Vector2;
     use std::f64::consts::PI;
 
@@ -675,7 +665,8 @@ mod spatial_tests {
             center_of_mass_tolerance: Vector2::new(0.002, 0.001),
             mass_tolerance: 0.02,
         };
-        let Ok(RobustVerdict::Recommended(r)) = solve_robust(&candidate, &u, &Settings::default())
+        let Ok(planar::robust::Verdict::Recommended(r)) =
+            planar::robust::solve(&candidate, &u, &Settings::default())
         else {
             panic!("every object in the box can be held");
         };
@@ -801,13 +792,13 @@ mod spatial_tests {
             "{}",
             boxed.message
         );
-        let candidate = SpatialCandidate::try_from(&boxed_in).expect("a valid candidate");
-        let u = SpatialUncertainty {
+        let candidate = spatial::Candidate::try_from(&boxed_in).expect("a valid candidate");
+        let u = spatial::robust::Uncertainty {
             center_of_mass_tolerance: nalgebra::Vector3::new(0.01, 0.02, 0.0),
             mass_tolerance: 0.1,
         };
-        let Ok(SpatialRobustVerdict::Recommended(r)) =
-            solve_spatial_robust(&candidate, &u, &Settings::default())
+        let Ok(spatial::robust::Verdict::Recommended(r)) =
+            spatial::robust::solve(&candidate, &u, &Settings::default())
         else {
             panic!("the box can be held");
         };

@@ -20,7 +20,7 @@ use crate::msg::{
     ColorRgba, GraspCandidate, GripRecommendation, Marker, MarkerArray, Point, Pose, PoseCandidate,
     PoseRecommendation, Quaternion, Vector3,
 };
-use crate::solver::{Settings, SpatialRecommendation};
+use crate::solver::{spatial, Settings};
 use grasp_orient_geometry::{ClosingAxis, Object, Primitive, Shape};
 use nalgebra::{UnitQuaternion, Vector3 as V3};
 
@@ -136,7 +136,7 @@ impl Scene {
 
     /// The spatial model: everything in 3D, the cones sliced by Π (module docs of
     /// `solver::spatial`, §2–3).
-    fn spatial(c: &GraspCandidate, r: &SpatialRecommendation) -> Self {
+    fn spatial(c: &GraspCandidate, r: &spatial::Recommendation) -> Self {
         let point = |p: &Point| V3::new(p.x, p.y, p.z);
         let gravity = V3::new(c.gravity.x, c.gravity.y, c.gravity.z);
         let contacts = [point(&c.contact_1), point(&c.contact_2)];
@@ -168,7 +168,7 @@ impl Scene {
 pub fn build(
     candidate: &GraspCandidate,
     answer: &GripRecommendation,
-    spatial: Option<&SpatialRecommendation>,
+    spatial: Option<&spatial::Recommendation>,
 ) -> MarkerArray {
     let scene = match spatial {
         Some(r) => Scene::spatial(candidate, r),

@@ -11,15 +11,21 @@
 //!   candidate they make, answered and ranked as above.
 //! - [`markers`]: an answer drawn for RViz and Foxglove.
 //!
+//! - [`Forces`] (`forces.rs`): the forces of an answer, whichever solver gave them, and the one
+//!   place they become wire fields; `reply.rs` builds the published reply from a solver's answer.
+//!
 //! To add an output field: fill it here (or in the solver), declare it in `msg/*.msg` and the wire
-//! struct (`crate::msg`), and map it in `src/msg/convert.rs`.
+//! struct (`crate::msg`), and map it in `reply.rs` (a force: in `forces.rs`).
 
 mod candidate;
+mod forces;
 pub mod markers;
 mod pose;
+mod reply;
 mod sets;
 
 pub use candidate::{answer, answer_in_full, Answered};
+pub use forces::Forces;
 pub use pose::{
     pose_set_without_geometry, uncast, without_geometry, PoseAnswerer, PoseRefusal,
     MESH_CACHE_BYTES,

@@ -22,8 +22,8 @@
 //!   ranked by [`answer_set`] exactly as a [`GraspCandidateSet`]'s (the gripper's limit, the
 //!   set's `max_grip_force`, `max_set_size`), a pose refused by the geometry never ranked.
 
+use super::reply::no_closure;
 use super::{answer_one, answer_set, Rules};
-use crate::msg::convert::no_closure;
 use crate::msg::{
     invalid, CompactString, GraspCandidate, GraspCandidateSet, GraspObject, GripRecommendation,
     GripRecommendationSet, Header, Point, Pose, PoseCandidate, PoseCandidateSet,
@@ -152,7 +152,7 @@ impl PoseAnswerer {
             Ok(object) => object,
             Err(why) => return (target.refused(&why.into()), None),
         };
-        let answer = match self.grasp(&m.grasp_pose, "grasp_pose", m.width, &object, &m.object) {
+        let answer = match self.grasp(&m.grasp_pose, &"grasp_pose", m.width, &object, &m.object) {
             Ok(grasp) => finish(
                 answer_one(&target.candidate(&grasp), settings, rules),
                 &grasp,

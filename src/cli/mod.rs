@@ -10,10 +10,12 @@ pub mod solve;
 
 use anyhow::bail;
 use grasp_orient::answer::{GripperDrive, Rules};
-use grasp_orient::config::declare::Setting;
-use grasp_orient::config::{bounds, params_in_file, Config, Domain, Parameter, RangeKind};
+use grasp_orient::config::declare::{Real, Setting};
+use grasp_orient::config::{
+    bounds, params_in_file, Config, Domain, InvalidBounds, Parameter, RangeKind, ValueError,
+};
 use grasp_orient::replay::Override;
-use grasp_orient::solver::{AllowedRange, Objective, Settings};
+use grasp_orient::solver::{AllowedRange, Objective, Settings, UnknownObjective};
 use serde_yaml_ng::Value;
 use std::path::PathBuf;
 
@@ -130,81 +132,122 @@ impl SolveOptions {
     }
 }
 
-fn parse_objective(text: &str) -> Result<Objective, String> {
+/// Why a value on the command line is refused; clap prints its words after the option.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum BadValue {
+    /// Not a number.
+    #[error("{text:?} is not a number")]
+    NotANumber {
+        /// What was given.
+        text: String,
+    },
+    /// Not an integer.
+    #[error("{text:?} is not an integer")]
+    NotAnInteger {
+        /// What was given.
+        text: String,
+    },
+    /// Not a value of the parameter's type.
+    #[error("{text:?} is not a valid {type_name}")]
+    NotOfType {
+        /// What was given.
+        text: String,
+        /// The parameter's ROS type.
+        type_name: &'static str,
+    },
+    /// Not three numbers separated by commas.
+    #[error("expected X,Y,Z (three numbers), got {text:?}")]
+    NotThree {
+        /// What was given.
+        text: String,
+    },
+    /// Not a range.
+    #[error("expected from_above, graspable or LO:HI")]
+    NotARange,
+    /// Outside the parameter's domain.
+    #[error(transparent)]
+    Domain(#[from] ValueError),
+    /// Range bounds that are no interval.
+    #[error(transparent)]
+    Bounds(#[from] InvalidBounds),
+    /// A `--rate` between 0 and 0.001.
+    #[error("must be 0 or in [0.001, 1000], got {}", Real(*.rate))]
+    Rate {
+        /// What was given.
+        rate: f64,
+    },
+}
+
+fn number(text: &str) -> Result<f64, BadValue> {
+    text.trim()
+        .parse::<f64>()
+        .map_err(|_| BadValue::NotANumber {
+            text: text.to_string(),
+        })
+}
+
+fn parse_objective(text: &str) -> Result<Objective, UnknownObjective> {
     parse_name(text)
 }
 
 /// A clap parser for a setting that is one of a few names.
-pub fn parse_name<T>(text: &str) -> Result<T, String>
+pub fn parse_name<T>(text: &str) -> Result<T, T::Err>
 where
     T: std::str::FromStr,
-    T::Err: std::fmt::Display,
 {
-    text.parse::<T>().map_err(|e| e.to_string())
+    text.parse::<T>()
 }
 
 /// `X,Y,Z` in m, each in the domain of the parameter `center_of_mass_tolerance`.
-fn parse_center_of_mass_tolerance(text: &str) -> Result<[f64; 3], String> {
+fn parse_center_of_mass_tolerance(text: &str) -> Result<[f64; 3], BadValue> {
     let parts: Vec<&str> = text.split(',').collect();
     let [x, y, z] = parts.as_slice() else {
-        return Err(format!("expected X,Y,Z (three numbers), got {text:?}"));
-    };
-    let number = |s: &str| {
-        s.trim()
-            .parse::<f64>()
-            .map_err(|_| format!("{s:?} is not a number"))
+        return Err(BadValue::NotThree {
+            text: text.to_string(),
+        });
     };
     let value = [number(x)?, number(y)?, number(z)?];
     let domain = Parameter::find("center_of_mass_tolerance").map_or(Domain::Any, |p| p.domain);
-    value.check(&domain).map_err(|why| why.to_string())?;
+    value.check(&domain)?;
     Ok(value)
 }
 
 /// `from_above`, `graspable`, or `LO:HI` bounds in rad.
-fn parse_range(text: &str) -> Result<AllowedRange, String> {
+fn parse_range(text: &str) -> Result<AllowedRange, BadValue> {
     let Some((lo, hi)) = text.split_once(':') else {
         return match text.parse::<RangeKind>() {
-            Ok(kind @ (RangeKind::FromAbove | RangeKind::Graspable)) => {
-                kind.allowed(0.0, 0.0).map_err(|e| e.to_string())
-            }
-            _ => Err("expected from_above, graspable or LO:HI".to_string()),
+            Ok(kind @ (RangeKind::FromAbove | RangeKind::Graspable)) => Ok(kind.allowed(0.0, 0.0)?),
+            _ => Err(BadValue::NotARange),
         };
     };
-    let number = |s: &str| {
-        s.trim()
-            .parse::<f64>()
-            .map_err(|_| format!("{s:?} is not a number"))
-    };
-    bounds(number(lo)?, number(hi)?).map_err(|e| e.to_string())
+    Ok(bounds(number(lo)?, number(hi)?)?)
 }
 
 /// A clap parser for a value of parameter `name`, checked against the domain the parameter
 /// table declares for it (so the option and the parameter agree).
-pub fn parameter<T>(name: &'static str) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync
+pub fn parameter<T>(
+    name: &'static str,
+) -> impl Fn(&str) -> Result<T, BadValue> + Clone + Send + Sync
 where
     T: std::str::FromStr + Setting,
 {
     move |text| {
-        let value: T = text
-            .trim()
-            .parse()
-            .map_err(|_| format!("{text:?} is not a valid {}", T::ROS_TYPE.name()))?;
+        let value: T = text.trim().parse().map_err(|_| BadValue::NotOfType {
+            text: text.to_string(),
+            type_name: T::ROS_TYPE.name(),
+        })?;
         let domain = Parameter::find(name).map_or(Domain::Any, |p| p.domain);
-        value.check(&domain).map_err(|why| why.to_string())?;
+        value.check(&domain)?;
         Ok(value)
     }
 }
 
 /// A clap parser for a real number in `[min, max]` (never NaN or infinite).
-pub fn real_in(min: f64, max: f64) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync {
+pub fn real_in(min: f64, max: f64) -> impl Fn(&str) -> Result<f64, BadValue> + Clone + Send + Sync {
     move |text| {
-        let value: f64 = text
-            .trim()
-            .parse()
-            .map_err(|_| format!("{text:?} is not a number"))?;
-        value
-            .check(&Domain::Real { min, max })
-            .map_err(|why| why.to_string())?;
+        let value = number(text)?;
+        value.check(&Domain::Real { min, max })?;
         Ok(value)
     }
 }
@@ -213,15 +256,12 @@ pub fn real_in(min: f64, max: f64) -> impl Fn(&str) -> Result<f64, String> + Clo
 pub fn integer_in(
     min: i64,
     max: i64,
-) -> impl Fn(&str) -> Result<i64, String> + Clone + Send + Sync {
+) -> impl Fn(&str) -> Result<i64, BadValue> + Clone + Send + Sync {
     move |text| {
-        let value: i64 = text
-            .trim()
-            .parse()
-            .map_err(|_| format!("{text:?} is not an integer"))?;
-        value
-            .check(&Domain::Integer { min, max })
-            .map_err(|why| why.to_string())?;
+        let value: i64 = text.trim().parse().map_err(|_| BadValue::NotAnInteger {
+            text: text.to_string(),
+        })?;
+        value.check(&Domain::Integer { min, max })?;
         Ok(value)
     }
 }
@@ -237,7 +277,12 @@ mod tests {
             parse_range("-1.5:0.5"),
             Ok(AllowedRange::Bounds { lo: -1.5, hi: 0.5 })
         );
-        assert!(parse_range("1:0").is_err());
+        assert!(matches!(parse_range("1:0"), Err(BadValue::Bounds(_))));
+        assert_eq!(parse_range("sideways"), Err(BadValue::NotARange));
+        assert_eq!(
+            parse_range("x:1").map_err(|e| e.to_string()),
+            Err("\"x\" is not a number".to_string())
+        );
         assert!(parse_range("sideways").is_err());
         assert!(parse_range("bounds").is_err());
         assert!(parse_range("nan:1").is_err());

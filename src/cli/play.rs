@@ -4,7 +4,6 @@
 use crate::node::play::{publish, Pace};
 use crate::node::session::Start;
 use anyhow::bail;
-use grasp_orient::config::declare::Real;
 use grasp_orient::record::bag;
 use ros2_client::NodeOptions;
 use std::io::Write;
@@ -30,10 +29,10 @@ pub struct Args {
 }
 
 /// `--rate`: 0, or a speed-up from 0.001 to 1000.
-fn rate(text: &str) -> Result<f64, String> {
+fn rate(text: &str) -> Result<f64, super::BadValue> {
     match super::real_in(0.0, 1e3)(text)? {
         r if r == 0.0 || r >= 1e-3 => Ok(r),
-        r => Err(format!("must be 0 or in [0.001, 1000], got {}", Real(r))),
+        rate => Err(super::BadValue::Rate { rate }),
     }
 }
 

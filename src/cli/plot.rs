@@ -6,7 +6,7 @@
 //! A planar candidate with tolerances (its own, or `--center-of-mass-tolerance` /
 //! `--mass-tolerance` where it gives none) adds, on the power chart, each vertex's curve (the
 //! object with its centre of mass at that vertex of the box cut by the object, at the largest
-//! mass) and their upper envelope, the worst case that `solve_robust` minimises (same θ for every
+//! mass) and their upper envelope, the worst case that `planar::robust::solve` minimises (same θ for every
 //! vertex: the paper frame's axes are the contacts', `crates/solver/src/planar/robust/mod.rs`
 //! section 2), with the robust recommendation on it.
 //!
@@ -23,9 +23,9 @@ use grasp_orient::geometry::ClosingAxis;
 use grasp_orient::msg::{GraspCandidate, GripRecommendation, MessageLimits, PoseCandidate};
 use grasp_orient::record::output::Replacement;
 use grasp_orient::solver::{
-    analyse, analyse_spatial, solve_robust, Analysis, AxisRelation, Candidate, CurrentPose,
-    Recommendation, RobustVerdict, Settings, SpatialCandidate, SpatialRecommendation, Uncertainty,
-    IN_PLANE_TOLERANCE,
+    planar::{self, analyse, robust::Uncertainty, Analysis, Candidate, Recommendation},
+    spatial::{self, AxisRelation, CurrentPose, IN_PLANE_TOLERANCE},
+    Settings,
 };
 use plotters::prelude::*;
 use std::io::Write;
@@ -224,8 +224,8 @@ fn add_worst_case(
         center_of_mass_tolerance: nalgebra::Vector2::new(t.x, t.y),
         mass_tolerance: message.mass_tolerance,
     };
-    match solve_robust(candidate, &uncertainty, settings).map_err(refused)? {
-        RobustVerdict::Recommended(r) => {
+    match planar::robust::solve(candidate, &uncertainty, settings).map_err(refused)? {
+        planar::robust::Verdict::Recommended(r) => {
             // A vertex on a tangent line may be refused by the nominal checks; it is then left
             // out of the drawing (its value is still in the reported worst case).
             let corners: Vec<Analysis> = r
@@ -258,18 +258,18 @@ fn add_worst_case(
                 best: (r.gravity_angle, r.gripping_power),
             });
         }
-        RobustVerdict::NoCommonOrientation { reason, .. } => {
+        planar::robust::Verdict::NoCommonOrientation { reason, .. } => {
             figure.summary = format!("{reason}; nominal object: {}", figure.summary);
         }
-        RobustVerdict::Exact(_) | RobustVerdict::NoForceClosure(_) => {}
+        planar::robust::Verdict::Exact(_) | planar::robust::Verdict::NoForceClosure(_) => {}
     }
     Ok(())
 }
 
 /// A spatial candidate: its grasp plane Π.
 fn spatial_figure(message: &GraspCandidate, settings: &Settings) -> anyhow::Result<Figure> {
-    let candidate = SpatialCandidate::try_from(message).map_err(refused)?;
-    let (analysis, r) = analyse_spatial(&candidate, settings)
+    let candidate = spatial::Candidate::try_from(message).map_err(refused)?;
+    let (analysis, r) = spatial::analyse(&candidate, settings)
         .map_err(refused)?
         .map_err(|e| anyhow!("{e}"))?;
     // `+ 0.0` prints a negative zero as 0.
@@ -307,7 +307,7 @@ fn spatial_figure(message: &GraspCandidate, settings: &Settings) -> anyhow::Resu
 
 /// The current pose as a point of Π's curve, when gravity lies in Π: not when the object swings,
 /// nor, on the contact axis, when the current gravity is in another plane than the one chosen.
-fn current_in_plane(c: &SpatialCandidate, r: &SpatialRecommendation) -> Option<(f64, f64)> {
+fn current_in_plane(c: &spatial::Candidate, r: &spatial::Recommendation) -> Option<(f64, f64)> {
     let point = (
         r.planar.current_gravity_angle,
         r.planar.gripping_power_current,

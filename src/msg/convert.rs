@@ -1,20 +1,15 @@
-//! Wire candidate → solver input, and solver outcome → wire recommendation: conversions only.
-//! Which solver answers a candidate, and with which tolerances, is the answer layer's
-//! (`crate::answer`).
+//! Wire candidate → solver input, and the reply that carries no answer (a refusal): conversions
+//! only. Which solver answers a candidate, with which tolerances, and how its answer fills the
+//! reply, is the answer layer's (`crate::answer`, `src/answer/reply.rs`).
 //!
 //! A planar candidate (`model` 0) uses the x-y components of its points and vectors; a spatial one
-//! (`model` 1) all three ([`SpatialCandidate`]). The spatial answer fills the same fields in the
-//! spatial reading of the message (`docs/spatial.md`): the smallest 3D rotation
-//! as `wrist_rotation` (its angle) and `rotation`, the recommended 3D gravity direction, the
-//! planar answer in the grasp plane Π for the rest, and in `message` what the caller must know
-//! though the grasp holds: the object swings at its current pose, the answer is sensitive to the
-//! centre of mass.
+//! (`model` 1) all three ([`spatial::Candidate`]).
 
 use super::{CompactString, GraspCandidate, GripRecommendation, Point, Quaternion, Vector3};
 use crate::solver::{
-    Candidate, InvalidInput, Recommendation, SpatialCandidate, SpatialRecommendation, Uncertainty,
+    planar::{robust::Uncertainty, Candidate},
+    spatial, InvalidInput,
 };
-use compact_str::ToCompactString as _;
 use nalgebra::Vector2;
 
 /// Longest accepted `id` and `header.frame_id`, bytes.
@@ -107,12 +102,12 @@ fn vector3(v: &Vector3) -> nalgebra::Vector3<f64> {
 }
 
 /// Every component as given: the spatial solver checks them all, naming each (`contact_1.z`).
-impl TryFrom<&GraspCandidate> for SpatialCandidate {
+impl TryFrom<&GraspCandidate> for spatial::Candidate {
     type Error = MessageLimits;
 
     fn try_from(m: &GraspCandidate) -> Result<Self, Self::Error> {
         check_texts(m)?;
-        Ok(SpatialCandidate {
+        Ok(spatial::Candidate {
             contact_1: point3(&m.contact_1),
             contact_2: point3(&m.contact_2),
             normal_1: vector3(&m.normal_1),
@@ -202,101 +197,6 @@ pub fn invalid(m: &GraspCandidate, why: &dyn std::fmt::Display) -> GripRecommend
         GripRecommendation::STATUS_INVALID_INPUT,
         compact_str::format_compact!("invalid input: {why}"),
     )
-}
-
-/// The answer to a valid grasp that no orientation holds: status 1, `why` naming the contact,
-/// the current-pose fields infinite.
-pub(crate) fn no_closure(m: &GraspCandidate, why: &dyn std::fmt::Display) -> GripRecommendation {
-    let mut out = refused(
-        m,
-        GripRecommendation::STATUS_NO_FORCE_CLOSURE,
-        why.to_compact_string(),
-    );
-    out.gripping_power_current = f64::INFINITY;
-    out.internal_force_current = f64::INFINITY;
-    out.finger_force_current = f64::INFINITY;
-    out
-}
-
-pub(crate) fn recommended(m: &GraspCandidate, r: &Recommendation) -> GripRecommendation {
-    let half = 0.5 * r.wrist_rotation;
-    GripRecommendation {
-        header: m.header.clone(),
-        candidate_id: m.id.clone(),
-        status: GripRecommendation::STATUS_OK,
-        message: CompactString::default(),
-        wrist_rotation: r.wrist_rotation,
-        rotation: Quaternion {
-            x: 0.0,
-            y: 0.0,
-            z: half.sin(),
-            w: half.cos(),
-        },
-        gravity_direction: Vector3 {
-            x: r.gravity_direction.x,
-            y: r.gravity_direction.y,
-            z: 0.0,
-        },
-        gravity_angle: r.gravity_angle,
-        gripping_power: r.gripping_power,
-        internal_force: r.internal_force,
-        contact_forces: r.contact_forces,
-        gripping_power_current: r.gripping_power_current,
-        internal_force_current: r.internal_force_current,
-        grasp_case: CompactString::const_new(r.grasp_case.name()),
-        local_minima: r.local_minima.iter().map(|l| l.gravity_angle).collect(),
-        local_minima_power: r.local_minima.iter().map(|l| l.power).collect(),
-        local_minima_labels: r.local_minima.iter().map(|l| label(l.label)).collect(),
-        objective: CompactString::const_new(r.objective.name()),
-        recommended_label: label(r.recommended_label),
-        candidate_c: r.candidate_c as u8,
-        finger_force: r.finger_force,
-        finger_force_current: r.finger_force_current,
-        // `wrist_rotation` is signed about +z.
-        rotation_axis: Vector3 {
-            x: 0.0,
-            y: 0.0,
-            z: 1.0,
-        },
-        gripping_power_nominal: r.gripping_power,
-    }
-}
-
-/// A paper candidate's name, `""` for none; inline, without a heap block.
-fn label(l: Option<crate::solver::PaperCandidate>) -> CompactString {
-    l.map_or(CompactString::default(), |x| {
-        CompactString::const_new(x.name())
-    })
-}
-
-/// The answer to a spatial grasp that holds: the planar answer in Π, with the 3D rotation, the
-/// recommended 3D gravity direction, and the notes on the current pose and the centre of mass.
-pub(crate) fn spatial_recommended(
-    m: &GraspCandidate,
-    r: &SpatialRecommendation,
-) -> GripRecommendation {
-    let mut out = recommended(m, &r.planar);
-    let [x, y, z, w] = r.quaternion();
-    out.wrist_rotation = r.rotation_angle;
-    out.rotation = Quaternion { x, y, z, w };
-    let d = &r.gravity_direction;
-    out.gravity_direction = Vector3 {
-        x: d.x,
-        y: d.y,
-        z: d.z,
-    };
-    let k = &r.rotation_axis;
-    out.rotation_axis = Vector3 {
-        x: k.x,
-        y: k.y,
-        z: k.z,
-    };
-    let notes: Vec<String> = [r.current_pose.note(), r.axis.note().map(str::to_string)]
-        .into_iter()
-        .flatten()
-        .collect();
-    out.message = notes.join("; ").into();
-    out
 }
 
 /// The tolerances of a candidate in the planar model: x and y of the box, the mass; the box's z

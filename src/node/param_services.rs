@@ -10,11 +10,11 @@
 //! then sets them one by one, publishing one parameter event each (ros2-client publishes one for
 //! all).
 
-use super::params::{descriptor, Shared};
+use super::params::{descriptor, ParameterRefused, Shared};
 use crate::config::Parameter as Declared;
 use anyhow::Context as _;
 use futures::StreamExt;
-use ros2_client::parameters::{raw, ParameterDescriptor};
+use ros2_client::parameters::{raw, ParameterDescriptor, SetParametersResult};
 use ros2_client::rcl_interfaces::{
     DescribeParametersRequest, DescribeParametersResponse, GetParameterTypesRequest,
     GetParameterTypesResponse, GetParametersRequest, GetParametersResponse, ListParametersRequest,
@@ -155,7 +155,7 @@ fn get_types_of(node: &Node, req: &GetParameterTypesRequest) -> GetParameterType
     }
 }
 
-fn result(r: Result<(), String>) -> raw::SetParametersResult {
+fn result(r: SetParametersResult) -> raw::SetParametersResult {
     r.into()
 }
 
@@ -178,7 +178,10 @@ fn set_all(
     req: SetParametersRequest,
 ) -> SetParametersAtomicallyResponse {
     let params: Vec<Parameter> = req.parameter.into_iter().map(Parameter::from).collect();
-    let checked = params.iter().try_for_each(|p| acceptable(node, shared, p));
+    let checked = params
+        .iter()
+        .try_for_each(|p| acceptable(node, shared, p))
+        .map_err(|e| e.to_string());
     let outcome = checked.and_then(|()| {
         params
             .into_iter()
@@ -191,30 +194,30 @@ fn set_all(
 
 /// Whether the node's store would take `p` on its own: declared, of its type, and valid (the
 /// store's rules, then the validator it was given, as ros2-client's `set_atomically` checks).
-fn acceptable(node: &Node, shared: &Shared, p: &Parameter) -> Result<(), String> {
+fn acceptable(node: &Node, shared: &Shared, p: &Parameter) -> Result<(), ParameterRefused> {
     let Some(current) = node.get_parameter(&p.name) else {
-        return Err(format!(
-            "Setting undeclared parameter '{}' is not allowed.",
-            p.name
-        ));
+        return Err(ParameterRefused::Undeclared {
+            name: p.name.clone(),
+        });
     };
     if std::mem::discriminant(&current) != std::mem::discriminant(&p.value)
         && !matches!(p.value, ParameterValue::NotSet)
     {
-        return Err(format!(
-            "Cannot change type of parameter '{}' from {:?} to {:?}.",
-            p.name,
-            current.to_parameter_type(),
-            p.value.to_parameter_type()
-        ));
+        return Err(ParameterRefused::TypeChange {
+            name: p.name.clone(),
+            from: format!("{:?}", current.to_parameter_type()),
+            to: format!("{:?}", p.value.to_parameter_type()),
+        });
     }
     if p.name == "use_sim_time" {
         return match p.value {
             ParameterValue::Boolean(_) => Ok(()),
-            _ => Err(format!("Parameter '{}' must be Boolean.", p.name)),
+            _ => Err(ParameterRefused::NotBoolean {
+                name: p.name.clone(),
+            }),
         };
     }
-    (shared.validator())(&p.name, &p.value)
+    shared.check(&p.name, &p.value).map(|_| ())
 }
 
 fn list_names(node: &Node, req: &ListParametersRequest) -> ListParametersResponse {

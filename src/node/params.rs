@@ -2,15 +2,69 @@
 //! a whole on every set, shared with the answering loop, and described from their declarations
 //! ([`crate::config::PARAMETERS`]).
 
-use crate::config::{Config, Domain, Parameter, RosType};
+use crate::config::{Config, ConfigError, Domain, Parameter, RosType};
 use crate::solver::Settings;
-use ros2_client::parameters::{raw, NumericRange, ParameterDescriptor, ParameterType};
+use ros2_client::parameters::{
+    raw, NumericRange, ParameterDescriptor, ParameterType, SetParametersResult,
+};
 use ros2_client::{NodeOptions, ParameterValue};
 use serde_yaml_ng::Value;
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
 
-/// A parameter hook as ros2-client takes it: `Err(reason)` refuses the value.
-pub type ParameterHook = Box<dyn Fn(&str, &ParameterValue) -> Result<(), String> + Send + Sync>;
+/// A parameter hook as ros2-client takes it: `Err(reason)` refuses the value, the reason being
+/// a [`ParameterRefused`] in words (ros2-client's `SetParametersResult`).
+pub type ParameterHook = Box<dyn Fn(&str, &ParameterValue) -> SetParametersResult + Send + Sync>;
+
+/// Why a parameter set is refused; its words are the reason ROS clients are given.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ParameterRefused {
+    /// A set to "not set": the node's parameters cannot be deleted.
+    #[error("parameter {name} cannot be deleted")]
+    Deleted {
+        /// The parameter.
+        name: String,
+    },
+    /// A value of a type no parameter has (a byte array, ...).
+    #[error("parameter {name}: unsupported value {value}")]
+    Unsupported {
+        /// The parameter.
+        name: String,
+        /// The value, as ros2-client prints it.
+        value: String,
+    },
+    /// A parameter that only a restart changes.
+    #[error("{name} is fixed while the node runs; restart it with -p {name}:=VALUE")]
+    Fixed {
+        /// The parameter.
+        name: String,
+    },
+    /// The value, or the settings with it, are refused.
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    /// A parameter the node does not declare.
+    #[error("Setting undeclared parameter '{name}' is not allowed.")]
+    Undeclared {
+        /// The parameter.
+        name: String,
+    },
+    /// A value of another type than the parameter's.
+    #[error("Cannot change type of parameter '{name}' from {from} to {to}.")]
+    TypeChange {
+        /// The parameter.
+        name: String,
+        /// Its type, as ros2-client prints it.
+        from: String,
+        /// The value's type, likewise.
+        to: String,
+    },
+    /// `use_sim_time` set to anything but a boolean.
+    #[error("Parameter '{name}' must be Boolean.")]
+    NotBoolean {
+        /// The parameter.
+        name: String,
+    },
+}
 
 /// The parameters as they were from one time on.
 #[derive(Debug, Clone, PartialEq)]
@@ -144,11 +198,20 @@ impl Shared {
     }
 
     /// Whether `name := value` would be accepted, and the config it would give.
-    fn check(&self, name: &str, value: &ParameterValue) -> Result<(Config, Settings), String> {
+    pub(crate) fn check(
+        &self,
+        name: &str,
+        value: &ParameterValue,
+    ) -> Result<(Config, Settings), ParameterRefused> {
         let live = self.lock();
         let value = to_yaml(value).ok_or_else(|| match value {
-            ParameterValue::NotSet => format!("parameter {name} cannot be deleted"),
-            other => format!("parameter {name}: unsupported value {other:?}"),
+            ParameterValue::NotSet => ParameterRefused::Deleted {
+                name: name.to_string(),
+            },
+            other => ParameterRefused::Unsupported {
+                name: name.to_string(),
+                value: format!("{other:?}"),
+            },
         })?;
         let current = live
             .config
@@ -158,13 +221,13 @@ impl Shared {
             .map(|(_, v)| v);
         let fixed = Parameter::find(name).is_some_and(|p| p.fixed);
         if fixed && current.as_ref() != Some(&value) {
-            return Err(format!(
-                "{name} is fixed while the node runs; restart it with -p {name}:=VALUE"
-            ));
+            return Err(ParameterRefused::Fixed {
+                name: name.to_string(),
+            });
         }
         let mut config = live.config.clone();
-        config.set_value(name, value).map_err(|e| e.to_string())?;
-        let settings = config.solver_settings().map_err(|e| e.to_string())?;
+        config.set_value(name, value)?;
+        let settings = config.solver_settings()?;
         Ok((config, settings))
     }
 
@@ -185,7 +248,12 @@ impl Shared {
     /// The validator handed to ros2-client: refuses with a reason, keeping the old value.
     pub fn validator(&self) -> ParameterHook {
         let shared = self.clone();
-        Box::new(move |name, value| shared.check(name, value).map(|_| ()))
+        Box::new(move |name, value| {
+            shared
+                .check(name, value)
+                .map(|_| ())
+                .map_err(|e| e.to_string())
+        })
     }
 
     /// The set action handed to ros2-client: a change makes a new [`Version`], in force for
@@ -193,7 +261,7 @@ impl Shared {
     pub fn set_action(&self) -> ParameterHook {
         let shared = self.clone();
         Box::new(move |name, value| {
-            let (config, settings) = shared.check(name, value)?;
+            let (config, settings) = shared.check(name, value).map_err(|e| e.to_string())?;
             {
                 let mut live = shared.lock();
                 if live.config != config {
@@ -338,6 +406,30 @@ mod tests {
         );
         assert!(check("mass_tolerance", &ParameterValue::Double(1e9)).is_err());
         assert_eq!(s.lock().config.objective, crate::solver::Objective::Norm1);
+    }
+
+    /// A refusal names what is wrong in its type, and its words are those ROS clients have
+    /// always been given.
+    #[test]
+    fn refusals_are_typed_and_keep_their_words() {
+        let s = shared();
+        let deleted = s
+            .check("objective", &ParameterValue::NotSet)
+            .expect_err("parameters are not deleted");
+        assert!(matches!(&deleted, ParameterRefused::Deleted { name } if name == "objective"));
+        assert_eq!(deleted.to_string(), "parameter objective cannot be deleted");
+        let fixed = s
+            .check("qos_depth", &ParameterValue::Integer(7))
+            .expect_err("fixed while running");
+        assert!(matches!(&fixed, ParameterRefused::Fixed { name } if name == "qos_depth"));
+        assert_eq!(
+            fixed.to_string(),
+            "qos_depth is fixed while the node runs; restart it with -p qos_depth:=VALUE"
+        );
+        let below = s
+            .check("friction_safety_factor", &ParameterValue::Double(0.5))
+            .expect_err("below one");
+        assert!(matches!(below, ParameterRefused::Config(_)));
     }
 
     #[test]

@@ -473,7 +473,7 @@ impl<'a> Walk<'a> {
         if record.opcode == op::CHUNK {
             let (_, records) = match resync::open_chunk(record, &mut self.budget) {
                 Ok(opened) => opened,
-                Err(why) => return Ok(damaged(why)),
+                Err(why) => return Ok(damaged(why.to_string())),
             };
             // Nothing of a chunk is used unless every record in it reads.
             let list: Vec<(u64, Parsed<'_>)> =

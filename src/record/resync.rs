@@ -8,8 +8,38 @@
 //! ([`scan::decompressed_limit`]), so that no file, however many chunk headers it fakes, makes
 //! `recover` decompress more than a bounded multiple of its size.
 
-use super::scan::{self, op, Chunk, Parsed, Record};
+use super::scan::{self, op, Chunk, Parsed, Record, Undecompressable};
 use std::borrow::Cow;
+
+/// Why a chunk record does not open; its words are the damage `recover` reports there.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Unopened {
+    /// The record is not a chunk.
+    #[error("not a chunk")]
+    NotAChunk,
+    /// Its fields do not read (the strict reader's words).
+    #[error("{0}")]
+    Fields(String),
+    /// Its length is not that of its fields.
+    #[error("chunk record: its length, {length} bytes, is not that of its fields")]
+    Length {
+        /// The record's length, bytes.
+        length: usize,
+    },
+    /// Its records would take the decompressed bytes beyond the [`Budget`].
+    #[error(
+        "chunk record: declares {declared} bytes of records, which takes the file's chunks \
+         beyond 1024 times the file's size: refused undecompressed"
+    )]
+    OverBudget {
+        /// The records' size it declares, bytes.
+        declared: u64,
+    },
+    /// Its records do not decompress.
+    #[error("chunk record: {0}")]
+    Decompress(#[from] Undecompressable),
+}
 
 /// Decompressed bytes still allowed.
 #[derive(Debug, Clone, Copy)]
@@ -25,12 +55,9 @@ impl Budget {
         }
     }
 
-    fn take(&mut self, n: u64) -> Result<(), String> {
+    fn take(&mut self, n: u64) -> Result<(), Unopened> {
         if n > self.left {
-            return Err(format!(
-                "declares {n} bytes of records, which takes the file's chunks beyond 1024 times \
-                 the file's size: refused undecompressed"
-            ));
+            return Err(Unopened::OverBudget { declared: n });
         }
         self.left -= n;
         Ok(())
@@ -64,22 +91,19 @@ pub fn end_of(record: &Record<'_>) -> u64 {
 pub fn open_chunk<'a>(
     record: &Record<'a>,
     budget: &mut Budget,
-) -> Result<(Chunk<'a>, Cow<'a, [u8]>), String> {
+) -> Result<(Chunk<'a>, Cow<'a, [u8]>), Unopened> {
     let chunk = match scan::parse(record) {
         Ok(Parsed::Chunk(chunk)) => chunk,
-        Ok(_) => return Err("not a chunk".into()),
-        Err(d) => return Err(d.what),
+        Ok(_) => return Err(Unopened::NotAChunk),
+        Err(d) => return Err(Unopened::Fields(d.what)),
     };
     if !scan::chunk_fills_its_record(&chunk, record) {
-        return Err(format!(
-            "chunk record: its length, {} bytes, is not that of its fields",
-            record.body.len()
-        ));
+        return Err(Unopened::Length {
+            length: record.body.len(),
+        });
     }
-    budget
-        .take(chunk.uncompressed_size)
-        .map_err(|why| format!("chunk record: {why}"))?;
-    let records = scan::decompress(&chunk).map_err(|why| format!("chunk record: {why}"))?;
+    budget.take(chunk.uncompressed_size)?;
+    let records = scan::decompress(&chunk)?;
     Ok((chunk, records))
 }
 
@@ -119,4 +143,25 @@ pub fn next_record(
     (from + 1..until)
         .find(|at| starts_record(bytes, *at, until, until_is_sound, budget))
         .unwrap_or(until)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The budget refuses what it cannot pay, as a structured error whose words are the damage
+    /// `recover` has always reported there.
+    #[test]
+    fn a_chunk_beyond_the_budget_is_refused_naming_its_size() {
+        let mut budget = Budget::new(0);
+        let all = scan::decompressed_limit(0);
+        assert!(budget.take(all).is_ok());
+        let refused = budget.take(1).expect_err("the budget is spent");
+        assert!(matches!(refused, Unopened::OverBudget { declared: 1 }));
+        assert_eq!(
+            refused.to_string(),
+            "chunk record: declares 1 bytes of records, which takes the file's chunks beyond \
+             1024 times the file's size: refused undecompressed"
+        );
+    }
 }

@@ -461,7 +461,7 @@ fn replay_on_cores(
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let chunk = bag.candidates.len().div_ceil(threads).max(1);
     type Part = (Vec<Recorded<GripRecommendation>>, Summary);
-    let parts: Result<Vec<Part>, String> = std::thread::scope(|scope| {
+    let parts: Result<Vec<Part>, ReplayError> = std::thread::scope(|scope| {
         let handles: Vec<_> = bag
             .candidates
             .chunks(chunk)
@@ -501,10 +501,13 @@ fn replay_on_cores(
             .collect();
         handles
             .into_iter()
-            .map(|h| h.join().map_err(|e| panic_words(e.as_ref())))
-            .collect::<Result<Vec<_>, String>>()
+            .map(|h| {
+                h.join()
+                    .map_err(|e| ReplayError::Worker(panic_words(e.as_ref())))
+            })
+            .collect()
     });
-    let parts = parts.map_err(ReplayError::Worker)?;
+    let parts = parts?;
     let mut summary = Summary {
         unmatched_recommendations: unmatched,
         ..Summary::default()

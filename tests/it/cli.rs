@@ -254,9 +254,7 @@ fn solve_reads_the_model_absent_as_planar() {
 /// the library's numbers.
 #[test]
 fn solve_answers_a_spatial_box_with_the_spatial_robust_solver() {
-    use grasp_orient::solver::{
-        solve_spatial_robust, Settings, SpatialCandidate, SpatialRobustVerdict, SpatialUncertainty,
-    };
+    use grasp_orient::solver::{spatial, Settings};
     use nalgebra::Vector3;
     let boxed = |id: &str, gravity_x: f64, t: [f64; 3], dm: f64| {
         upright_square(id, gravity_x).replacen(
@@ -281,7 +279,7 @@ fn solve_answers_a_spatial_box_with_the_spatial_robust_solver() {
     assert!(ok, "{stderr}");
     let num = |v: &Value| v.as_f64().expect("a number");
     for ((id, gx, t, dm), a) in cases.iter().zip(&out) {
-        let grasp = SpatialCandidate {
+        let grasp = spatial::Candidate {
             contact_1: Vector3::new(0.0, 1.0, 1.0),
             contact_2: Vector3::new(0.0, -1.0, 1.0),
             normal_1: Vector3::new(0.0, -1.0, 0.0),
@@ -292,12 +290,12 @@ fn solve_answers_a_spatial_box_with_the_spatial_robust_solver() {
             mass: 1.0,
             gravity: Vector3::new(*gx, 0.0, -1.0),
         };
-        let u = SpatialUncertainty {
+        let u = spatial::robust::Uncertainty {
             center_of_mass_tolerance: Vector3::new(t[0], t[1], t[2]),
             mass_tolerance: *dm,
         };
-        let Ok(SpatialRobustVerdict::Recommended(r)) =
-            solve_spatial_robust(&grasp, &u, &Settings::default())
+        let Ok(spatial::robust::Verdict::Recommended(r)) =
+            spatial::robust::solve(&grasp, &u, &Settings::default())
         else {
             panic!("{id}: every object in the box can be held");
         };

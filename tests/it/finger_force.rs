@@ -7,7 +7,8 @@
 
 use crate::util::{random_grasp, RefObjective, RefPoint, Reference};
 use grasp_orient::solver::{
-    solve_orientation, AllowedRange, Candidate, Objective, Settings, Verdict,
+    planar::{self, Candidate, Verdict},
+    AllowedRange, Objective, Settings,
 };
 use nalgebra::Vector2;
 use rand::SeedableRng;
@@ -35,7 +36,7 @@ fn check(seed: u64, count: usize, settings: Settings, objective: RefObjective) -
     let (mut worst_mean, mut worst_max) = (0.0f64, 0.0f64);
     for _ in 0..count {
         let c = random_grasp(&mut rng);
-        let r = match solve_orientation(&c, &settings) {
+        let r = match planar::solve(&c, &settings) {
             Ok(Verdict::Recommended(r)) => r,
             other => panic!("a force-closure grasp was refused: {other:?}; grasp {c:?}"),
         };

@@ -3,8 +3,8 @@
 use crate::util::{random_grasp, wrap};
 use approx::abs_diff_eq;
 use grasp_orient::solver::{
-    solve_orientation, AllowedRange, Candidate, GraspCase, Objective, Recommendation, Settings,
-    Verdict,
+    planar::{self, Candidate, GraspCase, Recommendation, Verdict},
+    AllowedRange, Objective, Settings,
 };
 use nalgebra::{Rotation2, Vector2};
 use proptest::prelude::*;
@@ -12,7 +12,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 fn solve(c: &Candidate, s: &Settings) -> Recommendation {
-    match solve_orientation(c, s) {
+    match planar::solve(c, s) {
         Ok(Verdict::Recommended(r)) => *r,
         other => panic!("{other:?}"),
     }
@@ -140,6 +140,6 @@ proptest! {
         prop_assert!((turned - r.gravity_direction).norm() < 1e-12);
         prop_assert!(r.wrist_rotation > -std::f64::consts::PI && r.wrist_rotation <= std::f64::consts::PI);
         prop_assert!(r.gripping_power <= r.gripping_power_current * (1.0 + 1e-12)
-            || !matches!(r.candidate_c, grasp_orient::solver::CandidateC::OutOfRange));
+            || !matches!(r.candidate_c, grasp_orient::solver::planar::CandidateC::OutOfRange));
     }
 }

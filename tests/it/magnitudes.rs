@@ -9,7 +9,7 @@ use crate::util::random_grasp;
 use crate::util::spatial::{random_spatial_grasp, Kind};
 use grasp_orient::answer::answer;
 use grasp_orient::msg::{GraspCandidate, GripRecommendation, Point, Vector3};
-use grasp_orient::solver::{AllowedRange, Candidate, Objective, Settings, SpatialCandidate};
+use grasp_orient::solver::{planar::Candidate, spatial, AllowedRange, Objective, Settings};
 use nalgebra::{Vector2, Vector3 as V3};
 use proptest::prelude::*;
 use rand::SeedableRng;
@@ -64,7 +64,7 @@ fn vector3(v: V3<f64>) -> Vector3 {
 }
 
 /// A spatial candidate as the message carries it (`model` 1).
-fn spatial_message(c: &SpatialCandidate) -> GraspCandidate {
+fn spatial_message(c: &spatial::Candidate) -> GraspCandidate {
     GraspCandidate {
         id: "magnitude-spatial".into(),
         model: GraspCandidate::MODEL_SPATIAL,
@@ -92,7 +92,7 @@ const KINDS: [Kind; 7] = [
     Kind::OnAxisCoplanar,
 ];
 
-fn random_spatial(seed: u64, kind: usize) -> SpatialCandidate {
+fn random_spatial(seed: u64, kind: usize) -> spatial::Candidate {
     random_spatial_grasp(
         &mut ChaCha8Rng::seed_from_u64(seed),
         KINDS[kind % KINDS.len()],
@@ -100,7 +100,7 @@ fn random_spatial(seed: u64, kind: usize) -> SpatialCandidate {
 }
 
 /// `c` with field `field` multiplied by `k`, as [`scaled`] does for planar candidates.
-fn scaled_spatial(c: &SpatialCandidate, field: &str, k: f64) -> SpatialCandidate {
+fn scaled_spatial(c: &spatial::Candidate, field: &str, k: f64) -> spatial::Candidate {
     let mut s = *c;
     match field {
         "contact_1" => s.contact_1 *= k,

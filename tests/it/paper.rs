@@ -6,7 +6,8 @@ use crate::util::{random_grasp, wrap, RefObjective, RefRange, Reference};
 use approx::{abs_diff_eq, abs_diff_ne, assert_abs_diff_eq};
 use grasp_orient::msg::GraspCandidate;
 use grasp_orient::solver::{
-    analyse, solve_orientation, Analysis, Candidate, CandidateC, PaperCandidate, Settings, Verdict,
+    planar::{self, analyse, Analysis, Candidate, CandidateC, PaperCandidate, Verdict},
+    Settings,
 };
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -143,7 +144,7 @@ fn theta_34_is_where_both_contacts_slip() {
 fn paper_case_studies_recommend_theta_34() {
     for case in ['a', 'b', 'c', 'd'] {
         let c = table_1(case);
-        let Ok(Verdict::Recommended(r)) = solve_orientation(&c, &Settings::default()) else {
+        let Ok(Verdict::Recommended(r)) = planar::solve(&c, &Settings::default()) else {
             panic!("({case}) must be solvable")
         };
         let reference = Reference::new(&c, 1.0, RefObjective::Norm2);
@@ -183,7 +184,7 @@ fn paper_case_studies_fall_in_their_cases() {
         ..Settings::default()
     };
     for (case, expected) in [('a', "a"), ('b', "a"), ('c', "b"), ('d', "d")] {
-        let Ok(Verdict::Recommended(r)) = solve_orientation(&table_1(case), &settings) else {
+        let Ok(Verdict::Recommended(r)) = planar::solve(&table_1(case), &settings) else {
             panic!("({case}) must be solvable")
         };
         assert_eq!(r.grasp_case.name(), expected, "({case})");
@@ -201,7 +202,7 @@ fn theorem_1_fails_on_random_grasps_and_the_solver_does_not() {
     let n = 5000;
     for _ in 0..n {
         let c = random_grasp(&mut rng);
-        let Ok(Verdict::Recommended(r)) = solve_orientation(&c, &Settings::default()) else {
+        let Ok(Verdict::Recommended(r)) = planar::solve(&c, &Settings::default()) else {
             panic!("valid grasp refused")
         };
         let k = r.candidate_c as usize;
@@ -217,7 +218,7 @@ fn theorem_1_fails_on_random_grasps_and_the_solver_does_not() {
     assert!(counts[CandidateC::Beaten as usize] > 0);
     for (k, example) in examples.iter().enumerate() {
         let Some(c) = example else { continue };
-        let Ok(Verdict::Recommended(r)) = solve_orientation(c, &Settings::default()) else {
+        let Ok(Verdict::Recommended(r)) = planar::solve(c, &Settings::default()) else {
             unreachable!("solved above")
         };
         let reference = Reference::new(c, 1.0, RefObjective::Norm2);
@@ -246,7 +247,7 @@ fn named_counterexamples_to_theorem_1() {
     let mut seen = [false; 2];
     for _ in 0..5000 {
         let c = random_grasp(&mut rng);
-        let Ok(Verdict::Recommended(r)) = solve_orientation(&c, &Settings::default()) else {
+        let Ok(Verdict::Recommended(r)) = planar::solve(&c, &Settings::default()) else {
             panic!("valid grasp refused")
         };
         let kind = match r.candidate_c {
@@ -315,7 +316,7 @@ fn local_minima_of_the_case_studies() {
     ];
     for (case, labels) in expected {
         let c = table_1(case);
-        let Ok(Verdict::Recommended(r)) = solve_orientation(&c, &settings) else {
+        let Ok(Verdict::Recommended(r)) = planar::solve(&c, &settings) else {
             panic!("({case}) must be solvable")
         };
         let reference = Reference::new(&c, 1.0, RefObjective::Norm2);

@@ -4,7 +4,8 @@
 use crate::util::{random_grasp, wrap, RefObjective, RefRange, Reference};
 use approx::{abs_diff_eq, assert_abs_diff_eq};
 use grasp_orient::solver::{
-    solve_orientation, AllowedRange, Candidate, Objective, Recommendation, Settings, Verdict,
+    planar::{self, Candidate, Recommendation, Verdict},
+    AllowedRange, Objective, Settings,
 };
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -25,7 +26,7 @@ struct Tally {
 }
 
 fn solve(c: &Candidate, settings: &Settings) -> Recommendation {
-    match solve_orientation(c, settings) {
+    match planar::solve(c, settings) {
         Ok(Verdict::Recommended(r)) => *r,
         other => panic!("solver refused a valid force-closure grasp {c:?}: {other:?}"),
     }
@@ -248,7 +249,7 @@ fn safety_factor_matches_reference() {
     let mut refused = 0;
     while tally.grasps < 1000 {
         let c = random_grasp(&mut rng);
-        match solve_orientation(&c, &settings) {
+        match planar::solve(&c, &settings) {
             Ok(Verdict::Recommended(_)) => check(
                 &c,
                 &settings,

@@ -22,8 +22,12 @@ use crate::util::robust::{
 };
 use crate::util::{random_grasp, wrap, RefObjective, RefPoint, RefRange};
 use grasp_orient::solver::{
-    solve_orientation, solve_robust, AllowedRange, BoxPointKind, Candidate, NoCommonOrientation,
-    Objective, RobustRecommendation, RobustVerdict, Settings, Uncertainty, Verdict,
+    planar::{
+        self,
+        robust::{BoxPointKind, NoCommonOrientation, Uncertainty},
+        Candidate, Verdict,
+    },
+    AllowedRange, Objective, Settings,
 };
 use nalgebra::Vector2;
 use proptest::prelude::*;
@@ -123,25 +127,25 @@ fn check_case(
         center_of_mass_tolerance: half,
         mass_tolerance: tm,
     };
-    let nominal = match solve_orientation(c, s) {
+    let nominal = match planar::solve(c, s) {
         Ok(Verdict::Recommended(r)) => *r,
         Ok(Verdict::NoForceClosure(why)) => {
             // Force closure does not depend on the centre of mass or the mass.
             assert_eq!(
-                solve_robust(c, &u, s),
-                Ok(RobustVerdict::NoForceClosure(why))
+                planar::robust::solve(c, &u, s),
+                Ok(planar::robust::Verdict::NoForceClosure(why))
             );
             tally.no_closure += 1;
             return;
         }
         other => panic!("nominal solver refused a valid grasp: {other:?}"),
     };
-    match solve_robust(c, &u, s) {
-        Ok(RobustVerdict::Recommended(r)) => {
+    match planar::robust::solve(c, &u, s) {
+        Ok(planar::robust::Verdict::Recommended(r)) => {
             assert_eq!(r.nominal, nominal, "the nominal answer is today's");
             check_recommended(c, half, tm, s, &r, density, tally);
         }
-        Ok(RobustVerdict::NoCommonOrientation { reason, nominal: n }) => {
+        Ok(planar::robust::Verdict::NoCommonOrientation { reason, nominal: n }) => {
             assert_eq!(*n, nominal, "the nominal answer is today's");
             check_no_common(c, half, s, &reason, tally);
         }
@@ -219,7 +223,7 @@ fn check_recommended(
     half: Vector2<f64>,
     tm: f64,
     s: &Settings,
-    r: &RobustRecommendation,
+    r: &planar::robust::Recommendation,
     density: Density,
     tally: &mut Tally,
 ) {
@@ -307,7 +311,7 @@ struct Case<'a> {
     half: Vector2<f64>,
     tm: f64,
     s: &'a Settings,
-    r: &'a RobustRecommendation,
+    r: &'a planar::robust::Recommendation,
 }
 
 /// The worst internal and finger force at the recommended pose: no sampled object needs more than
@@ -604,7 +608,8 @@ fn norm1_internal_force_worst_case_over_the_region() {
                 center_of_mass_tolerance: half,
                 mass_tolerance: tm,
             };
-            let Ok(RobustVerdict::Recommended(r)) = solve_robust(&posed, &u, &s) else {
+            let Ok(planar::robust::Verdict::Recommended(r)) = planar::robust::solve(&posed, &u, &s)
+            else {
                 break;
             };
             let fscale = r.internal_force_current.abs().max(m_max * g.norm());
@@ -714,13 +719,13 @@ fn negative_norm1_squeeze_is_largest_at_the_least_mass() {
         center_of_mass_tolerance: half,
         mass_tolerance: tm,
     };
-    let Ok(RobustVerdict::Recommended(r)) = solve_robust(&c, &u, &s) else {
+    let Ok(planar::robust::Verdict::Recommended(r)) = planar::robust::solve(&c, &u, &s) else {
         panic!("recommended above");
     };
     assert!(r.internal_force < 0.0);
 }
 
-/// Zero tolerance takes today's path: the verdict is `solve_orientation`'s, bit for bit.
+/// Zero tolerance takes today's path: the verdict is `planar::solve`'s, bit for bit.
 #[test]
 fn zero_tolerance_is_todays_answer_bit_for_bit() {
     let mut rng = ChaCha8Rng::seed_from_u64(15);
@@ -735,9 +740,9 @@ fn zero_tolerance_is_todays_answer_bit_for_bit() {
             range: [AllowedRange::FromAbove, AllowedRange::Graspable][k % 2],
             friction_safety_factor: [1.0, 1.5][k % 2],
         };
-        let today = solve_orientation(&c, &s);
-        match solve_robust(&c, &exact, &s) {
-            Ok(RobustVerdict::Exact(v)) => assert_eq!(Ok(v), today),
+        let today = planar::solve(&c, &s);
+        match planar::robust::solve(&c, &exact, &s) {
+            Ok(planar::robust::Verdict::Exact(v)) => assert_eq!(Ok(v), today),
             Err(e) => assert_eq!(Err(e), today),
             other => panic!("zero tolerance left today's path: {other:?}"),
         }
@@ -755,7 +760,9 @@ fn mass_tolerance_alone_scales_the_answer() {
             center_of_mass_tolerance: Vector2::zeros(),
             mass_tolerance: tm,
         };
-        let Ok(RobustVerdict::Recommended(r)) = solve_robust(&c, &u, &Settings::default()) else {
+        let Ok(planar::robust::Verdict::Recommended(r)) =
+            planar::robust::solve(&c, &u, &Settings::default())
+        else {
             panic!("mass alone always has a common orientation");
         };
         let k = (c.mass + tm) / c.mass;
@@ -790,7 +797,7 @@ fn bad_tolerances_name_the_field() {
             center_of_mass_tolerance: half,
             mass_tolerance: tm,
         };
-        let e = solve_robust(&c, &u, &s).expect_err("refused");
+        let e = planar::robust::solve(&c, &u, &s).expect_err("refused");
         assert!(e.to_string().contains(field), "{e}");
     }
     // The candidate's own faults come first, as today.
@@ -802,7 +809,7 @@ fn bad_tolerances_name_the_field() {
         center_of_mass_tolerance: Vector2::new(0.01, 0.01),
         mass_tolerance: 0.0,
     };
-    assert!(solve_robust(&bad, &u, &s)
+    assert!(planar::robust::solve(&bad, &u, &s)
         .expect_err("refused")
         .to_string()
         .contains("mass"));
@@ -828,7 +835,7 @@ fn docs_bottle_example() {
         center_of_mass_tolerance: Vector2::new(0.02, 0.02),
         mass_tolerance: 0.0,
     };
-    let Ok(RobustVerdict::Recommended(r)) = solve_robust(&bottle, &u, &s) else {
+    let Ok(planar::robust::Verdict::Recommended(r)) = planar::robust::solve(&bottle, &u, &s) else {
         panic!("the bottle can be held");
     };
     let n = &r.nominal;
@@ -836,7 +843,7 @@ fn docs_bottle_example() {
         gravity: nalgebra::Rotation2::new(-n.wrist_rotation) * bottle.gravity,
         ..bottle
     };
-    let Ok(RobustVerdict::Recommended(p)) = solve_robust(&posed, &u, &s) else {
+    let Ok(planar::robust::Verdict::Recommended(p)) = planar::robust::solve(&posed, &u, &s) else {
         panic!("the bottle can be held");
     };
     let round = |x: f64, k: f64| (x * k).round() / k;
@@ -896,8 +903,8 @@ fn extreme_tolerances_answer() {
                 range,
                 ..Settings::default()
             };
-            match solve_robust(&c, &u, &s) {
-                Ok(RobustVerdict::Recommended(r)) => {
+            match planar::robust::solve(&c, &u, &s) {
+                Ok(planar::robust::Verdict::Recommended(r)) => {
                     for v in [
                         r.gravity_angle,
                         r.gripping_power,
@@ -909,7 +916,7 @@ fn extreme_tolerances_answer() {
                         assert!(v.is_finite(), "{r:?}");
                     }
                 }
-                Ok(RobustVerdict::NoCommonOrientation { reason, .. }) => {
+                Ok(planar::robust::Verdict::NoCommonOrientation { reason, .. }) => {
                     assert!(!reason.to_string().is_empty());
                 }
                 other => panic!("{other:?}"),
@@ -952,7 +959,7 @@ fn close(a: f64, b: f64, scale: f64) -> bool {
 
 /// Whether the worst case has two local minima of equal value (or a flat bottom), where the
 /// choice between them may fall either way under rounding.
-fn twin_minima(r: &RobustRecommendation) -> bool {
+fn twin_minima(r: &planar::robust::Recommendation) -> bool {
     let m = &r.local_minima;
     let scale = r.gripping_power.abs().max(1e-12);
     m.iter().enumerate().any(|(i, a)| {
@@ -965,14 +972,17 @@ fn twin_minima(r: &RobustRecommendation) -> bool {
 /// Two answers that must be the same up to the frame: the same worst cases, the same rotation
 /// (or an equal worst case elsewhere: a tie), and the same verdict.
 fn same_answer(
-    a: &Result<RobustVerdict, grasp_orient::solver::InvalidInput>,
-    b: &Result<RobustVerdict, grasp_orient::solver::InvalidInput>,
+    a: &Result<planar::robust::Verdict, grasp_orient::solver::InvalidInput>,
+    b: &Result<planar::robust::Verdict, grasp_orient::solver::InvalidInput>,
     force_scale: f64,
     rotation_sign: f64,
     weight: f64,
 ) -> Result<(), TestCaseError> {
     match (a, b) {
-        (Ok(RobustVerdict::Recommended(x)), Ok(RobustVerdict::Recommended(y))) => {
+        (
+            Ok(planar::robust::Verdict::Recommended(x)),
+            Ok(planar::robust::Verdict::Recommended(y)),
+        ) => {
             let w = weight * force_scale;
             prop_assert!(close(x.gripping_power * force_scale, y.gripping_power, w));
             prop_assert!(close(
@@ -1001,8 +1011,8 @@ fn same_answer(
             Ok(())
         }
         (
-            Ok(RobustVerdict::NoCommonOrientation { .. }),
-            Ok(RobustVerdict::NoCommonOrientation { .. }),
+            Ok(planar::robust::Verdict::NoCommonOrientation { .. }),
+            Ok(planar::robust::Verdict::NoCommonOrientation { .. }),
         ) => Ok(()),
         _ => {
             prop_assert!(false, "verdicts differ: {a:?} vs {b:?}");
@@ -1024,12 +1034,12 @@ proptest! {
     ) {
         let c = grasp(seed);
         let s = settings(objective, graspable);
-        let small = solve_robust(&c, &tolerance(&c, fx, fy, fm), &s);
-        let large = solve_robust(&c, &tolerance(&c, fx + gx, fy + gy, fm + gm), &s);
+        let small = planar::robust::solve(&c, &tolerance(&c, fx, fy, fm), &s);
+        let large = planar::robust::solve(&c, &tolerance(&c, fx + gx, fy + gy, fm + gm), &s);
         let w = c.mass * c.gravity.norm();
-        let least = |v: &Result<RobustVerdict, _>| match v {
-            Ok(RobustVerdict::Recommended(r)) => Some(r.gripping_power),
-            Ok(RobustVerdict::Exact(Verdict::Recommended(r))) => Some(r.gripping_power),
+        let least = |v: &Result<planar::robust::Verdict, _>| match v {
+            Ok(planar::robust::Verdict::Recommended(r)) => Some(r.gripping_power),
+            Ok(planar::robust::Verdict::Exact(Verdict::Recommended(r))) => Some(r.gripping_power),
             _ => None,
         };
         match (least(&small), least(&large)) {
@@ -1055,9 +1065,9 @@ proptest! {
             friction_2: c.friction_1,
             ..c
         };
-        let (a, b) = (solve_robust(&c, &u, &s), solve_robust(&swapped, &u, &s));
+        let (a, b) = (planar::robust::solve(&c, &u, &s), planar::robust::solve(&swapped, &u, &s));
         same_answer(&a, &b, 1.0, 1.0, c.mass * c.gravity.norm())?;
-        if let (Ok(RobustVerdict::Recommended(x)), Ok(RobustVerdict::Recommended(y))) = (&a, &b) {
+        if let (Ok(planar::robust::Verdict::Recommended(x)), Ok(planar::robust::Verdict::Recommended(y))) = (&a, &b) {
             let w = c.mass * c.gravity.norm();
             for (i, j) in [(0, 2), (1, 3), (2, 0), (3, 1)] {
                 prop_assert!(close(x.contact_forces[i], y.contact_forces[j], w));
@@ -1079,7 +1089,7 @@ proptest! {
             center_of_mass: c.center_of_mass + shift,
             ..c
         };
-        same_answer(&solve_robust(&c, &u, &s), &solve_robust(&moved, &u, &s), 1.0, 1.0,
+        same_answer(&planar::robust::solve(&c, &u, &s), &planar::robust::solve(&moved, &u, &s), 1.0, 1.0,
                     c.mass * c.gravity.norm())?;
     }
 
@@ -1102,7 +1112,7 @@ proptest! {
             center_of_mass_tolerance: u.center_of_mass_tolerance * length,
             mass_tolerance: u.mass_tolerance * weight,
         };
-        same_answer(&solve_robust(&c, &u, &s), &solve_robust(&scaled, &v, &s), weight, 1.0,
+        same_answer(&planar::robust::solve(&c, &u, &s), &planar::robust::solve(&scaled, &v, &s), weight, 1.0,
                     c.mass * c.gravity.norm())?;
     }
 
@@ -1130,9 +1140,9 @@ proptest! {
             center_of_mass_tolerance: if turns % 2 == 1 { Vector2::new(t.y, t.x) } else { t },
             ..u
         };
-        let (a, b) = (solve_robust(&c, &u, &s), solve_robust(&turned, &v, &s));
+        let (a, b) = (planar::robust::solve(&c, &u, &s), planar::robust::solve(&turned, &v, &s));
         same_answer(&a, &b, 1.0, 1.0, c.mass * c.gravity.norm())?;
-        if let (Ok(RobustVerdict::Recommended(x)), Ok(RobustVerdict::Recommended(y))) = (&a, &b) {
+        if let (Ok(planar::robust::Verdict::Recommended(x)), Ok(planar::robust::Verdict::Recommended(y))) = (&a, &b) {
             prop_assert!((q(x.gravity_direction) - y.gravity_direction).norm() < 1e-7
                 || twin_minima(x));
         }
@@ -1155,7 +1165,7 @@ proptest! {
             gravity: m(c.gravity),
             ..c
         };
-        same_answer(&solve_robust(&c, &u, &s), &solve_robust(&mirrored, &u, &s), 1.0, -1.0,
+        same_answer(&planar::robust::solve(&c, &u, &s), &planar::robust::solve(&mirrored, &u, &s), 1.0, -1.0,
                     c.mass * c.gravity.norm())?;
     }
 }

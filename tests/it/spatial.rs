@@ -9,9 +9,9 @@
 use crate::util::spatial::{random_spatial_grasp, Held, Kind, RefRange, SpatialReference};
 use crate::util::{random_grasp, wrap};
 use grasp_orient::solver::{
-    analyse_spatial, solve_orientation, solve_spatial, AllowedRange, AxisRelation, Contact,
-    CurrentPose, InvalidInput, Objective, Recommendation, Settings, SpatialCandidate, SpatialMiss,
-    SpatialRecommendation, SpatialVerdict, Verdict,
+    planar::{self, Recommendation, Verdict},
+    spatial::{self, AxisRelation, CurrentPose},
+    AllowedRange, Contact, InvalidInput, Objective, Settings,
 };
 use nalgebra::{Rotation3, Unit, Vector3};
 use rand::SeedableRng;
@@ -39,9 +39,9 @@ fn kinds(count: usize) -> impl Iterator<Item = Kind> {
         .take(count)
 }
 
-fn spatial(c: &SpatialCandidate, s: &Settings) -> SpatialRecommendation {
-    match solve_spatial(c, s) {
-        Ok(SpatialVerdict::Recommended(r)) => *r,
+fn spatial(c: &spatial::Candidate, s: &Settings) -> spatial::Recommendation {
+    match spatial::solve(c, s) {
+        Ok(spatial::Verdict::Recommended(r)) => *r,
         other => panic!("spatial solver refused a force-closure grasp {c:?}: {other:?}"),
     }
 }
@@ -69,7 +69,7 @@ fn rotate(k: &Vector3<f64>, angle: f64, v: &Vector3<f64>) -> Vector3<f64> {
 /// Everything checkable at the solver's own answer: the reference's power there, the solver's
 /// forces against the 3D balance and cones, the rotation, and the current pose; one block of
 /// checks per part of the answer, in the answer's order, each with the tolerance it needs.
-fn check_answer(c: &SpatialCandidate, s: &Settings, worst: &mut Worst) {
+fn check_answer(c: &spatial::Candidate, s: &Settings, worst: &mut Worst) {
     let r = spatial(c, s);
     let reference = SpatialReference::new(c, s.friction_safety_factor);
     let weight = c.mass * c.gravity.norm();
@@ -169,7 +169,7 @@ fn note_clarabel(
     clarabel: Option<f64>,
     power: f64,
     scale: f64,
-    c: &SpatialCandidate,
+    c: &spatial::Candidate,
 ) {
     match clarabel {
         Some(p) => {
@@ -187,7 +187,12 @@ fn note_clarabel(
 /// How far the solver's 3D contact forces are from holding the object inside the true cones, in
 /// units of the weight (and, under the 2-norm, how far their norm is from the reported power,
 /// relative to `scale`).
-fn balance_error(c: &SpatialCandidate, s: &Settings, r: &SpatialRecommendation, scale: f64) -> f64 {
+fn balance_error(
+    c: &spatial::Candidate,
+    s: &Settings,
+    r: &spatial::Recommendation,
+    scale: f64,
+) -> f64 {
     let weight = c.mass * c.gravity.norm();
     let [f1, f2] = r.force_vectors;
     let w = r.gravity_direction * weight;
@@ -218,7 +223,7 @@ fn balance_error(c: &SpatialCandidate, s: &Settings, r: &SpatialRecommendation, 
 
 /// How far the reported rotation is from turning the current gravity into the recommended one by
 /// the smallest angle, about a unit axis.
-fn rotation_error(c: &SpatialCandidate, r: &SpatialRecommendation) -> f64 {
+fn rotation_error(c: &spatial::Candidate, r: &spatial::Recommendation) -> f64 {
     let g0 = c.gravity.normalize();
     let k = r.rotation_axis;
     let turned = rotate(&k, -r.rotation_angle, &g0);
@@ -234,7 +239,7 @@ fn rotation_error(c: &SpatialCandidate, r: &SpatialRecommendation) -> f64 {
 
 /// The larger push of two 3D contact forces along the contact line, into the object, N: what
 /// `finger_force` reports (`crates/solver/src/planar/finger.rs`), computed here from the forces themselves.
-fn pushes(c: &SpatialCandidate, forces: &[Vector3<f64>; 2]) -> f64 {
+fn pushes(c: &spatial::Candidate, forces: &[Vector3<f64>; 2]) -> f64 {
     let line = (c.contact_2 - c.contact_1).normalize();
     forces[0].dot(&line).max(-forces[1].dot(&line))
 }
@@ -304,20 +309,20 @@ fn graspable_range_internal_force_and_safety_factor_match_the_reference() {
     let mut worst = Worst::default();
     for kind in kinds(400) {
         let c = random_spatial_grasp(&mut rng, kind);
-        match solve_spatial(&c, &settings) {
-            Ok(SpatialVerdict::Recommended(_)) => {
+        match spatial::solve(&c, &settings) {
+            Ok(spatial::Verdict::Recommended(_)) => {
                 check_answer(&c, &settings, &mut worst);
                 held += 1;
             }
-            Ok(SpatialVerdict::NoForceClosure(why)) => {
+            Ok(spatial::Verdict::NoForceClosure(why)) => {
                 // Every miss is what it says: a tilt beyond the friction angle, or a sliced cone
                 // that misses the other contact.
                 for m in &why.misses {
                     match m {
-                        SpatialMiss::Tilted {
+                        spatial::Miss::Tilted {
                             tilt, half_angle, ..
                         } => assert!(tilt >= half_angle),
-                        SpatialMiss::Cone(m) => assert!(m.angle_to_other >= m.half_angle),
+                        spatial::Miss::Cone(m) => assert!(m.angle_to_other >= m.half_angle),
                     }
                 }
                 lost += 1;
@@ -332,8 +337,8 @@ fn graspable_range_internal_force_and_safety_factor_match_the_reference() {
     assert!(lost > 0 && held > 0);
 }
 
-/// `analyse_spatial` (what `plot` draws for a spatial candidate) is the objective over Π: its
-/// recommendation is `solve_spatial`'s, and its power at every gravity angle of the graspable range
+/// `spatial::analyse` (what `plot` draws for a spatial candidate) is the objective over Π: its
+/// recommendation is `spatial::solve`'s, and its power at every gravity angle of the graspable range
 /// equals the reference's with gravity along that angle's direction in Π (the paper frame of Π is
 /// right-handed about `plane_normal`, so the direction at `θ` is the recommended one turned by
 /// `θ − θ*` about it).
@@ -344,9 +349,9 @@ fn analysis_in_the_plane_is_the_objective_over_the_plane() {
     let mut worst = 0f64;
     for kind in kinds(60) {
         let c = random_spatial_grasp(&mut rng, kind);
-        let (analysis, r) = match analyse_spatial(&c, &settings) {
+        let (analysis, r) = match spatial::analyse(&c, &settings) {
             Ok(Ok(pair)) => pair,
-            other => panic!("analyse_spatial refused a force-closure grasp {c:?}: {other:?}"),
+            other => panic!("spatial::analyse refused a force-closure grasp {c:?}: {other:?}"),
         };
         assert_eq!(r, spatial(&c, &settings));
         let again = analysis.recommend(&settings.range).expect("the same range");
@@ -502,7 +507,7 @@ fn planar_candidates_given_as_spatial_give_the_planar_answer() {
         let p = random_grasp(&mut rng);
         let z = (k as f64 * 0.37).sin() * 3.0;
         let lift = |v: nalgebra::Vector2<f64>, z: f64| Vector3::new(v.x, v.y, z);
-        let c = SpatialCandidate {
+        let c = spatial::Candidate {
             contact_1: lift(p.contact_1, z),
             contact_2: lift(p.contact_2, z),
             normal_1: lift(p.normal_1, 0.0),
@@ -518,12 +523,12 @@ fn planar_candidates_given_as_spatial_give_the_planar_answer() {
             range: [AllowedRange::FromAbove, AllowedRange::Graspable][(k / 3) % 2],
             friction_safety_factor: [1.0, 1.0, 1.1][k % 3],
         };
-        let planar = match solve_orientation(&p, &settings) {
+        let planar = match planar::solve(&p, &settings) {
             Ok(Verdict::Recommended(r)) => *r,
             Ok(Verdict::NoForceClosure(_)) => {
                 assert!(matches!(
-                    solve_spatial(&c, &settings),
-                    Ok(SpatialVerdict::NoForceClosure(_))
+                    spatial::solve(&c, &settings),
+                    Ok(spatial::Verdict::NoForceClosure(_))
                 ));
                 continue;
             }
@@ -540,7 +545,7 @@ fn planar_candidates_given_as_spatial_give_the_planar_answer() {
 
 /// The largest difference between a planar answer and a spatial one of the same grasp (angles in
 /// rad, forces relative to the weight), failing on any difference in labels.
-fn planar_gap(p: &Recommendation, s: &SpatialRecommendation, weight: f64) -> f64 {
+fn planar_gap(p: &Recommendation, s: &spatial::Recommendation, weight: f64) -> f64 {
     let q = &s.planar;
     assert_eq!(s.plane_normal, Vector3::z());
     assert_ne!(s.axis, AxisRelation::OnAxis);
@@ -616,7 +621,7 @@ fn on_axis_search_beats_a_dense_scan_of_planes() {
             for j in 0..3600 {
                 let psi = std::f64::consts::TAU * j as f64 / 3600.0;
                 let g = rotate(&a, psi, &side) * c.gravity.norm();
-                let probe = SpatialCandidate { gravity: g, ..c };
+                let probe = spatial::Candidate { gravity: g, ..c };
                 let plane = spatial_plane_best(&probe, &settings, &a);
                 scan = scan.min(plane);
             }
@@ -637,7 +642,7 @@ fn on_axis_search_beats_a_dense_scan_of_planes() {
 
 /// The best power in the plane through the axis and `probe.gravity`: the planar problem of that
 /// plane, set up by hand (paper frame, y = 0) from the 3D data.
-fn spatial_plane_best(probe: &SpatialCandidate, settings: &Settings, a: &Vector3<f64>) -> f64 {
+fn spatial_plane_best(probe: &spatial::Candidate, settings: &Settings, a: &Vector3<f64>) -> f64 {
     let g = probe.gravity.normalize();
     let v = -(g - a * g.dot(a)).normalize();
     let w = a.cross(&v);
@@ -650,7 +655,7 @@ fn spatial_plane_best(probe: &SpatialCandidate, settings: &Settings, a: &Vector3
         let mu = mu / settings.friction_safety_factor;
         ((1.0 + mu * mu) * cos_beta * cos_beta - 1.0).sqrt()
     };
-    let planar = grasp_orient::solver::Candidate {
+    let planar = grasp_orient::solver::planar::Candidate {
         contact_1: nalgebra::Vector2::new((probe.contact_1 - c).dot(a) / d, 0.0),
         contact_2: nalgebra::Vector2::new((probe.contact_2 - c).dot(a) / d, 0.0),
         normal_1: planar_normal(&probe.normal_1),
@@ -665,14 +670,14 @@ fn spatial_plane_best(probe: &SpatialCandidate, settings: &Settings, a: &Vector3
         friction_safety_factor: 1.0,
         ..*settings
     };
-    match solve_orientation(&planar, &one) {
+    match planar::solve(&planar, &one) {
         Ok(Verdict::Recommended(r)) => r.gripping_power,
         other => panic!("plane refused: {other:?}"),
     }
 }
 
-fn base() -> SpatialCandidate {
-    SpatialCandidate {
+fn base() -> spatial::Candidate {
+    spatial::Candidate {
         contact_1: Vector3::new(0.0, 1.0, 1.0),
         contact_2: Vector3::new(0.0, -1.0, 1.0),
         normal_1: Vector3::new(0.0, -1.0, 0.0),
@@ -685,8 +690,8 @@ fn base() -> SpatialCandidate {
     }
 }
 
-fn refused(c: &SpatialCandidate) -> InvalidInput {
-    match solve_spatial(c, &Settings::default()) {
+fn refused(c: &spatial::Candidate) -> InvalidInput {
+    match spatial::solve(c, &Settings::default()) {
         Err(e) => e,
         other => panic!("accepted: {other:?}"),
     }
@@ -766,7 +771,7 @@ fn refusals_name_the_field_and_the_contact() {
         ..Settings::default()
     };
     assert_eq!(
-        solve_spatial(&base(), &s),
+        spatial::solve(&base(), &s),
         Err(InvalidInput::SafetyFactor { value: 0.5 })
     );
     // The planar model's domain: friction from 1e-6, a safety factor up to 1000.
@@ -775,7 +780,7 @@ fn refusals_name_the_field_and_the_contact() {
         ..Settings::default()
     };
     assert_eq!(
-        solve_spatial(&base(), &s),
+        spatial::solve(&base(), &s),
         Err(InvalidInput::SafetyFactor { value: 1001.0 })
     );
     let mut c = base();
@@ -800,11 +805,11 @@ fn no_force_closure_names_the_contact_and_the_reason() {
         .normalize();
     c.normal_2 = Vector3::new(0.0, 1.0, 0.0) * 0.5f64.cos() + nu * 0.5f64.sin();
     c.friction_2 = 0.5f64.tan() * 0.99;
-    match solve_spatial(&c, &Settings::default()) {
-        Ok(SpatialVerdict::NoForceClosure(why)) => {
+    match spatial::solve(&c, &Settings::default()) {
+        Ok(spatial::Verdict::NoForceClosure(why)) => {
             assert!(matches!(
                 why.misses[..],
-                [SpatialMiss::Tilted {
+                [spatial::Miss::Tilted {
                     contact: Contact::Second,
                     ..
                 }]
@@ -820,17 +825,17 @@ fn no_force_closure_names_the_contact_and_the_reason() {
     // Just inside the friction angle it holds.
     c.friction_2 = 0.5f64.tan() * 1.01;
     assert!(matches!(
-        solve_spatial(&c, &Settings::default()),
-        Ok(SpatialVerdict::Recommended(_))
+        spatial::solve(&c, &Settings::default()),
+        Ok(spatial::Verdict::Recommended(_))
     ));
     // On the axis, a cone that misses the other contact.
     let mut c = base();
     c.center_of_mass = Vector3::new(0.0, 0.2, 1.0);
     c.normal_1 = Vector3::new(0.0, -1.0, 1.0);
-    match solve_spatial(&c, &Settings::default()) {
-        Ok(SpatialVerdict::NoForceClosure(why)) => {
+    match spatial::solve(&c, &Settings::default()) {
+        Ok(spatial::Verdict::NoForceClosure(why)) => {
             assert!(
-                matches!(why.misses[..], [SpatialMiss::Cone(m)] if m.contact == Contact::First)
+                matches!(why.misses[..], [spatial::Miss::Cone(m)] if m.contact == Contact::First)
             );
         }
         other => panic!("{other:?}"),
@@ -844,7 +849,7 @@ fn no_force_closure_names_the_contact_and_the_reason() {
 /// poses the nearer one wins.
 #[test]
 fn a_ball_gripped_through_its_centre_turns_in_its_current_plane() {
-    let c = SpatialCandidate {
+    let c = spatial::Candidate {
         contact_1: Vector3::new(0.05, 0.0, 0.0),
         contact_2: Vector3::new(-0.05, 0.0, 0.0),
         normal_1: Vector3::new(-1.0, 0.0, 0.0),
@@ -910,7 +915,7 @@ fn on_axis_plane_is_located_to_1e9_rad() {
             continue; // gravity along the axis: every plane holds it
         }
         let at = |psi: f64| {
-            let probe = SpatialCandidate {
+            let probe = spatial::Candidate {
                 gravity: rotate(&a, psi, &g) * c.gravity.norm(),
                 ..c
             };

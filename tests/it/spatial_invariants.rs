@@ -9,8 +9,9 @@
 use crate::util::spatial::{random_spatial_grasp, Kind};
 use crate::util::wrap;
 use grasp_orient::solver::{
-    solve_spatial, AllowedRange, AxisRelation, CurrentPose, GraspCase, Objective, Settings,
-    SpatialCandidate, SpatialRecommendation, SpatialVerdict,
+    planar::GraspCase,
+    spatial::{self, AxisRelation, CurrentPose},
+    AllowedRange, Objective, Settings,
 };
 use nalgebra::{Rotation3, Unit, Vector3};
 use proptest::prelude::*;
@@ -27,7 +28,7 @@ const KINDS: [Kind; 7] = [
     Kind::OnAxisCoplanar,
 ];
 
-fn grasp(seed: u64, kind: u8) -> SpatialCandidate {
+fn grasp(seed: u64, kind: u8) -> spatial::Candidate {
     random_spatial_grasp(
         &mut ChaCha8Rng::seed_from_u64(seed),
         KINDS[kind as usize % KINDS.len()],
@@ -47,9 +48,9 @@ fn settings(objective: u8, graspable: bool) -> Settings {
     }
 }
 
-fn solve(c: &SpatialCandidate, s: &Settings) -> SpatialRecommendation {
-    match solve_spatial(c, s) {
-        Ok(SpatialVerdict::Recommended(r)) => *r,
+fn solve(c: &spatial::Candidate, s: &Settings) -> spatial::Recommendation {
+    match spatial::solve(c, s) {
+        Ok(spatial::Verdict::Recommended(r)) => *r,
         other => panic!("{other:?} for {c:?}"),
     }
 }
@@ -60,7 +61,7 @@ fn solve(c: &SpatialCandidate, s: &Settings) -> SpatialRecommendation {
 /// that much (the answer is flagged sensitive); such scenes are compared only where it is small.
 /// The contact axis itself is known to about `ε M / |p1 − p2|`, which adds to it (contacts a
 /// few millimetres apart, far from the origin).
-fn plane_uncertainty(c: &SpatialCandidate) -> f64 {
+fn plane_uncertainty(c: &spatial::Candidate) -> f64 {
     let span = (c.contact_1 - c.contact_2).norm();
     let a = (c.contact_1 - c.contact_2).normalize();
     let r = c.center_of_mass - c.contact_2;
@@ -78,7 +79,7 @@ fn plane_uncertainty(c: &SpatialCandidate) -> f64 {
 /// the relative condition, for `μ > 1`). Rounding of the plane moves the answer by a few `κ`
 /// times the plane's uncertainty: the comparisons allow `1e-9 + 16 κ (ε + δ)` (relative), with
 /// `δ` the [`plane_uncertainty`] of either scene.
-fn slice_condition(c: &SpatialCandidate, r: &SpatialRecommendation) -> f64 {
+fn slice_condition(c: &spatial::Candidate, r: &spatial::Recommendation) -> f64 {
     [c.friction_1, c.friction_2]
         .iter()
         .zip(r.sliced_friction)
@@ -97,10 +98,10 @@ fn close_within(a: f64, b: f64, scale: f64, rel: f64) -> bool {
 /// Longer than a screen: one check per field of the answer, each with the rule by which it
 /// transforms, so that a relation is stated in one place.
 fn same_answer(
-    c: &SpatialCandidate,
-    other: &SpatialCandidate,
-    a: &SpatialRecommendation,
-    b: &SpatialRecommendation,
+    c: &spatial::Candidate,
+    other: &spatial::Candidate,
+    a: &spatial::Recommendation,
+    b: &spatial::Recommendation,
     rot: &Rotation3<f64>,
     w: f64,
     swap: bool,
@@ -201,7 +202,7 @@ proptest! {
         prop_assume!(axis.norm() > 0.1);
         let rot = Rotation3::from_axis_angle(&Unit::new_normalize(axis), angle);
         let t = Vector3::from(shift);
-        let moved = SpatialCandidate {
+        let moved = spatial::Candidate {
             contact_1: rot * c.contact_1 + t,
             contact_2: rot * c.contact_2 + t,
             normal_1: rot * c.normal_1,
@@ -226,7 +227,7 @@ proptest! {
                                 graspable: bool) {
         let c = grasp(seed, kind);
         let s = settings(objective, graspable);
-        let swapped = SpatialCandidate {
+        let swapped = spatial::Candidate {
             contact_1: c.contact_2,
             contact_2: c.contact_1,
             normal_1: c.normal_2,
@@ -268,7 +269,7 @@ proptest! {
                         weight in 1e-2f64..1e2, objective in 0u8..3) {
         let c = grasp(seed, kind);
         let s = settings(objective, false);
-        let scaled = SpatialCandidate {
+        let scaled = spatial::Candidate {
             contact_1: c.contact_1 * length,
             contact_2: c.contact_2 * length,
             center_of_mass: c.center_of_mass * length,

@@ -26,9 +26,7 @@
 //! used by both sides here), and points inside faces beyond the samples taken.
 
 use crate::util::spatial::{random_spatial_grasp, Kind, SpatialReference};
-use grasp_orient::solver::{
-    solve_spatial_robust, Settings, SpatialCandidate, SpatialRobustVerdict, SpatialUncertainty,
-};
+use grasp_orient::solver::{spatial, Settings};
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -36,7 +34,7 @@ use std::f64::consts::FRAC_PI_2;
 
 /// The gravity under which an object whose centre of mass is at `c` hangs at tilt `theta`;
 /// `None` on the axis.
-fn hang(c: &SpatialCandidate, at: &Vector3<f64>, theta: f64) -> Option<Vector3<f64>> {
+fn hang(c: &spatial::Candidate, at: &Vector3<f64>, theta: f64) -> Option<Vector3<f64>> {
     let a = (c.contact_1 - c.contact_2).normalize();
     let r = at - c.contact_2;
     let across = r - a * r.dot(&a);
@@ -48,7 +46,7 @@ fn hang(c: &SpatialCandidate, at: &Vector3<f64>, theta: f64) -> Option<Vector3<f
 
 /// Whether `q` lies on the inner side of both tangent planes (a convex object can have its centre
 /// of mass there).
-fn possible(c: &SpatialCandidate, q: &Vector3<f64>) -> bool {
+fn possible(c: &spatial::Candidate, q: &Vector3<f64>) -> bool {
     c.normal_1.dot(&(q - c.contact_1)) >= 0.0 && c.normal_2.dot(&(q - c.contact_2)) >= 0.0
 }
 
@@ -71,21 +69,22 @@ fn worst_case_at_the_recommended_tilt_against_the_3d_reference() {
             rng.gen_range(0.01..0.15) * d,
             rng.gen_range(0.01..0.15) * d,
         );
-        let u = SpatialUncertainty {
+        let u = spatial::robust::Uncertainty {
             center_of_mass_tolerance: t,
             mass_tolerance: rng.gen_range(0.0..0.3) * c.mass,
         };
-        let Ok(SpatialRobustVerdict::Recommended(r)) = solve_spatial_robust(&c, &u, &settings)
+        let Ok(spatial::robust::Verdict::Recommended(r)) =
+            spatial::robust::solve(&c, &u, &settings)
         else {
             continue;
         };
-        let heavy = SpatialCandidate {
+        let heavy = spatial::Candidate {
             mass: r.mass_worst,
             ..c
         };
         let at = r.gripping_power_at.position;
         let reference = |q: &Vector3<f64>| {
-            let object = SpatialCandidate {
+            let object = spatial::Candidate {
                 center_of_mass: *q,
                 ..heavy
             };
@@ -138,7 +137,7 @@ fn worst_case_at_the_recommended_tilt_against_the_3d_reference() {
 /// Whether the upward vertical through `q`, under gravity `g`, meets the segment between the
 /// contacts (the definition of "from above", `AllowedRange::FromAbove`), in 3D: the ray
 /// `q − t g`, `t >= 0`, meets `p2 + u (p1 − p2)`, `u ∈ [0, 1]`, to `1e-9` of the contact distance.
-fn from_above_3d(c: &SpatialCandidate, q: &Vector3<f64>, g: &Vector3<f64>) -> bool {
+fn from_above_3d(c: &spatial::Candidate, q: &Vector3<f64>, g: &Vector3<f64>) -> bool {
     let d = c.contact_1 - c.contact_2;
     let m = nalgebra::Matrix3x2::from_columns(&[-g, -d]);
     let rhs = c.contact_2 - q;
@@ -154,7 +153,7 @@ fn from_above_3d(c: &SpatialCandidate, q: &Vector3<f64>, g: &Vector3<f64>) -> bo
 
 /// The largest (`up`) or least tilt at which `q` hangs from above, by bisection on
 /// [`from_above_3d`] from a tilt `inside` at which it does.
-fn from_above_limit(c: &SpatialCandidate, q: &Vector3<f64>, inside: f64, up: bool) -> f64 {
+fn from_above_limit(c: &spatial::Candidate, q: &Vector3<f64>, inside: f64, up: bool) -> f64 {
     let ok = |theta: f64| hang(c, q, theta).is_some_and(|g| from_above_3d(c, q, &g));
     let far = if up { FRAC_PI_2 } else { -FRAC_PI_2 };
     if ok(far) {
@@ -174,7 +173,7 @@ fn from_above_limit(c: &SpatialCandidate, q: &Vector3<f64>, inside: f64, up: boo
 
 /// Whether `q` lies in the box of half-widths `t` cut by the tangent half-spaces, to 1e-9 of the
 /// contact distance.
-fn in_region(c: &SpatialCandidate, t: &Vector3<f64>, q: &Vector3<f64>) -> bool {
+fn in_region(c: &spatial::Candidate, t: &Vector3<f64>, q: &Vector3<f64>) -> bool {
     let o = q - c.center_of_mass;
     let slack = 1e-9 * (c.contact_1 - c.contact_2).norm();
     o.x.abs() <= t.x + slack
@@ -190,9 +189,9 @@ fn in_region(c: &SpatialCandidate, t: &Vector3<f64>, q: &Vector3<f64>) -> bool {
 /// vertices of one tangent plane (edges and diagonals of that face, inside the region as it is
 /// convex). With `faces`, also a `faces × faces` grid on each face of the box.
 fn region_samples(
-    c: &SpatialCandidate,
+    c: &spatial::Candidate,
     t: &Vector3<f64>,
-    r: &grasp_orient::solver::SpatialRobustRecommendation,
+    r: &grasp_orient::solver::spatial::robust::Recommendation,
     per_edge: usize,
     faces: usize,
 ) -> Vec<Vector3<f64>> {
@@ -233,7 +232,7 @@ fn region_samples(
         );
         out.push(v.position);
     }
-    use grasp_orient::solver::RegionPointKind::Cut;
+    use grasp_orient::solver::spatial::robust::RegionPointKind::Cut;
     for (i, v) in r.region.iter().enumerate() {
         for w in &r.region[i + 1..] {
             if let (Cut { contact: a }, Cut { contact: b }) = (v.kind, w.kind) {
@@ -305,15 +304,16 @@ fn scan_tilts(
             rng.gen_range(0.01..0.15) * d,
             rng.gen_range(0.01..0.15) * d,
         );
-        let u = SpatialUncertainty {
+        let u = spatial::robust::Uncertainty {
             center_of_mass_tolerance: t,
             mass_tolerance: rng.gen_range(0.0..0.3) * c.mass,
         };
-        let Ok(SpatialRobustVerdict::Recommended(r)) = solve_spatial_robust(&c, &u, &settings)
+        let Ok(spatial::robust::Verdict::Recommended(r)) =
+            spatial::robust::solve(&c, &u, &settings)
         else {
             continue;
         };
-        let heavy = SpatialCandidate {
+        let heavy = spatial::Candidate {
             mass: r.mass_worst,
             ..c
         };
@@ -377,8 +377,8 @@ fn scan_tilts(
 /// pinned there), a point of the region like any other: the reference alone values it. `grasp`
 /// names the grasp in a failure.
 fn with_pinned_worst(
-    c: &SpatialCandidate,
-    u: &SpatialUncertainty,
+    c: &spatial::Candidate,
+    u: &spatial::robust::Uncertainty,
     settings: &Settings,
     theta: f64,
     samples: &[Vector3<f64>],
@@ -395,8 +395,8 @@ fn with_pinned_worst(
         ..*settings
     };
     let mut here = samples.to_vec();
-    let v = solve_spatial_robust(c, u, &pinned);
-    if let Ok(SpatialRobustVerdict::Recommended(p)) = v {
+    let v = spatial::robust::solve(c, u, &pinned);
+    if let Ok(spatial::robust::Verdict::Recommended(p)) = v {
         let q = p.gripping_power_at.position;
         assert!(
             in_region(c, &u.center_of_mass_tolerance, &q),
@@ -411,7 +411,7 @@ fn with_pinned_worst(
 
 /// The unit contact axis `a` (contact 2 to contact 1) and two unit vectors `e1`, `e2` across it,
 /// with `a × e1 = e2`: the planes through the axis are `cos ψ e1 + sin ψ e2`.
-fn axis_frame(c: &SpatialCandidate) -> [Vector3<f64>; 3] {
+fn axis_frame(c: &spatial::Candidate) -> [Vector3<f64>; 3] {
     let a = (c.contact_1 - c.contact_2) / (c.contact_1 - c.contact_2).norm();
     let e1 = a
         .cross(&Vector3::x())
@@ -426,8 +426,8 @@ fn axis_frame(c: &SpatialCandidate) -> [Vector3<f64>; 3] {
 /// taken, the worst found by a scan of the planes refined by golden section. `socps` counts the
 /// reference's cone programs; `grasp` names the grasp in a failure.
 fn sampled_worst(
-    c: &SpatialCandidate,
-    heavy: &SpatialCandidate,
+    c: &spatial::Candidate,
+    heavy: &spatial::Candidate,
     points: &[Vector3<f64>],
     theta: f64,
     [a, e1, e2]: [Vector3<f64>; 3],
@@ -436,7 +436,7 @@ fn sampled_worst(
 ) -> f64 {
     let mut worst = f64::NEG_INFINITY;
     for q in points {
-        let object = SpatialCandidate {
+        let object = spatial::Candidate {
             center_of_mass: *q,
             ..*heavy
         };
@@ -493,7 +493,7 @@ fn sampled_worst(
 /// by bisection on the 3D definition at the range's middle); gives how far inside them it lies,
 /// rad. `grasp` names the grasp in a failure.
 fn from_above_slack(
-    c: &SpatialCandidate,
+    c: &spatial::Candidate,
     dense: &[Vector3<f64>],
     (lo, hi): (f64, f64),
     grasp: usize,

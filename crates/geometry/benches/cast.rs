@@ -12,7 +12,7 @@ use grasp_orient_geometry::{
     cast_fingers, center_of_mass, load, parse, AmentIndex, GripperPose, Mesh, MeshCache, Object,
     Shape,
 };
-use grasp_orient_solver::{solve_spatial, Settings, SpatialCandidate, SpatialVerdict};
+use grasp_orient_solver::{spatial, Settings};
 use nalgebra::{Isometry3, Translation3, Vector3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -77,11 +77,11 @@ fn ms(d: Duration) -> f64 {
 }
 
 /// The contacts of each pose that touches, as the 3D solver's candidates.
-fn cast_all(set: &[GripperPose], object: &Object) -> Vec<SpatialCandidate> {
+fn cast_all(set: &[GripperPose], object: &Object) -> Vec<spatial::Candidate> {
     let com = center_of_mass(&object.pose, &object.shape, None).expect("closed");
     set.iter()
         .filter_map(|g| cast_fingers(g, object).ok())
-        .map(|[c1, c2]| SpatialCandidate {
+        .map(|[c1, c2]| spatial::Candidate {
             contact_1: c1.point.coords,
             contact_2: c2.point.coords,
             normal_1: c1.normal.into_inner(),
@@ -118,20 +118,20 @@ fn main() {
     );
 
     let settings = Settings::default();
-    let contacts: Vec<SpatialCandidate> = candidates.iter().cycle().take(1000).copied().collect();
+    let contacts: Vec<spatial::Candidate> = candidates.iter().cycle().take(1000).copied().collect();
     let recommended = contacts
         .iter()
         .filter(|c| {
             matches!(
-                solve_spatial(c, &settings),
-                Ok(SpatialVerdict::Recommended(_))
+                spatial::solve(c, &settings),
+                Ok(spatial::Verdict::Recommended(_))
             )
         })
         .count();
     let solve = time(9, || {
         contacts
             .iter()
-            .filter(|c| solve_spatial(c, &settings).is_ok())
+            .filter(|c| spatial::solve(c, &settings).is_ok())
             .count()
     });
     println!("({recommended} of the 1,000 contact candidates have force closure)");

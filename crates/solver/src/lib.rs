@@ -29,9 +29,17 @@
 //! is the exact minimiser of `P` over the allowed range, found from the envelope's breakpoints and
 //! the closed-form stationary points of each piece.
 //!
-//! When the centre of mass and the mass are known only to within tolerances, [`solve_robust`]
+//! When the centre of mass and the mass are known only to within tolerances, [`planar::robust::solve`]
 //! minimises the worst case of `P` over them instead (the mathematics is in
 //! `planar/robust/mod.rs` and `docs/theory.md`).
+//!
+//! # Modules
+//! [`planar`] answers a grasp in a plane ([`planar::solve`], [`planar::analyse`]) and [`spatial`]
+//! one in 3D ([`spatial::solve`], [`spatial::analyse`]); each has a `robust` module for the worst
+//! case over tolerances ([`planar::robust::solve`], [`spatial::robust::solve`]). The two mirror
+//! each other: `Candidate`, `Recommendation`, `Verdict`, `NoForceClosure` in each, named by their
+//! module. The root holds only what both share: [`Settings`], [`Objective`], [`AllowedRange`],
+//! [`Contact`], [`InvalidInput`] and the input limits.
 
 pub mod planar;
 mod sinusoid;
@@ -43,24 +51,7 @@ pub mod table_1;
 #[doc = include_str!("../README.md")]
 struct ReadmeExample;
 
-pub use planar::analysis::{Analysis, PointValue};
 pub use planar::frame::{MAX_COORDINATE, MAX_SAFETY_FACTOR};
-pub use planar::paper::CandidateAngles;
-pub use planar::robust::{
-    solve_robust, BoxPoint, BoxPointKind, NoCommonOrientation, RobustRecommendation, RobustVerdict,
-    Uncertainty,
-};
-pub use planar::{
-    analyse, solve_orientation, Candidate, CandidateC, ConeMiss, GraspCase, LocalMinimum,
-    NoForceClosure, PaperCandidate, Recommendation, Verdict,
-};
-pub use spatial::{
-    analyse_spatial, sliced_friction, solve_spatial, solve_spatial_robust, AxisRelation,
-    CurrentPose, RegionPoint, RegionPointKind, SpatialCandidate, SpatialMiss,
-    SpatialNoCommonOrientation, SpatialNoForceClosure, SpatialRecommendation,
-    SpatialRobustRecommendation, SpatialRobustVerdict, SpatialUncertainty, SpatialVerdict,
-    IN_PLANE_TOLERANCE, NEAR_AXIS, ON_AXIS,
-};
 
 use std::fmt;
 

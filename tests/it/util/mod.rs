@@ -15,7 +15,7 @@ pub mod robust;
 pub mod spatial;
 pub mod zstd_bomb;
 
-use grasp_orient::solver::Candidate;
+use grasp_orient::solver::planar::Candidate;
 use nalgebra::{Matrix3x4, Matrix4x3, Vector2, Vector3, Vector4};
 use rand::Rng;
 use std::f64::consts::{PI, TAU};

@@ -5,7 +5,7 @@
 //! worst case lies at a vertex; the vertices are simply among the points sampled.
 
 use super::{RefObjective, RefPoint, RefRange, Reference};
-use grasp_orient::solver::Candidate;
+use grasp_orient::solver::planar::Candidate;
 use nalgebra::{Matrix2, Vector2};
 use rand::Rng;
 use std::f64::consts::TAU;

@@ -26,7 +26,7 @@ use clarabel::solver::{
     DefaultSettings, DefaultSolver, IPSolver, SecondOrderConeT, SolverStatus, SupportedConeT,
     ZeroConeT,
 };
-use grasp_orient::solver::SpatialCandidate;
+use grasp_orient::solver::spatial;
 use nalgebra::{Matrix5x6, Matrix6, Rotation3, Unit, Vector3, Vector5, Vector6};
 use rand::Rng;
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
@@ -104,7 +104,7 @@ fn skew(r: &Vector3<f64>) -> [[f64; 3]; 3] {
 }
 
 impl SpatialReference {
-    pub fn new(c: &SpatialCandidate, safety: f64) -> Self {
+    pub fn new(c: &spatial::Candidate, safety: f64) -> Self {
         Self {
             p: [c.contact_1, c.contact_2],
             c: c.center_of_mass,
@@ -608,7 +608,7 @@ fn off_axis_local(rng: &mut impl Rng, kind: Kind, mu: [f64; 2]) -> Option<Local>
 /// A random spatial grasp with force closure of the given kind, in a random 3D frame, with
 /// random units and normal lengths. Gravity is random in 3D, and in the grasp plane for about a
 /// fifth of the off-axis grasps (so that the current pose can be held).
-pub fn random_spatial_grasp(rng: &mut impl Rng, kind: Kind) -> SpatialCandidate {
+pub fn random_spatial_grasp(rng: &mut impl Rng, kind: Kind) -> spatial::Candidate {
     let (local, mu) = loop {
         let mu = [rng.gen_range(0.1..2.0), rng.gen_range(0.1..2.0)];
         if on_axis(kind) {
@@ -634,7 +634,7 @@ pub fn random_spatial_grasp(rng: &mut impl Rng, kind: Kind) -> SpatialCandidate 
     } else {
         unit_random(rng)
     };
-    SpatialCandidate {
+    spatial::Candidate {
         contact_1: place(local.p[0]),
         contact_2: place(local.p[1]),
         normal_1: rot * local.n[0] * rng.gen_range(0.1..10.0),

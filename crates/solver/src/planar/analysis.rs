@@ -686,7 +686,7 @@ fn top_at(funcs: &[Sinusoid], at: &Angle, tol: f64) -> usize {
 mod tests {
     use super::*;
     use crate::table_1::{paper_grasp, table_1};
-    use crate::{Candidate, Settings};
+    use crate::{planar::Candidate, Settings};
     use approx::abs_diff_eq;
 
     fn analysis(c: &Candidate, objective: Objective) -> Analysis {

@@ -1,6 +1,6 @@
 //! Planar grasps: the paper's problem, solved exactly (`docs/theory.md`).
 //!
-//! [`solve_orientation`] answers one [`Candidate`]; [`analyse`] gives the whole curve of gripping
+//! [`solve`] answers one [`Candidate`]; [`analyse`] gives the whole curve of gripping
 //! power over the graspable range. The submodules hold the steps: `frame` the paper frame and
 //! the input checks, `paper` the paper's closed forms, `analysis` the envelope and the objective on
 //! it, `curve` the objective's pieces and the walk that finds their local minima,
@@ -12,12 +12,14 @@ pub(crate) mod curve;
 pub(crate) mod finger;
 pub(crate) mod frame;
 pub(crate) mod paper;
-pub(crate) mod robust;
+pub mod robust;
+
+pub use analysis::{Analysis, PointValue};
+pub use paper::CandidateAngles;
 
 #[allow(unused_imports)] // the submodules reach these as `super::…`
 use crate::sinusoid;
 use crate::{AllowedRange, Contact, InvalidInput, Objective, Settings};
-use analysis::Analysis;
 use frame::GraspFrame;
 use nalgebra::Vector2;
 use std::fmt;
@@ -240,7 +242,7 @@ pub enum Verdict {
 /// friction √3 and 1/√3, `Mg = 1`. The least gripping power is at candidate C,
 /// `θ_34 = -π/12` (Table 2 prints +0.261: its sign is wrong, see `tests/it/paper.rs`).
 /// ```
-/// use grasp_orient_solver::{solve_orientation, Candidate, PaperCandidate, Settings, Verdict};
+/// use grasp_orient_solver::{planar::{self, Candidate, PaperCandidate, Verdict}, Settings};
 /// use nalgebra::Vector2;
 ///
 /// let grasp = Candidate {
@@ -254,17 +256,15 @@ pub enum Verdict {
 ///     mass: 1.0,
 ///     gravity: Vector2::new(0.0, -1.0),
 /// };
-/// let Ok(Verdict::Recommended(r)) = solve_orientation(&grasp, &Settings::default()) else {
+/// let Ok(Verdict::Recommended(r)) = planar::solve(&grasp, &Settings::default()) else {
 ///     panic!("the grasp has force closure");
 /// };
 /// assert!((r.gravity_angle + std::f64::consts::PI / 12.0).abs() < 1e-12);
 /// assert_eq!(r.recommended_label, Some(PaperCandidate::C));
 /// assert!((r.gripping_power - 1.0).abs() < 1e-12); // P = Mg here
 /// ```
-pub fn solve_orientation(
-    candidate: &Candidate,
-    settings: &Settings,
-) -> Result<Verdict, InvalidInput> {
+#[doc(alias = "solve_orientation")]
+pub fn solve(candidate: &Candidate, settings: &Settings) -> Result<Verdict, InvalidInput> {
     // `analyse`, without the Result around its Result: the analysis is not moved once more.
     let frame = GraspFrame::new(candidate, settings.friction_safety_factor)?;
     match Analysis::new(&frame, settings.objective) {
@@ -276,7 +276,7 @@ pub fn solve_orientation(
 }
 
 /// The gripping power of one grasp over its whole graspable range, for plots and studies: what
-/// [`solve_orientation`] minimises, with the paper's bounds and candidate angles. Uses the
+/// [`solve`] minimises, with the paper's bounds and candidate angles. Uses the
 /// objective and friction safety factor of `settings` (the range only matters to
 /// [`Analysis::recommend`]).
 ///

@@ -47,21 +47,21 @@
 //!
 //! The last form is what [`sliced_friction`] computes: no trigonometry, and the only cancellation
 //! is `μ − t` itself near the limit. `t ≥ μ` (`β ≥ ξ`) leaves no force closure, reported as
-//! [`SpatialMiss::Tilted`]. Checked by unit tests against direct membership in the 3D cone.
+//! [`Miss::Tilted`]. Checked by unit tests against direct membership in the 3D cone.
 //!
 //! # 3. The plane's orientation and the planar answer
 //! `ν = ±(p1 − c) × (p2 − c) / |…|` with the sign that makes `ν_z > 0` (or `ν_z = 0, ν_y > 0`, or
 //! `ν_z = ν_y = 0, ν_x > 0`) in the candidate frame. Π's basis `(e_x, e_y)` is the rotation that
 //! takes `+z` to `ν` applied to `+x` and `+y`. So a grasp lying in the x-y plane has `ν = +z`,
 //! `e_x = +x`, `e_y = +y` and reads exactly as the planar model (`tests/it/spatial.rs` checks 1e-12).
-//! The planar problem is solved in the coordinates `(e_x, e_y)`, and [`SpatialRecommendation::planar`]
+//! The planar problem is solved in the coordinates `(e_x, e_y)`, and [`Recommendation::planar`]
 //! is its answer as the planar model gives it: the gravity angle and local minima in the paper frame
 //! of Π (right-handed about `ν`), labels A–E and the case a–d in the candidate's labelling.
 //!
 //! **Contact forces** `(N1, F1, N2, F2)` (the `contact_forces` of the planar answer, newtons):
 //! `N_i` along `û_i`, the unit projection of the inward normal into Π, and `F_i` along `ν × û_i`
 //! (the planar rule "inward normal turned +90° about +z" with `ν` for `+z`). The 3D vectors
-//! `f_i = N_i û_i + F_i ν × û_i` are [`SpatialRecommendation::force_vectors`]. The 2-norm and the
+//! `f_i = N_i û_i + F_i ν × û_i` are [`Recommendation::force_vectors`]. The 2-norm and the
 //! internal force do not depend on this split; the 1-norm objective is the 1-norm of these four
 //! components (in 3D terms the normal force is `N_i cos β_i`).
 //!
@@ -69,7 +69,7 @@
 //! With `ĝ0` the current gravity direction and `d` the recommended one (in Π), rotating the object
 //! by `R` turns gravity, seen in the object's frame, into `Rᵀ ĝ0`. The smallest `R` with
 //! `Rᵀ ĝ0 = d` turns about `k = (d × ĝ0)/|d × ĝ0|` by `φ = ∠(d, ĝ0) ∈ [0, π]`:
-//! [`SpatialRecommendation::rotation_axis`] and [`SpatialRecommendation::rotation_angle`]. In the
+//! [`Recommendation::rotation_axis`] and [`Recommendation::rotation_angle`]. In the
 //! basis `(e_x, e_y, ν)`, with `ω` the planar wrist rotation (signed about `ν`, from the projection
 //! of `ĝ0` to `d`) and `ĝ0 = (g_x, g_y, g_ν)`, `g_∥ = |(g_x, g_y)|`:
 //!
@@ -118,9 +118,9 @@
 
 pub mod on_axis;
 mod plane;
-mod robust;
+pub mod robust;
 
-use super::{Candidate, ConeMiss, Contact, InvalidInput, NoForceClosure, Recommendation, Settings};
+use super::{planar::ConeMiss, Contact, InvalidInput, Settings};
 use crate::planar::analysis::Analysis;
 use crate::planar::frame::GraspFrame;
 use nalgebra::{Vector2, Vector3};
@@ -128,10 +128,6 @@ use plane::{Basis, Geometry, PlaneSolve};
 use std::fmt;
 
 pub use plane::sliced_friction;
-pub use robust::{
-    solve_spatial_robust, RegionPoint, RegionPointKind, SpatialNoCommonOrientation,
-    SpatialRobustRecommendation, SpatialRobustVerdict, SpatialUncertainty,
-};
 
 /// The centre of mass counts as on the contact axis when its distance from the axis is at most
 /// this fraction of the contact distance. It is the fraction below which the planar model calls
@@ -150,7 +146,8 @@ pub const IN_PLANE_TOLERANCE: f64 = 1e-9;
 
 /// A two-finger grasp in 3D, in the candidate's own frame. SI units.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SpatialCandidate {
+#[doc(alias = "SpatialCandidate")]
+pub struct Candidate {
     /// Contact point 1, m.
     pub contact_1: Vector3<f64>,
     /// Contact point 2, m.
@@ -236,13 +233,14 @@ impl CurrentPose {
 
 /// The answer for a spatial grasp with force closure.
 #[derive(Debug, Clone, PartialEq)]
-pub struct SpatialRecommendation {
+#[doc(alias = "SpatialRecommendation")]
+pub struct Recommendation {
     /// The planar answer in Π (module docs §3): gravity angle, local minima, labels, case, what
     /// became of candidate C, powers and contact forces in newtons. Its `gravity_direction` is in
     /// the basis `(plane_x, plane_y)`, its `wrist_rotation` is signed about `plane_normal` and
     /// turns the projection of the current gravity into Π, and its `current_gravity_angle` is
     /// that projection's. Its current-pose powers are `+∞` when the object swings.
-    pub planar: Recommendation,
+    pub planar: crate::planar::Recommendation,
     /// Unit `e_x` of Π in the candidate frame.
     pub plane_x: Vector3<f64>,
     /// Unit `e_y` of Π in the candidate frame.
@@ -265,7 +263,7 @@ pub struct SpatialRecommendation {
     pub friction_directions: [Vector3<f64>; 2],
     /// `μ'_i`: the friction coefficients of the cones sliced by Π, after the safety factor.
     pub sliced_friction: [f64; 2],
-    /// `tan β_i` of the tilt of each normal out of Π ([`SpatialRecommendation::normal_tilt`]).
+    /// `tan β_i` of the tilt of each normal out of Π ([`Recommendation::normal_tilt`]).
     tilt_tangent: [f64; 2],
     /// Whether the current pose can be held.
     pub current_pose: CurrentPose,
@@ -273,15 +271,15 @@ pub struct SpatialRecommendation {
     pub axis: AxisRelation,
     /// Distance of the centre of mass from the contact axis over the contact distance.
     pub center_of_mass_offset: f64,
-    /// The planar candidate solved in Π, for [`analyse_spatial`]: contacts and centre of mass in
+    /// The planar candidate solved in Π, for [`analyse`]: contacts and centre of mass in
     /// the coordinates `(plane_x, plane_y)` (as given, or relative to the centre of mass over the
     /// reach), the projected normals, the sliced coefficients (already divided by the safety
     /// factor), unit gravity along the projection of the current one, and the weight `m |g|` as
     /// its mass, so that its powers are in newtons.
-    plane_candidate: Candidate,
+    plane_candidate: crate::planar::Candidate,
 }
 
-impl SpatialRecommendation {
+impl Recommendation {
     /// `β_i`: the tilt of each normal out of Π, rad in `[0, π/2)`.
     pub fn normal_tilt(&self) -> [f64; 2] {
         self.tilt_tangent.map(f64::atan)
@@ -297,7 +295,8 @@ impl SpatialRecommendation {
 
 /// One reason a spatial grasp has no force closure, naming the contact.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum SpatialMiss {
+#[doc(alias = "SpatialMiss")]
+pub enum Miss {
     /// The normal is tilted out of the grasp plane by `tilt >= half_angle`: the friction cone
     /// meets Π in no more than a ray.
     Tilted {
@@ -314,14 +313,15 @@ pub enum SpatialMiss {
 
 /// Why a spatial grasp has no force closure.
 #[derive(Debug, Clone, PartialEq)]
-pub struct SpatialNoForceClosure {
+#[doc(alias = "SpatialNoForceClosure")]
+pub struct NoForceClosure {
     /// One or two misses.
-    pub misses: Vec<SpatialMiss>,
+    pub misses: Vec<Miss>,
     /// The safety factor that divided the friction coefficients.
     pub friction_safety_factor: f64,
 }
 
-impl fmt::Display for SpatialNoForceClosure {
+impl fmt::Display for NoForceClosure {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str("no force closure: ")?;
         for (i, m) in self.misses.iter().enumerate() {
@@ -329,7 +329,7 @@ impl fmt::Display for SpatialNoForceClosure {
                 f.write_str("; ")?;
             }
             match m {
-                SpatialMiss::Tilted {
+                Miss::Tilted {
                     contact,
                     tilt,
                     half_angle,
@@ -338,7 +338,7 @@ impl fmt::Display for SpatialNoForceClosure {
                     "the normal at {contact} is tilted out of the grasp plane by {tilt:.4} rad, \
                      beyond the friction angle {half_angle:.4} rad"
                 )?,
-                SpatialMiss::Cone(m) => write!(
+                Miss::Cone(m) => write!(
                     f,
                     "the friction cone at {} (half-angle {:.4} rad in the grasp plane) misses {} \
                      by {:.4} rad",
@@ -362,28 +362,29 @@ impl fmt::Display for SpatialNoForceClosure {
 
 /// The solver's verdict on a valid spatial candidate.
 #[derive(Debug, Clone, PartialEq)]
-pub enum SpatialVerdict {
+#[doc(alias = "SpatialVerdict")]
+pub enum Verdict {
     /// The grasp can be held: here is the best orientation.
-    Recommended(Box<SpatialRecommendation>),
+    Recommended(Box<Recommendation>),
     /// No orientation can hold the grasp.
-    NoForceClosure(SpatialNoForceClosure),
+    NoForceClosure(NoForceClosure),
 }
 
 /// Solves one spatial candidate: the orientation of least gripping power, as a 3D rotation, and
 /// the planar answer in the grasp plane.
 ///
 /// Bad input is an `Err` naming the field; a valid grasp that cannot be held is
-/// `Ok(SpatialVerdict::NoForceClosure)`.
+/// `Ok(Verdict::NoForceClosure)`.
 ///
 /// # Example
 /// The paper's case (c) square (Table 1), stood up in the y-z plane of a frame whose gravity
 /// points along -z: the best gravity direction is the planar one, `θ_34 = -π/12` (in Π), and the
 /// rotation turns about ±x, the normal of the grasp plane.
 /// ```
-/// use grasp_orient_solver::{solve_spatial, Settings, SpatialCandidate, SpatialVerdict};
+/// use grasp_orient_solver::{Settings, spatial};
 /// use nalgebra::Vector3;
 ///
-/// let grasp = SpatialCandidate {
+/// let grasp = spatial::Candidate {
 ///     contact_1: Vector3::new(0.0, 1.0, 1.0),
 ///     contact_2: Vector3::new(0.0, -1.0, 1.0),
 ///     normal_1: Vector3::new(0.0, -1.0, 0.0),
@@ -394,7 +395,7 @@ pub enum SpatialVerdict {
 ///     mass: 1.0,
 ///     gravity: Vector3::new(0.0, 0.0, -1.0),
 /// };
-/// let Ok(SpatialVerdict::Recommended(r)) = solve_spatial(&grasp, &Settings::default()) else {
+/// let Ok(spatial::Verdict::Recommended(r)) = spatial::solve(&grasp, &Settings::default()) else {
 ///     panic!("the grasp has force closure");
 /// };
 /// assert!((r.planar.gravity_angle.abs() - std::f64::consts::PI / 12.0).abs() < 1e-12);
@@ -402,10 +403,8 @@ pub enum SpatialVerdict {
 /// assert!(r.rotation_axis.x.abs() > 1.0 - 1e-12);
 /// assert!((r.planar.gripping_power - 1.0).abs() < 1e-12);
 /// ```
-pub fn solve_spatial(
-    candidate: &SpatialCandidate,
-    settings: &Settings,
-) -> Result<SpatialVerdict, InvalidInput> {
+#[doc(alias = "solve_spatial")]
+pub fn solve(candidate: &Candidate, settings: &Settings) -> Result<Verdict, InvalidInput> {
     let geometry = Geometry::new(candidate, settings.friction_safety_factor)?;
     if geometry.offset <= ON_AXIS {
         return on_axis::solve(&geometry, settings);
@@ -418,18 +417,18 @@ pub fn solve_spatial(
     let basis = Basis::through_center_of_mass(&geometry);
     let plane = match PlaneSolve::new(&geometry, &basis, geometry.planar_points(&basis)) {
         Ok(p) => p,
-        Err(Ok(misses)) => return Ok(SpatialVerdict::NoForceClosure(misses)),
+        Err(Ok(misses)) => return Ok(Verdict::NoForceClosure(misses)),
         Err(Err(invalid)) => return Err(invalid),
     };
     let planar = match plane.solve(settings)? {
         Ok(r) => r,
-        Err(miss) => return Ok(SpatialVerdict::NoForceClosure(miss)),
+        Err(miss) => return Ok(Verdict::NoForceClosure(miss)),
     };
     let current_pose = match geometry.out_of_plane(&basis, geometry.in_plane_tolerance()) {
         Some(out_of_plane) => CurrentPose::Swings { out_of_plane },
         None => CurrentPose::Held,
     };
-    Ok(SpatialVerdict::Recommended(Box::new(plane.assemble(
+    Ok(Verdict::Recommended(Box::new(plane.assemble(
         planar,
         current_pose,
         axis,
@@ -443,23 +442,24 @@ pub fn solve_spatial(
 /// chose (§6).
 ///
 /// Bad input is an `Err`; a valid grasp without force closure is `Ok(Err(_))`, as from
-/// [`solve_spatial`].
+/// [`solve`].
 #[allow(clippy::type_complexity)]
-pub fn analyse_spatial(
-    candidate: &SpatialCandidate,
+#[doc(alias = "analyse_spatial")]
+pub fn analyse(
+    candidate: &Candidate,
     settings: &Settings,
-) -> Result<Result<(Analysis, SpatialRecommendation), SpatialNoForceClosure>, InvalidInput> {
-    let r = match solve_spatial(candidate, settings)? {
-        SpatialVerdict::Recommended(r) => r,
-        SpatialVerdict::NoForceClosure(why) => return Ok(Err(why)),
+) -> Result<Result<(Analysis, Recommendation), NoForceClosure>, InvalidInput> {
+    let r = match solve(candidate, settings)? {
+        Verdict::Recommended(r) => r,
+        Verdict::NoForceClosure(why) => return Ok(Err(why)),
     };
     // The sliced friction is already divided by the safety factor: the planar frame gets 1.
     let frame = GraspFrame::from_valid(&r.plane_candidate, 1.0);
     Ok(match Analysis::new(&frame, settings.objective) {
         Ok(analysis) => Ok((analysis, *r)),
         // Not reached: the planar solver held this very candidate a moment ago.
-        Err(NoForceClosure { misses, .. }) => Err(SpatialNoForceClosure {
-            misses: misses.into_iter().map(SpatialMiss::Cone).collect(),
+        Err(crate::planar::NoForceClosure { misses, .. }) => Err(NoForceClosure {
+            misses: misses.into_iter().map(Miss::Cone).collect(),
             friction_safety_factor: settings.friction_safety_factor,
         }),
     })
@@ -467,21 +467,21 @@ pub fn analyse_spatial(
 
 /// The planar verdict of one plane: the recommendation (unit weight) or the misses, mapped into
 /// spatial terms.
-type PlanarOutcome = Result<Recommendation, SpatialNoForceClosure>;
+type PlanarOutcome = Result<crate::planar::Recommendation, NoForceClosure>;
 
 /// Runs the planar solver on a planar candidate built by the reduction and maps "no force
 /// closure" into spatial terms. The 3D input has been validated, so the planar checks are not run
 /// again; the friction coefficients are already divided by the safety factor `safety`.
 fn planar_outcome(
-    candidate: &Candidate,
+    candidate: &crate::planar::Candidate,
     settings: &Settings,
     safety: f64,
 ) -> Result<PlanarOutcome, InvalidInput> {
     let frame = GraspFrame::from_valid(candidate, 1.0);
     Ok(match Analysis::new(&frame, settings.objective) {
         Ok(analysis) => Ok(analysis.recommend(&settings.range)?),
-        Err(NoForceClosure { misses, .. }) => Err(SpatialNoForceClosure {
-            misses: misses.into_iter().map(SpatialMiss::Cone).collect(),
+        Err(crate::planar::NoForceClosure { misses, .. }) => Err(NoForceClosure {
+            misses: misses.into_iter().map(Miss::Cone).collect(),
             friction_safety_factor: safety,
         }),
     })

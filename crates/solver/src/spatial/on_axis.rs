@@ -92,8 +92,11 @@
 //! that agree to rounding).
 
 use super::plane::{Basis, Geometry, PlaneSolve};
-use super::{AxisRelation, CurrentPose, SpatialMiss, SpatialNoForceClosure, SpatialVerdict};
-use crate::{AllowedRange, ConeMiss, Contact, InvalidInput, Objective, Recommendation, Settings};
+use super::{AxisRelation, CurrentPose};
+use crate::{
+    planar::{ConeMiss, Recommendation},
+    AllowedRange, Contact, InvalidInput, Objective, Settings,
+};
 use nalgebra::{Vector2, Vector3};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
@@ -451,7 +454,7 @@ fn norm1_candidates(
 #[derive(Debug)]
 enum Stop {
     Invalid(InvalidInput),
-    NoClosure(SpatialNoForceClosure),
+    NoClosure(super::NoForceClosure),
 }
 
 /// One solved plane.
@@ -490,12 +493,12 @@ fn solve_plane<'a>(
 }
 
 /// The best orientation over every plane through the axis (module docs).
-pub(super) fn solve(g: &Geometry, settings: &Settings) -> Result<SpatialVerdict, InvalidInput> {
+pub(super) fn solve(g: &Geometry, settings: &Settings) -> Result<super::Verdict, InvalidInput> {
     let grasp = match AxisGrasp::new(g) {
         Ok(grasp) => grasp,
         Err(misses) => {
-            return Ok(SpatialVerdict::NoForceClosure(SpatialNoForceClosure {
-                misses: misses.into_iter().map(SpatialMiss::Cone).collect(),
+            return Ok(super::Verdict::NoForceClosure(super::NoForceClosure {
+                misses: misses.into_iter().map(super::Miss::Cone).collect(),
                 friction_safety_factor: g.safety,
             }))
         }
@@ -503,12 +506,12 @@ pub(super) fn solve(g: &Geometry, settings: &Settings) -> Result<SpatialVerdict,
     match search(g, &grasp, settings) {
         Ok(r) => Ok(r),
         Err(Stop::Invalid(e)) => Err(e),
-        Err(Stop::NoClosure(miss)) => Ok(SpatialVerdict::NoForceClosure(miss)),
+        Err(Stop::NoClosure(miss)) => Ok(super::Verdict::NoForceClosure(miss)),
     }
 }
 
 /// Solves the candidate planes and keeps the best (ties to the smaller rotation).
-fn search(g: &Geometry, grasp: &AxisGrasp, settings: &Settings) -> Result<SpatialVerdict, Stop> {
+fn search(g: &Geometry, grasp: &AxisGrasp, settings: &Settings) -> Result<super::Verdict, Stop> {
     let psi0 = grasp.azimuth_of(&g.g0);
     // The plane of the current gravity: its current-pose answer, and the first candidate (so
     // that ties keep the object in it).
@@ -550,7 +553,7 @@ fn search(g: &Geometry, grasp: &AxisGrasp, settings: &Settings) -> Result<Spatia
     out.planar.gripping_power_current = current.0 * g.weight;
     out.planar.internal_force_current = current.1 * g.weight;
     out.planar.finger_force_current = current.2 * g.weight;
-    Ok(SpatialVerdict::Recommended(Box::new(out)))
+    Ok(super::Verdict::Recommended(Box::new(out)))
 }
 
 /// Whether `s` beats `b`: lower power, or a tie (1e-12 relative, unit weight) with a rotation

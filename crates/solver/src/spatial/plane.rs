@@ -1,15 +1,15 @@
 //! Validation of a spatial candidate, the plane Π, the sliced cones (module docs §2), the planar
 //! candidate in Π and the way back to 3D (§3, §4).
 
-use super::{
-    planar_outcome, v2, AxisRelation, CurrentPose, PlanarOutcome, SpatialCandidate, SpatialMiss,
-    SpatialNoForceClosure, SpatialRecommendation,
-};
+use super::{planar_outcome, v2, AxisRelation, CurrentPose, PlanarOutcome};
 use crate::planar::frame::{
     friction, times_pow2, MAX_COORDINATE, MAX_FRICTION, MAX_GRAVITY, MAX_MASS,
     MAX_NORMAL_COMPONENT, MAX_SAFETY_FACTOR, MIN_FRICTION, MIN_WEIGHT,
 };
-use crate::{Candidate, ConeMiss, Contact, InvalidInput, Recommendation, Settings};
+use crate::{
+    planar::{Candidate, ConeMiss, Recommendation},
+    Contact, InvalidInput, Settings,
+};
 use nalgebra::{Vector2, Vector3};
 
 /// Contacts closer than this fraction of their reach from the centre of mass coincide (as in the
@@ -133,7 +133,7 @@ fn direction(field: &'static str, v: &Vector3<f64>) -> Result<Vector3<f64>, Inva
 
 /// Whether every field is within its limits (NaN and infinities are not): the common case, in
 /// one pass; [`validate`] names the field otherwise.
-fn within_limits(c: &SpatialCandidate) -> bool {
+fn within_limits(c: &super::Candidate) -> bool {
     let all = |v: &Vector3<f64>, limit: f64| v.iter().all(|x| x.abs() <= limit);
     let positive = |x: f64, limit: f64| x > 0.0 && x <= limit;
     all(&c.contact_1, MAX_COORDINATE)
@@ -149,7 +149,7 @@ fn within_limits(c: &SpatialCandidate) -> bool {
 
 /// Checks every field of a spatial candidate, naming the first one at fault, in the planar
 /// model's order.
-fn validate(c: &SpatialCandidate) -> Result<(), InvalidInput> {
+fn validate(c: &super::Candidate) -> Result<(), InvalidInput> {
     vector(
         ["contact_1.x", "contact_1.y", "contact_1.z"],
         &c.contact_1,
@@ -228,7 +228,7 @@ pub(super) struct Geometry {
 
 impl Geometry {
     /// Validates `c` and divides friction by `safety`.
-    pub fn new(c: &SpatialCandidate, safety: f64) -> Result<Self, InvalidInput> {
+    pub fn new(c: &super::Candidate, safety: f64) -> Result<Self, InvalidInput> {
         if !(1.0..=MAX_SAFETY_FACTOR).contains(&safety) {
             return Err(InvalidInput::SafetyFactor { value: safety });
         }
@@ -399,7 +399,7 @@ fn cones_missing(
     points: &[Vector2<f64>; 3],
     normals: &[Vector2<f64>; 2],
     sliced: &[f64; 2],
-) -> Vec<SpatialMiss> {
+) -> Vec<super::Miss> {
     (0..2)
         .filter(|&i| sliced[i] > 0.0)
         .filter_map(|i| {
@@ -409,7 +409,7 @@ fn cones_missing(
                 .abs()
                 .atan2(u.dot(&to_other));
             (angle >= sliced[i].atan()).then(|| {
-                SpatialMiss::Cone(ConeMiss {
+                super::Miss::Cone(ConeMiss {
                     contact: [Contact::First, Contact::Second][i],
                     half_angle: sliced[i].atan(),
                     angle_to_other: angle,
@@ -442,7 +442,7 @@ impl<'a> PlaneSolve<'a> {
         g: &'a Geometry,
         basis: &Basis,
         points: [Vector2<f64>; 3],
-    ) -> Result<Self, Result<SpatialNoForceClosure, InvalidInput>> {
+    ) -> Result<Self, Result<super::NoForceClosure, InvalidInput>> {
         let mut normals2 = [Vector2::zeros(); 2];
         let mut normals = [Vector3::zeros(); 2];
         let mut tilt_tangent = [0.0; 2];
@@ -471,7 +471,7 @@ impl<'a> PlaneSolve<'a> {
             tilt_tangent[i] = across * inv;
             match sliced_friction(g.mu[i], tilt_tangent[i]) {
                 Some(mu) => sliced[i] = mu,
-                None => misses.push(SpatialMiss::Tilted {
+                None => misses.push(super::Miss::Tilted {
                     contact: [Contact::First, Contact::Second][i],
                     tilt: across.atan2(in_plane),
                     half_angle: g.mu[i].atan(),
@@ -480,7 +480,7 @@ impl<'a> PlaneSolve<'a> {
         }
         if !misses.is_empty() {
             misses.extend(cones_missing(&points, &normals2, &sliced));
-            return Err(Ok(SpatialNoForceClosure {
+            return Err(Ok(super::NoForceClosure {
                 misses,
                 friction_safety_factor: g.safety,
             }));
@@ -550,7 +550,7 @@ impl<'a> PlaneSolve<'a> {
         mut planar: Recommendation,
         current_pose: CurrentPose,
         axis: AxisRelation,
-    ) -> SpatialRecommendation {
+    ) -> super::Recommendation {
         let (rotation_axis, rotation_angle) = self.rotation(&planar);
         let w = self.geometry.weight;
         planar.gripping_power *= w;
@@ -582,7 +582,7 @@ impl<'a> PlaneSolve<'a> {
             self.normals[0] * n1 + friction_directions[0] * f1,
             self.normals[1] * n2 + friction_directions[1] * f2,
         ];
-        SpatialRecommendation {
+        super::Recommendation {
             gravity_direction: b.lift(&planar.gravity_direction),
             plane_x: b.x,
             plane_y: b.y,

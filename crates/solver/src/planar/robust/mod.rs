@@ -6,8 +6,8 @@
 //! `center_of_mass_tolerance` along the x and y axes of the candidate frame, and its `mass` to
 //! within `± mass_tolerance`; friction is `μ / s` as everywhere (the safety factor). The answer
 //! minimises, over the allowed orientations, the worst case of the objective over all of these
-//! objects, and reports that worst case. With every tolerance zero, [`solve_robust`] is
-//! [`solve_orientation`] itself, so the answer is today's bit for bit.
+//! objects, and reports that worst case. With every tolerance zero, [`solve`] is
+//! [`super::solve`] itself, so the answer is today's bit for bit.
 //!
 //! # 1. At one orientation the worst case lies at a vertex
 //! Take moments about a point fixed in the object, not about the centre of mass `c`. At a fixed
@@ -92,7 +92,7 @@
 //!   fingers at no orientation, and for gravity with any component across the line the objects
 //!   just beside the segment on one side rest on the fingers. Only gravity exactly along the line
 //!   is left, one direction no wrist can hold to, so this is refused rather than handled: the
-//!   answer is [`RobustVerdict::NoCommonOrientation`], naming the vertex across the line;
+//!   answer is [`Verdict::NoCommonOrientation`], naming the vertex across the line;
 //!   likewise when the vertices' ranges do not meet (naming the two that bound it) or the bounds
 //!   miss the region's range. The nominal answer is given with it. (A vertex within 1e-12 of the
 //!   contact distance across the line counts as on it.)
@@ -146,7 +146,7 @@
 //! its allowed and graspable ranges; the local minima of the worst case over the region's
 //! graspable range; and the nominal object's own answer. With only the mass uncertain the region
 //! is the nominal centre of mass and the answer is the nominal one with every force scaled by
-//! `(m + Δm) / m`. [`RobustRecommendation::to_recommendation`] proposes how the answer fills
+//! `(m + Δm) / m`. [`Recommendation::to_recommendation`] proposes how the answer fills
 //! today's message fields.
 //!
 //! The finger force is the push of the harder-pushing finger along the contact line
@@ -160,8 +160,8 @@ use super::frame::{length, unit, GraspFrame, MAX_COORDINATE};
 use super::paper::{self, FORCE_SCALE};
 use super::sinusoid::{wrap_angle, Angle};
 use super::{
-    solve_orientation, AllowedRange, Candidate, Contact, InvalidInput, LocalMinimum,
-    NoForceClosure, Objective, Recommendation, Settings, Verdict,
+    AllowedRange, Candidate, Contact, InvalidInput, LocalMinimum, NoForceClosure, Objective,
+    Settings,
 };
 use nalgebra::Vector2;
 use std::f64::consts::TAU;
@@ -373,7 +373,8 @@ impl fmt::Display for NoCommonOrientation {
 /// "Worst" is the largest over the region of centres of mass (the box cut by the object) and
 /// the mass interval, with friction `μ / s`.
 #[derive(Debug, Clone, PartialEq)]
-pub struct RobustRecommendation {
+#[doc(alias = "RobustRecommendation")]
+pub struct Recommendation {
     /// The objective minimised (its worst case).
     pub objective: Objective,
     /// Recommended gravity angle θ, rad, in the nominal object's paper frame.
@@ -423,10 +424,10 @@ pub struct RobustRecommendation {
     /// The largest mass, kg.
     pub mass_worst: f64,
     /// The nominal object's own answer (its own optimum).
-    pub nominal: Recommendation,
+    pub nominal: super::Recommendation,
 }
 
-impl RobustRecommendation {
+impl Recommendation {
     /// The answer in the fields of today's [`Recommendation`] (a proposal for the message
     /// stage): the pose is the robust one; `gripping_power`, `internal_force` and their
     /// `_current` values are the worst cases; `contact_forces` are the nominal object's there;
@@ -434,8 +435,8 @@ impl RobustRecommendation {
     /// recommendation is no paper candidate of one object); `grasp_case` and `candidate_c`
     /// describe the nominal object (Theorem 1); `finger_force` and its `_current` value are the
     /// worst cases.
-    pub fn to_recommendation(&self) -> Recommendation {
-        Recommendation {
+    pub fn to_recommendation(&self) -> super::Recommendation {
+        super::Recommendation {
             objective: self.objective,
             gravity_angle: self.gravity_angle,
             wrist_rotation: self.wrist_rotation,
@@ -458,17 +459,18 @@ impl RobustRecommendation {
 
 /// The robust solver's verdict on valid input.
 #[derive(Debug, Clone, PartialEq)]
-pub enum RobustVerdict {
-    /// Every tolerance is zero: exactly [`solve_orientation`]'s verdict.
-    Exact(Verdict),
+#[doc(alias = "RobustVerdict")]
+pub enum Verdict {
+    /// Every tolerance is zero: exactly [`super::solve`]'s verdict.
+    Exact(super::Verdict),
     /// Every object in the tolerances can be held: the orientation of least worst case.
-    Recommended(Box<RobustRecommendation>),
+    Recommended(Box<Recommendation>),
     /// No allowed orientation suits every object in the tolerances; the nominal answer is given.
     NoCommonOrientation {
         /// Which vertices fail.
         reason: NoCommonOrientation,
         /// The nominal object's answer.
-        nominal: Box<Recommendation>,
+        nominal: Box<super::Recommendation>,
     },
     /// No orientation holds the grasp at all (force closure does not depend on the centre of
     /// mass or the mass).
@@ -479,14 +481,14 @@ pub enum RobustVerdict {
 /// the orientation of least worst-case objective and the forces it needs (module docs).
 ///
 /// Bad input (the candidate's or the tolerances') is an `Err`. With every tolerance zero this
-/// is [`solve_orientation`], unchanged.
+/// is [`super::solve`], unchanged.
 ///
 /// # Example
 /// The paper's case (c), a square held at the middle of two opposite sides, with its centre of
 /// mass known to ±0.1 along x: the recommendation moves off `θ_34`, and the worst case needs more
 /// than the nominal object.
 /// ```
-/// use grasp_orient_solver::{solve_robust, Candidate, RobustVerdict, Settings, Uncertainty};
+/// use grasp_orient_solver::{planar::{self, Candidate, robust::Uncertainty}, Settings};
 /// use nalgebra::Vector2;
 ///
 /// let grasp = Candidate {
@@ -504,7 +506,7 @@ pub enum RobustVerdict {
 ///     center_of_mass_tolerance: Vector2::new(0.1, 0.0),
 ///     mass_tolerance: 0.0,
 /// };
-/// let Ok(RobustVerdict::Recommended(r)) = solve_robust(&grasp, &tolerance, &Settings::default())
+/// let Ok(planar::robust::Verdict::Recommended(r)) = planar::robust::solve(&grasp, &tolerance, &Settings::default())
 /// else {
 ///     panic!("every object in the box can be held from above");
 /// };
@@ -512,20 +514,21 @@ pub enum RobustVerdict {
 /// assert!(r.gripping_power_nominal >= r.nominal.gripping_power);
 /// assert!((r.gravity_angle - r.nominal.gravity_angle).abs() > 1e-3);
 /// ```
-pub fn solve_robust(
+#[doc(alias = "solve_robust")]
+pub fn solve(
     candidate: &Candidate,
     uncertainty: &Uncertainty,
     settings: &Settings,
-) -> Result<RobustVerdict, InvalidInput> {
+) -> Result<Verdict, InvalidInput> {
     if uncertainty.is_exact() {
-        return solve_orientation(candidate, settings).map(RobustVerdict::Exact);
+        return super::solve(candidate, settings).map(Verdict::Exact);
     }
-    // The nominal answer, exactly as `solve_orientation` computes it.
+    // The nominal answer, exactly as `super::solve` computes it.
     let frame = GraspFrame::new(candidate, settings.friction_safety_factor)?;
     uncertainty.validate(candidate.mass)?;
     let nominal_analysis = match Analysis::new(&frame, settings.objective) {
         Ok(a) => a,
-        Err(miss) => return Ok(RobustVerdict::NoForceClosure(miss)),
+        Err(miss) => return Ok(Verdict::NoForceClosure(miss)),
     };
     let nominal = nominal_analysis.recommend(&settings.range)?;
     let mass_worst = candidate.mass + uncertainty.mass_tolerance;
@@ -534,14 +537,14 @@ pub fn solve_robust(
     let worst = match Worst::new(&frame, candidate, &region, masses, settings) {
         Ok(w) => w,
         Err(Refusal::NoCommon(reason)) => {
-            return Ok(RobustVerdict::NoCommonOrientation {
+            return Ok(Verdict::NoCommonOrientation {
                 reason,
                 nominal: Box::new(nominal),
             })
         }
-        Err(Refusal::NoClosure(miss)) => return Ok(RobustVerdict::NoForceClosure(miss)),
+        Err(Refusal::NoClosure(miss)) => return Ok(Verdict::NoForceClosure(miss)),
     };
-    Ok(RobustVerdict::Recommended(Box::new(worst.recommend(
+    Ok(Verdict::Recommended(Box::new(worst.recommend(
         &nominal_analysis,
         nominal,
         mass_worst,
@@ -859,9 +862,9 @@ impl Worst {
     fn recommend(
         &self,
         nominal_analysis: &Analysis,
-        nominal: Recommendation,
+        nominal: super::Recommendation,
         mass_worst: f64,
-    ) -> RobustRecommendation {
+    ) -> Recommendation {
         let f = &self.nominal_frame;
         let lo = self.graspable.0;
         let current = lo + (f.current_theta - lo).rem_euclid(TAU);
@@ -874,7 +877,7 @@ impl Worst {
         let ((power, power_at), (internal, internal_at)) = self.worst_at(theta);
         let ((power_now, _), (internal_now, _)) = self.worst_at(current);
         let at_nominal = nominal_analysis.evaluate(theta);
-        RobustRecommendation {
+        Recommendation {
             objective: self.objective,
             gravity_angle: theta,
             wrist_rotation: wrap_angle(current - theta),
@@ -961,9 +964,9 @@ mod tests {
         }
     }
 
-    fn recommended(c: &Candidate, u: &Uncertainty, s: &Settings) -> RobustRecommendation {
-        match solve_robust(c, u, s) {
-            Ok(RobustVerdict::Recommended(r)) => *r,
+    fn recommended(c: &Candidate, u: &Uncertainty, s: &Settings) -> Recommendation {
+        match solve(c, u, s) {
+            Ok(Verdict::Recommended(r)) => *r,
             other => panic!("expected a recommendation, got {other:?}"),
         }
     }
@@ -1028,8 +1031,8 @@ mod tests {
         let c = square_case_c();
         let s = Settings::default();
         assert_eq!(
-            solve_robust(&c, &Uncertainty::EXACT, &s),
-            solve_orientation(&c, &s).map(RobustVerdict::Exact)
+            super::solve(&c, &Uncertainty::EXACT, &s),
+            crate::planar::solve(&c, &s).map(super::Verdict::Exact)
         );
     }
 
@@ -1073,7 +1076,7 @@ mod tests {
     fn tolerances_are_checked() {
         let c = square_case_c();
         let s = Settings::default();
-        let refused = |u: Uncertainty| solve_robust(&c, &u, &s).expect_err("refused");
+        let refused = |u: Uncertainty| super::solve(&c, &u, &s).expect_err("refused");
         assert_eq!(
             refused(tolerance(-0.1, 0.0, 0.0)),
             InvalidInput::Tolerance {
@@ -1104,16 +1107,16 @@ mod tests {
     fn across_the_contact_line_has_no_common_orientation() {
         // The contact line is y = 1; a box reaching past it.
         let c = square_case_c();
-        match solve_robust(&c, &tolerance(0.1, 1.5, 0.0), &Settings::default()) {
-            Ok(RobustVerdict::NoCommonOrientation {
+        match super::solve(&c, &tolerance(0.1, 1.5, 0.0), &Settings::default()) {
+            Ok(super::Verdict::NoCommonOrientation {
                 reason: NoCommonOrientation::AcrossContactLine { point },
                 nominal,
             }) => {
                 assert!(point.position.y > 1.0);
                 assert_eq!(
                     Some(*nominal),
-                    match solve_orientation(&c, &Settings::default()) {
-                        Ok(Verdict::Recommended(r)) => Some(*r),
+                    match crate::planar::solve(&c, &Settings::default()) {
+                        Ok(crate::planar::Verdict::Recommended(r)) => Some(*r),
                         _ => None,
                     }
                 );
@@ -1136,8 +1139,8 @@ mod tests {
             mass: 1.0,
             gravity: Vector2::new(0.0, -9.81),
         };
-        match solve_robust(&c, &tolerance(1.0, 0.1, 0.0), &Settings::default()) {
-            Ok(RobustVerdict::NoCommonOrientation {
+        match super::solve(&c, &tolerance(1.0, 0.1, 0.0), &Settings::default()) {
+            Ok(super::Verdict::NoCommonOrientation {
                 reason: NoCommonOrientation::Disjoint { lo, hi, .. },
                 ..
             }) => assert!(lo > hi),
@@ -1211,8 +1214,8 @@ mod tests {
             range: AllowedRange::Bounds { lo: 2.3, hi: 2.35 },
             ..Settings::default()
         };
-        match solve_robust(&c, &u, &narrow) {
-            Ok(RobustVerdict::NoCommonOrientation {
+        match super::solve(&c, &u, &narrow) {
+            Ok(super::Verdict::NoCommonOrientation {
                 reason: reason @ NoCommonOrientation::BoundsMissed { .. },
                 ..
             }) => {
@@ -1230,7 +1233,7 @@ mod tests {
             ..Settings::default()
         };
         assert!(matches!(
-            solve_robust(&c, &u, &outside),
+            super::solve(&c, &u, &outside),
             Err(InvalidInput::RangeOutsideGraspable { .. })
         ));
     }

@@ -5,7 +5,7 @@
 //! The centre of mass is known to within a box of half-widths `center_of_mass_tolerance` along
 //! the x, y and z axes of the candidate frame around `center_of_mass`, the mass to within
 //! `± mass_tolerance`; friction is `μ / s` as everywhere. With every tolerance zero,
-//! [`solve_spatial_robust`] is [`solve_spatial`] itself. Units inside: lengths over the contact
+//! [`solve`] is [`super::solve`] itself. Units inside: lengths over the contact
 //! distance `d`, forces over the weight at the largest mass `W = m_max |g|`.
 //!
 //! # 1. The swing: what a gripper pose fixes
@@ -107,7 +107,7 @@
 //! [`EXCHANGE_ABS`] (1e-10 of the weight, *Tolerances*), add the worst point at `θ_S` to `S`
 //! (with two neighbours on its edge when it moved along one, *Iteration bounds*) and repeat (at most [`MAX_EXCHANGES`] times; sooner when no point can move `θ_S`, see *Iteration
 //! bounds*). The answer is `θ_S`; its worst
-//! case is exact (§4), and [`SpatialRobustRecommendation::optimality_gap`] is the certified bound
+//! case is exact (§4), and [`Recommendation::optimality_gap`] is the certified bound
 //! of how far it can lie above the least worst case over the allowed range. (A stationary
 //! minimum of `R` carried by a moving worst point is approached by curves that touch `R` from
 //! below; the choice is checked by a scan of tilts against the 3D reference, see *Status*.)
@@ -121,7 +121,7 @@
 //!   made of the images of its edges (great-circle arcs), on which the least elevation is found
 //!   in closed form ([`region`]).
 //! - **Graspable**: `[−π/2, π/2]` (§1). **Bounds**: met with it, shifted by multiples of 2π.
-//! - An empty range is [`SpatialNoCommonOrientation`], naming the points that bound it.
+//! - An empty range is [`NoCommonOrientation`], naming the points that bound it.
 //!
 //! # 7. What is reported
 //! At the recommended tilt and at the current one (after the swing): the worst objective, the
@@ -154,7 +154,7 @@
 //!   tolerance, so the certificate never decides when the exchange stops. Before, its absolute
 //!   floor was `1e-15 W`, about the rounding of the terms themselves, which the interval bounds
 //!   along a nearly flat edge reach only with pieces of 1e-8 of it.
-//! - What a user sees: [`SpatialRobustRecommendation::optimality_gap`] is at most
+//! - What a user sees: [`Recommendation::optimality_gap`] is at most
 //!   `1e-9 gripping_power + 1e-10 W` unless an iteration bound ended the search (the gap then
 //!   says how far it got).
 //!
@@ -178,7 +178,7 @@
 //!   point of the region gives a curve below `R`, so the certificate is unchanged, and the gap
 //!   halves every round (27 rounds to 14 for the slowest candidate of `benches/tail.rs`).
 //! - So an answer makes at most `MAX_EXCHANGES + 4 + L` maximisations (`L` the local minima it
-//!   reports), of at most `MAX_SPLITS` splits each; [`SpatialRobustRecommendation::splits`]
+//!   reports), of at most `MAX_SPLITS` splits each; [`Recommendation::splits`]
 //!   counts them. A maximisation depends only on the quantity and the tilt, so one at a tilt
 //!   already maximised (the answer's tilt is the last exchange round's, and usually one of the
 //!   local minima's) is taken from the earlier one, not made again. The envelope's walk is
@@ -208,7 +208,7 @@
 //! hang direction from it; it is the reading of the problem), points inside the region's faces
 //! beyond the samples, and the squeeze and finger force against the reference (they come from
 //! the same closed form as the objective). The message stage (`src/msg/convert.rs`) answers a
-//! spatial candidate with a centre-of-mass box with [`solve_spatial_robust`]; a mass tolerance
+//! spatial candidate with a centre-of-mass box with [`solve`]; a mass tolerance
 //! alone scales the nominal spatial answer.
 //!
 //! The 1-norm with a centre-of-mass tolerance is refused ([`InvalidInput::Norm1SpatialTolerance`]):
@@ -220,17 +220,13 @@ mod worst;
 
 use super::on_axis::AxisGrasp;
 use super::plane::Geometry;
-use super::{
-    solve_spatial, SpatialCandidate, SpatialMiss, SpatialNoForceClosure, SpatialRecommendation,
-    SpatialVerdict,
-};
 use crate::planar::analysis::Analysis;
 use crate::planar::curve::Curve;
 use crate::planar::frame::{GraspFrame, MAX_COORDINATE};
 use crate::planar::paper::FORCE_SCALE;
 use crate::planar::robust::{check_tolerance, periodic_meet, Envelope};
 use crate::sinusoid::Angle;
-use crate::{AllowedRange, Contact, InvalidInput, LocalMinimum, Objective, Settings};
+use crate::{planar::LocalMinimum, AllowedRange, Contact, InvalidInput, Objective, Settings};
 use nalgebra::{Vector2, Vector3};
 use region::Region;
 use std::cell::{Cell, RefCell};
@@ -249,7 +245,8 @@ pub const MAX_EXCHANGES: usize = 60;
 
 /// How well a spatial object is known. Zero everywhere means exactly.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct SpatialUncertainty {
+#[doc(alias = "SpatialUncertainty")]
+pub struct Uncertainty {
     /// Half-widths of a box around `center_of_mass` along the x, y and z axes of the candidate
     /// frame, m, each `>= 0`.
     pub center_of_mass_tolerance: Vector3<f64>,
@@ -257,9 +254,9 @@ pub struct SpatialUncertainty {
     pub mass_tolerance: f64,
 }
 
-impl SpatialUncertainty {
+impl Uncertainty {
     /// No uncertainty: the nominal problem.
-    pub const EXACT: SpatialUncertainty = SpatialUncertainty {
+    pub const EXACT: Uncertainty = Uncertainty {
         center_of_mass_tolerance: Vector3::new(0.0, 0.0, 0.0),
         mass_tolerance: 0.0,
     };
@@ -345,7 +342,8 @@ impl fmt::Display for RegionPoint {
 
 /// Why no tilt of the contact axis suits every object in the region (status 1).
 #[derive(Debug, Clone, PartialEq)]
-pub enum SpatialNoCommonOrientation {
+#[doc(alias = "SpatialNoCommonOrientation")]
+pub enum NoCommonOrientation {
     /// Hanging from above: `first` needs the gravity angle at least `lo`, `second` at most
     /// `hi < lo`.
     Disjoint {
@@ -367,11 +365,11 @@ pub enum SpatialNoCommonOrientation {
     },
 }
 
-impl fmt::Display for SpatialNoCommonOrientation {
+impl fmt::Display for NoCommonOrientation {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str("no tilt of the contact axis suits every object in the tolerances: ")?;
         match self {
-            SpatialNoCommonOrientation::Disjoint {
+            NoCommonOrientation::Disjoint {
                 first,
                 lo,
                 second,
@@ -381,7 +379,7 @@ impl fmt::Display for SpatialNoCommonOrientation {
                 "to hang from above with the centre of mass at {first} the gravity angle must be \
                  at least {lo:.6} rad, at {second} at most {hi:.6} rad"
             ),
-            SpatialNoCommonOrientation::BoundsMissed { lo, hi } => write!(
+            NoCommonOrientation::BoundsMissed { lo, hi } => write!(
                 f,
                 "the range bounds [{lo:.6}, {hi:.6}] rad miss [-pi/2, pi/2], the gravity angles at \
                  which an object whose centre of mass is uncertain hangs below the contact axis"
@@ -393,7 +391,8 @@ impl fmt::Display for SpatialNoCommonOrientation {
 /// The answer when a tolerance is not zero and every object in it can be held. "Worst" is the
 /// largest over the region (the box cut by the object's tangent planes) and the mass interval.
 #[derive(Debug, Clone, PartialEq)]
-pub struct SpatialRobustRecommendation {
+#[doc(alias = "SpatialRobustRecommendation")]
+pub struct Recommendation {
     /// The objective minimised (its worst case).
     pub objective: Objective,
     /// The recommended gravity angle θ*, rad in `[−π/2, π/2]`: `sin θ* = ĝ · a`, the tilt of the
@@ -434,7 +433,7 @@ pub struct SpatialRobustRecommendation {
     pub gripping_power_nominal: f64,
     /// The nominal object's squeeze there, N.
     pub internal_force_nominal: f64,
-    /// The nominal object's `(N1, F1, N2, F2)` there, N, split as [`SpatialRecommendation`]
+    /// The nominal object's `(N1, F1, N2, F2)` there, N, split as [`super::Recommendation`]
     /// splits them (in the nominal's plane).
     pub contact_forces: [f64; 4],
     /// The nominal object's contact forces there as 3D vectors, candidate frame, N.
@@ -456,43 +455,42 @@ pub struct SpatialRobustRecommendation {
     /// work of this answer, bounded (module docs §4).
     pub splits: usize,
     /// The nominal object's own answer.
-    pub nominal: SpatialRecommendation,
+    pub nominal: super::Recommendation,
 }
 
 /// The spatial robust solver's verdict on valid input.
 #[derive(Debug, Clone, PartialEq)]
-pub enum SpatialRobustVerdict {
-    /// Every tolerance is zero: exactly [`solve_spatial`]'s verdict.
-    Exact(SpatialVerdict),
+#[doc(alias = "SpatialRobustVerdict")]
+pub enum Verdict {
+    /// Every tolerance is zero: exactly [`super::solve`]'s verdict.
+    Exact(super::Verdict),
     /// Every object in the tolerances can be held: the tilt of least worst case.
-    Recommended(Box<SpatialRobustRecommendation>),
+    Recommended(Box<Recommendation>),
     /// No allowed tilt suits every object; the nominal answer is given.
     NoCommonOrientation {
         /// Which points fail.
-        reason: SpatialNoCommonOrientation,
+        reason: NoCommonOrientation,
         /// The nominal object's answer.
-        nominal: Box<SpatialRecommendation>,
+        nominal: Box<super::Recommendation>,
     },
     /// No orientation holds the grasp (force closure does not depend on the centre of mass).
-    NoForceClosure(SpatialNoForceClosure),
+    NoForceClosure(super::NoForceClosure),
 }
 
 /// Solves one spatial candidate whose centre of mass and mass are known only to within
 /// `uncertainty`: the tilt of the contact axis of least worst-case objective (module docs).
 ///
-/// Bad input is an `Err`; with every tolerance zero this is [`solve_spatial`], unchanged.
+/// Bad input is an `Err`; with every tolerance zero this is [`super::solve`], unchanged.
 ///
 /// # Example
 /// The paper's case (c) square stood up in the y-z plane, its centre of mass known to ±0.1 along
 /// x (out of the grasp plane) and y: every object hangs in its own plane, and the worst case
 /// needs more than the nominal object.
 /// ```
-/// use grasp_orient_solver::{
-///     solve_spatial_robust, Settings, SpatialCandidate, SpatialRobustVerdict, SpatialUncertainty,
-/// };
+/// use grasp_orient_solver::{Settings, spatial};
 /// use nalgebra::Vector3;
 ///
-/// let grasp = SpatialCandidate {
+/// let grasp = spatial::Candidate {
 ///     contact_1: Vector3::new(0.0, 1.0, 1.0),
 ///     contact_2: Vector3::new(0.0, -1.0, 1.0),
 ///     normal_1: Vector3::new(0.0, -1.0, 0.0),
@@ -503,33 +501,32 @@ pub enum SpatialRobustVerdict {
 ///     mass: 1.0,
 ///     gravity: Vector3::new(0.0, 0.0, -1.0),
 /// };
-/// let tolerance = SpatialUncertainty {
+/// let tolerance = spatial::robust::Uncertainty {
 ///     center_of_mass_tolerance: Vector3::new(0.1, 0.1, 0.0),
 ///     mass_tolerance: 0.0,
 /// };
-/// let Ok(SpatialRobustVerdict::Recommended(r)) =
-///     solve_spatial_robust(&grasp, &tolerance, &Settings::default())
+/// let Ok(spatial::robust::Verdict::Recommended(r)) =
+///     spatial::robust::solve(&grasp, &tolerance, &Settings::default())
 /// else {
 ///     panic!("every object in the box can be held from above");
 /// };
 /// assert!(r.gripping_power > r.gripping_power_nominal);
 /// assert!(r.optimality_gap <= 1e-9 * r.gripping_power);
 /// ```
-pub fn solve_spatial_robust(
-    candidate: &SpatialCandidate,
-    uncertainty: &SpatialUncertainty,
+#[doc(alias = "solve_spatial_robust")]
+pub fn solve(
+    candidate: &super::Candidate,
+    uncertainty: &Uncertainty,
     settings: &Settings,
-) -> Result<SpatialRobustVerdict, InvalidInput> {
+) -> Result<Verdict, InvalidInput> {
     if uncertainty.is_exact() {
-        return solve_spatial(candidate, settings).map(SpatialRobustVerdict::Exact);
+        return super::solve(candidate, settings).map(Verdict::Exact);
     }
-    let nominal = solve_spatial(candidate, settings)?;
+    let nominal = super::solve(candidate, settings)?;
     uncertainty.validate(candidate.mass)?;
     let nominal = match nominal {
-        SpatialVerdict::Recommended(r) => *r,
-        SpatialVerdict::NoForceClosure(miss) => {
-            return Ok(SpatialRobustVerdict::NoForceClosure(miss))
-        }
+        super::Verdict::Recommended(r) => *r,
+        super::Verdict::NoForceClosure(miss) => return Ok(Verdict::NoForceClosure(miss)),
     };
     if uncertainty.center_of_mass_tolerance != Vector3::zeros()
         && settings.objective == Objective::Norm1
@@ -540,23 +537,19 @@ pub fn solve_spatial_robust(
     let axis = match AxisGrasp::new(&geometry) {
         Ok(axis) => axis,
         Err(misses) => {
-            return Ok(SpatialRobustVerdict::NoForceClosure(
-                SpatialNoForceClosure {
-                    misses: misses.into_iter().map(SpatialMiss::Cone).collect(),
-                    friction_safety_factor: settings.friction_safety_factor,
-                },
-            ))
+            return Ok(Verdict::NoForceClosure(super::NoForceClosure {
+                misses: misses.into_iter().map(super::Miss::Cone).collect(),
+                friction_safety_factor: settings.friction_safety_factor,
+            }))
         }
     };
     let problem = Problem::new(candidate, uncertainty, settings, &geometry, &axis, &nominal);
     Ok(match problem.allowed(&settings.range) {
-        Err(reason) => SpatialRobustVerdict::NoCommonOrientation {
+        Err(reason) => Verdict::NoCommonOrientation {
             reason,
             nominal: Box::new(nominal),
         },
-        Ok(allowed) => {
-            SpatialRobustVerdict::Recommended(Box::new(problem.recommend(allowed, nominal)))
-        }
+        Ok(allowed) => Verdict::Recommended(Box::new(problem.recommend(allowed, nominal))),
     })
 }
 
@@ -596,12 +589,12 @@ struct Problem {
 
 impl Problem {
     fn new(
-        candidate: &SpatialCandidate,
-        uncertainty: &SpatialUncertainty,
+        candidate: &super::Candidate,
+        uncertainty: &Uncertainty,
         settings: &Settings,
         g: &Geometry,
         axis: &AxisGrasp,
-        nominal: &SpatialRecommendation,
+        nominal: &super::Recommendation,
     ) -> Self {
         let contacts = axis.contacts;
         let across = contacts.map(|c| Vector2::new(c.azimuth.cos(), c.azimuth.sin()) * c.sin_delta);
@@ -685,7 +678,7 @@ impl Problem {
 
 impl Problem {
     /// The gravity angles allowed for every object (module docs §6).
-    fn allowed(&self, range: &AllowedRange) -> Result<Vec<(f64, f64)>, SpatialNoCommonOrientation> {
+    fn allowed(&self, range: &AllowedRange) -> Result<Vec<(f64, f64)>, NoCommonOrientation> {
         match *range {
             AllowedRange::FromAbove => {
                 let v = &self.view;
@@ -694,7 +687,7 @@ impl Problem {
                 let (low, first) = self.region.least_elevation(&p1, &-v.a);
                 let lo = -low;
                 if lo > hi {
-                    return Err(SpatialNoCommonOrientation::Disjoint {
+                    return Err(NoCommonOrientation::Disjoint {
                         first,
                         lo,
                         second,
@@ -707,7 +700,7 @@ impl Problem {
             AllowedRange::Bounds { lo, hi } => {
                 let out = periodic_meet(lo, hi, -FRAC_PI_2, FRAC_PI_2);
                 if out.is_empty() {
-                    Err(SpatialNoCommonOrientation::BoundsMissed { lo, hi })
+                    Err(NoCommonOrientation::BoundsMissed { lo, hi })
                 } else {
                     Ok(out)
                 }
@@ -927,8 +920,8 @@ impl Problem {
     fn recommend(
         &self,
         allowed: Vec<(f64, f64)>,
-        nominal: SpatialRecommendation,
-    ) -> SpatialRobustRecommendation {
+        nominal: super::Recommendation,
+    ) -> Recommendation {
         let (theta, gap, envelope, samples) = self.exchange(&allowed);
         let w = self.weight;
         let power = self.worst(false, theta);
@@ -955,7 +948,7 @@ impl Problem {
         let direction = n.a * s + v3 * k;
         let (rotation_axis, rotation_angle) = rotation(&direction, &self.g0, &n.a.cross(&v3));
         let (nominal_values, contact_forces, force_vectors) = self.nominal_at(theta, &nominal);
-        SpatialRobustRecommendation {
+        Recommendation {
             objective: self.objective,
             gravity_angle: theta,
             gravity_direction: direction,
@@ -994,15 +987,15 @@ impl Problem {
     fn nominal_at(
         &self,
         theta: f64,
-        nominal: &SpatialRecommendation,
-    ) -> (crate::PointValue, [f64; 4], [Vector3<f64>; 2]) {
+        nominal: &super::Recommendation,
+    ) -> (crate::planar::PointValue, [f64; 4], [Vector3<f64>; 2]) {
         let frame = GraspFrame {
             weight: self.nominal_weight,
             ..self.frame_at(&self.center, Some(self.reference))
         };
         let value = match Analysis::new(&frame, self.objective) {
             Ok(a) => a.evaluate(theta),
-            Err(_) => crate::PointValue {
+            Err(_) => crate::planar::PointValue {
                 alpha_min: f64::NAN,
                 alpha: f64::NAN,
                 power: f64::NAN,
@@ -1072,7 +1065,7 @@ mod tests {
 
     /// Contacts on the x axis at ±0.5, normals tilted off the axis within 0.9 of the friction
     /// angle, the centre of mass off the axis inside the object.
-    fn grasp(k: u64) -> SpatialCandidate {
+    fn grasp(k: u64) -> crate::spatial::Candidate {
         let r = |j: u64| uniform(97 * k + j);
         let mu = [0.3 + 1.2 * r(0), 0.3 + 1.2 * r(1)];
         let normal = |toward: f64, mu: f64, a: f64, b: f64| {
@@ -1084,7 +1077,7 @@ mod tests {
                 delta.sin() * eta.sin(),
             )
         };
-        SpatialCandidate {
+        crate::spatial::Candidate {
             contact_1: Vector3::new(0.5, 0.0, 0.0),
             contact_2: Vector3::new(-0.5, 0.0, 0.0),
             normal_1: normal(-1.0, mu[0], r(2), r(3)),
@@ -1097,14 +1090,18 @@ mod tests {
         }
     }
 
-    fn problem(c: &SpatialCandidate, t: Vector3<f64>, settings: &Settings) -> Option<Problem> {
+    fn problem(
+        c: &crate::spatial::Candidate,
+        t: Vector3<f64>,
+        settings: &Settings,
+    ) -> Option<Problem> {
         let g = Geometry::new(c, settings.friction_safety_factor).ok()?;
         let axis = AxisGrasp::new(&g).ok()?;
-        let nominal = match solve_spatial(c, settings).ok()? {
-            SpatialVerdict::Recommended(r) => *r,
-            SpatialVerdict::NoForceClosure(_) => return None,
+        let nominal = match crate::spatial::solve(c, settings).ok()? {
+            crate::spatial::Verdict::Recommended(r) => *r,
+            crate::spatial::Verdict::NoForceClosure(_) => return None,
         };
-        let u = SpatialUncertainty {
+        let u = super::Uncertainty {
             center_of_mass_tolerance: t,
             mass_tolerance: 0.0,
         };
@@ -1115,27 +1112,26 @@ mod tests {
     /// gravity of lengths whose squares underflow give the answer of unit ones, never a panic.
     #[test]
     fn tiny_normals_and_gravity_give_the_answer_of_unit_ones() {
-        let u = SpatialUncertainty {
+        let u = super::Uncertainty {
             center_of_mass_tolerance: Vector3::new(0.02, 0.05, 0.05),
             mass_tolerance: 0.1,
         };
         let mut compared = 0;
         for k in 0..20 {
             let c = grasp(k);
-            let Ok(SpatialRobustVerdict::Recommended(want)) =
-                solve_spatial_robust(&c, &u, &Settings::default())
+            let Ok(super::Verdict::Recommended(want)) = super::solve(&c, &u, &Settings::default())
             else {
                 continue;
             };
             for scale in [1e-200, 1e-160, 1e3] {
-                let scaled = SpatialCandidate {
+                let scaled = crate::spatial::Candidate {
                     normal_1: c.normal_1 * scale,
                     normal_2: c.normal_2 * scale,
                     gravity: c.gravity * scale,
                     ..c
                 };
-                let got = solve_spatial_robust(&scaled, &u, &Settings::default());
-                let Ok(SpatialRobustVerdict::Recommended(got)) = got else {
+                let got = super::solve(&scaled, &u, &Settings::default());
+                let Ok(super::Verdict::Recommended(got)) = got else {
                     panic!("grasp {k} at scale {scale:e}: {got:?}");
                 };
                 let power = got.gripping_power / scale;
@@ -1239,8 +1235,8 @@ mod tests {
     /// with the answer the code before the absolute tolerances gave (tilt, rad; worst objective
     /// or squeeze, N; its optimality gap, N).
     struct Slow {
-        candidate: SpatialCandidate,
-        uncertainty: SpatialUncertainty,
+        candidate: crate::spatial::Candidate,
+        uncertainty: super::Uncertainty,
         settings: Settings,
         theta: f64,
         worst: f64,
@@ -1262,8 +1258,8 @@ mod tests {
     /// Two grasps whose least worst squeeze is nearly zero (2.4e-12 N and 3.2e-12 N for 1 kg):
     /// before, 13.1 s and 3.4 s, 848,650 and 432,890 splits, 60 exchanges each.
     fn near_zero() -> [Slow; 2] {
-        let on_x =
-            |n1: Vector3<f64>, n2: Vector3<f64>, mu: [f64; 2], c: Vector3<f64>| SpatialCandidate {
+        let on_x = |n1: Vector3<f64>, n2: Vector3<f64>, mu: [f64; 2], c: Vector3<f64>| {
+            crate::spatial::Candidate {
                 contact_1: v(0.5, 0.0, 0.0),
                 contact_2: v(-0.5, 0.0, 0.0),
                 normal_1: n1,
@@ -1273,8 +1269,9 @@ mod tests {
                 center_of_mass: c,
                 mass: 1.0,
                 gravity: v(0.0, 0.0, -9.81),
-            };
-        let box_only = |t: Vector3<f64>| SpatialUncertainty {
+            }
+        };
+        let box_only = |t: Vector3<f64>| super::Uncertainty {
             center_of_mass_tolerance: t,
             mass_tolerance: 0.0,
         };
@@ -1340,7 +1337,7 @@ mod tests {
     fn stalled() -> [Slow; 2] {
         [
             Slow {
-                candidate: SpatialCandidate {
+                candidate: crate::spatial::Candidate {
                     contact_1: v(
                         -1.1574751372189247,
                         -0.19217043114056687,
@@ -1359,7 +1356,7 @@ mod tests {
                     mass: 0.19478281224264662,
                     gravity: v(10.32822757158938, 2.6231222872542594, -3.533838044566626),
                 },
-                uncertainty: SpatialUncertainty {
+                uncertainty: super::Uncertainty {
                     center_of_mass_tolerance: v(
                         0.3285526076281989,
                         0.29987471628323575,
@@ -1373,7 +1370,7 @@ mod tests {
                 gap: 1.7167989416105476e-3,
             },
             Slow {
-                candidate: SpatialCandidate {
+                candidate: crate::spatial::Candidate {
                     contact_1: v(
                         -0.35555005168395126,
                         -1.3960802994854324,
@@ -1388,7 +1385,7 @@ mod tests {
                     mass: 22.537203552058187,
                     gravity: v(9.043802656199327, 3.178870681810648, 3.5678849579373537),
                 },
-                uncertainty: SpatialUncertainty {
+                uncertainty: super::Uncertainty {
                     center_of_mass_tolerance: v(
                         0.040722356533697934,
                         0.04132116257966973,
@@ -1404,16 +1401,16 @@ mod tests {
         ]
     }
 
-    fn solved(s: &Slow) -> SpatialRobustRecommendation {
-        match solve_spatial_robust(&s.candidate, &s.uncertainty, &s.settings) {
-            Ok(SpatialRobustVerdict::Recommended(r)) => *r,
+    fn solved(s: &Slow) -> super::Recommendation {
+        match super::solve(&s.candidate, &s.uncertainty, &s.settings) {
+            Ok(super::Verdict::Recommended(r)) => *r,
             other => panic!("{other:?}"),
         }
     }
 
     /// The points the exchange method added to the region's vertices and axis points (the worst
     /// point of each round and its neighbours).
-    fn exchanges(r: &SpatialRobustRecommendation) -> usize {
+    fn exchanges(r: &super::Recommendation) -> usize {
         r.samples - r.region.len() - usize::from(r.axis_segment.is_some()) * 2
     }
 
