@@ -19,7 +19,7 @@ pub mod markers;
 mod pose;
 mod sets;
 
-pub use candidate::{answer, answer_in_full, Answered};
+pub use candidate::{answer, answer_in_full, Answered, BEHIND_TANGENT_NOTE};
 pub use pose::{without_geometry, PoseAnswerer, PoseRefusal, MESH_CACHE_BYTES};
 pub use sets::{
     answer_one, answer_one_in_full, answer_set, answer_set_on, answer_set_within, apply_limit,

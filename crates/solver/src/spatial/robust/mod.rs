@@ -66,7 +66,9 @@
 //!
 //! # 3. Where the worst object lies: on the region's edges, not only at its corners
 //! The region is the box cut by the tangent planes at the contacts (a centre of mass lies inside a
-//! convex object), a convex polytope. Fix a half-plane `H_ψ` through the axis: on it `v` is fixed,
+//! convex object), a convex polytope; a tangent plane the nominal centre of mass lies behind (an
+//! object that is not convex there, `docs/theory.md#a-centre-of-mass-behind-a-tangent`) cuts
+//! nothing. Nothing below needs the cuts, only a convex polytope. Fix a half-plane `H_ψ` through the axis: on it `v` is fixed,
 //! `(ξ, ρ)` are affine coordinates, `B1`, `B2` are affine and `h_i` convex, so `IF` and `P` are
 //! convex on `H_ψ`. `H_ψ` meets the region in a convex polygon whose vertices lie on the region's
 //! edges or on the axis. So the worst object over the region lies on an edge of the region, or on
