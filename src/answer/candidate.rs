@@ -13,7 +13,7 @@ use crate::msg::convert::{invalid, planar_uncertainty, MessageLimits};
 use crate::msg::{CompactString, GraspCandidate, GripRecommendation};
 use crate::solver::{
     planar::{self, analyse, Candidate, Recommendation, Verdict},
-    spatial, InvalidInput, Settings, MAX_COORDINATE,
+    spatial, InvalidInput, Settings, BEHIND_TANGENT, MAX_COORDINATE,
 };
 use compact_str::ToCompactString as _;
 
@@ -116,7 +116,56 @@ fn planar_reply(m: &GraspCandidate, settings: &Settings) -> GripRecommendation {
     if reply.objective.is_empty() {
         reply.objective = CompactString::const_new(settings.objective.name());
     }
+    note_behind_tangent(&mut reply, m);
     reply
+}
+
+/// The start of the note in `message` for a centre of mass behind the surface tangent at a
+/// contact; the contacts follow (`contact_1`, `contact_2`, or both joined by " and ").
+pub const BEHIND_TANGENT_NOTE: &str = "center_of_mass lies behind the surface tangent at ";
+
+/// Adds [`BEHIND_TANGENT_NOTE`] to the `message` of an answered candidate (status not 2) whose
+/// centre of mass lies behind the surface tangent at a contact: an object that is not convex
+/// there. The solver answers it as any other (the statics never needed convexity,
+/// `docs/theory.md#a-centre-of-mass-behind-a-tangent`); the note says that the input is unusual,
+/// in case a mesh's normal or the centre of mass is wrong. The planar model reads the x-y parts.
+fn note_behind_tangent(reply: &mut GripRecommendation, m: &GraspCandidate) {
+    if reply.status == GripRecommendation::STATUS_INVALID_INPUT {
+        return;
+    }
+    let planar = m.model == GraspCandidate::MODEL_PLANAR;
+    let v = |x: f64, y: f64, z: f64| nalgebra::Vector3::new(x, y, if planar { 0.0 } else { z });
+    let com = v(m.center_of_mass.x, m.center_of_mass.y, m.center_of_mass.z);
+    let behind: Vec<&str> = [
+        ("contact_1", &m.contact_1, &m.normal_1),
+        ("contact_2", &m.contact_2, &m.normal_2),
+    ]
+    .into_iter()
+    .filter(|(_, p, n)| {
+        // Each vector divided by its largest component first: no square under- or overflows.
+        let unit = |w: nalgebra::Vector3<f64>| {
+            let big = w.amax();
+            (big > 0.0).then(|| (w / big).normalize())
+        };
+        match (unit(v(n.x, n.y, n.z)), unit(com - v(p.x, p.y, p.z))) {
+            (Some(n), Some(to)) => n.dot(&to) < -BEHIND_TANGENT,
+            _ => false,
+        }
+    })
+    .map(|(name, _, _)| name)
+    .collect();
+    if behind.is_empty() {
+        return;
+    }
+    let note = format!(
+        "{BEHIND_TANGENT_NOTE}{} (the object is not convex there)",
+        behind.join(" and ")
+    );
+    reply.message = if reply.message.is_empty() {
+        note.into()
+    } else {
+        format!("{}; {note}", reply.message).into()
+    };
 }
 
 /// The answer to a candidate read in the spatial model. A mass tolerance alone scales every
@@ -126,6 +175,13 @@ fn planar_reply(m: &GraspCandidate, settings: &Settings) -> GripRecommendation {
 /// swings about the contact axis to hang in its own plane, and the answer fixes the tilt of the
 /// axis whose worst case is least ([`spatial_robust_recommended`]).
 fn answer_spatial(m: &GraspCandidate, settings: &Settings) -> Answered {
+    let mut out = answer_spatial_unnoted(m, settings);
+    note_behind_tangent(&mut out.reply, m);
+    out
+}
+
+/// [`answer_spatial`] without the note on a centre of mass behind a tangent.
+fn answer_spatial_unnoted(m: &GraspCandidate, settings: &Settings) -> Answered {
     let mut out = match spatial_tolerance(m)
         .map_err(|e| e.to_string())
         .and_then(|tolerance| {
@@ -316,6 +372,56 @@ mod tests {
         assert_abs_diff_eq!(2.0 * q.z.atan2(q.w), a.wrist_rotation, epsilon = 1e-12);
         assert_eq!(a.local_minima.len(), a.local_minima_labels.len());
         assert_eq!(a.objective, "norm2");
+    }
+
+    /// Paper case (c) with its centre of mass moved behind the tangent at contact 1 (past that
+    /// side of the square, off the contact line): an object that is not convex there.
+    fn behind_contact_1() -> GraspCandidate {
+        let mut m = paper_case_c();
+        let (p1, p2) = (&m.contact_1, &m.contact_2);
+        let d = (p1.x - p2.x).hypot(p1.y - p2.y);
+        let len = m.normal_1.x.hypot(m.normal_1.y);
+        let (nx, ny) = (m.normal_1.x / len, m.normal_1.y / len);
+        m.center_of_mass.x = p1.x - 0.3 * d * nx - 0.2 * d * ny;
+        m.center_of_mass.y = p1.y - 0.3 * d * ny + 0.2 * d * nx;
+        m
+    }
+
+    /// Objects need not be convex (`docs/theory.md#a-centre-of-mass-behind-a-tangent`): behind
+    /// the tangent at contact 1 is answered as any other (status 0), with the note naming the
+    /// contact; with both tolerances too (the robust solver); the case itself carries no note.
+    #[test]
+    fn centre_of_mass_behind_a_tangent_is_answered_with_a_note() {
+        let plain = answer(&paper_case_c(), &Settings::default());
+        assert!(plain.message.is_empty(), "{}", plain.message);
+        let m = behind_contact_1();
+        let a = answer(&m, &Settings::default());
+        assert_eq!(a.status, GripRecommendation::STATUS_OK, "{}", a.message);
+        assert!(a.gripping_power.is_finite());
+        assert_eq!(
+            a.message,
+            format!("{BEHIND_TANGENT_NOTE}contact_1 (the object is not convex there)")
+        );
+        let mut robust = m.clone();
+        robust.center_of_mass_tolerance = Vector3 {
+            x: 0.01,
+            y: 0.01,
+            z: 0.0,
+        };
+        robust.mass_tolerance = 0.1 * robust.mass;
+        let r = answer(&robust, &Settings::default());
+        assert_ne!(
+            r.status,
+            GripRecommendation::STATUS_INVALID_INPUT,
+            "{}",
+            r.message
+        );
+        assert!(r.message.contains(BEHIND_TANGENT_NOTE), "{}", r.message);
+        let mut spatial = m;
+        spatial.model = GraspCandidate::MODEL_SPATIAL;
+        let s = answer(&spatial, &Settings::default());
+        assert_eq!(s.status, GripRecommendation::STATUS_OK, "{}", s.message);
+        assert!(s.message.contains(BEHIND_TANGENT_NOTE), "{}", s.message);
     }
 
     #[test]

@@ -24,7 +24,7 @@ mod pose;
 mod reply;
 mod sets;
 
-pub use candidate::{answer, answer_in_full, Answered};
+pub use candidate::{answer, answer_in_full, Answered, BEHIND_TANGENT_NOTE};
 pub use forces::Forces;
 pub use pose::{
     pose_set_without_geometry, uncast, without_geometry, PoseAnswerer, PoseRefusal,

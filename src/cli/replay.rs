@@ -290,6 +290,14 @@ fn report(summary: &Summary, secs: f64, no_compare: bool) -> anyhow::Result<()> 
             ""
         }
     )?;
+    if summary.answered_behind_tangent > 0 {
+        writeln!(
+            out,
+            "{} recorded refusals for a centre of mass behind a tangent are answered now (not \
+             differences: docs/recordings.md)",
+            summary.answered_behind_tangent
+        )?;
+    }
     if summary.sets > 0 || summary.unmatched_set_answers > 0 {
         writeln!(
             out,

@@ -7,7 +7,7 @@
 mod poses;
 mod sets;
 
-use crate::answer::{answer_one, Rules};
+use crate::answer::{answer_one, Rules, BEHIND_TANGENT_NOTE};
 use crate::config::{Config, ConfigError};
 use crate::msg::{clip, short_id, GraspCandidate, GripRecommendation, GripRecommendationSet};
 use crate::record::bag::{keep_example, Bag, Recorded};
@@ -51,6 +51,11 @@ pub struct Summary {
     pub pose_candidates: u64,
     /// Pose sets answered again (counted in `sets` too).
     pub pose_sets: u64,
+
+    /// Compared candidates recorded as refused for a centre of mass behind a surface tangent
+    /// ([`RECORDED_BEHIND_TANGENT`]) and answered now ([`answered_behind_tangent`]): counted as
+    /// agreeing, and here.
+    pub answered_behind_tangent: u64,
 }
 
 impl Summary {
@@ -67,6 +72,8 @@ impl Summary {
         self.in_refused_sets += other.in_refused_sets;
         self.pose_candidates += other.pose_candidates;
         self.pose_sets += other.pose_sets;
+
+        self.answered_behind_tangent += other.answered_behind_tangent;
         for (field, gap) in other.largest {
             self.note_gap(field, gap);
         }
@@ -559,6 +566,10 @@ fn compare_one(
     summary: &mut Summary,
 ) -> bool {
     summary.compared += 1;
+    if answered_behind_tangent(ours, theirs) {
+        summary.answered_behind_tangent += 1;
+        return false;
+    }
     let diffs = differences_in(ours, theirs, fields);
     for (field, gap) in &diffs {
         summary.note_gap(field, *gap);
@@ -580,6 +591,36 @@ fn compare_one(
         )
     });
     true
+}
+
+/// How recordings made before objects needed not be convex refused a candidate whose centre of
+/// mass lies behind the surface tangent at a contact (the contact follows).
+pub const RECORDED_BEHIND_TANGENT: &str =
+    "invalid input: center_of_mass lies outside the object: behind the surface tangent at ";
+
+/// Whether `theirs` is exactly that recorded refusal (status 2, [`RECORDED_BEHIND_TANGENT`] and
+/// a contact) and `ours` is today's answer to it: not refused, its `message` noting
+/// ([`BEHIND_TANGENT_NOTE`]) the contact the refusal named, for the same candidate (id, header)
+/// and objective. Every other difference stays a difference (`docs/recordings.md`).
+pub fn answered_behind_tangent(ours: &GripRecommendation, theirs: &GripRecommendation) -> bool {
+    let Some(contact) = theirs.message.strip_prefix(RECORDED_BEHIND_TANGENT) else {
+        return false;
+    };
+    let named = ours
+        .message
+        .split("; ")
+        .filter_map(|note| note.strip_prefix(BEHIND_TANGENT_NOTE))
+        .any(|rest| {
+            let contacts = rest.split(" (").next().unwrap_or(rest);
+            contacts.split(" and ").any(|c| c == contact)
+        });
+    theirs.status == GripRecommendation::STATUS_INVALID_INPUT
+        && matches!(contact, "contact_1" | "contact_2")
+        && ours.status != GripRecommendation::STATUS_INVALID_INPUT
+        && named
+        && ours.candidate_id == theirs.candidate_id
+        && ours.header == theirs.header
+        && ours.objective == theirs.objective
 }
 
 /// Solves with `settings` and `rules`, and with the objective `recorded` names, if given.
@@ -626,6 +667,72 @@ mod tests {
             differences(&nan, &nan.clone()).is_empty(),
             "NaN equals NaN here"
         );
+    }
+
+    /// `docs/recordings.md`, *Refusals answered now*: today's answer stands for exactly the
+    /// recorded refusal of a centre of mass behind a tangent, and for nothing else.
+    #[test]
+    fn a_recorded_behind_tangent_refusal_accepts_only_todays_answer() {
+        let mut m = crate::msg::paper_cases().swap_remove(2);
+        let (p1, n1) = (m.contact_1.clone(), m.normal_1.clone());
+        m.center_of_mass.x = p1.x - 0.5 * n1.x + 0.3 * n1.y;
+        m.center_of_mass.y = p1.y - 0.5 * n1.y - 0.3 * n1.x;
+        let ours = answer(&m, &Settings::default());
+        assert_eq!(
+            ours.status,
+            GripRecommendation::STATUS_OK,
+            "{}",
+            ours.message
+        );
+        let refusal = |contact: &str| {
+            let mut r = crate::msg::convert::invalid(
+                &m,
+                &format!("center_of_mass lies outside the object: behind the surface tangent at {contact}"),
+            );
+            r.objective = "norm2".into();
+            r
+        };
+        let theirs = refusal("contact_1");
+        assert!(answered_behind_tangent(&ours, &theirs));
+        let mut summary = Summary::default();
+        let fields = RecordedFields::default();
+        assert!(!compare_one(
+            String::new,
+            &ours,
+            &theirs,
+            &fields,
+            &mut summary
+        ));
+        assert_eq!((summary.compared, summary.differing), (1, 0));
+        assert_eq!(summary.answered_behind_tangent, 1);
+        // The other contact, another status, other words, a refusal today, another candidate or
+        // objective: differences as ever.
+        assert!(!answered_behind_tangent(&ours, &refusal("contact_2")));
+        let mut other = theirs.clone();
+        other.status = GripRecommendation::STATUS_NO_FORCE_CLOSURE;
+        assert!(!answered_behind_tangent(&ours, &other));
+        let mut other = theirs.clone();
+        other.message = other.message.replace("lies outside", "is outside").into();
+        assert!(!answered_behind_tangent(&ours, &other));
+        assert!(!answered_behind_tangent(&theirs, &theirs));
+        let mut other = theirs.clone();
+        other.candidate_id = "another".into();
+        assert!(!answered_behind_tangent(&ours, &other));
+        let mut other = theirs.clone();
+        other.objective = "norm1".into();
+        assert!(!answered_behind_tangent(&ours, &other));
+        assert!(compare_one(
+            String::new,
+            &ours,
+            &other,
+            &fields,
+            &mut summary
+        ));
+        assert_eq!(summary.differing, 1);
+        // Without the note (an answer for another reason), it is a difference too.
+        let mut plain = ours.clone();
+        plain.message = "".into();
+        assert!(!answered_behind_tangent(&plain, &theirs));
     }
 
     #[test]

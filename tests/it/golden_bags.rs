@@ -97,6 +97,11 @@ fn random_grasps_with_refused_ones_replay_unchanged() {
         text.contains("335 compared with a recorded recommendation, 0 differ"),
         "{text}"
     );
+    // Its refusal of a centre of mass behind a tangent is answered now (docs/recordings.md).
+    assert!(
+        text.contains("1 recorded refusals for a centre of mass behind a tangent are answered now"),
+        "{text}"
+    );
     assert!(
         text.contains("0 recorded recommendations unmatched"),
         "{text}"
@@ -135,6 +140,7 @@ fn the_bag_the_node_recorded_replays_with_its_settings() {
     assert!(
         text.contains("solved with the settings it recorded (2 settings records)")
             && text.contains("38 compared with a recorded recommendation, 0 differ")
+            && text.contains("1 recorded refusals for a centre of mass behind a tangent")
             && text.contains("0 recorded recommendations unmatched"),
         "{text}"
     );
@@ -162,11 +168,14 @@ fn a_bag_written_by_rosbags_is_read() {
     assert!(text.contains("replayed 24 candidates"), "{text}");
 }
 
-#[test]
-fn a_changed_answer_fails_the_replay() {
-    // Flip one recorded answer by writing a copy through the library, then replay it.
+/// A copy of golden bag `bag` with each recorded recommendation passed through `edit` (with its
+/// index), written through the library; the replay's exit status and report.
+fn replay_edited(
+    bag: &str,
+    edit: impl Fn(usize, &mut grasp_orient::msg::GripRecommendation),
+) -> (bool, String) {
     use grasp_orient::record::{bag, BagWriter, Entry, Payload, Topics};
-    let src = format!("{}/bags/paper_cases.mcap", env!("CARGO_MANIFEST_DIR"));
+    let src = format!("{}/bags/{bag}", env!("CARGO_MANIFEST_DIR"));
     let recorded = bag::read(std::path::Path::new(&src)).expect("golden bag reads");
     let dir = temp_dir("golden");
     let out = dir.path().join("tampered.mcap");
@@ -188,9 +197,7 @@ fn a_changed_answer_fails_the_replay() {
     }
     for (i, r) in recorded.recommendations.iter().enumerate() {
         let mut m = r.message.clone();
-        if i == 2 {
-            m.internal_force *= 1.0 + 1e-6;
-        }
+        edit(i, &mut m);
         w.write(&Entry {
             payload: Payload::Recommendation(Box::new(m)),
             log_time: r.log_time,
@@ -203,12 +210,70 @@ fn a_changed_answer_fails_the_replay() {
         .args(["replay", out.to_str().expect("utf-8")])
         .output()
         .expect("runs");
-    let text = String::from_utf8_lossy(&status.stdout);
-    assert!(!status.status.success(), "{text}");
+    (
+        status.status.success(),
+        String::from_utf8_lossy(&status.stdout).into_owned(),
+    )
+}
+
+#[test]
+fn a_changed_answer_fails_the_replay() {
+    // Flip one recorded answer by writing a copy through the library, then replay it.
+    let (ok, text) = replay_edited("paper_cases.mcap", |i, m| {
+        if i == 2 {
+            m.internal_force *= 1.0 + 1e-6;
+        }
+    });
+    assert!(!ok, "{text}");
     assert!(
         text.contains("internal_force") && text.contains("paper-c"),
         "{text}"
     );
+}
+
+/// Only the recorded refusal of a centre of mass behind a tangent, exactly as recorded, is
+/// accepted for today's answer (`docs/recordings.md`): a copy of the recording with that refusal
+/// edited (its status, or its words) has one difference more than the unedited copy, and none
+/// accepted. (A copy written today carries every field, so it differs from today's answers in the
+/// fields the original did not record: the copies are compared with each other.)
+#[test]
+fn a_behind_tangent_refusal_edited_otherwise_fails_the_replay() {
+    use grasp_orient::replay::RECORDED_BEHIND_TANGENT;
+    let src = format!("{}/bags/random_grasps.mcap", env!("CARGO_MANIFEST_DIR"));
+    let recorded =
+        grasp_orient::record::bag::read(std::path::Path::new(&src)).expect("golden bag reads");
+    let first = recorded
+        .recommendations
+        .iter()
+        .position(|r| r.message.message.starts_with(RECORDED_BEHIND_TANGENT))
+        .expect("random_grasps.mcap records such a refusal");
+    let accepted = "1 recorded refusals for a centre of mass behind a tangent are answered now";
+    let differing = |text: &str| -> usize {
+        let (_, rest) = text
+            .split_once("recommendation, ")
+            .unwrap_or_else(|| panic!("{text}"));
+        rest.split(' ')
+            .next()
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("{text}"))
+    };
+    let (_, text) = replay_edited("random_grasps.mcap", |_, _| {});
+    assert!(text.contains(accepted), "unedited: {text}");
+    let unedited = differing(&text);
+    let (ok, text) = replay_edited("random_grasps.mcap", |i, m| {
+        if i == first {
+            m.status = 1;
+        }
+    });
+    assert!(!ok && !text.contains(accepted), "status 1: {text}");
+    assert_eq!(differing(&text), unedited + 1, "status 1: {text}");
+    let (ok, text) = replay_edited("random_grasps.mcap", |i, m| {
+        if i == first {
+            m.message = m.message.replace("lies outside", "is outside").into();
+        }
+    });
+    assert!(!ok && !text.contains(accepted), "other words: {text}");
+    assert_eq!(differing(&text), unedited + 1, "other words: {text}");
 }
 
 /// `replay --write` writes what it solved; that recording replays without a difference, for

@@ -1,7 +1,7 @@
 //! The solver against the independent numerical reference (`tests/it/util`), on random
 //! force-closure grasps in random frames with random labellings.
 
-use crate::util::{random_grasp, wrap, RefObjective, RefRange, Reference};
+use crate::util::{random_grasp, random_grasp_behind, wrap, RefObjective, RefRange, Reference};
 use approx::{abs_diff_eq, assert_abs_diff_eq};
 use grasp_orient::solver::{
     planar::{self, Candidate, Recommendation, Verdict},
@@ -131,6 +131,28 @@ fn run(
     range: RefRange,
     samples: usize,
 ) {
+    run_behind(
+        seed,
+        count,
+        [false, false],
+        settings,
+        objective,
+        range,
+        samples,
+    );
+}
+
+/// [`run`] on grasps whose centre of mass lies behind the tangent line at contact `i` where
+/// `behind[i]` (`util::random_grasp_behind`).
+fn run_behind(
+    seed: u64,
+    count: usize,
+    behind: [bool; 2],
+    settings: Settings,
+    objective: RefObjective,
+    range: RefRange,
+    samples: usize,
+) {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut tally = Tally {
         grasps: 0,
@@ -141,11 +163,11 @@ fn run(
         tie_gap: (f64::INFINITY, 0.0),
     };
     for _ in 0..count {
-        let c = random_grasp(&mut rng);
+        let c = random_grasp_behind(&mut rng, behind);
         check(&c, &settings, objective, range, samples, &mut tally);
     }
     println!(
-        "{objective:?} {range:?}: {} grasps, worst angle error {:.2e} rad, {} ties of equal power {:.3}..{:.3} rad apart, \
+        "{objective:?} {range:?} behind {behind:?}: {} grasps, worst angle error {:.2e} rad, {} ties of equal power {:.3}..{:.3} rad apart, \
          worst power error {:.2e} (relative), worst force error {:.2e} (of the weight)",
         tally.grasps,
         tally.worst_angle,
@@ -229,6 +251,58 @@ fn internal_force_matches_reference() {
         RefRange::Graspable,
         4000,
     );
+}
+
+/// Objects that are not convex: the centre of mass behind the tangent line at contact 1, at
+/// contact 2, or at both (`docs/theory.md#a-centre-of-mass-behind-a-tangent`). The solver answers
+/// them and agrees with the reference to the tolerances above, for every objective and range:
+/// 1,800 grasps.
+#[test]
+fn center_of_mass_behind_a_tangent_matches_reference() {
+    let graspable = |objective| Settings {
+        objective,
+        range: AllowedRange::Graspable,
+        ..Settings::default()
+    };
+    for (k, behind) in [[true, false], [false, true], [true, true]]
+        .into_iter()
+        .enumerate()
+    {
+        let seed = 40 + 10 * k as u64;
+        let norm2 = Settings::default();
+        run_behind(
+            seed,
+            300,
+            behind,
+            norm2,
+            RefObjective::Norm2,
+            RefRange::FromAbove,
+            2000,
+        );
+        let norm2 = graspable(Objective::Norm2);
+        run_behind(
+            seed + 1,
+            100,
+            behind,
+            norm2,
+            RefObjective::Norm2,
+            RefRange::Graspable,
+            4000,
+        );
+        let norm1 = graspable(Objective::Norm1);
+        run_behind(
+            seed + 2,
+            100,
+            behind,
+            norm1,
+            RefObjective::Norm1,
+            RefRange::Graspable,
+            4000,
+        );
+        let squeeze = graspable(Objective::InternalForce);
+        let (objective, range) = (RefObjective::InternalForce, RefRange::Graspable);
+        run_behind(seed + 3, 100, behind, squeeze, objective, range, 4000);
+    }
 }
 
 #[test]

@@ -51,7 +51,7 @@ pub mod table_1;
 #[doc = include_str!("../README.md")]
 struct ReadmeExample;
 
-pub use planar::frame::{MAX_COORDINATE, MAX_SAFETY_FACTOR};
+pub use planar::frame::{BEHIND_TANGENT, MAX_COORDINATE, MAX_SAFETY_FACTOR};
 
 use std::fmt;
 
@@ -242,12 +242,6 @@ pub enum InvalidInput {
     #[error("normal_{} does not point into the object: it points away from {}", contact_number(*.contact), .contact.other())]
     NormalOutward {
         /// The contact whose normal is wrong.
-        contact: Contact,
-    },
-    /// The centre of mass lies outside the convex object.
-    #[error("center_of_mass lies outside the object: behind the surface tangent at {contact}")]
-    CenterOfMassOutside {
-        /// The contact whose tangent line separates it.
         contact: Contact,
     },
     /// The friction safety factor is not in `[1, MAX_SAFETY_FACTOR]`.

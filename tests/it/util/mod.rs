@@ -348,6 +348,21 @@ fn cone_contains(p: Vector2<f64>, n: Vector2<f64>, mu: f64, q: Vector2<f64>) -> 
 /// The object is implied: the centre of mass lies on the inner side of both tangent lines, so a
 /// convex object through both contacts can contain it.
 pub fn random_grasp(rng: &mut impl Rng) -> Candidate {
+    random_grasp_behind(rng, [false, false])
+}
+
+/// [`random_grasp`] with the centre of mass behind the tangent line at contact `i` (by at least
+/// 1e-3 of the scene's unit) where `behind[i]`, on its inner side (by as much) elsewhere: the
+/// object is not convex there.
+pub fn random_grasp_behind(rng: &mut impl Rng, behind: [bool; 2]) -> Candidate {
+    let side_ok = |depth: f64, behind: bool| {
+        if behind {
+            depth < -1e-3
+        } else {
+            depth > 1e-3
+        }
+    };
+    let reach = if behind.contains(&true) { 2.0 } else { 1.0 };
     loop {
         let p1 = Vector2::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));
         let p2 = Vector2::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));
@@ -364,8 +379,8 @@ pub fn random_grasp(rng: &mut impl Rng) -> Candidate {
         }
         // Centre of mass: somewhere inside both half-planes, near the contacts.
         let mid = (p1 + p2) / 2.0;
-        let com = mid + Vector2::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));
-        if n1.dot(&(com - p1)) <= 1e-3 || n2.dot(&(com - p2)) <= 1e-3 {
+        let com = mid + Vector2::new(rng.gen_range(-reach..reach), rng.gen_range(-reach..reach));
+        if !side_ok(n1.dot(&(com - p1)), behind[0]) || !side_ok(n2.dot(&(com - p2)), behind[1]) {
             continue;
         }
         // A random rigid motion and unit scale of the whole scene.

@@ -548,7 +548,12 @@ fn on_axis_local(rng: &mut impl Rng, kind: Kind, mu: [f64; 2]) -> Local {
 /// 0.95 of the sliced half-angle ξ' (`cos ξ' = cos ξ / cos β`) of the other contact; the centre of
 /// mass in the plane on the inner side of both normals, near the axis for `NearAxis`. `None`
 /// when the draw does not make such a grasp.
-fn off_axis_local(rng: &mut impl Rng, kind: Kind, mu: [f64; 2]) -> Option<Local> {
+fn off_axis_local(
+    rng: &mut impl Rng,
+    kind: Kind,
+    mu: [f64; 2],
+    behind: [bool; 2],
+) -> Option<Local> {
     let q1: (f64, f64) = (rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));
     let q2: (f64, f64) = (rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));
     let dist = (q1.0 - q2.0).hypot(q1.1 - q2.1);
@@ -581,7 +586,12 @@ fn off_axis_local(rng: &mut impl Rng, kind: Kind, mu: [f64; 2]) -> Option<Local>
         p1 + (p2 - p1) * t + Vector3::new(-along.1, along.0, 0.0) * (offset * side)
     } else {
         let mid = (p1 + p2) / 2.0;
-        mid + Vector3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), 0.0)
+        let reach = if behind.contains(&true) { 2.0 } else { 1.0 };
+        mid + Vector3::new(
+            rng.gen_range(-reach..reach),
+            rng.gen_range(-reach..reach),
+            0.0,
+        )
     };
     let r = com - p1;
     let a = (p2 - p1) / dist;
@@ -595,7 +605,15 @@ fn off_axis_local(rng: &mut impl Rng, kind: Kind, mu: [f64; 2]) -> Option<Local>
     } else {
         1e-3 * dist
     };
-    if n1.dot(&(com - p1)) <= margin || n2.dot(&(com - p2)) <= margin {
+    // Behind the tangent plane where asked (by as much): an object that is not convex there.
+    let side_ok = |depth: f64, behind: bool| {
+        if behind {
+            depth < -margin.max(1e-3 * dist)
+        } else {
+            depth > margin
+        }
+    };
+    if !side_ok(n1.dot(&(com - p1)), behind[0]) || !side_ok(n2.dot(&(com - p2)), behind[1]) {
         return None;
     }
     Some(Local {
@@ -609,12 +627,22 @@ fn off_axis_local(rng: &mut impl Rng, kind: Kind, mu: [f64; 2]) -> Option<Local>
 /// random units and normal lengths. Gravity is random in 3D, and in the grasp plane for about a
 /// fifth of the off-axis grasps (so that the current pose can be held).
 pub fn random_spatial_grasp(rng: &mut impl Rng, kind: Kind) -> spatial::Candidate {
+    random_spatial_grasp_behind(rng, kind, [false, false])
+}
+
+/// [`random_spatial_grasp`] (off the axis) with the centre of mass behind the tangent plane at
+/// contact `i` (by at least 1e-3 of the contact distance) where `behind[i]`.
+pub fn random_spatial_grasp_behind(
+    rng: &mut impl Rng,
+    kind: Kind,
+    behind: [bool; 2],
+) -> spatial::Candidate {
     let (local, mu) = loop {
         let mu = [rng.gen_range(0.1..2.0), rng.gen_range(0.1..2.0)];
         if on_axis(kind) {
             break (on_axis_local(rng, kind, mu), mu);
         }
-        if let Some(local) = off_axis_local(rng, kind, mu) {
+        if let Some(local) = off_axis_local(rng, kind, mu, behind) {
             break (local, mu);
         }
     };

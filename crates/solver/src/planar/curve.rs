@@ -73,6 +73,20 @@ impl Curve {
         }
     }
 
+    /// Stationary maxima strictly inside `(lo, hi)`, appended to `out`: the minima of `-Q` or
+    /// `-S`.
+    pub(crate) fn maxima_between(&self, lo: f64, hi: f64, out: &mut impl Extend<f64>) {
+        match self {
+            Curve::Quad(q) => QuadForm {
+                p: -q.p,
+                q: -q.q,
+                r: -q.r,
+            }
+            .minima_between(lo, hi, out),
+            Curve::Sin(s) => s.scaled(-1.0).minima_between(lo, hi, out),
+        }
+    }
+
     /// The first angle strictly after `after` where `other` rises through `self`, if any
     /// (module docs of `robust`, section 6).
     ///

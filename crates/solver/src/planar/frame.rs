@@ -26,6 +26,12 @@ pub const MAX_SAFETY_FACTOR: f64 = 1e3;
 pub const MIN_WEIGHT: f64 = f64::MIN_POSITIVE;
 /// Contacts closer than this fraction of their distance to the centre of mass coincide.
 const COINCIDENT_FRACTION: f64 = 1e-9;
+/// A centre of mass lies behind the surface tangent at a contact when the unit vector from the
+/// contact to it has an inward-normal component below minus this (the rounding of a centre of
+/// mass on the tangent is not "behind"). Nothing is refused for it: the statics hold for any
+/// object, convex or not (`docs/theory.md#a-centre-of-mass-behind-a-tangent`); the robust regions
+/// take no cut from such a tangent (`robust/mod.rs` section 3).
+pub const BEHIND_TANGENT: f64 = 1e-12;
 
 /// A candidate expressed in the paper's object frame (module docs of [`crate`]).
 ///
@@ -258,18 +264,17 @@ fn validate(c: &Candidate) -> Result<Measured, InvalidInput> {
     // for bit: the scaling by a power of two, the norm and the division all keep the sign apart).
     let to_first = unit(&(c.contact_1 - c.contact_2));
     let to_second = to_first.map(|u| -u);
-    for (contact, p, towards_other, n) in [
-        (Contact::First, c.contact_1, to_second, n1),
-        (Contact::Second, c.contact_2, to_first, n2),
+    for (contact, towards_other, n) in [
+        (Contact::First, to_second, n1),
+        (Contact::Second, to_first, n2),
     ] {
-        // A convex object lies in the half-plane its inward normal points into, so the other
-        // contact and the centre of mass must lie there too. Unit vectors: the signs do not
+        // The other contact lies where the inward normal points (the object is between the
+        // fingers). The centre of mass may lie anywhere: behind a tangent is ordinary for an
+        // object that is not convex, and the statics never needed convexity
+        // (`docs/theory.md#a-centre-of-mass-behind-a-tangent`). Unit vectors: the signs do not
         // depend on the lengths' scale.
         if towards_other.is_some_and(|u| n.dot(&u) < 0.0) {
             return Err(InvalidInput::NormalOutward { contact });
-        }
-        if unit(&(c.center_of_mass - p)).is_some_and(|u| n.dot(&u) < -1e-12) {
-            return Err(InvalidInput::CenterOfMassOutside { contact });
         }
     }
     Ok(Measured {
@@ -485,12 +490,10 @@ mod tests {
             GraspFrame::new(&c, 1.0),
             Err(InvalidInput::ZeroInPlane { field: "gravity" })
         );
+        // Behind both tangents (above the circle's top): answered, not refused.
         let mut c = circle_case_a();
         c.center_of_mass = Vector2::new(0.0, 30.0);
-        assert!(matches!(
-            GraspFrame::new(&c, 1.0),
-            Err(InvalidInput::CenterOfMassOutside { .. })
-        ));
+        assert!(GraspFrame::new(&c, 1.0).is_ok());
         assert_eq!(
             GraspFrame::new(&circle_case_a(), 0.5),
             Err(InvalidInput::SafetyFactor { value: 0.5 })

@@ -265,13 +265,11 @@ impl Geometry {
         }
         for (i, contact) in [Contact::First, Contact::Second].into_iter().enumerate() {
             let (pi, qi, ni) = (p[i], p[1 - i], n[i]);
-            // A convex object lies on the side its inward normal points to: the other contact
-            // and the centre of mass must lie there too.
+            // The other contact lies where the inward normal points. The centre of mass may lie
+            // behind the tangent plane (an object that is not convex): the reduction to the
+            // plane and its statics never needed convexity (`docs/theory.md`).
             if ni.dot(&(qi - pi)) < 0.0 {
                 return Err(InvalidInput::NormalOutward { contact });
-            }
-            if ni.dot(&to_com[i]) < -1e-12 * dist[i] {
-                return Err(InvalidInput::CenterOfMassOutside { contact });
             }
             if dist[i] <= COINCIDENT_FRACTION * d {
                 return Err(InvalidInput::CenterOfMassAtContact { contact });

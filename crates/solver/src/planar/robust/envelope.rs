@@ -114,6 +114,24 @@ impl Envelope {
         best.map_or(allowed[0].0, |(t, _)| t)
     }
 
+    /// The highest value on `[a, b]` (inside the envelope's interval), for curves scaled by
+    /// `k`: the largest of the values at `a`, `b`, the piece boundaries between them and the
+    /// pieces' stationary maxima between them (each piece is one curve, so its maximum over an
+    /// interval is at an end or a stationary point).
+    pub(crate) fn highest_between(&self, a: f64, b: f64, k: f64) -> f64 {
+        let mut top = f64::NEG_INFINITY;
+        let mut inside = Vec::with_capacity(2);
+        for piece in self.pieces.iter().filter(|p| p.hi >= a && p.lo <= b) {
+            let (lo, hi) = (piece.lo.max(a), piece.hi.min(b));
+            inside.clear();
+            piece.curve.maxima_between(lo, hi, &mut inside);
+            for &t in [lo, hi].iter().chain(inside.iter()) {
+                top = top.max(piece.curve.power(&Angle::new(t), k));
+            }
+        }
+        top
+    }
+
     /// Every local minimum of the envelope over its whole interval, for curves scaled by `k`,
     /// unlabelled (the paper's candidates belong to one object).
     pub(crate) fn local_minima(&self, k: f64) -> Vec<LocalMinimum> {

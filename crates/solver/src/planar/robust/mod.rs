@@ -62,10 +62,14 @@
 //!
 //! # 3. The region: the box, cut by the object
 //! The centre of mass of a convex object lies inside it, hence on the inner side of both surface
-//! tangents at the contacts (the check that refuses a nominal centre of mass outside the object).
-//! Where the box reaches past a tangent line, no object can have its centre of mass there, so the
-//! region used is the box cut by the two tangent half-planes: a convex polygon of at most six
-//! vertices (each cut adds at most one). This keeps every object the candidate allows and no
+//! tangents at the contacts. Where the box reaches past a tangent line, no object convex there can
+//! have its centre of mass there, so the region used is the box cut by the tangent half-planes: a
+//! convex polygon of at most six vertices (each cut adds at most one). Objects need not be convex
+//! (`docs/theory.md#a-centre-of-mass-behind-a-tangent`): a tangent the nominal centre of mass lies
+//! behind (by more than [`BEHIND_TANGENT`] of its distance from the contact) shows that the object
+//! is not convex at that contact, so it cuts nothing; one the nominal lies on (to that rounding)
+//! gives way to it. Nothing below needs the cuts: the worst case (section 1) and the ranges
+//! (section 4) hold for any convex polygon, but for one statement of section 4, which says so. This keeps every object the candidate allows and no
 //! object it rules out, so the worst case is exact rather than over-cautious, and a node-wide
 //! tolerance still works on thin objects, whose box would otherwise always stick out. Section 1
 //! holds for any convex polygon. The vertices are reported as [`BoxPoint`]s: box corners, or
@@ -87,8 +91,10 @@
 //!   `graspable_range_is_the_hull_not_the_union`).
 //! - **Bounds**: the bounds, shifted by multiples of 2π, met with the region's graspable range.
 //! - **Across the contact line**: a region with vertices on both sides of the contact line meets
-//!   the segment (it lies within both tangent half-planes, whose intersection with the line is the
-//!   segment). Then no orientation suits every object: objects on both sides hang below the
+//!   the segment when both tangents cut it (it lies within both tangent half-planes, whose
+//!   intersection with the line is the segment); a region a tangent does not cut may cross the line
+//!   beyond a contact instead, and is refused all the same (cautious: objects beyond the contacts on
+//!   the line could share an orientation). Then no orientation suits every object: objects on both sides hang below the
 //!   fingers at no orientation, and for gravity with any component across the line the objects
 //!   just beside the segment on one side rest on the fingers. Only gravity exactly along the line
 //!   is left, one direction no wrist can hold to, so this is refused rather than handled: the
@@ -156,7 +162,7 @@
 
 use super::analysis::Analysis;
 use super::curve::Curve;
-use super::frame::{length, unit, GraspFrame, MAX_COORDINATE};
+use super::frame::{length, unit, GraspFrame, BEHIND_TANGENT, MAX_COORDINATE};
 use super::paper::{self, FORCE_SCALE};
 use super::sinusoid::{wrap_angle, Angle};
 use super::{
@@ -555,7 +561,8 @@ pub fn solve(
 /// section 3), its vertices in order around it, duplicates merged.
 ///
 /// Sutherland–Hodgman against each tangent half-plane `n_i · (q - p_i) >= min(0, n_i · (c - p_i))`
-/// (the bound gives way by the rounding the validation of `c` allows, so `c` stays inside).
+/// (the bound gives way by the rounding of a nominal `c` on the tangent, so `c` stays inside); a
+/// tangent the nominal `c` lies behind ([`BEHIND_TANGENT`]) cuts nothing (module docs, section 3).
 fn region(c: &Candidate, u: &Uncertainty, contact_distance: f64) -> Vec<BoxPoint> {
     let t = u.center_of_mass_tolerance;
     let sign = |s: i8, half_width: f64| if half_width > 0.0 { s } else { 0 };
@@ -576,6 +583,10 @@ fn region(c: &Candidate, u: &Uncertainty, contact_distance: f64) -> Vec<BoxPoint
         // Scale-free: a normal whose square underflows still has its direction (`validate`
         // accepted it, so it is not zero).
         let n = unit(&n).unwrap_or_else(Vector2::zeros);
+        if unit(&(c.center_of_mass - p)).is_some_and(|u| n.dot(&u) < -BEHIND_TANGENT) {
+            // The object is not convex at this contact: its tangent bounds nothing.
+            continue;
+        }
         let limit = n.dot(&(c.center_of_mass - p)).min(0.0);
         let side = |q: &Vector2<f64>| n.dot(&(q - p)) - limit;
         let mut cut = Vec::with_capacity(poly.len() + 1);

@@ -66,7 +66,9 @@
 //!
 //! # 3. Where the worst object lies: on the region's edges, not only at its corners
 //! The region is the box cut by the tangent planes at the contacts (a centre of mass lies inside a
-//! convex object), a convex polytope. Fix a half-plane `H_ψ` through the axis: on it `v` is fixed,
+//! convex object), a convex polytope; a tangent plane the nominal centre of mass lies behind (an
+//! object that is not convex there, `docs/theory.md#a-centre-of-mass-behind-a-tangent`) cuts
+//! nothing. Nothing below needs the cuts, only a convex polytope. Fix a half-plane `H_ψ` through the axis: on it `v` is fixed,
 //! `(ξ, ρ)` are affine coordinates, `B1`, `B2` are affine and `h_i` convex, so `IF` and `P` are
 //! convex on `H_ψ`. `H_ψ` meets the region in a convex polygon whose vertices lie on the region's
 //! edges or on the axis. So the worst object over the region lies on an edge of the region, or on
@@ -134,6 +136,25 @@
 //! the nominal centre of mass: the answer is the nominal object's over the tilts of §1 (for
 //! `from_above`, the nominal answer with every force scaled by `(m + Δm)/m`).
 //!
+//! **One minimum per fan.** Where the exchange added points along one edge (§5, *Iteration
+//! bounds*), their curves cross near the least worst case and `R_S` ripples there: a fan of
+//! near-identical local minima (25 within 0.01 rad for the slowest candidate of
+//! `benches/tail.rs`) that are minima of the finite sample, not of `R`, each of which cost a
+//! certified maximisation. So the local minima of `R_S` over the allowed range are taken in
+//! increasing angle, and each joins the last one kept when `R_S` between the two (its highest
+//! value there: at the pieces' ends and stationary maxima) rises above the higher of them by at
+//! most [`FAN_BARRIER`] `= 1e-5 W`; a group keeps its lowest and only it is certified. Two kept
+//! minima are then separated by a barrier higher than that (the barrier to a group's lowest is at
+//! least the barrier to its first member). `1e-5 W` is 9.8e-5 N for 1 kg: ten times below what
+//! a gripper's force sensing resolves (about 1e-4 W, *Tolerances*), so a gripper cannot tell the
+//! minima it merges apart, whether they are ripples of the sample or shallow minima of `R`; and
+//! above the ripple of the fans of `benches/tail.rs` (the slowest's barriers rise 1e-12 to
+//! 9.7e-6 W, 25 minima to 1; unit test `one_minimum_per_fan`). The answer's tilt is `R_S`'s least
+//! over the allowed range (§5), unchanged: it is not taken from this list. The planar robust
+//! solver does not merge: its worst case is the exact envelope of the region's vertices
+//! (`planar/robust/mod.rs` §6), whose local minima are minima of `R` itself, each valued without
+//! a maximisation.
+//!
 //! # Tolerances
 //! Every force of §2 is proportional to the weight at the largest mass `W = m_max |g|`, and the
 //! solve works in units of it, so each tolerance is relative to the value plus absolute in units
@@ -178,7 +199,7 @@
 //!   point of the region gives a curve below `R`, so the certificate is unchanged, and the gap
 //!   halves every round (27 rounds to 14 for the slowest candidate of `benches/tail.rs`).
 //! - So an answer makes at most `MAX_EXCHANGES + 4 + L` maximisations (`L` the local minima it
-//!   reports), of at most `MAX_SPLITS` splits each; [`Recommendation::splits`]
+//!   reports, one per fan, §7), of at most `MAX_SPLITS` splits each; [`Recommendation::splits`]
 //!   counts them. A maximisation depends only on the quantity and the tilt, so one at a tilt
 //!   already maximised (the answer's tilt is the last exchange round's, and usually one of the
 //!   local minima's) is taken from the earlier one, not made again. The envelope's walk is
@@ -240,6 +261,10 @@ pub const EXCHANGE: f64 = 1e-9;
 /// The absolute part of the exchange method's tolerance, a fraction of the weight at the largest
 /// mass: 1e-10 `m_max |g|`, 9.8e-10 N for 1 kg (module docs, *Tolerances*).
 pub const EXCHANGE_ABS: f64 = 1e-10;
+/// Two local minima of the sampled worst case are one (a fan) when the envelope between them
+/// rises above the higher by at most this fraction of the weight at the largest mass: 1e-5
+/// `m_max |g|`, 9.8e-5 N for 1 kg (module docs §7, *One minimum per fan*).
+pub const FAN_BARRIER: f64 = 1e-5;
 /// Most points added by the exchange method; past it the gap reached is reported.
 pub const MAX_EXCHANGES: usize = 60;
 
@@ -438,8 +463,8 @@ pub struct Recommendation {
     pub contact_forces: [f64; 4],
     /// The nominal object's contact forces there as 3D vectors, candidate frame, N.
     pub force_vectors: [Vector3<f64>; 2],
-    /// Local minima of the worst case over the allowed range (module docs §7), in increasing
-    /// angle, unlabelled.
+    /// Local minima of the worst case over the allowed range, one per fan of minima separated by
+    /// less than [`FAN_BARRIER`] (module docs §7), in increasing angle, unlabelled.
     pub local_minima: Vec<LocalMinimum>,
     /// The allowed gravity angles for every object, rad, as closed intervals in `[−π/2, π/2]`.
     pub allowed: Vec<(f64, f64)>,
@@ -929,7 +954,7 @@ impl Problem {
         let power_now = self.worst(false, self.current);
         let squeeze_now = self.worst(true, self.current);
         let finger = |sq: f64, at: f64| w * (sq + 0.5 * at.sin().abs());
-        let local_minima = envelope
+        let in_range = envelope
             .local_minima(FORCE_SCALE)
             .into_iter()
             .filter(|m| {
@@ -937,6 +962,9 @@ impl Problem {
                     .iter()
                     .any(|&(a, b)| m.gravity_angle >= a && m.gravity_angle <= b)
             })
+            .collect();
+        let local_minima = one_per_fan(&envelope, in_range)
+            .into_iter()
             .map(|m| LocalMinimum {
                 power: w * self.worst(false, m.gravity_angle).value,
                 ..m
@@ -1025,6 +1053,29 @@ impl Problem {
         let ((a, b), (c, d)) = (split(0), split(1));
         (value, [a, b, c, d], vectors)
     }
+}
+
+/// The local minima of `R_S` (`minima`, in increasing angle, values in units of the weight), one
+/// per fan (module docs §7, *One minimum per fan*): each joins the last one kept when the
+/// envelope between the two rises above the higher of them by at most [`FAN_BARRIER`]; a fan
+/// keeps its lowest (the first of equals).
+fn one_per_fan(envelope: &Envelope, minima: Vec<LocalMinimum>) -> Vec<LocalMinimum> {
+    let mut kept: Vec<LocalMinimum> = Vec::with_capacity(minima.len());
+    for m in minima {
+        if let Some(last) = kept.last_mut() {
+            let higher = last.power.max(m.power);
+            let barrier =
+                envelope.highest_between(last.gravity_angle, m.gravity_angle, FORCE_SCALE);
+            if barrier - higher <= FAN_BARRIER {
+                if m.power < last.power {
+                    *last = m;
+                }
+                continue;
+            }
+        }
+        kept.push(m);
+    }
+    kept
 }
 
 /// The value at `theta` of one object's curve given piece by piece, in the envelope's scale
@@ -1468,5 +1519,62 @@ mod tests {
             assert!(r.optimality_gap <= s.gap.max(1e-9 * value), "{k}");
             assert!((r.gravity_angle - s.theta).abs() <= 1e-9, "{k}");
         }
+    }
+
+    /// Module docs §7, *One minimum per fan*: the slowest candidate of `benches/tail.rs`
+    /// (#14833) reported 27 local minima, 25 of them a fan within 0.01 rad of the answer whose
+    /// separating barriers rise at most 9.7e-6 of the weight, each valued by its own certified
+    /// maximisation (2,765 splits in all). One per fan: the minimum 0.3 rad below it, the fan's
+    /// lowest and the one across the range; the answer is the one of before.
+    #[test]
+    fn one_minimum_per_fan() {
+        let s = Slow {
+            candidate: crate::spatial::Candidate {
+                contact_1: v(0.37579301970347456, 1.678390513028841, 0.28867764865079115),
+                contact_2: v(0.3166935767251592, 2.3230553430081073, -0.7094528743328252),
+                normal_1: v(
+                    -0.04638894109481941,
+                    0.10181071083527465,
+                    -0.018378483100017443,
+                ),
+                normal_2: v(1.5148189627253503, -2.154160498127905, 2.2995217854345333),
+                friction_1: 1.9447726842882251,
+                friction_2: 0.7322443735890246,
+                center_of_mass: v(0.3432331554470405, 2.0335597154983973, -0.2612246238803148),
+                mass: 0.28647168020482605,
+                gravity: v(5.03818004870848, -0.24842905177107885, 5.4974205787526635),
+            },
+            uncertainty: super::Uncertainty {
+                center_of_mass_tolerance: v(
+                    0.15020811588559219,
+                    0.3258216811122028,
+                    0.19660497230142177,
+                ),
+                mass_tolerance: 0.0413978533856024,
+            },
+            settings: settings(Objective::InternalForce, AllowedRange::FromAbove),
+            theta: -0.636877542429512,
+            worst: 6.666259049438088,
+            gap: 2.8269938110932852e-9,
+        };
+        let r = solved(&s);
+        println!(
+            "fan: {} minima, {} splits, θ {:.17}",
+            r.local_minima.len(),
+            r.splits,
+            r.gravity_angle
+        );
+        let angles: Vec<f64> = r.local_minima.iter().map(|m| m.gravity_angle).collect();
+        assert_eq!(angles.len(), 3, "{angles:?}");
+        assert!((angles[0] + 0.937).abs() < 1e-3, "{angles:?}");
+        assert!((angles[1] - s.theta).abs() < 0.01, "{angles:?}");
+        assert!((angles[2] - 0.703).abs() < 1e-3, "{angles:?}");
+        // The fan's minimum is worth no more than the answer, to the exchange's tolerance.
+        let tol = EXCHANGE * s.worst + EXCHANGE_ABS * r.mass_worst * s.candidate.gravity.norm();
+        assert!(r.local_minima[1].power <= r.internal_force + tol);
+        assert!((r.gravity_angle - s.theta).abs() <= 1e-12);
+        assert!((r.internal_force - s.worst).abs() <= 1e-12 * s.worst);
+        assert!(r.optimality_gap <= s.gap + tol);
+        assert!(r.splits < 2_000, "{} splits", r.splits);
     }
 }

@@ -3,7 +3,7 @@
 //! elevation of its points seen from a contact (module docs §6).
 
 use super::{RegionPoint, RegionPointKind};
-use crate::Contact;
+use crate::{Contact, BEHIND_TANGENT};
 use nalgebra::Vector3;
 
 /// Lengths closer than this fraction of the scene's size are equal.
@@ -33,7 +33,8 @@ pub(super) struct Region {
 impl Region {
     /// The box around `center` with half-widths `half`, cut by the tangent plane at each contact
     /// `(contact, point, unit inward normal)` where the box reaches past it. The bound gives way
-    /// to keep `center` inside, as the planar region's does.
+    /// to keep `center` inside, as the planar region's does; a tangent `center` lies behind
+    /// ([`BEHIND_TANGENT`]: the object is not convex there) cuts nothing (module docs §3).
     pub fn new(
         center: Vector3<f64>,
         half: Vector3<f64>,
@@ -50,6 +51,9 @@ impl Region {
             vertices: Vec::new(),
         };
         for (contact, p, n) in tangents {
+            if n.dot(&(center - p)) < -BEHIND_TANGENT * (center - p).norm() {
+                continue;
+            }
             let offset = n.dot(&p) + n.dot(&(center - p)).min(0.0);
             let plane = Plane { n, offset };
             if region.corners().iter().any(|c| n.dot(c) < offset) {
