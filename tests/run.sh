@@ -68,8 +68,9 @@ phase "the message contract against the peer's Jazzy .msg files (cargo test --te
 AMENT_PREFIX_PATH=$(source "$ENV_SH" && printf '%s' "$AMENT_PREFIX_PATH") \
     cargo test --test it peer_ -- --ignored
 # The node under test is the binary `cargo test` built, copied aside: tests/ros/test_colcon.py
-# builds the repository in a colcon workspace with cargo in the same target folder (test profile,
-# so only the crate compiles), which relinks target/debug/grasp_orient with other features.
+# builds the repository in a colcon workspace with cargo in the same target folder (test profile;
+# Cargo.toml gives the node's dependencies the dev-dependencies' features, so little compiles),
+# which relinks target/debug/grasp_orient.
 TARGET="${CARGO_TARGET_DIR:-$PWD/target}"
 mkdir -p "$TARGET/under-test"
 cp "$TARGET/debug/grasp_orient" "$TARGET/under-test/grasp_orient"
