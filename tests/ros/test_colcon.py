@@ -16,8 +16,11 @@ Environment:
                                  Default: `--cmake-args -DGRASP_ORIENT_CARGO_PROFILE=test
                                  -DGRASP_ORIENT_CARGO_TARGET_DIR=T`, T the clone's cargo target
                                  (${CARGO_TARGET_DIR:-<repo>/target}). `cargo test` has built every
-                                 dependency there in the test profile, so only the crate compiles (a dev
-                                 build would recompile every dependency: cargo keys them by profile).
+                                 dependency there in the test profile, so little compiles (a dev build
+                                 would recompile every dependency: cargo keys them by profile).
+                                 Cargo.toml gives the node's dependencies the features the
+                                 dev-dependencies turn on; tests/run.sh keeps clippy-driver as
+                                 RUSTC_WORKSPACE_WRAPPER, which the workspace's crates are keyed by.
 
 A missing colcon, a missing peer or a failed build fails every test here; nothing skips.
 """
