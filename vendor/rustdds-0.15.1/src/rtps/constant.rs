@@ -48,6 +48,8 @@ pub const REPAIR_INTERVAL_MAX: Duration = Duration::from_millis(100);
 
 // Most bytes of DATA, DATAFRAG and GAP submessages one repair round sends to
 // one reader. A round always sends at least one sample, even a larger one.
+// Patched for grasp_orient (0010-repair-window.patch): now the first round's
+// budget; the reader's ACKNACKs grow and shrink it (src/rtps/repair_window.rs).
 pub const REPAIR_BATCH_MAX_BYTES: usize = 8192;
 
 // Periodic HEARTBEAT period for reliable Writers. The period is adaptive: while
