@@ -1439,6 +1439,7 @@ impl Writer {
 
     let round_budget = reader_proxy.repair_window.bytes();
     let now = std::time::Instant::now();
+    let mut sent_any = false;
     while round_bytes < round_budget {
       let Some(unsent_sn) = reader_proxy.first_unsent_change() else {
         break;
@@ -1540,13 +1541,42 @@ impl Writer {
       }
       reader_proxy.mark_change_sent(unsent_sn);
       reader_proxy.repair_window.repaired(unsent_sn, now);
+      sent_any = true;
     }
 
     self.flush_repair_datagram(&mut datagram, reader_proxy);
     if reader_proxy.first_unsent_change().is_none() {
       reader_proxy.repair_mode = false;
+      if sent_any {
+        self.heartbeat_after_repair(reader_proxy);
+      }
     }
   } // fn
+
+  // Patched for grasp_orient (0010-repair-window.patch): when a repair round has sent all the
+  // reader asked for, a HEARTBEAT (final flag clear) asks it for its next ACKNACK at once. An
+  // ACKNACK names at most 256 sequence numbers; waiting for the periodic HEARTBEAT (100 ms while
+  // a reader is behind) capped repair at 2,560 samples per second, however large the window.
+  // Now the reader's own answers pace the repair, and feed its window.
+  fn heartbeat_after_repair(&self, reader_proxy: &RtpsReaderProxy) {
+    let hb_message = MessageBuilder::new()
+      .heartbeat_msg(
+        self.entity_id(),
+        self.send_buffer.first_change_sequence_number(),
+        self.send_buffer.last_change_sequence_number(),
+        self.next_heartbeat_count(),
+        self.endianness,
+        reader_proxy.remote_reader_guid.entity_id,
+        false, // final_flag: request an ACKNACK
+        false, // liveliness_flag
+      )
+      .add_header_and_build(self.my_guid.prefix);
+    self.send_control_to_readers(
+      DeliveryMode::Unicast,
+      hb_message,
+      &mut std::iter::once(reader_proxy),
+    );
+  }
 
   // Append `part` to the repair datagram being built for `reader_proxy`, first
   // sending the datagram if `part` (plus `invalidate_len` bytes for an INFO_TS
@@ -3077,6 +3107,37 @@ mod tests {
         f.repair_round(),
         8,
         "a repeated NACK did not shrink the round"
+      );
+    }
+
+    // Patched for grasp_orient (0010-repair-window.patch): the round that sends the
+    // last of what the reader asked for ends with a HEARTBEAT to it, which asks for
+    // its next ACKNACK; a round that leaves some for later does not.
+    #[test]
+    fn a_repair_round_that_sends_all_asked_for_ends_with_a_heartbeat() {
+      let mut f = Fixture::user(20, 1000, None);
+      f.writer.nack_response_delay = StdDuration::ZERO;
+      // HEARTBEATs built since the last call (each takes the next count).
+      let mut counted = f.writer.next_heartbeat_count();
+      let mut heartbeats = |f: &Fixture| {
+        let now = f.writer.next_heartbeat_count();
+        let sent = now - counted - 1;
+        counted = now;
+        sent
+      };
+      f.ack_nack(1..=20, 1);
+      assert_eq!(f.repair_round(), 8);
+      assert_eq!(
+        heartbeats(&f),
+        0,
+        "a HEARTBEAT while repair was still under way"
+      );
+      assert_eq!(f.repair_round(), 8);
+      assert_eq!(f.repair_round(), 4);
+      assert_eq!(
+        heartbeats(&f),
+        1,
+        "no HEARTBEAT after the round that sent the last of what was asked for"
       );
     }
 
