@@ -80,7 +80,7 @@ def test_a_slow_reader_gets_every_answer_without_a_flood(start_node, peer: Peer)
     print(f"slow reader: {res['received']} of {N} answers (+1 probe) in {took:.1f} s, "
           f"{res['udp_drops']} datagrams dropped at its socket")
     assert res["received"] >= N, f"the slow reader got {res['received']} of {N} answers:\n{err[-2000:]}"
-    # Most drops come from the first sending of the burst while the reader is stopped (57 to 343 in five runs
+    # Most drops come from the first sending of the burst while the reader is stopped (237 to 615 in three runs
     # with patch 0010, 105 to 561 in four without, on a loaded machine). A writer whose repair rounds did not
     # shrink for this reader would send it rounds larger than its 32 kB buffer over and over: drops by the
     # thousand, and answers that never arrive.
