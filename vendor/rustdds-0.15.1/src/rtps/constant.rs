@@ -25,6 +25,17 @@ pub const CACHE_CLEAN_PERIOD: Duration = Duration::from_secs(4);
 pub const NACK_RESPONSE_DELAY: Duration = Duration::from_millis(5);
 pub const NACK_SUPPRESSION_DURATION: Duration = Duration::from_millis(0);
 
+// Patched for grasp_orient (0009-heartbeat-response-delay.patch). How long a reliable reader
+// waits before it answers a HEARTBEAT (RTPS 2.5 8.4.15.x heartbeatResponseDelay), and for how
+// long after an answer it ignores HEARTBEATs that announce nothing newer
+// (heartbeatSuppressionDuration). The delay is Fast DDS's default (5 ms): long enough for the
+// DATA_FRAGs that a writer sends right after the HEARTBEAT announcing them to arrive, so the
+// reader does not ask for them again; short next to a writer's heartbeat period (3 s in Fast
+// DDS). The suppression covers a writer's nackResponseDelay (5 ms in Fast DDS and here): a
+// repair asked for is on its way for that long. A gap that DATA proves is still NACKed at once.
+pub const HEARTBEAT_RESPONSE_DELAY: Duration = Duration::from_millis(5);
+pub const HEARTBEAT_SUPPRESSION_DURATION: Duration = Duration::from_millis(5);
+
 // Time between two repair rounds (SendRepairData, SendRepairFrags) for one
 // reader, and the backoff while the reader's send socket has queued control
 // datagrams. A Writer with a finite, positive Deadline uses a fifth of it,
@@ -37,6 +48,8 @@ pub const REPAIR_INTERVAL_MAX: Duration = Duration::from_millis(100);
 
 // Most bytes of DATA, DATAFRAG and GAP submessages one repair round sends to
 // one reader. A round always sends at least one sample, even a larger one.
+// Patched for grasp_orient (0010-repair-window.patch): now the first round's
+// budget; the reader's ACKNACKs grow and shrink it (src/rtps/repair_window.rs).
 pub const REPAIR_BATCH_MAX_BYTES: usize = 8192;
 
 // Periodic HEARTBEAT period for reliable Writers. The period is adaptive: while

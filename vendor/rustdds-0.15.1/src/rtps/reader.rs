@@ -4,7 +4,7 @@ use std::{
   rc::Rc,
   sync::{Arc, Mutex, MutexGuard},
   task::Waker,
-  time::Duration as StdDuration,
+  time::{Duration as StdDuration, Instant},
 };
 
 use mio1::Token;
@@ -42,8 +42,12 @@ use crate::{
   network::udp_sender::UDPSender,
   polling::{ReadySender, SharedTimer, WakeReceiver},
   rtps::{
-    fragment_assembler::FragmentAssembler, message_receiver::MessageReceiverState,
-    rtps_writer_proxy::RtpsWriterProxy, timed_event::DpTimerEvent, Message,
+    constant::{HEARTBEAT_RESPONSE_DELAY, HEARTBEAT_SUPPRESSION_DURATION},
+    fragment_assembler::FragmentAssembler,
+    message_receiver::MessageReceiverState,
+    rtps_writer_proxy::RtpsWriterProxy,
+    timed_event::DpTimerEvent,
+    Message,
   },
   structure::{
     cache_change::{CacheChange, ChangeKind},
@@ -66,6 +70,21 @@ use crate::no_security::SecurityPluginsHandle;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum TimedEvent {
   DeadlineMissedCheck,
+  // Patched for grasp_orient (0009-heartbeat-response-delay.patch): the heartbeat response
+  // delay of this writer's HEARTBEAT has passed; answer it now.
+  HeartbeatResponse { writer_guid: GUID },
+}
+
+// Patched for grasp_orient (0009-heartbeat-response-delay.patch): what a HEARTBEAT (or several
+// merged while the answer waits) asks the reader to answer.
+#[derive(Clone, Debug)]
+struct HeartbeatToAnswer {
+  first_sn: SequenceNumber,
+  last_sn: SequenceNumber,
+  // Every merged HEARTBEAT had the final flag: answer only if something is missing.
+  final_flag_set: bool,
+  source_guid_prefix: GuidPrefix,
+  reply_locators: Vec<Locator>,
 }
 
 // Some pieces necessary to construct a reader.
@@ -125,11 +144,15 @@ pub(crate) struct Reader {
 
   my_guid: GUID,
 
+  // RTPS 2.5 8.4.15.x: how long the reader waits before it answers a HEARTBEAT, and for how
+  // long after an answer it ignores HEARTBEATs that announce nothing newer (patched for
+  // grasp_orient, 0009-heartbeat-response-delay.patch; both were unused before).
   heartbeat_response_delay: StdDuration,
-
-  // TODO: Implement (use) this
-  #[allow(dead_code)]
   heartbeat_suppression_duration: StdDuration,
+  // Per writer: the HEARTBEAT answer waiting for its delay, and when the last answer went out
+  // with the last_sn it covered.
+  heartbeats_to_answer: BTreeMap<GUID, HeartbeatToAnswer>,
+  heartbeats_answered: BTreeMap<GUID, (Instant, SequenceNumber)>,
 
   received_heartbeat_count: i32,
 
@@ -197,8 +220,10 @@ impl Reader {
       seqnum_instant_map: BTreeMap::new(),
       my_guid: i.guid,
 
-      heartbeat_response_delay: StdDuration::new(0, 500_000_000), // 0,5sec
-      heartbeat_suppression_duration: StdDuration::new(0, 0),
+      heartbeat_response_delay: HEARTBEAT_RESPONSE_DELAY,
+      heartbeat_suppression_duration: HEARTBEAT_SUPPRESSION_DURATION,
+      heartbeats_to_answer: BTreeMap::new(),
+      heartbeats_answered: BTreeMap::new(),
       received_heartbeat_count: 0,
       fragment_assemblers: BTreeMap::new(),
       last_fragment_garbage_collect: Timestamp::now(),
@@ -323,6 +348,11 @@ impl Reader {
       TimedEvent::DeadlineMissedCheck => {
         self.handle_requested_deadline_event();
         self.set_requested_deadline_check_timer(); // re-prime timer
+      }
+      TimedEvent::HeartbeatResponse { writer_guid } => {
+        if let Some(to_answer) = self.heartbeats_to_answer.remove(&writer_guid) {
+          self.answer_heartbeat(writer_guid, &to_answer);
+        }
       }
     }
   }
@@ -466,6 +496,8 @@ impl Reader {
   }
 
   pub fn remove_writer_proxy(&mut self, writer_guid: GUID) {
+    self.heartbeats_to_answer.remove(&writer_guid);
+    self.heartbeats_answered.remove(&writer_guid);
     if self.matched_writers.contains_key(&writer_guid) {
       self.matched_writers.remove(&writer_guid);
       self
@@ -1033,13 +1065,13 @@ impl Reader {
       );
     }
 
-    self
+    let to_answer = self
       .with_mutable_writer_proxy(writer_guid, |this, writer_proxy| {
         // Note: This is worker closure. Use `this` instead of `self`.
 
         if heartbeat.count <= writer_proxy.received_heartbeat_count {
           // This heartbeat was already seen an processed.
-          return false;
+          return None;
         }
         writer_proxy.received_heartbeat_count = heartbeat.count;
 
@@ -1053,9 +1085,6 @@ impl Reader {
           this.notify_cache_change();
         }
 
-        // let received_before = writer_proxy.all_ackable_before();
-        let reader_id = this.entity_id();
-
         // See if ACKNACK is needed, and generate one.
         let missing_seqnums = writer_proxy.missing_seqnums(heartbeat.first_sn, heartbeat.last_sn);
 
@@ -1068,131 +1097,195 @@ impl Reader {
         // having received all the data samples or may indicate that some data
         // samples are missing. The response may be delayed to avoid message storms.
 
-        if !missing_seqnums.is_empty() || !final_flag_set {
-          let mut partially_received = Vec::new();
-          // report of what we have.
-          // We claim to have received all SNs before "base" and produce a set of missing
-          // sequence numbers that are >= base.
-          let reader_sn_state = match missing_seqnums.first() {
-            Some(&first_missing) => {
-              // Here we assume missing_seqnums are returned in order.
-              // Limit the set to maximum that can be sent in acknack submessage.
-
-              SequenceNumberSet::from_base_and_set(
-                first_missing,
-                &missing_seqnums
-                  .iter()
-                  .copied()
-                  .take_while(|sn| sn < &(first_missing + SequenceNumber::new(256)))
-                  .filter(|sn| {
-                    if this.is_frag_partially_received(writer_guid, *sn) {
-                      partially_received.push(*sn);
-                      false
-                    } else {
-                      true
-                    }
-                  })
-                  .collect(),
-              )
-            }
-
-            // Nothing missing. Report that we have all we have.
-            None => SequenceNumberSet::new_empty(writer_proxy.all_ackable_before()),
-          };
-
-          let response_ack_nack = AckNack {
-            reader_id,
-            writer_id: heartbeat.writer_id,
-            reader_sn_state,
-            count: writer_proxy.next_ack_nack_sequence_number(),
-          };
-
-          // Sanity check
-          //
-          // Wrong. This sanity check is invalid. The condition
-          // ack_base > heartbeat.last_sn + 1
-          // May be legitimately true, if there are some changes available, and a GAP
-          // after that. E.g. HEARTBEAT 1..8 and GAP 9..10. Then acknack_base == 11
-          // and 11 > 8 + 1.
-          //
-          //
-          // if response_ack_nack.reader_sn_state.base() > heartbeat.last_sn +
-          // SequenceNumber::new(1) {   error!(
-          //     "OOPS! AckNack sanity check tripped: HEARTBEAT = {:?} ACKNACK = {:?}
-          // missing_seqnums = {:?} all_ackable_before = {:?} writer={:?}",
-          //     &heartbeat, &response_ack_nack, missing_seqnums,
-          // writer_proxy.all_ackable_before(), writer_guid,   );
-          // }
-
-          // The acknack can be sent now or later. The rest of the RTPS message
-          // needs to be constructed. p. 48
-          let acknack_flags = BitFlags::<ACKNACK_Flags>::from_flag(ACKNACK_Flags::Endianness)
-            | BitFlags::<ACKNACK_Flags>::from_flag(ACKNACK_Flags::Final);
-
-          let nackfrag_flags = BitFlags::<NACKFRAG_Flags>::from_flag(NACKFRAG_Flags::Endianness);
-
-          // send NackFrags, if any
-          let mut nackfrags = Vec::new();
-          for sn in partially_received {
-            let count = writer_proxy.next_ack_nack_sequence_number();
-            let mut missing_frags = this.missing_frags_for(writer_guid, sn);
-            let first_missing = missing_frags.next();
-            if let Some(first) = first_missing {
-              let missing_frags_set = iter::once(first).chain(missing_frags).collect(); // "undo" the .next() above
-              let nf = NackFrag {
-                reader_id,
-                writer_id: writer_proxy.remote_writer_guid.entity_id,
-                writer_sn: sn,
-                fragment_number_state: FragmentNumberSet::from_base_and_set(
-                  first,
-                  &missing_frags_set,
-                ),
-                count,
-              };
-              nackfrags.push(nf);
-            } else {
-              error!("The dog ate my missing fragments.");
-              // Really, this should not happen, as we are above checking
-              // that this SN is really partially (and not fully) received.
-            }
-          }
-
-          // Decide where should we send a reply, i.e. ACKNACK
-          let reply_locators = match mr_state.unicast_reply_locator_list {
-            [] | [Locator::Invalid] => &writer_proxy.unicast_locator_list,
+        if missing_seqnums.is_empty() && final_flag_set {
+          return None;
+        }
+        Some(HeartbeatToAnswer {
+          first_sn: heartbeat.first_sn,
+          last_sn: heartbeat.last_sn,
+          final_flag_set,
+          source_guid_prefix: mr_state.source_guid_prefix,
+          reply_locators: match mr_state.unicast_reply_locator_list {
+            [] | [Locator::Invalid] => writer_proxy.unicast_locator_list.clone(),
             //TODO: What is writer_proxy has an empty list?
-            others => others,
-          };
+            others => others.to_vec(),
+          },
+        })
+      }) // worker fn
+      .flatten();
+    match to_answer {
+      Some(to_answer) => self.schedule_heartbeat_answer(writer_guid, to_answer),
+      None => false, // no writer_proxy, a HEARTBEAT seen before, or nothing to answer
+    }
+  } // fn
 
-          if !nackfrags.is_empty() {
-            this.send_nackfrags_to(
-              nackfrag_flags,
-              nackfrags,
-              InfoDestination {
-                guid_prefix: mr_state.source_guid_prefix,
-              },
-              reply_locators,
-              writer_guid,
-            );
-          }
+  // Patched for grasp_orient (0009-heartbeat-response-delay.patch), RTPS 2.5 8.4.15.x: a
+  // HEARTBEAT is answered after heartbeat_response_delay, not at once. A writer may announce a
+  // sample ahead of its DATA (Fast DDS sends a HEARTBEAT before the first DATA_FRAG of a large
+  // sample); answering at once asked for fragments on their way, and the writer sent them twice.
+  // HEARTBEATs that come while an answer waits are merged into it. Within
+  // heartbeat_suppression_duration of an answer, a HEARTBEAT that announces nothing past what
+  // that answer covered is ignored: the repair it would ask for is already on its way. A gap that
+  // DATA proves (0008) and the NACK_FRAGs of 0005 are still sent at once. Returns whether an
+  // answer is (or will be) sent.
+  fn schedule_heartbeat_answer(&mut self, writer_guid: GUID, to_answer: HeartbeatToAnswer) -> bool {
+    if let Some(&(answered_at, answered_last_sn)) = self.heartbeats_answered.get(&writer_guid) {
+      if answered_at.elapsed() < self.heartbeat_suppression_duration
+        && to_answer.last_sn <= answered_last_sn
+      {
+        trace!("HEARTBEAT from {writer_guid:?} within the suppression duration: ignored");
+        return false;
+      }
+    }
+    if self.heartbeat_response_delay.is_zero() {
+      self.answer_heartbeat(writer_guid, &to_answer);
+      return true;
+    }
+    match self.heartbeats_to_answer.get_mut(&writer_guid) {
+      Some(waiting) => {
+        waiting.first_sn = waiting.first_sn.max(to_answer.first_sn);
+        waiting.last_sn = waiting.last_sn.max(to_answer.last_sn);
+        waiting.final_flag_set &= to_answer.final_flag_set;
+        waiting.reply_locators = to_answer.reply_locators;
+      }
+      None => {
+        self.heartbeats_to_answer.insert(writer_guid, to_answer);
+        self.timed_event_timer.borrow_mut().set_timeout(
+          self.heartbeat_response_delay,
+          DpTimerEvent::Reader {
+            entity_id: self.my_guid.entity_id,
+            event: TimedEvent::HeartbeatResponse { writer_guid },
+          },
+        );
+      }
+    }
+    true
+  }
 
-          this.send_acknack_to(
-            acknack_flags,
-            response_ack_nack,
-            InfoDestination {
-              guid_prefix: mr_state.source_guid_prefix,
-            },
-            reply_locators,
-            writer_guid,
-          );
+  // Sends the ACKNACK (and NACK_FRAGs) that answer `to_answer`, from what the reader has now.
+  fn answer_heartbeat(&mut self, writer_guid: GUID, to_answer: &HeartbeatToAnswer) {
+    if !self.matched_writers.contains_key(&writer_guid) {
+      return; // unmatched while the answer waited
+    }
+    self
+      .heartbeats_answered
+      .insert(writer_guid, (Instant::now(), to_answer.last_sn));
+    self.with_mutable_writer_proxy(writer_guid, |this, writer_proxy| {
+      let reader_id = this.entity_id();
+      let missing_seqnums = writer_proxy.missing_seqnums(to_answer.first_sn, to_answer.last_sn);
+      if missing_seqnums.is_empty() && to_answer.final_flag_set {
+        return; // what the HEARTBEAT announced arrived meanwhile
+      }
+      let mut partially_received = Vec::new();
+      // report of what we have.
+      // We claim to have received all SNs before "base" and produce a set of missing
+      // sequence numbers that are >= base.
+      let reader_sn_state = match missing_seqnums.first() {
+        Some(&first_missing) => {
+          // Here we assume missing_seqnums are returned in order.
+          // Limit the set to maximum that can be sent in acknack submessage.
 
-          return true;
+          SequenceNumberSet::from_base_and_set(
+            first_missing,
+            &missing_seqnums
+              .iter()
+              .copied()
+              .take_while(|sn| sn < &(first_missing + SequenceNumber::new(256)))
+              .filter(|sn| {
+                if this.is_frag_partially_received(writer_guid, *sn) {
+                  partially_received.push(*sn);
+                  false
+                } else {
+                  true
+                }
+              })
+              .collect(),
+          )
         }
 
-        false
-      }) // worker fn
-      .unwrap_or(false) // default false: no writer_proxy -> no acknack
-  } // fn
+        // Nothing missing. Report that we have all we have.
+        None => SequenceNumberSet::new_empty(writer_proxy.all_ackable_before()),
+      };
+
+      let response_ack_nack = AckNack {
+        reader_id,
+        writer_id: writer_guid.entity_id,
+        reader_sn_state,
+        count: writer_proxy.next_ack_nack_sequence_number(),
+      };
+
+      // Sanity check
+      //
+      // Wrong. This sanity check is invalid. The condition
+      // ack_base > heartbeat.last_sn + 1
+      // May be legitimately true, if there are some changes available, and a GAP
+      // after that. E.g. HEARTBEAT 1..8 and GAP 9..10. Then acknack_base == 11
+      // and 11 > 8 + 1.
+      //
+      //
+      // if response_ack_nack.reader_sn_state.base() > heartbeat.last_sn +
+      // SequenceNumber::new(1) {   error!(
+      //     "OOPS! AckNack sanity check tripped: HEARTBEAT = {:?} ACKNACK = {:?}
+      // missing_seqnums = {:?} all_ackable_before = {:?} writer={:?}",
+      //     &heartbeat, &response_ack_nack, missing_seqnums,
+      // writer_proxy.all_ackable_before(), writer_guid,   );
+      // }
+
+      // The acknack can be sent now or later. The rest of the RTPS message
+      // needs to be constructed. p. 48
+      let acknack_flags = BitFlags::<ACKNACK_Flags>::from_flag(ACKNACK_Flags::Endianness)
+        | BitFlags::<ACKNACK_Flags>::from_flag(ACKNACK_Flags::Final);
+
+      let nackfrag_flags = BitFlags::<NACKFRAG_Flags>::from_flag(NACKFRAG_Flags::Endianness);
+
+      // send NackFrags, if any
+      let mut nackfrags = Vec::new();
+      for sn in partially_received {
+        let count = writer_proxy.next_ack_nack_sequence_number();
+        let mut missing_frags = this.missing_frags_for(writer_guid, sn);
+        let first_missing = missing_frags.next();
+        if let Some(first) = first_missing {
+          let missing_frags_set = iter::once(first).chain(missing_frags).collect(); // "undo" the .next() above
+          let nf = NackFrag {
+            reader_id,
+            writer_id: writer_proxy.remote_writer_guid.entity_id,
+            writer_sn: sn,
+            fragment_number_state: FragmentNumberSet::from_base_and_set(first, &missing_frags_set),
+            count,
+          };
+          nackfrags.push(nf);
+        } else {
+          error!("The dog ate my missing fragments.");
+          // Really, this should not happen, as we are above checking
+          // that this SN is really partially (and not fully) received.
+        }
+      }
+
+      let reply_locators = &to_answer.reply_locators;
+
+      if !nackfrags.is_empty() {
+        this.send_nackfrags_to(
+          nackfrag_flags,
+          nackfrags,
+          InfoDestination {
+            guid_prefix: to_answer.source_guid_prefix,
+          },
+          reply_locators,
+          writer_guid,
+        );
+      }
+
+      this.send_acknack_to(
+        acknack_flags,
+        response_ack_nack,
+        InfoDestination {
+          guid_prefix: to_answer.source_guid_prefix,
+        },
+        reply_locators,
+        writer_guid,
+      );
+    });
+  }
 
   pub fn handle_gap_msg(&mut self, gap: &Gap, mr_state: &MessageReceiverState) {
     // ATM all things related to groups is ignored. TODO?
@@ -1995,6 +2088,176 @@ mod tests {
     assert_eq!(data(&mut reader, 3), 2);
   }
 
+  // A reliable user topic's reader whose writer's reply locator is a socket of the test's, so
+  // the ACKNACKs and NACK_FRAGs it sends can be read back (0009-heartbeat-response-delay.patch).
+  fn reader_answering_to_a_socket() -> (Reader, GUID, std::net::UdpSocket, SharedTimer<DpTimerEvent>)
+  {
+    let dds_cache = Arc::new(RwLock::new(DDSCache::new()));
+    let qos_policy = QosPolicyBuilder::new()
+      .reliability(Reliability::Reliable {
+        max_blocking_time: Duration::from_millis(100),
+      })
+      .build();
+    let topic_cache_handle = dds_cache.write().unwrap().add_new_topic(
+      "test_name".to_string(),
+      TypeDesc::new("test_type".to_string()),
+      &qos_policy,
+    );
+    let (notification_sender, _notification_receiver) =
+      crate::mio_source::notification_channel(100);
+    let (_notification_event_source, notification_event_sender) =
+      mio_source::make_poll_channel().unwrap();
+    let (status_sender, _status_receiver) = sync_status_channel::<DataReaderStatus>(4).unwrap();
+    let (participant_status_sender, _participant_status_receiver) =
+      sync_status_channel(16).unwrap();
+    let (_reader_command_sender, reader_command_receiver) =
+      wake_channel::<ReaderCommand>(10, &LoopWaker::new());
+    let timer = new_shared_timer();
+    let mut reader = Reader::new(
+      ReaderIngredients {
+        guid: GUID::dummy_test_guid(EntityKind::READER_NO_KEY_USER_DEFINED),
+        notification_sender,
+        status_sender,
+        topic_name: "test_name".to_string(),
+        topic_cache_handle,
+        like_stateless: false,
+        qos_policy: qos_policy.clone(),
+        data_reader_command_receiver: reader_command_receiver,
+        data_reader_waker: Arc::new(Mutex::new(None)),
+        poll_event_sender: notification_event_sender,
+        security_plugins: None,
+        discovery_notify: None,
+      },
+      Rc::new(UDPSender::new(0).unwrap()),
+      timer.clone(),
+      participant_status_sender,
+    );
+    let socket = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    socket.set_nonblocking(true).unwrap();
+    let writer_guid = GUID::dummy_test_guid(EntityKind::WRITER_NO_KEY_USER_DEFINED);
+    reader.matched_writer_add(
+      writer_guid,
+      EntityId::UNKNOWN,
+      vec![Locator::from(socket.local_addr().unwrap())],
+      vec![],
+      &qos_policy,
+    );
+    (reader, writer_guid, socket, timer)
+  }
+
+  // The sequence numbers (and fragments) that the reader's datagrams to `socket` asked for
+  // since the last call: (sn, None) for an ACKNACK's, (sn, Some(fragment)) for a NACK_FRAG's;
+  // and how many ACKNACKs came.
+  fn requests_sent(socket: &std::net::UdpSocket) -> (Vec<(i64, Option<u32>)>, usize) {
+    std::thread::sleep(StdDuration::from_millis(20));
+    let mut asked = Vec::new();
+    let mut acknacks = 0;
+    let mut buf = vec![0u8; 65536];
+    while let Ok(n) = socket.recv(&mut buf) {
+      let message = Message::read_from_buffer(&bytes::Bytes::copy_from_slice(&buf[..n])).unwrap();
+      for sub in message.submessages() {
+        match sub.body {
+          crate::rtps::SubmessageBody::Reader(ReaderSubmessage::AckNack(a, _)) => {
+            acknacks += 1;
+            asked.extend(a.reader_sn_state.iter().map(|sn| (i64::from(sn), None)));
+          }
+          crate::rtps::SubmessageBody::Reader(ReaderSubmessage::NackFrag(nf, _)) => {
+            let sn = i64::from(nf.writer_sn);
+            asked.extend(
+              nf.fragment_number_state
+                .iter()
+                .map(|f| (sn, Some(u32::from(f)))),
+            );
+          }
+          _ => {}
+        }
+      }
+    }
+    (asked, acknacks)
+  }
+
+  // Runs the reader's timed events that are due.
+  fn run_due_timers(reader: &mut Reader, timer: &SharedTimer<DpTimerEvent>) {
+    loop {
+      let event = timer.borrow_mut().poll();
+      match event {
+        Some(DpTimerEvent::Reader { event, .. }) => reader.handle_timed_event(event),
+        Some(_) => {}
+        None => break,
+      }
+    }
+  }
+
+  #[test]
+  fn a_sample_announced_ahead_of_its_fragments_is_not_asked_for() {
+    // What Fast DDS does with a large sample: a HEARTBEAT announcing it, then its DATA_FRAGs.
+    let (mut reader, writer_guid, socket, timer) = reader_answering_to_a_socket();
+    let mr_state = MessageReceiverState {
+      source_guid_prefix: writer_guid.prefix,
+      ..Default::default()
+    };
+    let _preemptive = requests_sent(&socket);
+    let reader_id = reader.my_guid.entity_id;
+    let heartbeat = |count: i32, last: i64| Heartbeat {
+      reader_id,
+      writer_id: writer_guid.entity_id,
+      first_sn: SequenceNumber::new(1),
+      last_sn: SequenceNumber::new(last),
+      count,
+    };
+    assert!(reader.handle_heartbeat_msg(&heartbeat(1, 1), false, &mr_state));
+    // Sample 1: 40,000 bytes in 40 fragments of 1,000, arriving after the HEARTBEAT.
+    let payload: Vec<u8> = [0x00, 0x01, 0x00, 0x00]
+      .into_iter()
+      .chain((0..39_996).map(|i| (i % 251) as u8))
+      .collect();
+    let flags = BitFlags::<DATAFRAG_Flags>::from_flag(DATAFRAG_Flags::Endianness);
+    for (i, chunk) in payload.chunks(1000).enumerate() {
+      let frag = DataFrag {
+        reader_id,
+        writer_id: writer_guid.entity_id,
+        writer_sn: SequenceNumber::new(1),
+        fragment_starting_num: FragmentNumber::new(i as u32 + 1),
+        fragments_in_submessage: 1,
+        data_size: payload.len() as u32,
+        fragment_size: 1000,
+        inline_qos: None,
+        serialized_payload: bytes::Bytes::copy_from_slice(chunk),
+      };
+      reader.handle_datafrag_msg(&frag, flags, &mr_state);
+      if i == 0 {
+        // The first fragment is in, the rest on its way: asking now sends them twice.
+        let (asked, _) = requests_sent(&socket);
+        assert!(
+          asked.is_empty(),
+          "the reader asked for {asked:?} while the sample's fragments were on their way"
+        );
+      }
+    }
+    assert_eq!(
+      reader
+        .matched_writer(writer_guid)
+        .unwrap()
+        .all_ackable_before(),
+      SequenceNumber::new(2),
+      "the sample was not assembled"
+    );
+    // The response delay passes: the reader acknowledges the sample and asks for nothing.
+    std::thread::sleep(reader.heartbeat_response_delay);
+    run_due_timers(&mut reader, &timer);
+    // Within the suppression duration, a HEARTBEAT announcing nothing newer is ignored.
+    assert!(!reader.handle_heartbeat_msg(&heartbeat(2, 1), false, &mr_state));
+    let (asked, acknacks) = requests_sent(&socket);
+    assert_eq!(acknacks, 1, "the HEARTBEAT was never answered");
+    assert!(asked.is_empty(), "the reader asked for {asked:?}");
+    // One that announces a newer sample is answered, after the delay, with what is missing.
+    assert!(reader.handle_heartbeat_msg(&heartbeat(3, 2), false, &mr_state));
+    std::thread::sleep(reader.heartbeat_response_delay);
+    run_due_timers(&mut reader, &timer);
+    let (asked, acknacks) = requests_sent(&socket);
+    assert_eq!((asked, acknacks), (vec![(2, None)], 1));
+  }
+
   #[test]
   fn fragments_of_a_received_sample_leave_no_assembly_behind() {
     // A reliable user topic's reader, as in reader_sends_data_to_topic_cache.
@@ -2161,6 +2424,9 @@ mod tests {
       new_shared_timer(),
       participant_status_sender,
     );
+    // This test is about what is answered, not when: answer at once, suppress nothing.
+    reader.heartbeat_response_delay = StdDuration::ZERO;
+    reader.heartbeat_suppression_duration = StdDuration::ZERO;
 
     // 2. Add info of a matched writer to the reader
     let writer_guid = GUID::dummy_test_guid(EntityKind::WRITER_NO_KEY_USER_DEFINED);

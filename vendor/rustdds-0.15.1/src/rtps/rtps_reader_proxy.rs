@@ -15,6 +15,7 @@ use crate::{
   network::util::{path_mtu_payload_for_peer, IfAddr},
   rtps::{
     constant::*,
+    repair_window::RepairWindow,
     transmit::{InterfaceObservations, InterfaceSelector, RouteSelector, SendRoute},
   },
   structure::{
@@ -95,6 +96,10 @@ pub(crate) struct RtpsReaderProxy {
   // multi-fragment DATAFRAG datagrams. An overestimate only causes IP
   // fragmentation, never data loss.
   max_datagram_payload: usize,
+
+  // Patched for grasp_orient (0010-repair-window.patch): the bytes one repair round may send
+  // to this reader, grown and shrunk by its ACKNACKs.
+  pub repair_window: RepairWindow,
 }
 
 impl RtpsReaderProxy {
@@ -119,6 +124,7 @@ impl RtpsReaderProxy {
       frags_requested: BTreeMap::new(),
       send_route: SendRoute::default(),
       max_datagram_payload: FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE,
+      repair_window: RepairWindow::default(),
     }
   }
 
@@ -248,6 +254,7 @@ impl RtpsReaderProxy {
       frags_requested: BTreeMap::new(),
       send_route: SendRoute::default(),
       max_datagram_payload: FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE,
+      repair_window: RepairWindow::default(),
     }
   }
 
@@ -326,6 +333,7 @@ impl RtpsReaderProxy {
       frags_requested: BTreeMap::new(),
       send_route: SendRoute::default(),
       max_datagram_payload: FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE,
+      repair_window: RepairWindow::default(),
     }
   }
 

@@ -30,8 +30,8 @@ use crate::{
     constant::{
       DEFAULT_WRITER_MAX_SAMPLES, FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE, FRAGMENT_SIZE,
       HEARTBEAT_PERIOD_FAST, HEARTBEAT_PERIOD_SLOW, HEARTBEAT_SUBMESSAGE_SERIALIZED_SIZE,
-      NACK_RESPONSE_DELAY, NACK_SUPPRESSION_DURATION, REPAIR_BATCH_MAX_BYTES,
-      REPAIR_INTERVAL_DEFAULT, REPAIR_INTERVAL_MAX, REPAIR_INTERVAL_MIN,
+      NACK_RESPONSE_DELAY, NACK_SUPPRESSION_DURATION, REPAIR_INTERVAL_DEFAULT, REPAIR_INTERVAL_MAX,
+      REPAIR_INTERVAL_MIN,
     },
     outbound::{SocketId, TrafficClass},
     rtps_reader_proxy::RtpsReaderProxy,
@@ -1202,6 +1202,13 @@ impl Writer {
 
           //TODO: We should drop SNs in "pending gap" from unsent changes
           reader_proxy.handle_ack_nack(ack_submessage, last_seq);
+          // Patched for grasp_orient (0010-repair-window.patch): the ACKNACK paces the
+          // reader's repair rounds.
+          reader_proxy.repair_window.on_acknack(
+            an.reader_sn_state.base(),
+            an.reader_sn_state.iter(),
+            std::time::Instant::now(),
+          );
 
           // Sanity Check: if the reader asked for something we did not even advertise
           // yet. TODO: This
@@ -1407,8 +1414,9 @@ impl Writer {
   }
 
   // One repair round for a reader: send its unsent changes, lowest first, until
-  // REPAIR_BATCH_MAX_BYTES have gone out (at least one change) or nothing is
-  // left, which ends repair mode. GAPs and unfragmented DATA are packed into
+  // the reader's repair window (patched for grasp_orient, 0010-repair-window.patch:
+  // it was a fixed REPAIR_BATCH_MAX_BYTES) has gone out (at least one change) or
+  // nothing is left, which ends repair mode. GAPs and unfragmented DATA are packed into
   // datagrams of the reader's path-MTU budget; a fragmented sample goes out on
   // its own.
   fn handle_repair_data_send_worker(&mut self, reader_proxy: &mut RtpsReaderProxy) {
@@ -1429,7 +1437,10 @@ impl Writer {
     let mut pending_gap_sent = false;
     let mut round_bytes = 0;
 
-    while round_bytes < REPAIR_BATCH_MAX_BYTES {
+    let round_budget = reader_proxy.repair_window.bytes();
+    let now = std::time::Instant::now();
+    let mut sent_any = false;
+    while round_bytes < round_budget {
       let Some(unsent_sn) = reader_proxy.first_unsent_change() else {
         break;
       };
@@ -1529,13 +1540,43 @@ impl Writer {
         ts_active = source_timestamp.is_some();
       }
       reader_proxy.mark_change_sent(unsent_sn);
+      reader_proxy.repair_window.repaired(unsent_sn, now);
+      sent_any = true;
     }
 
     self.flush_repair_datagram(&mut datagram, reader_proxy);
     if reader_proxy.first_unsent_change().is_none() {
       reader_proxy.repair_mode = false;
+      if sent_any {
+        self.heartbeat_after_repair(reader_proxy);
+      }
     }
   } // fn
+
+  // Patched for grasp_orient (0010-repair-window.patch): when a repair round has sent all the
+  // reader asked for, a HEARTBEAT (final flag clear) asks it for its next ACKNACK at once. An
+  // ACKNACK names at most 256 sequence numbers; waiting for the periodic HEARTBEAT (100 ms while
+  // a reader is behind) capped repair at 2,560 samples per second, however large the window.
+  // Now the reader's own answers pace the repair, and feed its window.
+  fn heartbeat_after_repair(&self, reader_proxy: &RtpsReaderProxy) {
+    let hb_message = MessageBuilder::new()
+      .heartbeat_msg(
+        self.entity_id(),
+        self.send_buffer.first_change_sequence_number(),
+        self.send_buffer.last_change_sequence_number(),
+        self.next_heartbeat_count(),
+        self.endianness,
+        reader_proxy.remote_reader_guid.entity_id,
+        false, // final_flag: request an ACKNACK
+        false, // liveliness_flag
+      )
+      .add_header_and_build(self.my_guid.prefix);
+    self.send_control_to_readers(
+      DeliveryMode::Unicast,
+      hb_message,
+      &mut std::iter::once(reader_proxy),
+    );
+  }
 
   // Append `part` to the repair datagram being built for `reader_proxy`, first
   // sending the datagram if `part` (plus `invalidate_len` bytes for an INFO_TS
@@ -2921,6 +2962,24 @@ mod tests {
           .handle_ack_nack(self.reader_guid.prefix, &AckSubmessage::AckNack(ack_nack));
       }
 
+      // The reader has received everything before `base` and requests `requested`.
+      fn ack_nack_from(&mut self, base: i64, requested: impl IntoIterator<Item = i64>, count: i32) {
+        let requested: BTreeSet<SequenceNumber> =
+          requested.into_iter().map(SequenceNumber::new).collect();
+        let ack_nack = AckNack {
+          reader_id: self.reader_guid.entity_id,
+          writer_id: self.writer.my_guid.entity_id,
+          reader_sn_state: SequenceNumberSet::from_base_and_set(
+            SequenceNumber::new(base),
+            &requested,
+          ),
+          count,
+        };
+        self
+          .writer
+          .handle_ack_nack(self.reader_guid.prefix, &AckSubmessage::AckNack(ack_nack));
+      }
+
       // Timed events addressed to our reader that expire within `max_wait`.
       // This keeps SendRepairFrags, which next_repair_event skips.
       fn reader_events(&self, max_wait: StdDuration) -> Vec<TimedEvent> {
@@ -3023,6 +3082,63 @@ mod tests {
         f.repair_round();
       }
       assert_eq!(f.unsent(), 0);
+    }
+
+    // Patched for grasp_orient (0010-repair-window.patch): a round sends the
+    // reader's repair window, which doubles while its ACKNACKs acknowledge what was
+    // repaired and halves when it NACKs again a sample repaired long enough ago.
+    #[test]
+    fn repair_rounds_follow_the_readers_acknacks() {
+      let mut f = Fixture::user(200, 1000, None);
+      f.writer.nack_response_delay = StdDuration::ZERO;
+      f.ack_nack(1..=200, 1);
+      assert_eq!(f.repair_round(), 8, "the first round is 8 KiB");
+      // 1..=8 arrived: the window doubles.
+      f.ack_nack_from(9, 9..=200, 2);
+      assert_eq!(
+        f.repair_round(),
+        16,
+        "the round after an ACKNACK that acknowledged the repair did not grow"
+      );
+      // 9..=24 went out, but the reader asks for all of them again later: lost.
+      std::thread::sleep(crate::rtps::repair_window::REPAIR_LOSS_AGE);
+      f.ack_nack_from(9, 9..=200, 3);
+      assert_eq!(
+        f.repair_round(),
+        8,
+        "a repeated NACK did not shrink the round"
+      );
+    }
+
+    // Patched for grasp_orient (0010-repair-window.patch): the round that sends the
+    // last of what the reader asked for ends with a HEARTBEAT to it, which asks for
+    // its next ACKNACK; a round that leaves some for later does not.
+    #[test]
+    fn a_repair_round_that_sends_all_asked_for_ends_with_a_heartbeat() {
+      let mut f = Fixture::user(20, 1000, None);
+      f.writer.nack_response_delay = StdDuration::ZERO;
+      // HEARTBEATs built since the last call (each takes the next count).
+      let mut counted = f.writer.next_heartbeat_count();
+      let mut heartbeats = |f: &Fixture| {
+        let now = f.writer.next_heartbeat_count();
+        let sent = now - counted - 1;
+        counted = now;
+        sent
+      };
+      f.ack_nack(1..=20, 1);
+      assert_eq!(f.repair_round(), 8);
+      assert_eq!(
+        heartbeats(&f),
+        0,
+        "a HEARTBEAT while repair was still under way"
+      );
+      assert_eq!(f.repair_round(), 8);
+      assert_eq!(f.repair_round(), 4);
+      assert_eq!(
+        heartbeats(&f),
+        1,
+        "no HEARTBEAT after the round that sent the last of what was asked for"
+      );
     }
 
     // A sample larger than a whole round still goes out, one per round. These
