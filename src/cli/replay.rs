@@ -16,7 +16,7 @@ use grasp_orient::record::bag::{self, Bag};
 use grasp_orient::record::output::{Pending, Replacement};
 use grasp_orient::record::{BagWriter, Entry, Payload, PoseTopics, SetTopics, Topics};
 use grasp_orient::replay::{
-    replay, replay_with_answers, Answers, Override, Plan, Summary, TOLERANCE,
+    replay, replay_with_answers, Answers, Override, Plan, PoseAnswers, Summary, TOLERANCE,
 };
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -114,6 +114,18 @@ impl Output {
             written.recommendation_sets,
             self.path.display()
         )?;
+        if written.pose_candidates + written.pose_sets > 0 {
+            writeln!(
+                std::io::stdout(),
+                "wrote {} pose candidates, {} pose answers, {} pose sets and {} pose set answers \
+                 to {}",
+                written.pose_candidates,
+                written.pose_recommendations,
+                written.pose_sets,
+                written.pose_recommendation_sets,
+                self.path.display()
+            )?;
+        }
         Ok(())
     }
 }
@@ -166,6 +178,8 @@ fn replay_file(
         bag = Bag {
             candidates: std::mem::take(&mut bag.candidates),
             candidate_sets: std::mem::take(&mut bag.candidate_sets),
+            pose_candidates: std::mem::take(&mut bag.pose_candidates),
+            pose_sets: std::mem::take(&mut bag.pose_sets),
             ..Bag::default()
         };
     }
@@ -236,7 +250,8 @@ fn settings_words(plan: &Plan) -> String {
     }
 }
 
-/// Writes the settings used, every set and its new answer, every candidate and its new answer.
+/// Writes the settings used, every set and its new answer, every candidate and its new answer,
+/// then the same for pose sets and pose candidates.
 fn write_replay(w: &mut BagWriter, bag: &Bag, plan: &Plan, answers: Answers) -> anyhow::Result<()> {
     for record in &plan.recorded {
         w.write(&Entry {
@@ -265,6 +280,35 @@ fn write_replay(w: &mut BagWriter, bag: &Bag, plan: &Plan, answers: Answers) -> 
         })?;
         w.write(&Entry {
             payload: Payload::Recommendation(Box::new(a.message)),
+            log_time: a.log_time,
+            publish_time: a.publish_time,
+        })?;
+    }
+    write_poses(w, bag, answers.poses)
+}
+
+/// Writes every pose set and its new answer, then every pose candidate and its new answer.
+fn write_poses(w: &mut BagWriter, bag: &Bag, answers: PoseAnswers) -> anyhow::Result<()> {
+    for (s, a) in bag.pose_sets.iter().zip(answers.sets) {
+        w.write(&Entry {
+            payload: Payload::PoseCandidateSet(Box::new(s.message.clone())),
+            log_time: s.log_time,
+            publish_time: s.publish_time,
+        })?;
+        w.write(&Entry {
+            payload: Payload::PoseRecommendationSet(Box::new(a.message)),
+            log_time: a.log_time,
+            publish_time: a.publish_time,
+        })?;
+    }
+    for (c, a) in bag.pose_candidates.iter().zip(answers.recommendations) {
+        w.write(&Entry {
+            payload: Payload::PoseCandidate(Box::new(c.message.clone())),
+            log_time: c.log_time,
+            publish_time: c.publish_time,
+        })?;
+        w.write(&Entry {
+            payload: Payload::PoseRecommendation(Box::new(a.message)),
             log_time: a.log_time,
             publish_time: a.publish_time,
         })?;

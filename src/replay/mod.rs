@@ -7,6 +7,8 @@
 mod poses;
 mod sets;
 
+pub use poses::PoseAnswers;
+
 use crate::answer::{answer_one, Rules, BEHIND_TANGENT_NOTE};
 use crate::config::{Config, ConfigError};
 use crate::msg::{clip, short_id, GraspCandidate, GripRecommendation, GripRecommendationSet};
@@ -414,7 +416,7 @@ pub fn replay(
 ) -> Result<Summary, ReplayError> {
     let (mut summary, _) = replay_on_cores(bag, plan, false, &progress)?;
     summary.merge(sets::replay_sets(bag, plan, false).0);
-    summary.merge(poses::replay_poses(bag, plan, &pose_meshes())?);
+    summary.merge(poses::replay_poses(bag, plan, &pose_meshes(), false)?.0);
     Ok(summary)
 }
 
@@ -434,6 +436,8 @@ pub struct Answers {
     pub recommendations: Vec<Recorded<GripRecommendation>>,
     /// One per recorded set, in the sets' order.
     pub sets: Vec<Recorded<GripRecommendationSet>>,
+    /// The pose candidates' and pose sets' answers.
+    pub poses: PoseAnswers,
 }
 
 /// [`replay`], also returning the new answers.
@@ -445,12 +449,14 @@ pub fn replay_with_answers(
     let (mut summary, recommendations) = replay_on_cores(bag, plan, true, &progress)?;
     let (of_sets, sets) = sets::replay_sets(bag, plan, true);
     summary.merge(of_sets);
-    summary.merge(poses::replay_poses(bag, plan, &pose_meshes())?);
+    let (of_poses, poses) = poses::replay_poses(bag, plan, &pose_meshes(), true)?;
+    summary.merge(of_poses);
     Ok((
         summary,
         Answers {
             recommendations,
             sets,
+            poses,
         },
     ))
 }

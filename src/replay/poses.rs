@@ -14,10 +14,10 @@ use super::sets::{compare_set, rules_like};
 use super::{compare_one, key, number_gap, Key, Plan, ReplayError, Summary, TOLERANCE};
 use crate::answer::{cut_like, uncast, PoseAnswerer};
 use crate::msg::{
-    short_id, GraspObject, GripRecommendation, GripRecommendationSet, Point, PoseRecommendation,
-    PoseRecommendationSet, Vector3,
+    short_id, GraspObject, GripRecommendation, GripRecommendationSet, Point, PoseCandidateSet,
+    PoseRecommendation, PoseRecommendationSet, Vector3,
 };
-use crate::record::bag::{keep_example, Bag};
+use crate::record::bag::{keep_example, Bag, Recorded};
 use grasp_orient_geometry::MeshCache;
 use std::collections::{HashMap, VecDeque};
 use std::sync::Arc;
@@ -39,13 +39,26 @@ fn pair<'a>(
     (pairs, unmatched)
 }
 
-/// Replays every pose candidate and pose set of `bag` with the meshes of `meshes`.
+/// The new answers of a replay's pose candidates and pose sets, each with its candidate's (or
+/// set's) times, in the recording's order; empty unless asked for.
+#[derive(Debug, Default)]
+pub struct PoseAnswers {
+    /// One per recorded pose candidate.
+    pub recommendations: Vec<Recorded<PoseRecommendation>>,
+    /// One per recorded pose set.
+    pub sets: Vec<Recorded<PoseRecommendationSet>>,
+}
+
+/// Replays every pose candidate and pose set of `bag` with the meshes of `meshes`, keeping the
+/// new answers when `keep`.
 pub(super) fn replay_poses(
     bag: &Bag,
     plan: &Plan,
     meshes: &Arc<MeshCache>,
-) -> Result<Summary, ReplayError> {
+    keep: bool,
+) -> Result<(Summary, PoseAnswers), ReplayError> {
     let mut summary = Summary::default();
+    let mut kept = PoseAnswers::default();
     let (pairs, unmatched) = pair(
         bag.pose_candidates
             .iter()
@@ -73,18 +86,27 @@ pub(super) fn replay_poses(
                 summary.differing += 1;
             }
         }
+        if keep {
+            kept.recommendations.push(Recorded {
+                message: ours,
+                log_time: c.log_time,
+                publish_time: c.publish_time,
+            });
+        }
     }
-    replay_pose_sets(bag, plan, meshes, &mut summary)?;
-    Ok(summary)
+    kept.sets = replay_pose_sets(bag, plan, meshes, &mut summary, keep)?;
+    Ok((summary, kept))
 }
 
-/// Replays every pose set of `bag` into `summary`.
+/// Replays every pose set of `bag` into `summary`, returning the new answers when `keep`.
 fn replay_pose_sets(
     bag: &Bag,
     plan: &Plan,
     meshes: &Arc<MeshCache>,
     summary: &mut Summary,
-) -> Result<(), ReplayError> {
+    keep: bool,
+) -> Result<Vec<Recorded<PoseRecommendationSet>>, ReplayError> {
+    let mut kept = Vec::new();
     let (pairs, unmatched) = pair(
         bag.pose_sets
             .iter()
@@ -114,15 +136,37 @@ fn replay_pose_sets(
         summary.sets += 1;
         summary.pose_sets += 1;
         summary.candidates += set.message.poses.len() as u64;
-        let (Some(theirs), Some(theirs_grip)) = (theirs, theirs_grip) else {
-            continue;
-        };
+        if let (Some(theirs), Some(theirs_grip)) = (theirs, theirs_grip) {
+            compare_pose_set(set, &ours, theirs, &theirs_grip, bag, summary);
+        }
+        if keep {
+            kept.push(Recorded {
+                message: ours,
+                log_time: set.log_time,
+                publish_time: set.publish_time,
+            });
+        }
+    }
+    Ok(kept)
+}
+
+/// Compares a pose set's new answer `ours` with its recorded one, `theirs` (`theirs_grip` as a
+/// candidate set's answer), into `summary`.
+fn compare_pose_set(
+    set: &Recorded<PoseCandidateSet>,
+    ours: &PoseRecommendationSet,
+    theirs: &PoseRecommendationSet,
+    theirs_grip: &GripRecommendationSet,
+    bag: &Bag,
+    summary: &mut Summary,
+) {
+    {
         summary.sets_compared += 1;
         // A set cut short (max_set_time, or the node stopping): its unsolved members as recorded.
-        let ours_grip = as_grip(&ours);
-        let ours_grip = cut_like(&ours_grip, &theirs_grip);
+        let ours_grip = as_grip(ours);
+        let ours_grip = cut_like(&ours_grip, theirs_grip);
         let stand_in = uncast(&set.message);
-        let mut differ = compare_set(&stand_in, &ours_grip, &theirs_grip, bag, summary);
+        let mut differ = compare_set(&stand_in, &ours_grip, theirs_grip, bag, summary);
         for (k, (a, b)) in ours
             .recommendations
             .iter()
@@ -148,7 +192,6 @@ fn replay_pose_sets(
             summary.in_refused_sets += set.message.poses.len() as u64;
         }
     }
-    Ok(())
 }
 
 /// Whether a recorded answer got as far as the geometry: anything but a refusal as invalid input
