@@ -559,7 +559,9 @@ async fn finish_loads(
     loading: &mut Loading,
 ) {
     let mut grace = FutureExt::fuse(smol::Timer::after(STOP_GRACE));
-    loop {
+    // An empty `FuturesUnordered` that has said so once is terminated, and `select!` would skip
+    // it and wait out the whole grace: only a stream with loads in it is waited for.
+    while !loading.is_empty() {
         futures::select_biased! {
             loaded = loading.next() => match loaded {
                 Some(l) => send_loaded(node, endpoints, answerer, l).await,

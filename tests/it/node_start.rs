@@ -183,3 +183,21 @@ fn a_namesake_on_the_domain_is_warned_of_by_both() {
     let (_, alone_err) = alone.exit(true, Duration::from_secs(10));
     assert!(quiet, "{alone_err}");
 }
+
+/// A node stopped with no pose candidate in flight leaves at once, without a warning about a
+/// mesh still loading: the wait for pose answers at a stop waited out its whole grace, and
+/// warned, at every stop.
+#[test]
+fn a_stop_with_no_pose_in_flight_says_nothing_of_meshes() {
+    let name = format!("stop_{}", std::process::id());
+    let node = Node::start(&["-r", &format!("__node:={name}"), "-p", "record:=false"]);
+    assert!(
+        node.wait_for("waiting for", Duration::from_secs(20)),
+        "{}",
+        node.stderr()
+    );
+    let (code, stderr) = node.exit(true, Duration::from_secs(10));
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(stderr.contains("leaving the ROS graph"), "{stderr}");
+    assert!(!stderr.contains("still loading"), "{stderr}");
+}
