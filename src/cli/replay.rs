@@ -12,11 +12,11 @@ use grasp_orient::msg::{
     GraspCandidate, GraspCandidateSet, GripRecommendation, PoseCandidate, PoseCandidateSet,
     RosMessage,
 };
-use grasp_orient::record::bag::{self, Bag};
+use grasp_orient::record::bag::{self, Bag, Recorded};
 use grasp_orient::record::output::{Pending, Replacement};
 use grasp_orient::record::{BagWriter, Entry, Payload, PoseTopics, SetTopics, Topics};
 use grasp_orient::replay::{
-    replay, replay_with_answers, Answers, Override, Plan, PoseAnswers, Summary, TOLERANCE,
+    replay, replay_with_answers, Answers, Override, Plan, Summary, TOLERANCE,
 };
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -261,58 +261,46 @@ fn write_replay(w: &mut BagWriter, bag: &Bag, plan: &Plan, answers: Answers) -> 
         })?;
     }
     for (s, a) in bag.candidate_sets.iter().zip(answers.sets) {
-        w.write(&Entry {
-            payload: Payload::CandidateSet(Box::new(s.message.clone())),
-            log_time: s.log_time,
-            publish_time: s.publish_time,
-        })?;
-        w.write(&Entry {
-            payload: Payload::RecommendationSet(Box::new(a.message)),
-            log_time: a.log_time,
-            publish_time: a.publish_time,
-        })?;
+        write_pair(w, s, Payload::CandidateSet, a, Payload::RecommendationSet)?;
     }
     for (c, a) in bag.candidates.iter().zip(answers.recommendations) {
-        w.write(&Entry {
-            payload: Payload::Candidate(Box::new(c.message.clone())),
-            log_time: c.log_time,
-            publish_time: c.publish_time,
-        })?;
-        w.write(&Entry {
-            payload: Payload::Recommendation(Box::new(a.message)),
-            log_time: a.log_time,
-            publish_time: a.publish_time,
-        })?;
+        write_pair(w, c, Payload::Candidate, a, Payload::Recommendation)?;
     }
-    write_poses(w, bag, answers.poses)
+    let poses = answers.poses;
+    for (s, a) in bag.pose_sets.iter().zip(poses.sets) {
+        write_pair(
+            w,
+            s,
+            Payload::PoseCandidateSet,
+            a,
+            Payload::PoseRecommendationSet,
+        )?;
+    }
+    for (c, a) in bag.pose_candidates.iter().zip(poses.recommendations) {
+        write_pair(w, c, Payload::PoseCandidate, a, Payload::PoseRecommendation)?;
+    }
+    Ok(())
 }
 
-/// Writes every pose set and its new answer, then every pose candidate and its new answer.
-fn write_poses(w: &mut BagWriter, bag: &Bag, answers: PoseAnswers) -> anyhow::Result<()> {
-    for (s, a) in bag.pose_sets.iter().zip(answers.sets) {
-        w.write(&Entry {
-            payload: Payload::PoseCandidateSet(Box::new(s.message.clone())),
-            log_time: s.log_time,
-            publish_time: s.publish_time,
-        })?;
-        w.write(&Entry {
-            payload: Payload::PoseRecommendationSet(Box::new(a.message)),
-            log_time: a.log_time,
-            publish_time: a.publish_time,
-        })?;
-    }
-    for (c, a) in bag.pose_candidates.iter().zip(answers.recommendations) {
-        w.write(&Entry {
-            payload: Payload::PoseCandidate(Box::new(c.message.clone())),
-            log_time: c.log_time,
-            publish_time: c.publish_time,
-        })?;
-        w.write(&Entry {
-            payload: Payload::PoseRecommendation(Box::new(a.message)),
-            log_time: a.log_time,
-            publish_time: a.publish_time,
-        })?;
-    }
+/// Writes a recorded message (`asked`, as `ask` makes it a payload) and then its new answer, each
+/// at its own times.
+fn write_pair<Q: Clone, A>(
+    w: &mut BagWriter,
+    asked: &Recorded<Q>,
+    ask: fn(Box<Q>) -> Payload,
+    answer: Recorded<A>,
+    reply: fn(Box<A>) -> Payload,
+) -> anyhow::Result<()> {
+    w.write(&Entry {
+        payload: ask(Box::new(asked.message.clone())),
+        log_time: asked.log_time,
+        publish_time: asked.publish_time,
+    })?;
+    w.write(&Entry {
+        payload: reply(Box::new(answer.message)),
+        log_time: answer.log_time,
+        publish_time: answer.publish_time,
+    })?;
     Ok(())
 }
 

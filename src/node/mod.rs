@@ -503,14 +503,7 @@ async fn answer_one(
             &format!("cannot publish an answer: {e:?}"),
         );
     }
-    let answered = now_ns();
-    if let Some(array) = outcome.markers {
-        if let Err(e) = endpoints.markers.async_publish(array).await {
-            log::warn!("cannot publish markers: {e:?}");
-        }
-    }
-    let notes = answerer.record(outcome.recorded, answered);
-    tell(node, notes);
+    markers_then_record(node, endpoints, answerer, outcome.markers, outcome.recorded).await;
 }
 
 /// Takes one pose candidate: answered on the node's thread when its mesh is loaded already (or
@@ -598,13 +591,24 @@ async fn send_pose(
             &format!("cannot publish a pose answer: {e:?}"),
         );
     }
+    markers_then_record(node, endpoints, answerer, outcome.markers, outcome.recorded).await;
+}
+
+/// After an answer went out: its markers, then its record with the time the answer was sent.
+async fn markers_then_record(
+    node: &Node,
+    endpoints: &Endpoints,
+    answerer: &mut Answerer,
+    markers: Option<MarkerArray>,
+    recorded: answer::Recorded,
+) {
     let answered = now_ns();
-    if let Some(array) = outcome.markers {
+    if let Some(array) = markers {
         if let Err(e) = endpoints.markers.async_publish(array).await {
             log::warn!("cannot publish markers: {e:?}");
         }
     }
-    let notes = answerer.record(outcome.recorded, answered);
+    let notes = answerer.record(recorded, answered);
     tell(node, notes);
 }
 

@@ -160,37 +160,34 @@ fn compare_pose_set(
     bag: &Bag,
     summary: &mut Summary,
 ) {
+    summary.sets_compared += 1;
+    // A set cut short (max_set_time, or the node stopping): its unsolved members as recorded.
+    let ours_grip = as_grip(ours);
+    let ours_grip = cut_like(&ours_grip, theirs_grip);
+    let stand_in = uncast(&set.message);
+    let mut differ = compare_set(&stand_in, &ours_grip, theirs_grip, bag, summary);
+    for (k, (a, b)) in ours
+        .recommendations
+        .iter()
+        .zip(&theirs.recommendations)
+        .enumerate()
     {
-        summary.sets_compared += 1;
-        // A set cut short (max_set_time, or the node stopping): its unsolved members as recorded.
-        let ours_grip = as_grip(ours);
-        let ours_grip = cut_like(&ours_grip, theirs_grip);
-        let stand_in = uncast(&set.message);
-        let mut differ = compare_set(&stand_in, &ours_grip, theirs_grip, bag, summary);
-        for (k, (a, b)) in ours
-            .recommendations
-            .iter()
-            .zip(&theirs.recommendations)
-            .enumerate()
-        {
-            let label = || {
-                let id = set.message.poses.get(k).map_or("", |p| p.id.as_str());
-                format!(
-                    "pose set {:?} pose {k} {:?}",
-                    short_id(&set.message.id),
-                    short_id(id)
-                )
-            };
-            differ |= compare_geometry(label, a, b, summary);
-        }
-        if differ {
-            summary.sets_differing += 1;
-        }
-        if ours_grip.status != GripRecommendationSet::STATUS_OK
-            && ours_grip.recommendations.is_empty()
-        {
-            summary.in_refused_sets += set.message.poses.len() as u64;
-        }
+        let label = || {
+            let id = set.message.poses.get(k).map_or("", |p| p.id.as_str());
+            format!(
+                "pose set {:?} pose {k} {:?}",
+                short_id(&set.message.id),
+                short_id(id)
+            )
+        };
+        differ |= compare_geometry(label, a, b, summary);
+    }
+    if differ {
+        summary.sets_differing += 1;
+    }
+    if ours_grip.status != GripRecommendationSet::STATUS_OK && ours_grip.recommendations.is_empty()
+    {
+        summary.in_refused_sets += set.message.poses.len() as u64;
     }
 }
 
