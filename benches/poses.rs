@@ -21,8 +21,8 @@ mod torus;
 use grasp_orient::answer::{answer_set, PoseAnswerer, Rules, MESH_CACHE_BYTES};
 use grasp_orient::geometry::{parse, AmentIndex, ClosingAxis, GripperPose, MeshCache};
 use grasp_orient::msg::{
-    GraspCandidate, GraspCandidateSet, GraspObject, GraspPose, GripRecommendation, Point, Pose,
-    PoseCandidate, PoseCandidateSet, Quaternion, Vector3,
+    GraspCandidate, GraspCandidateSet, GraspObject, GraspPose, GripRecommendation, Pose,
+    PoseCandidate, PoseCandidateSet, Vector3,
 };
 use grasp_orient::solver::Settings;
 use nalgebra::{Isometry3, Translation3};
@@ -31,29 +31,12 @@ use rand_chacha::ChaCha8Rng;
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
-fn pose(p: &Isometry3<f64>) -> Pose {
-    let (t, q) = (&p.translation.vector, &p.rotation);
-    Pose {
-        position: Point {
-            x: t.x,
-            y: t.y,
-            z: t.z,
-        },
-        orientation: Quaternion {
-            x: q.i,
-            y: q.j,
-            z: q.k,
-            w: q.w,
-        },
-    }
-}
-
 /// The torus in the object frame `frame`, a mesh resource in millimetres.
 fn pose_set(resource: &str, frame: &Isometry3<f64>, grippers: &[GripperPose]) -> PoseCandidateSet {
     PoseCandidateSet {
         id: "torus".into(),
         object: GraspObject {
-            pose: pose(frame),
+            pose: Pose::from(frame),
             mesh: resource.into(),
             scale: Vector3 {
                 x: 0.001,
@@ -69,7 +52,7 @@ fn pose_set(resource: &str, frame: &Isometry3<f64>, grippers: &[GripperPose]) ->
             .enumerate()
             .map(|(i, g)| GraspPose {
                 id: format!("pose-{i}").into(),
-                grasp_pose: pose(&g.tool_pose),
+                grasp_pose: Pose::from(&g.tool_pose),
                 width: g.width,
             })
             .collect(),

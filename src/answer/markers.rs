@@ -329,20 +329,7 @@ fn object_marker(candidate: &GraspCandidate, object: &Object) -> Marker {
         a: 0.5,
     };
     let mut m = marker(candidate, "object", Marker::TRIANGLE_LIST, 1.0, grey);
-    let (t, q) = (&object.pose.translation, &object.pose.rotation);
-    m.pose = Pose {
-        position: Point {
-            x: t.x,
-            y: t.y,
-            z: t.z,
-        },
-        orientation: Quaternion {
-            x: q.i,
-            y: q.j,
-            z: q.k,
-            w: q.w,
-        },
-    };
+    m.pose = Pose::from(&object.pose);
     let scale = |x: f64, y: f64, z: f64| Vector3 { x, y, z };
     match &object.shape {
         Shape::Mesh(mesh) => {

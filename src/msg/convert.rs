@@ -5,7 +5,7 @@
 //! A planar candidate (`model` 0) uses the x-y components of its points and vectors; a spatial one
 //! (`model` 1) all three ([`spatial::Candidate`]).
 
-use super::{CompactString, GraspCandidate, GripRecommendation, Point, Quaternion, Vector3};
+use super::{CompactString, GraspCandidate, GripRecommendation, Point, Pose, Quaternion, Vector3};
 use crate::solver::{
     planar::{robust::Uncertainty, Candidate},
     spatial, InvalidInput,
@@ -90,6 +90,26 @@ impl TryFrom<&GraspCandidate> for Candidate {
             mass: m.mass,
             gravity: vector(["gravity.x", "gravity.y", "gravity.z"], &m.gravity)?,
         })
+    }
+}
+
+/// A rigid transform as a `geometry_msgs/Pose`: its translation and unit quaternion.
+impl From<&nalgebra::Isometry3<f64>> for Pose {
+    fn from(p: &nalgebra::Isometry3<f64>) -> Self {
+        let (t, q) = (&p.translation.vector, &p.rotation);
+        Pose {
+            position: Point {
+                x: t.x,
+                y: t.y,
+                z: t.z,
+            },
+            orientation: Quaternion {
+                x: q.i,
+                y: q.j,
+                z: q.k,
+                w: q.w,
+            },
+        }
     }
 }
 
