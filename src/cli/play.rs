@@ -1,5 +1,5 @@
-//! `grasp_orient play BAG`: republishes recorded candidates to the live graph at the recorded
-//! pace (or `--rate` times it), like `ros2 bag play`.
+//! `grasp_orient play BAG`: republishes recorded candidates, candidate sets, pose candidates and
+//! pose sets to the live graph at the recorded pace (or `--rate` times it), like `ros2 bag play`.
 
 use crate::node::play::{publish, Pace};
 use crate::node::session::Start;
@@ -12,7 +12,8 @@ use std::path::PathBuf;
 /// Arguments of `play`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct Args {
-    /// A recording with grasp_orient/msg/GraspCandidate or GraspCandidateSet messages.
+    /// A recording with grasp_orient/msg/GraspCandidate, GraspCandidateSet, PoseCandidate or
+    /// PoseCandidateSet messages.
     pub bag: PathBuf,
     /// Speed relative to the recording (2 = twice as fast), from 0.001 to 1000; 0 sends as fast
     /// as possible.
@@ -36,14 +37,21 @@ fn rate(text: &str) -> Result<f64, super::BadValue> {
     }
 }
 
-/// Publishes every candidate of the bag on `grasp_candidates` and every set on
-/// `grasp_candidate_sets` (remappable with `--ros-args`).
+/// Publishes every candidate of the bag on `grasp_candidates`, every set on
+/// `grasp_candidate_sets`, every pose candidate on `pose_candidates` and every pose set on
+/// `pose_candidate_sets` (remappable with `--ros-args`); one summary line per kind the bag holds
+/// (candidates always).
 pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
     let start = Start::new(ros_argv)?;
     let recorded = bag::read(&args.bag)?;
-    if recorded.candidates.is_empty() && recorded.candidate_sets.is_empty() {
+    if recorded.candidates.is_empty()
+        && recorded.candidate_sets.is_empty()
+        && recorded.pose_candidates.is_empty()
+        && recorded.pose_sets.is_empty()
+    {
         bail!(
-            "{}: no grasp_orient/msg/GraspCandidate or GraspCandidateSet messages",
+            "{}: no grasp_orient/msg/GraspCandidate, GraspCandidateSet, PoseCandidate or \
+             PoseCandidateSet messages",
             args.bag.display()
         );
     }
@@ -54,13 +62,7 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
         wait: args.wait,
         depth: args.depth,
     };
-    let played = publish(
-        &mut session,
-        &args.bag,
-        &recorded.candidates,
-        &recorded.candidate_sets,
-        pace,
-    );
+    let played = publish(&mut session, &args.bag, &recorded, pace);
     session.close();
     let played = played?;
     writeln!(
@@ -77,6 +79,24 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
             played.sets,
             recorded.candidate_sets.len(),
             played.sets_topic
+        )?;
+    }
+    if !recorded.pose_candidates.is_empty() {
+        writeln!(
+            std::io::stdout(),
+            "published {} of {} pose candidates on {}",
+            played.poses,
+            recorded.pose_candidates.len(),
+            played.poses_topic
+        )?;
+    }
+    if !recorded.pose_sets.is_empty() {
+        writeln!(
+            std::io::stdout(),
+            "published {} of {} pose sets on {}",
+            played.pose_sets,
+            recorded.pose_sets.len(),
+            played.pose_sets_topic
         )?;
     }
     Ok(())

@@ -1,11 +1,12 @@
-//! Republishing recorded candidates and candidate sets to the live graph at the recorded pace (or
-//! `rate` times it), like `ros2 bag play`; `grasp_orient play` (`cli/play.rs`) reads the bag and
-//! opens the session.
+//! Republishing recorded candidates, candidate sets, pose candidates and pose sets to the live
+//! graph at the recorded pace (or `rate` times it), like `ros2 bag play`; `grasp_orient play`
+//! (`cli/play.rs`) reads the bag and opens the session.
 
 use super::session::{create_topic, qos, Session, Shutdown};
-use crate::msg::{GraspCandidate, GraspCandidateSet};
-use crate::record::bag::Recorded;
+use crate::msg::{GraspCandidate, GraspCandidateSet, PoseCandidate, PoseCandidateSet, RosMessage};
+use crate::record::bag::{Bag, Recorded};
 use anyhow::bail;
+use futures::future::BoxFuture;
 use futures::FutureExt;
 use ros2_client::{Node, Publisher};
 use std::path::Path;
@@ -29,56 +30,145 @@ pub struct Played {
     pub candidates: usize,
     /// Candidate sets sent.
     pub sets: usize,
+    /// Pose candidates sent.
+    pub poses: usize,
+    /// Pose sets sent.
+    pub pose_sets: usize,
     /// The candidates topic's absolute name.
     pub candidates_topic: String,
     /// The sets topic's absolute name.
     pub sets_topic: String,
+    /// The pose candidates topic's absolute name.
+    pub poses_topic: String,
+    /// The pose sets topic's absolute name.
+    pub pose_sets_topic: String,
 }
 
 /// One message to play.
 enum Item<'a> {
     Candidate(&'a GraspCandidate),
     Set(&'a GraspCandidateSet),
+    Pose(&'a PoseCandidate),
+    PoseSet(&'a PoseCandidateSet),
 }
 
-/// The messages in recorded order (by `log_time`, candidates first on a tie), each with its time.
-fn merged<'a>(
-    candidates: &'a [Recorded<GraspCandidate>],
-    sets: &'a [Recorded<GraspCandidateSet>],
-) -> Vec<(u64, Item<'a>)> {
-    let mut all: Vec<(u64, Item<'a>)> = candidates
-        .iter()
-        .map(|c| (c.log_time, Item::Candidate(&c.message)))
-        .chain(sets.iter().map(|s| (s.log_time, Item::Set(&s.message))))
+/// The messages in recorded order (by `log_time`; on a tie candidates, then sets, then pose
+/// candidates, then pose sets, each in file order), each with its time.
+fn merged(bag: &Bag) -> Vec<(u64, Item<'_>)> {
+    fn timed<'a, M>(
+        recorded: &'a [Recorded<M>],
+        item: impl Fn(&'a M) -> Item<'a> + 'a,
+    ) -> impl Iterator<Item = (u64, Item<'a>)> + 'a {
+        recorded.iter().map(move |r| (r.log_time, item(&r.message)))
+    }
+    let mut all: Vec<(u64, Item<'_>)> = timed(&bag.candidates, Item::Candidate)
+        .chain(timed(&bag.candidate_sets, Item::Set))
+        .chain(timed(&bag.pose_candidates, Item::Pose))
+        .chain(timed(&bag.pose_sets, Item::PoseSet))
         .collect();
-    // Stable: file order is kept among equal times, candidates before sets.
+    // Stable: the chained order is kept among equal times.
     all.sort_by_key(|(t, _)| *t);
     all
+}
+
+/// The four publishers, one per topic played.
+struct Publishers {
+    candidates: Publisher<GraspCandidate>,
+    sets: Publisher<GraspCandidateSet>,
+    poses: Publisher<PoseCandidate>,
+    pose_sets: Publisher<PoseCandidateSet>,
+}
+
+/// A reliable, volatile publisher of `M` on `topic`.
+fn publisher<M: RosMessage + serde::Serialize>(
+    session: &mut Session,
+    topic: &str,
+    depth: i64,
+) -> anyhow::Result<Publisher<M>> {
+    let topic = create_topic::<M>(session.node(), topic, &qos(depth))?;
+    Ok(session.node_mut().create_publisher::<M>(&topic, None)?)
+}
+
+impl Publishers {
+    fn create(session: &mut Session, names: &Played, depth: i64) -> anyhow::Result<Self> {
+        Ok(Self {
+            candidates: publisher(session, &names.candidates_topic, depth)?,
+            sets: publisher(session, &names.sets_topic, depth)?,
+            poses: publisher(session, &names.poses_topic, depth)?,
+            pose_sets: publisher(session, &names.pose_sets_topic, depth)?,
+        })
+    }
+
+    /// Publishes one item and counts it in `played`.
+    async fn send(&self, item: &Item<'_>, played: &mut Played) -> anyhow::Result<()> {
+        let failed =
+            |what: &str, e: &dyn std::fmt::Debug| anyhow::anyhow!("cannot publish {what}: {e:?}");
+        match item {
+            Item::Candidate(c) => {
+                let sent = self.candidates.async_publish((*c).clone()).await;
+                sent.map_err(|e| failed("a candidate", &e))?;
+                played.candidates += 1;
+            }
+            Item::Set(s) => {
+                let sent = self.sets.async_publish((*s).clone()).await;
+                sent.map_err(|e| failed("a set", &e))?;
+                played.sets += 1;
+            }
+            Item::Pose(p) => {
+                let sent = self.poses.async_publish((*p).clone()).await;
+                sent.map_err(|e| failed("a pose candidate", &e))?;
+                played.poses += 1;
+            }
+            Item::PoseSet(s) => {
+                let sent = self.pose_sets.async_publish((*s).clone()).await;
+                sent.map_err(|e| failed("a pose set", &e))?;
+                played.pose_sets += 1;
+            }
+        }
+        Ok(())
+    }
+
+    /// For each topic with something to send, the wait for its first subscriber, and its name.
+    fn waits<'a>(
+        &'a self,
+        node: &'a Node,
+        bag: &Bag,
+        names: &'a Played,
+    ) -> Vec<(BoxFuture<'a, ()>, &'a str)> {
+        let mut waits = Vec::new();
+        if !bag.candidates.is_empty() {
+            let found = self.candidates.wait_for_subscription(node).boxed();
+            waits.push((found, names.candidates_topic.as_str()));
+        }
+        if !bag.candidate_sets.is_empty() {
+            let found = self.sets.wait_for_subscription(node).boxed();
+            waits.push((found, names.sets_topic.as_str()));
+        }
+        if !bag.pose_candidates.is_empty() {
+            let found = self.poses.wait_for_subscription(node).boxed();
+            waits.push((found, names.poses_topic.as_str()));
+        }
+        if !bag.pose_sets.is_empty() {
+            let found = self.pose_sets.wait_for_subscription(node).boxed();
+            waits.push((found, names.pose_sets_topic.as_str()));
+        }
+        waits
+    }
 }
 
 /// Waits until each publisher with something to send has a subscriber, or `wait` seconds pass;
 /// false when a shutdown was asked for.
 async fn wait_for_subscribers(
-    node: &Node,
-    shutdown: &mut super::session::Shutdown,
-    candidates: Option<(&Publisher<GraspCandidate>, &str)>,
-    sets: Option<(&Publisher<GraspCandidateSet>, &str)>,
+    shutdown: &mut Shutdown,
+    waits: Vec<(BoxFuture<'_, ()>, &str)>,
     wait: f64,
 ) -> anyhow::Result<bool> {
     // A wait too long for a clock to hold never times out (a stop request still ends it).
     let timer =
         Duration::try_from_secs_f64(wait).map_or_else(|_| smol::Timer::never(), smol::Timer::after);
     let mut deadline = std::pin::pin!(FutureExt::fuse(timer));
-    if let Some((publisher, topic)) = candidates {
-        let mut found = std::pin::pin!(publisher.wait_for_subscription(node).fuse());
-        futures::select! {
-            _ = found => {}
-            _ = deadline => bail!("no subscriber on {topic} after {wait} s"),
-            _ = shutdown.requested().fuse() => return Ok(false),
-        }
-    }
-    if let Some((publisher, topic)) = sets {
-        let mut found = std::pin::pin!(publisher.wait_for_subscription(node).fuse());
+    for (found, topic) in waits {
+        let mut found = found.fuse();
         futures::select! {
             _ = found => {}
             _ = deadline => bail!("no subscriber on {topic} after {wait} s"),
@@ -102,51 +192,47 @@ async fn paced(start: Instant, offset: f64, shutdown: &mut Shutdown) -> bool {
     }
 }
 
-/// Publishes `candidates` on `grasp_candidates` and `sets` on `grasp_candidate_sets` (both
+/// Publishes the bag's candidates on `grasp_candidates`, its sets on `grasp_candidate_sets`, its
+/// pose candidates on `pose_candidates` and its pose sets on `pose_candidate_sets` (all
 /// remappable), in the order and at the pace they were received (their `log_time`): waits for a
 /// subscriber on each topic with something to send, keeps the recorded gaps, stops early on
 /// SIGINT or SIGTERM.
 pub fn publish(
     session: &mut Session,
     source: &Path,
-    candidates: &[Recorded<GraspCandidate>],
-    sets: &[Recorded<GraspCandidateSet>],
+    bag: &Bag,
     pace: Pace,
 ) -> anyhow::Result<Played> {
-    let mut played = Played {
+    let names = Played {
         candidates_topic: session.topic_name("grasp_candidates"),
         sets_topic: session.topic_name("grasp_candidate_sets"),
+        poses_topic: session.topic_name("pose_candidates"),
+        pose_sets_topic: session.topic_name("pose_candidate_sets"),
         ..Played::default()
     };
-    let qos = qos(pace.depth);
-    let topic = create_topic::<GraspCandidate>(session.node(), &played.candidates_topic, &qos)?;
-    let set_topic = create_topic::<GraspCandidateSet>(session.node(), &played.sets_topic, &qos)?;
-    let publisher = session
-        .node_mut()
-        .create_publisher::<GraspCandidate>(&topic, None)?;
-    let set_publisher = session
-        .node_mut()
-        .create_publisher::<GraspCandidateSet>(&set_topic, None)?;
-    let items = merged(candidates, sets);
-    let (names, total) = (played.clone(), items.len());
-    let result: anyhow::Result<(usize, usize)> = session.run(async |node, shutdown| {
-        let wanted =
-            (!candidates.is_empty()).then_some((&publisher, names.candidates_topic.as_str()));
-        let set_wanted = (!sets.is_empty()).then_some((&set_publisher, names.sets_topic.as_str()));
-        if !wait_for_subscribers(node, shutdown, wanted, set_wanted, pace.wait).await? {
-            return Ok((0, 0));
+    let publishers = Publishers::create(session, &names, pace.depth)?;
+    let items = merged(bag);
+    let result: anyhow::Result<Played> = session.run(async |node, shutdown| {
+        let mut played = names.clone();
+        let waits = publishers.waits(node, bag, &names);
+        if !wait_for_subscribers(shutdown, waits, pace.wait).await? {
+            return Ok(played);
         }
         log::info!(
-            "playing {} candidates and {} sets from {} on {} and {}",
-            candidates.len(),
-            sets.len(),
+            "playing {} candidates, {} sets, {} pose candidates and {} pose sets from {} on {}, \
+             {}, {} and {}",
+            bag.candidates.len(),
+            bag.candidate_sets.len(),
+            bag.pose_candidates.len(),
+            bag.pose_sets.len(),
             source.display(),
             names.candidates_topic,
-            names.sets_topic
+            names.sets_topic,
+            names.poses_topic,
+            names.pose_sets_topic
         );
         let start = Instant::now();
         let first = items.first().map_or(0, |(t, _)| *t);
-        let (mut sent, mut sent_sets) = (0usize, 0usize);
         for (time, item) in &items {
             if pace.rate > 0.0 {
                 let offset = time.saturating_sub(first) as f64 / 1e9 / pace.rate;
@@ -154,32 +240,14 @@ pub fn publish(
                     break;
                 }
             }
-            match item {
-                Item::Candidate(c) => {
-                    publisher
-                        .async_publish((*c).clone())
-                        .await
-                        .map_err(|e| anyhow::anyhow!("cannot publish: {e:?}"))?;
-                    sent += 1;
-                }
-                Item::Set(s) => {
-                    set_publisher
-                        .async_publish((*s).clone())
-                        .await
-                        .map_err(|e| anyhow::anyhow!("cannot publish a set: {e:?}"))?;
-                    sent_sets += 1;
-                }
-            }
+            publishers.send(item, &mut played).await?;
         }
-        log::debug!("sent {} of {total} messages", sent + sent_sets);
+        let sent = played.candidates + played.sets + played.poses + played.pose_sets;
+        log::debug!("sent {sent} of {} messages", items.len());
         // Let reliable delivery finish before leaving.
         smol::Timer::after(Duration::from_millis(500)).await;
-        Ok((sent, sent_sets))
+        Ok(played)
     });
-    drop(publisher);
-    drop(set_publisher);
-    let (sent, sent_sets) = result?;
-    played.candidates = sent;
-    played.sets = sent_sets;
-    Ok(played)
+    drop(publishers);
+    result
 }

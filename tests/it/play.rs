@@ -115,16 +115,18 @@ fn write_candidates_and_sets(path: &std::path::Path) {
     w.finish().expect("finish");
 }
 
-/// Plays `source` into a node recording to `runs` on `domain`; what `play` printed, and the
-/// node's recording once it stopped cleanly.
+/// Plays `source` into a node recording to `runs` on `domain` (the node with `node_env` added to
+/// its environment); what `play` printed, and the node's recording once it stopped cleanly.
 fn play_into_a_recording_node(
     source: &std::path::Path,
     runs: &std::path::Path,
     domain: &str,
+    node_env: &[(&str, &str)],
 ) -> (String, std::path::PathBuf) {
     let mut node = bin()
         .args(["node", "--ros-args", "-p"])
         .arg(format!("record_dir:={}", runs.display()))
+        .envs(node_env.iter().copied())
         .env("ROS_DOMAIN_ID", domain)
         .env("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
         .stdout(Stdio::null())
@@ -179,7 +181,8 @@ fn played_sets_are_answered_recorded_and_replay_unchanged() {
     write_candidates_and_sets(&source);
     let domain = std::env::var("GRASP_ORIENT_TEST_DOMAIN_ID")
         .unwrap_or_else(|_| (170 + std::process::id() % 30).to_string());
-    let (text, recording) = play_into_a_recording_node(&source, &dir.path().join("runs"), &domain);
+    let (text, recording) =
+        play_into_a_recording_node(&source, &dir.path().join("runs"), &domain, &[]);
     assert!(text.contains("published 3 of 3 candidates"), "{text}");
     assert!(text.contains("published 3 of 3 candidate sets"), "{text}");
     let out = bin()
@@ -264,7 +267,8 @@ fn played_spatial_candidates_are_answered_in_3d_and_replay_unchanged() {
 
     let domain = std::env::var("GRASP_ORIENT_TEST_DOMAIN_ID")
         .unwrap_or_else(|_| (140 + std::process::id() % 30).to_string());
-    let (text, recording) = play_into_a_recording_node(&source, &dir.path().join("runs"), &domain);
+    let (text, recording) =
+        play_into_a_recording_node(&source, &dir.path().join("runs"), &domain, &[]);
     assert!(text.contains("published 4 of 4 candidates"), "{text}");
     assert!(text.contains("published 1 of 1 candidate sets"), "{text}");
 
@@ -299,6 +303,76 @@ fn played_spatial_candidates_are_answered_in_3d_and_replay_unchanged() {
     assert!(
         summary.contains("8 compared with a recorded recommendation, 0 differ")
             && summary.contains("1 compared with a recorded answer, 0 differ"),
+        "{summary}"
+    );
+}
+
+/// The pose answers of a recording, each as its `Debug` text, sorted: answers given off the
+/// node's thread may be recorded in another order than their candidates.
+fn pose_answers(bag: &grasp_orient::record::bag::Bag) -> (Vec<String>, Vec<String>) {
+    let mut singles: Vec<String> = bag
+        .pose_recommendations
+        .iter()
+        .map(|r| format!("{:?}", r.message))
+        .collect();
+    let mut sets: Vec<String> = bag
+        .pose_recommendation_sets
+        .iter()
+        .map(|r| format!("{:?}", r.message))
+        .collect();
+    singles.sort();
+    sets.sort();
+    (singles, sets)
+}
+
+/// `play` republishes pose candidates and pose sets: the golden `bags/node_poses.mcap` (recorded
+/// from a node with the default settings) played into a recording node gives the same pose
+/// answers, field for field, and a recording that replays unchanged.
+#[test]
+fn played_poses_are_answered_as_recorded_and_replay_unchanged() {
+    let _turn = TEST_DOMAIN.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = temp_dir("play_poses");
+    let source = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/bags/node_poses.mcap"));
+    let prefix = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/prefix");
+    let domain = std::env::var("GRASP_ORIENT_TEST_DOMAIN_ID")
+        .unwrap_or_else(|_| (110 + std::process::id() % 30).to_string());
+    let runs = dir.path().join("runs");
+    let node_env = [("AMENT_PREFIX_PATH", prefix)];
+    let (text, recording) = play_into_a_recording_node(source, &runs, &domain, &node_env);
+    assert!(text.contains("published 0 of 0 candidates"), "{text}");
+    assert!(!text.contains("candidate sets"), "{text}");
+    assert!(
+        text.contains("published 29 of 29 pose candidates on /pose_candidates"),
+        "{text}"
+    );
+    assert!(
+        text.contains("published 5 of 5 pose sets on /pose_candidate_sets"),
+        "{text}"
+    );
+
+    let golden = grasp_orient::record::bag::read(source).expect("the golden bag reads");
+    let bag = grasp_orient::record::bag::read(&recording).expect("the node's recording reads");
+    assert_eq!(
+        bag.pose_candidates.len(),
+        29,
+        "every played pose candidate recorded"
+    );
+    assert_eq!(bag.pose_sets.len(), 5, "every played pose set recorded");
+    let (singles, sets) = pose_answers(&bag);
+    let (want_singles, want_sets) = pose_answers(&golden);
+    assert_eq!(singles, want_singles);
+    assert_eq!(sets, want_sets);
+
+    let out = bin()
+        .args(["replay", recording.to_str().expect("utf-8")])
+        .env("AMENT_PREFIX_PATH", prefix)
+        .output()
+        .expect("replay runs");
+    let summary = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{summary}");
+    assert!(
+        summary.contains("54 compared with a recorded recommendation, 0 differ")
+            && summary.contains("5 compared with a recorded answer, 0 differ"),
         "{summary}"
     );
 }
