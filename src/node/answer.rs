@@ -76,6 +76,16 @@ pub struct PoseOutcome {
     pub recorded: Recorded,
 }
 
+/// The fewest triangles of an inline mesh (`object.inline_mesh`) for which a single pose candidate
+/// is answered off the node's thread. An inline mesh is indexed anew for every candidate that
+/// carries it (vertices merged, closedness and mass properties, the BVH): 0.5 to 1 µs a triangle.
+/// `cargo bench --bench inline_mesh` measured, in one run each, a hop to smol's blocking pool and
+/// back at 29 to 83 µs, and a whole answer on a 48- to 64-triangle mesh at 45 to 58 µs, on a
+/// 100-triangle one at 64 to 66 µs, on a 1,000-triangle one at 0.55 to 0.64 ms: below 100
+/// triangles the index costs about a hop or less, and the answer keeps its place among the pose
+/// answers (docs/node.md).
+pub const INLINE_OFF_THREAD_TRIANGLES: usize = 100;
+
 /// Answering one pose candidate, apart from the node's counts and recording: the settings in
 /// force when it was received, and the node's meshes. It may run on another thread.
 #[derive(Debug, Clone)]
@@ -508,6 +518,14 @@ impl Answerer {
             echo: self.echo,
             poses: PoseAnswerer::sharing(version.config.closing_axis, self.meshes.clone()),
         }
+    }
+
+    /// Whether answering `candidate` is worth a hop to another thread: it would load a mesh file
+    /// first ([`Answerer::loads_a_mesh`]), or index an inline mesh of at least
+    /// [`INLINE_OFF_THREAD_TRIANGLES`] triangles.
+    pub fn answers_off_thread(&self, candidate: &PoseCandidate) -> bool {
+        let inline = candidate.object.inline_mesh.triangles.len();
+        self.loads_a_mesh(candidate) || (!self.echo && inline >= INLINE_OFF_THREAD_TRIANGLES)
     }
 
     /// Whether answering `candidate` would load a mesh file first (one named by resource and not
@@ -1020,6 +1038,7 @@ mod tests {
         );
         let block = pose_on("block", &shape);
         assert!(a.loads_a_mesh(&block), "not loaded yet");
+        assert!(a.answers_off_thread(&block), "not loaded yet");
         let work = a.pose_work(12);
         let (reply, markers) = work.run(&block);
         assert_eq!(reply.recommendation.status, 0, "{reply:?}");
@@ -1032,5 +1051,65 @@ mod tests {
             r#""inline_mesh": {"vertices": [], "triangles": []}"#,
         );
         assert!(!a.loads_a_mesh(&inline), "no file to load");
+        assert!(!a.answers_off_thread(&inline), "nothing to index");
+    }
+
+    /// A closed inline mesh of `2 × rings × sides` triangles, in metres: a torus about an axis
+    /// parallel to z through (0, -0.06, 0), its tube 25 mm in radius, whose centre line passes
+    /// through the origin along x, so that [`pose_on`]'s fingers close across the tube.
+    fn torus_inline(rings: u32, sides: u32) -> String {
+        let mut vertices = Vec::new();
+        for i in 0..rings {
+            for j in 0..sides {
+                let u = std::f64::consts::TAU * f64::from(i) / f64::from(rings);
+                let v = std::f64::consts::TAU * f64::from(j) / f64::from(sides);
+                let rho = 0.06 + 0.025 * v.cos();
+                let (x, y, z) = (rho * u.sin(), rho * u.cos() - 0.06, 0.025 * v.sin());
+                vertices.push(format!(r#"{{"x": {x}, "y": {y}, "z": {z}}}"#));
+            }
+        }
+        let at = |i: u32, j: u32| (i % rings) * sides + j % sides;
+        let mut triangles = Vec::new();
+        for i in 0..rings {
+            for j in 0..sides {
+                let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+                triangles.push(format!(r#"{{"vertex_indices": [{a}, {b}, {c}]}}"#));
+                triangles.push(format!(r#"{{"vertex_indices": [{a}, {c}, {d}]}}"#));
+            }
+        }
+        format!(
+            r#""inline_mesh": {{"vertices": [{}], "triangles": [{}]}}"#,
+            vertices.join(", "),
+            triangles.join(", ")
+        )
+    }
+
+    /// A single pose candidate with an inline mesh of [`INLINE_OFF_THREAD_TRIANGLES`] triangles
+    /// or more is answered off the node's thread, every time (it is indexed anew each time); one
+    /// with fewer, on it. The answer off the thread is the one on it.
+    #[test]
+    fn a_large_inline_mesh_is_answered_off_the_thread_and_a_small_one_on_it() {
+        let mut a = answerer(no_recording(), false);
+        // 2 × 10 × 5 = 100 triangles; 2 × 8 × 6 = 96.
+        let large = pose_on("large", &torus_inline(10, 5));
+        let small = pose_on("small", &torus_inline(8, 6));
+        assert_eq!(
+            large.object.inline_mesh.triangles.len(),
+            INLINE_OFF_THREAD_TRIANGLES
+        );
+        assert!(small.object.inline_mesh.triangles.len() < INLINE_OFF_THREAD_TRIANGLES);
+        assert!(a.answers_off_thread(&large));
+        assert!(!a.answers_off_thread(&small));
+        let work = a.pose_work(20);
+        let sent = large.clone();
+        let run = std::thread::spawn(move || work.run(&sent));
+        let (reply, markers) = run.join().expect("answered on another thread");
+        assert_eq!(reply.recommendation.status, 0, "{reply:?}");
+        let off = a.account_pose(large.clone(), reply, markers, 20, 9);
+        assert!(a.answers_off_thread(&large), "an inline mesh is not kept");
+        let on = a.handle_pose(large, 21, 10);
+        assert_eq!(format!("{:?}", off.reply), format!("{:?}", on.reply));
+        let echo = answerer(no_recording(), true);
+        assert!(!echo.answers_off_thread(&pose_on("echoed", &torus_inline(10, 5))));
     }
 }

@@ -312,11 +312,11 @@ struct Loop<'a> {
 }
 
 /// Single pose candidates answered off the node's thread because their mesh was not loaded yet
-/// (at most [`MAX_LOADING`] at a time).
+/// or is a large inline mesh (at most [`MAX_LOADING`] at a time).
 type Loading = futures::stream::FuturesUnordered<smol::Task<Loaded>>;
 
-/// How many single pose candidates may load their meshes off the node's thread at once; one
-/// more is answered on the node's thread.
+/// How many single pose candidates may load or index their meshes off the node's thread at once;
+/// one more is answered on the node's thread.
 const MAX_LOADING: usize = 4;
 
 /// A single pose candidate answered off the node's thread, with its times.
@@ -506,10 +506,12 @@ async fn answer_one(
     markers_then_record(node, endpoints, answerer, outcome.markers, outcome.recorded).await;
 }
 
-/// Takes one pose candidate: answered on the node's thread when its mesh is loaded already (or
-/// it names none); otherwise off it ([`smol::unblock`]), its answer sent when it is back, so that
-/// a first load (a tenth of a second and more for a large mesh) holds up no other topic. Answers
-/// may then come back in another order than their candidates.
+/// Takes one pose candidate: answered on the node's thread when its mesh is loaded already, or
+/// it names none and carries no inline mesh of [`answer::INLINE_OFF_THREAD_TRIANGLES`] triangles
+/// or more; otherwise off it ([`smol::unblock`]), its answer sent when it is back, so that a
+/// first load or a large inline mesh's index (a tenth of a second and more for 100,000
+/// triangles) holds up no other topic. Answers may then come back in another order than their
+/// candidates.
 async fn take_pose(
     node: &Node,
     endpoints: &Endpoints,
@@ -519,7 +521,7 @@ async fn take_pose(
     info: &MessageInfo,
 ) {
     let (received, sent) = message_times(info);
-    if loading.len() < MAX_LOADING && answerer.loads_a_mesh(&candidate) {
+    if loading.len() < MAX_LOADING && answerer.answers_off_thread(&candidate) {
         let work = answerer.pose_work(received);
         loading.push(smol::unblock(move || {
             let (reply, markers) = work.run(&candidate);
