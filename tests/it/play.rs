@@ -115,13 +115,25 @@ fn write_candidates_and_sets(path: &std::path::Path) {
     w.finish().expect("finish");
 }
 
-/// Plays `source` into a node recording to `runs` on `domain` (the node with `node_env` added to
-/// its environment); what `play` printed, and the node's recording once it stopped cleanly.
+/// Plays `source` at `--rate 0` into a node recording to `runs` on `domain` (the node with
+/// `node_env` added to its environment); what `play` printed, and the node's recording once it
+/// stopped cleanly.
 fn play_into_a_recording_node(
     source: &std::path::Path,
     runs: &std::path::Path,
     domain: &str,
     node_env: &[(&str, &str)],
+) -> (String, std::path::PathBuf) {
+    play_at_rate_into_a_recording_node(source, runs, domain, node_env, "0")
+}
+
+/// [`play_into_a_recording_node`] at `--rate rate`.
+fn play_at_rate_into_a_recording_node(
+    source: &std::path::Path,
+    runs: &std::path::Path,
+    domain: &str,
+    node_env: &[(&str, &str)],
+    rate: &str,
 ) -> (String, std::path::PathBuf) {
     let mut node = bin()
         .args(["node", "--ros-args", "-p"])
@@ -135,7 +147,7 @@ fn play_into_a_recording_node(
         .expect("node starts");
     let played = bin()
         .args(["play", source.to_str().expect("utf-8")])
-        .args(["--rate", "0", "--wait", "20"])
+        .args(["--rate", rate, "--wait", "20"])
         .env("ROS_DOMAIN_ID", domain)
         .env("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
         .output()
@@ -374,5 +386,141 @@ fn played_poses_are_answered_as_recorded_and_replay_unchanged() {
         summary.contains("54 compared with a recorded recommendation, 0 differ")
             && summary.contains("5 compared with a recorded answer, 0 differ"),
         "{summary}"
+    );
+}
+
+/// A closed inline mesh of `2 × rings × sides` triangles, in metres: a torus whose tube (25 mm in
+/// radius) runs through the origin along x, its axis parallel to z through (0, -0.06, 0).
+fn torus(rings: u32, sides: u32) -> grasp_orient::msg::Mesh {
+    use grasp_orient::msg::{Mesh, MeshTriangle, Point};
+    let mut vertices = Vec::new();
+    for i in 0..rings {
+        for j in 0..sides {
+            let u = std::f64::consts::TAU * f64::from(i) / f64::from(rings);
+            let v = std::f64::consts::TAU * f64::from(j) / f64::from(sides);
+            let rho = 0.06 + 0.025 * v.cos();
+            vertices.push(Point {
+                x: rho * u.sin(),
+                y: rho * u.cos() - 0.06,
+                z: 0.025 * v.sin(),
+            });
+        }
+    }
+    let at = |i: u32, j: u32| (i % rings) * sides + j % sides;
+    let mut triangles = Vec::new();
+    for i in 0..rings {
+        for j in 0..sides {
+            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+            triangles.push(MeshTriangle {
+                vertex_indices: [a, b, c],
+            });
+            triangles.push(MeshTriangle {
+                vertex_indices: [a, c, d],
+            });
+        }
+    }
+    Mesh {
+        vertices,
+        triangles,
+    }
+}
+
+/// A single pose candidate with a large inline mesh (300,000 triangles: a few hundred ms to
+/// index) is answered off the node's thread: a contact candidate played 150 ms after it, received
+/// while the mesh is being indexed, is answered before it. Before, the node indexed the mesh on
+/// its thread and answered the candidate only after the pose.
+#[test]
+fn a_large_inline_mesh_holds_up_no_candidate_sent_after_it() {
+    use grasp_orient::msg::{GraspCandidate, GraspObject, PoseCandidate, Quaternion, Vector3};
+    use grasp_orient::record::{BagWriter, Entry, Payload, PoseTopics, Topics};
+
+    let _turn = TEST_DOMAIN.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = temp_dir("play_inline");
+    let source = dir.path().join("source.mcap");
+    let unturned = Quaternion {
+        w: 1.0,
+        ..Quaternion::default()
+    };
+    let mut pose = PoseCandidate {
+        id: "large-inline".into(),
+        width: 0.09,
+        object: GraspObject {
+            inline_mesh: torus(600, 250),
+            scale: Vector3 {
+                x: 1.0,
+                y: 1.0,
+                z: 1.0,
+            },
+            mass: 0.25,
+            friction: 0.5,
+            ..GraspObject::default()
+        },
+        gravity: Vector3 {
+            x: 0.0,
+            y: 0.0,
+            z: -9.81,
+        },
+        ..PoseCandidate::default()
+    };
+    pose.grasp_pose.orientation = unturned.clone();
+    pose.object.pose.orientation = unturned;
+    let contact: GraspCandidate = serde_json::from_str(
+        include_str!("../../examples/paper_cases.jsonl")
+            .lines()
+            .next()
+            .expect("a case"),
+    )
+    .expect("a candidate");
+    let topics = Topics {
+        candidates: "/grasp_candidates".into(),
+        recommendations: "/grip_recommendations".into(),
+        markers: None,
+        sets: None,
+        poses: Some(PoseTopics::default_names()),
+    };
+    let mut w = BagWriter::create(&source, &topics, 100).expect("create");
+    let at = |payload, t| Entry {
+        payload,
+        log_time: t,
+        publish_time: t,
+    };
+    let t0 = 1_000_000_000;
+    w.write(&at(Payload::PoseCandidate(Box::new(pose)), t0))
+        .expect("write");
+    w.write(&at(Payload::Candidate(Box::new(contact)), t0 + 150_000_000))
+        .expect("write");
+    w.finish().expect("finish");
+
+    let domain = std::env::var("GRASP_ORIENT_TEST_DOMAIN_ID")
+        .unwrap_or_else(|_| (80 + std::process::id() % 30).to_string());
+    let runs = dir.path().join("runs");
+    let (text, recording) = play_at_rate_into_a_recording_node(&source, &runs, &domain, &[], "1");
+    assert!(text.contains("published 1 of 1 candidates"), "{text}");
+    assert!(text.contains("published 1 of 1 pose candidates"), "{text}");
+    let bag = grasp_orient::record::bag::read(&recording).expect("the node's recording reads");
+    let (pose_in, contact_in) = (&bag.pose_candidates[0], &bag.candidates[0]);
+    let (pose_out, contact_out) = (&bag.pose_recommendations[0], &bag.recommendations[0]);
+    assert_eq!(
+        pose_out.message.recommendation.status, 0,
+        "{:?}",
+        pose_out.message
+    );
+    assert_eq!(contact_out.message.status, 0);
+    let ms = |t: u64, from: u64| (t as f64 - from as f64) / 1e6;
+    let times = format!(
+        "from the pose's arrival: the contact candidate came {:.1} ms later, its answer went out \
+         after {:.1} ms, the pose's after {:.1} ms",
+        ms(contact_in.log_time, pose_in.log_time),
+        ms(contact_out.log_time, pose_in.log_time),
+        ms(pose_out.log_time, pose_in.log_time)
+    );
+    eprintln!("{times}");
+    assert!(
+        contact_in.log_time > pose_in.log_time,
+        "the pose must arrive first for this test to say anything: {times}"
+    );
+    assert!(
+        contact_out.log_time < pose_out.log_time,
+        "the contact candidate's answer waited for the pose's: {times}"
     );
 }
