@@ -429,8 +429,13 @@ fn torus(rings: u32, sides: u32) -> grasp_orient::msg::Mesh {
 /// index) is answered off the node's thread: a contact candidate played 150 ms after it, received
 /// while the mesh is being indexed, is answered before it. Before, the node indexed the mesh on
 /// its thread and answered the candidate only after the pose.
+///
+/// It holds the node to a time (the pose must reach the node before the candidate, and its
+/// indexing outlast the 150 ms between them), so `tests/run.sh` runs it alone, after the tests
+/// that run beside the rclpy suite: `cargo test --test it timed_ -- --ignored`.
 #[test]
-fn a_large_inline_mesh_holds_up_no_candidate_sent_after_it() {
+#[ignore = "timed: run alone by tests/run.sh (cargo test --test it timed_ -- --ignored)"]
+fn timed_a_large_inline_mesh_holds_up_no_candidate_sent_after_it() {
     use grasp_orient::msg::{GraspCandidate, GraspObject, PoseCandidate, Quaternion, Vector3};
     use grasp_orient::record::{BagWriter, Entry, Payload, PoseTopics, Topics};
 
@@ -492,7 +497,7 @@ fn a_large_inline_mesh_holds_up_no_candidate_sent_after_it() {
     w.finish().expect("finish");
 
     let domain = std::env::var("GRASP_ORIENT_TEST_DOMAIN_ID")
-        .unwrap_or_else(|_| (80 + std::process::id() % 30).to_string());
+        .unwrap_or_else(|_| (170 + std::process::id() % 30).to_string());
     let runs = dir.path().join("runs");
     let (text, recording) = play_at_rate_into_a_recording_node(&source, &runs, &domain, &[], "1");
     assert!(text.contains("published 1 of 1 candidates"), "{text}");
