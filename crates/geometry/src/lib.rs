@@ -63,6 +63,7 @@
 //! # Ok::<(), grasp_orient_geometry::GeometryError>(())
 //! ```
 
+mod bvh;
 pub mod cast;
 pub mod error;
 pub mod load;

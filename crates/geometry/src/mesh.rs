@@ -18,6 +18,7 @@ use parry3d_f64::mass_properties::details::trimesh_signed_volume_and_center_of_m
 use parry3d_f64::math::Vector;
 use parry3d_f64::shape::{TriMesh, TriMeshFlags};
 
+use crate::bvh::CompactBvh;
 use crate::error::{GeometryError, MeshDefect};
 use crate::mass::check_closed;
 
@@ -26,6 +27,8 @@ use crate::mass::check_closed;
 pub struct Mesh {
     resource: String,
     trimesh: TriMesh,
+    /// The copy of the trimesh's BVH the fingers' casts walk.
+    compact: CompactBvh,
     /// The triangles at vertex `v` are `at_vertex[first[v]..first[v + 1]]`.
     first: Vec<u32>,
     at_vertex: Vec<u32>,
@@ -97,14 +100,17 @@ impl Mesh {
             volume: c.volume.abs(),
             centroid: c.centroid,
         });
+        let compact = CompactBvh::new(&trimesh);
         let aabb = trimesh.local_aabb();
         let size = (aabb.maxs - aabb.mins).length();
         let bytes = estimate_bytes(&trimesh, &resource)
             + size_of_val(&first[..])
-            + size_of_val(&at_vertex[..]);
+            + size_of_val(&at_vertex[..])
+            + compact.bytes();
         Ok(Mesh {
             resource,
             trimesh,
+            compact,
             first,
             at_vertex,
             closed,
@@ -157,6 +163,10 @@ impl Mesh {
 
     pub(crate) fn trimesh(&self) -> &TriMesh {
         &self.trimesh
+    }
+
+    pub(crate) fn compact_bvh(&self) -> &CompactBvh {
+        &self.compact
     }
 
     /// The corners of each triangle, object frame, metres (after merging and scaling), in the
