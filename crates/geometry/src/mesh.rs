@@ -5,7 +5,8 @@
 //! (STL stores each triangle's corners apart); drop triangles that become degenerate (two equal
 //! corners); check closedness ([`crate::mass::check_closed`]). A closed mesh gets its volume and
 //! centroid and is turned outward if it was wound inward (negative volume). Every mesh gets
-//! parry's BVH over its triangles, and the list of the triangles at each vertex, from which the
+//! parry's BVH over its triangles, a compact copy of it that the fingers' casts walk (`bvh.rs`),
+//! and the list of the triangles at each vertex, from which the
 //! pseudo-normal of an edge or a vertex is computed when a finger meets one (rarely: parry's own
 //! pseudo-normals for every edge and vertex took 40 % of the time to index and a quarter of the
 //! memory).
@@ -155,8 +156,8 @@ impl Mesh {
             .map(|c| Point3::new(c.centroid.x, c.centroid.y, c.centroid.z))
     }
 
-    /// What it holds in memory, bytes (parry's count of its vertices, triangles and BVH, and
-    /// the triangles at each vertex).
+    /// What it holds in memory, bytes (parry's count of its vertices, triangles and BVH, the
+    /// compact copy of the BVH, and the triangles at each vertex).
     pub fn bytes(&self) -> usize {
         self.bytes
     }
