@@ -34,8 +34,8 @@
 //!   means nothing).
 //!
 //! # Exactness
-//! Box and sphere: parry's closed-form ray casts. Mesh: parry's ray cast over its BVH (each
-//! triangle exact). Cylinder and cone: closed forms in this file, because parry casts a ray on
+//! Box and sphere: parry's closed-form ray casts. Mesh: parry's ray-triangle test (exact for each
+//! triangle) over a compact copy of parry's BVH (`crate::bvh`, whose boxes contain parry's). Cylinder and cone: closed forms in this file, because parry casts a ray on
 //! them by GJK iterations, whose normals were measured up to 1.9e-4 rad (cylinder) and 1.2e-3
 //! rad (cone) from the exact ones.
 
@@ -44,9 +44,8 @@ use std::str::FromStr;
 
 use nalgebra::{Isometry3, Point3, UnitVector3, Vector3};
 use parry3d_f64::math::Vector;
-use parry3d_f64::partitioning::BvhNode;
 use parry3d_f64::query::{Ray, RayCast};
-use parry3d_f64::shape::{Ball, Cuboid, TriMesh};
+use parry3d_f64::shape::{Ball, Cuboid};
 
 use crate::error::{Finger, GeometryError};
 use crate::mesh::Mesh;
@@ -519,11 +518,12 @@ fn cast_cone(half_height: f64, radius: f64, ray: &LocalRay) -> LocalCast {
     })
 }
 
-/// parry's BVH ray cast, from the tolerance behind the start, so that a start on the surface or
-/// inside it by less than the tolerance meets it at once (as the primitives' `t ≥ −tolerance`).
-/// For a closed mesh that the finger's way does not meet, the ray runs on past `max`: a start
-/// inside meets a back face first (an exit). Where that first hit is on an edge or a vertex, or at the start itself, the back face
-/// proves nothing, and rays in other directions decide ([`starts_inside`]).
+/// The ray cast over the mesh's BVH ([`first_triangle`]), from the tolerance behind the start,
+/// so that a start on the surface or inside it by less than the tolerance meets it at once (as
+/// the primitives' `t ≥ −tolerance`). For a closed mesh that the finger's way does not meet, the
+/// ray runs on past `max`: a start inside meets a back face first (an exit). Where that first hit
+/// is on an edge or a vertex, or at the start itself, the back face proves nothing, and rays in
+/// other directions decide ([`starts_inside`]).
 fn cast_mesh(mesh: &Mesh, ray: &LocalRay) -> LocalCast {
     let trimesh = mesh.trimesh();
     let closed = mesh.is_closed();
@@ -531,9 +531,9 @@ fn cast_mesh(mesh: &Mesh, ray: &LocalRay) -> LocalCast {
     // The finger's way first: the first hit there is the first hit on the whole ray, found with
     // the boxes beyond the way left out of the search. Only where the way meets nothing does a
     // closed mesh need the ray beyond it.
-    let on_the_way = first_triangle(trimesh, &behind, ray.max + ray.tolerance);
+    let on_the_way = first_triangle(mesh, &behind, ray.max + ray.tolerance);
     let first = match on_the_way {
-        None if closed => first_triangle(trimesh, &behind, f64::MAX),
+        None if closed => first_triangle(mesh, &behind, f64::MAX),
         found => found,
     };
     let Some((id, time_of_impact)) = first else {
@@ -615,7 +615,7 @@ fn starts_inside(mesh: &Mesh, ray: &LocalRay) -> bool {
     let origin = glam(&ray.origin);
     for d in DIRECTIONS {
         let d = Vector::from(d);
-        let Some((id, time_of_impact)) = first_triangle(trimesh, &Ray::new(origin, d), f64::MAX)
+        let Some((id, time_of_impact)) = first_triangle(mesh, &Ray::new(origin, d), f64::MAX)
         else {
             return false;
         };
@@ -636,66 +636,9 @@ fn starts_inside(mesh: &Mesh, ray: &LocalRay) -> bool {
     false
 }
 
-/// The first triangle a ray meets within `max`, and when: parry's best-first search of the mesh's
-/// BVH (`Bvh::find_best`), as `TriMesh::cast_local_ray_and_get_normal` runs it, with the same
-/// costs bit for bit (so the same nodes, in the same order, and the same triangle), but the
-/// inverse of the ray's direction computed once rather than at each of the nodes' boxes, and no
-/// normal computed for the triangles tried (the caller needs the hit one's only). Each box test
-/// was a fresh `Aabb` and three divisions; on a 100,000-triangle mesh the boxes were most of a
-/// cast (`docs/performance.md`).
-fn first_triangle(trimesh: &TriMesh, ray: &Ray, max: f64) -> Option<(u32, f64)> {
-    let slabs = Slabs::new(ray);
-    trimesh.bvh().find_best(
-        max,
-        |node: &BvhNode, best| slabs.entry(node, best),
-        |id, best| trimesh.triangle(id).cast_local_ray(ray, best, false),
-    )
-}
-
-/// A ray prepared for box tests: its origin, and per axis the inverse of its direction and
-/// which of a box's two planes it meets first (`None` where the direction is zero).
-struct Slabs {
-    origin: [f64; 3],
-    inverse: [Option<(f64, bool)>; 3],
-}
-
-impl Slabs {
-    fn new(ray: &Ray) -> Self {
-        let d = [ray.dir.x, ray.dir.y, ray.dir.z];
-        Slabs {
-            origin: [ray.origin.x, ray.origin.y, ray.origin.z],
-            inverse: d.map(|d| (d != 0.0).then(|| (1.0 / d, d < 0.0))),
-        }
-    }
-
-    /// When the ray enters a node's box (0 when it starts inside it), or `f64::MAX` when it
-    /// misses it before `max`: parry's `Aabb::cast_local_ray` with `solid`, term for term (its
-    /// two planes' times, the nearer kept, are the same numbers; it stops at the first axis
-    /// that empties the interval, and the interval then stays empty).
-    fn entry(&self, node: &BvhNode, max: f64) -> f64 {
-        let (mins, maxs) = (node.mins(), node.maxs());
-        let (mins, maxs) = ([mins.x, mins.y, mins.z], [maxs.x, maxs.y, maxs.z]);
-        let (mut near, mut far) = (0.0f64, max);
-        for i in 0..3 {
-            let o = self.origin[i];
-            match self.inverse[i] {
-                None if o < mins[i] || o > maxs[i] => return f64::MAX,
-                None => {}
-                Some((inverse, backwards)) => {
-                    let (first, last) = if backwards {
-                        (maxs[i], mins[i])
-                    } else {
-                        (mins[i], maxs[i])
-                    };
-                    near = near.max((first - o) * inverse);
-                    far = far.min((last - o) * inverse);
-                }
-            }
-        }
-        if near > far {
-            f64::MAX
-        } else {
-            near
-        }
-    }
+/// The first triangle a ray meets within `max`, and when: the walk of the mesh's compact copy of
+/// parry's BVH ([`crate::bvh`]), which finds what parry's own search of it finds (and, the few
+/// times that search misses the first hit, the first hit).
+fn first_triangle(mesh: &Mesh, ray: &Ray, max: f64) -> Option<(u32, f64)> {
+    mesh.compact_bvh().first_hit(mesh.trimesh(), ray, max)
 }

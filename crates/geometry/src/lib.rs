@@ -36,8 +36,9 @@
 //!
 //! # Dependencies
 //! parry3d-f64 0.31 (double precision, glam-based math types, converted at this crate's edges:
-//! the API speaks nalgebra like the solver) casts the rays on boxes, spheres and BVH-indexed
-//! triangle meshes and sums a mesh's signed volume; mesh-loader parses STL, OBJ and COLLADA.
+//! the API speaks nalgebra like the solver) casts the rays on boxes, spheres and triangles,
+//! indexes a mesh's triangles in a BVH (walked through a compact copy, `bvh.rs`) and sums a
+//! mesh's signed volume; mesh-loader parses STL, OBJ and COLLADA.
 //! The cylinder's and cone's ray casts are closed forms here (parry's are GJK iterations).
 //!
 //! # Example
@@ -63,6 +64,7 @@
 //! # Ok::<(), grasp_orient_geometry::GeometryError>(())
 //! ```
 
+mod bvh;
 pub mod cast;
 pub mod error;
 pub mod load;

@@ -5,7 +5,8 @@
 //! (STL stores each triangle's corners apart); drop triangles that become degenerate (two equal
 //! corners); check closedness ([`crate::mass::check_closed`]). A closed mesh gets its volume and
 //! centroid and is turned outward if it was wound inward (negative volume). Every mesh gets
-//! parry's BVH over its triangles, and the list of the triangles at each vertex, from which the
+//! parry's BVH over its triangles, a compact copy of it that the fingers' casts walk (`bvh.rs`),
+//! and the list of the triangles at each vertex, from which the
 //! pseudo-normal of an edge or a vertex is computed when a finger meets one (rarely: parry's own
 //! pseudo-normals for every edge and vertex took 40 % of the time to index and a quarter of the
 //! memory).
@@ -18,6 +19,7 @@ use parry3d_f64::mass_properties::details::trimesh_signed_volume_and_center_of_m
 use parry3d_f64::math::Vector;
 use parry3d_f64::shape::{TriMesh, TriMeshFlags};
 
+use crate::bvh::CompactBvh;
 use crate::error::{GeometryError, MeshDefect};
 use crate::mass::check_closed;
 
@@ -26,6 +28,8 @@ use crate::mass::check_closed;
 pub struct Mesh {
     resource: String,
     trimesh: TriMesh,
+    /// The copy of the trimesh's BVH the fingers' casts walk.
+    compact: CompactBvh,
     /// The triangles at vertex `v` are `at_vertex[first[v]..first[v + 1]]`.
     first: Vec<u32>,
     at_vertex: Vec<u32>,
@@ -97,14 +101,17 @@ impl Mesh {
             volume: c.volume.abs(),
             centroid: c.centroid,
         });
+        let compact = CompactBvh::new(&trimesh);
         let aabb = trimesh.local_aabb();
         let size = (aabb.maxs - aabb.mins).length();
         let bytes = estimate_bytes(&trimesh, &resource)
             + size_of_val(&first[..])
-            + size_of_val(&at_vertex[..]);
+            + size_of_val(&at_vertex[..])
+            + compact.bytes();
         Ok(Mesh {
             resource,
             trimesh,
+            compact,
             first,
             at_vertex,
             closed,
@@ -149,14 +156,18 @@ impl Mesh {
             .map(|c| Point3::new(c.centroid.x, c.centroid.y, c.centroid.z))
     }
 
-    /// What it holds in memory, bytes (parry's count of its vertices, triangles and BVH, and
-    /// the triangles at each vertex).
+    /// What it holds in memory, bytes (parry's count of its vertices, triangles and BVH, the
+    /// compact copy of the BVH, and the triangles at each vertex).
     pub fn bytes(&self) -> usize {
         self.bytes
     }
 
     pub(crate) fn trimesh(&self) -> &TriMesh {
         &self.trimesh
+    }
+
+    pub(crate) fn compact_bvh(&self) -> &CompactBvh {
+        &self.compact
     }
 
     /// The corners of each triangle, object frame, metres (after merging and scaling), in the
