@@ -76,7 +76,7 @@ parameters! {
     /// the worst case over it (a candidate lighter than this is refused, status 2).
     mass_tolerance: f64 = 0.0, "kg", in Domain::Below { min: 0.0, limit: MAX_MASS };
     /// The axis of the gripper's tool frame along which the fingers close, for pose candidates
-    /// (x, y or z; docs/poses.md); solve and rank read it, the node takes no pose candidates yet.
+    /// (x, y or z; docs/poses.md); solve, rank, replay and the node read it.
     closing_axis: ClosingAxis = ClosingAxis::Y, "";
 }
 
