@@ -603,7 +603,7 @@ mod tests {
         };
         w.submit(unheard).expect("taken");
         let done = next(&mut w);
-        assert!(done.outcome.reply.candidates().ranking.first().is_some());
+        assert!(!done.outcome.reply.candidates().ranking.is_empty());
         assert!(done.outcome.markers.is_none(), "drawn for nobody");
         let recorded = SetJob {
             audience: false,
