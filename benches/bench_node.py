@@ -11,6 +11,8 @@ In one run, for each of
     node   `grasp_orient node` with its defaults (working directory: a temporary folder, for any recording);
     node_nomarkers  the same with -p publish_markers:=false (with --with-nomarkers),
     node_norecord   the same with -p record:=false (with --with-norecord): what recording costs,
+    LABEL  another grasp_orient binary with the defaults (with --also-bin LABEL=PATH, repeatable): the
+           code before a change, measured against it in the same run,
 it measures
     (a) round-trip latency, rclpy publish -> rclpy receipt of the answer (raw: its serialized bytes, as in (b)),
         one candidate at a time: p50, p99, max;
@@ -28,6 +30,8 @@ Plus the peer's own ceiling: the same burst from the same publisher processes to
 process, no node in between (rclpy -> rclpy, GraspCandidate). When the node's and echo's throughput sit near
 that ceiling, Python/rclpy is the bottleneck, not the node. On two cores, an rclpy publisher and collector
 saturate the machine near 8,000 messages per second; (c) is the measurement the throughput target is read from.
+
+--offered-only skips the ceiling, (a) and (b).
 
 All traffic stays on this machine (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, one ROS_DOMAIN_ID for the run).
 """
