@@ -5,7 +5,7 @@
 //! encoding `cdr` with the 4-byte encapsulation header; channel metadata `offered_qos_profiles`;
 //! `log_time` the receive time, `publish_time` the send time; the settings in force as metadata
 //! ([`settings`]). Chunks are lz4-compressed and closed at least once a second, so a killed
-//! process loses at most the last second of what the writer took ([`recover`] reads the rest).
+//! process loses at most the last second ([`recover`] reads the rest).
 //!
 //! Files are never truncated or shared: a recording is created new (`O_EXCL`) under a name
 //! carrying the node's name and the start time, with a numeric suffix on a clash
@@ -13,8 +13,7 @@
 //! into place when complete ([`output`]).
 //!
 //! Writing happens on its own thread: the answering loop only hands over messages, so a slow disk
-//! delays the file, never the answers; the thread runs at a lower priority than the node's
-//! others ([`WRITER_NICE`]), so that its work waits for free cores rather than delay answers. When a write fails (a full disk), the file is cut back to
+//! delays the file, never the answers. When a write fails (a full disk), the file is cut back to
 //! its last complete flush and closed there, so what it holds stays readable, and the thread
 //! stops with the cause ([`RecordError::Stopped`]). [`lifecycle`] starts and stops the files of
 //! a node run as its `record` parameters say.
@@ -665,7 +664,6 @@ impl Recorder {
         let thread = std::thread::Builder::new()
             .name("grasp_orient-record".into())
             .spawn(move || {
-                yield_to_answers();
                 let result = pump(&mut bag, &rx).and_then(|()| bag.finish());
                 if result.is_err() {
                     flag.store(true, Ordering::SeqCst);
@@ -726,24 +724,6 @@ impl Drop for Recorder {
                 log::error!("{e}");
             }
         }
-    }
-}
-
-/// How much lower than the node's threads the writer thread runs (nice value, added to the
-/// process's). On Linux the nice value belongs to each thread.
-const WRITER_NICE: i32 = 10;
-
-/// Lowers the calling thread's scheduling priority by [`WRITER_NICE`]. The writer's work
-/// (encoding, lz4, writing, a tenth of the node's CPU at 20,000 candidates per second) then waits
-/// while the answering thread and DDS's threads want the cores, instead of taking a core from
-/// them for a batch each time it wakes; when the cores are free it runs as before. A recording
-/// only lags in memory, and is written whole when it is stopped. A failure leaves the priority as
-/// it was.
-fn yield_to_answers() {
-    let lowered = rustix::process::getpriority_process(None)
-        .and_then(|now| rustix::process::setpriority_process(None, (now + WRITER_NICE).min(19)));
-    if let Err(e) = lowered {
-        log::debug!("the recording's writer keeps its priority: {e}");
     }
 }
 
@@ -978,24 +958,5 @@ mod tests {
             "{text}"
         );
         bag::read(&path).expect("the file reads as it is");
-    }
-
-    /// The writer's priority is lowered for its own thread only (Linux keeps a nice value per
-    /// thread), by `WRITER_NICE`, and never past 19.
-    #[test]
-    fn the_writer_lowers_its_own_thread_only() {
-        let before = rustix::process::getpriority_process(None).expect("own priority");
-        let inside = std::thread::spawn(|| {
-            yield_to_answers();
-            rustix::process::getpriority_process(None).expect("own priority")
-        })
-        .join()
-        .expect("joined");
-        assert_eq!(inside, (before + WRITER_NICE).min(19));
-        assert_eq!(
-            rustix::process::getpriority_process(None).expect("own priority"),
-            before,
-            "the calling thread unchanged"
-        );
     }
 }
