@@ -11,6 +11,8 @@ In one run, for each of
     node   `grasp_orient node` with its defaults (working directory: a temporary folder, for any recording);
     node_nomarkers  the same with -p publish_markers:=false (with --with-nomarkers),
     node_norecord   the same with -p record:=false (with --with-norecord): what recording costs,
+    LABEL  another grasp_orient binary with the defaults (with --also-bin LABEL=PATH, repeatable): the
+           code before a change, measured against it in the same run,
 it measures
     (a) round-trip latency, rclpy publish -> rclpy receipt of the answer (raw: its serialized bytes, as in (b)),
         one candidate at a time: p50, p99, max;
@@ -28,6 +30,8 @@ Plus the peer's own ceiling: the same burst from the same publisher processes to
 process, no node in between (rclpy -> rclpy, GraspCandidate). When the node's and echo's throughput sit near
 that ceiling, Python/rclpy is the bottleneck, not the node. On two cores, an rclpy publisher and collector
 saturate the machine near 8,000 messages per second; (c) is the measurement the throughput target is read from.
+
+--offered-only skips the ceiling, (a) and (b).
 
 All traffic stays on this machine (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, one ROS_DOMAIN_ID for the run).
 """
@@ -306,6 +310,12 @@ def run(args) -> int:
         variants.append(("node_nomarkers", ["--ros-args", "-p", "publish_markers:=false"]))
     if args.with_norecord:
         variants.append(("node_norecord", ["--ros-args", "-p", "record:=false"]))
+    # other binaries (an older build, say), run with the defaults like `node`, interleaved with it
+    binaries = {}
+    for spec in args.also_bin:
+        label, _, path = spec.partition("=")
+        binaries[label] = Path(path).resolve()
+        variants.append((label, []))
     names = ["rclpy->rclpy"] + [v[0] for v in variants]
     # every measurement, per variant and kind, one entry per repetition
     results: dict = {n: {"latency": [], "windowed": [], "burst": [], "offered": {r: [] for r in args.rates},
@@ -314,15 +324,17 @@ def run(args) -> int:
     log(f"[bench] ROS_DOMAIN_ID={C.DOMAIN_ID}, binary {C.binary_path()}, {args.repeat} repetitions, "
         f"echo and node interleaved")
     for rep in range(args.repeat):
-        # the peer's own ceiling, no node: publisher processes -> this process, GraspCandidate
-        r = measure_burst(peer, f"/bench_loop_{rep}", f"/bench_loop_{rep}", GraspCandidate, args.n_throughput,
-                          args.publishers, args.idle, f"loop{rep}-")
-        results["rclpy->rclpy"]["burst"].append(r)
-        log(f"[bench] #{rep} rclpy->rclpy burst {r['per_s']:.0f}/s, lost {r['lost']}")
+        if not args.offered_only:
+            # the peer's own ceiling, no node: publisher processes -> this process, GraspCandidate
+            r = measure_burst(peer, f"/bench_loop_{rep}", f"/bench_loop_{rep}", GraspCandidate, args.n_throughput,
+                              args.publishers, args.idle, f"loop{rep}-")
+            results["rclpy->rclpy"]["burst"].append(r)
+            log(f"[bench] #{rep} rclpy->rclpy burst {r['per_s']:.0f}/s, lost {r['lost']}")
         for name, extra in variants:
             # (c) starts a fresh node for every rate: in one node, each publisher/collector pair that has come
             # and gone leaves the next run a higher p99 lag (docs/performance.md, "Known limit: peers that leave"), which would mix the rates up.
-            for phase in ["latency+windowed", "burst", *(f"offered{rate}" for rate in args.rates)]:
+            phases = [] if args.offered_only else ["latency+windowed", "burst"]
+            for phase in [*phases, *(f"offered{rate}" for rate in args.rates)]:
                 ns = f"/bench_{name}_{phase.split('+')[0]}_{rep}"
                 ros_args = ["-r", f"__ns:={ns}"]
                 rate = int(phase[len("offered"):]) if phase.startswith("offered") else None
@@ -331,7 +343,8 @@ def run(args) -> int:
                 if rate is not None:
                     ros_args += ["-p", f"qos_depth:={offered_depth(rate, args.seconds)}"]
                 node_args = [*extra, *ros_args] if "--ros-args" in extra else [*extra, "--ros-args", *ros_args]
-                proc = C.NodeProcess(node_args, C.ros_env(C.DOMAIN_ID), workdir, f"{name} ({phase})")
+                proc = C.NodeProcess(node_args, C.ros_env(C.DOMAIN_ID), workdir, f"{name} ({phase})",
+                                     binary=binaries.get(name))
                 res = results[name]
                 try:
                     try:
@@ -443,8 +456,14 @@ def run(args) -> int:
                   f"{median_of(no, 'per_s') / median_of(eo, 'per_s'):.2f}, lag p50 "
                   f"{median_of(no, 'lag_p50_ms') / median_of(eo, 'lag_p50_ms'):.2f}, p99 "
                   f"{median_of(no, 'lag_p99_ms') / median_of(eo, 'lag_p99_ms'):.2f}")
+        for name in names[3:]:
+            vo = results[name]["offered"][rate]
+            if eo and vo:
+                print(f"ratios {name}/echo at an offered {rate}/s (medians): lag p50 "
+                      f"{median_of(vo, 'lag_p50_ms') / median_of(eo, 'lag_p50_ms'):.2f}, p99 "
+                      f"{median_of(vo, 'lag_p99_ms') / median_of(eo, 'lag_p99_ms'):.2f}")
     ceiling = median_of(results["rclpy->rclpy"]["burst"], "per_s")
-    if nd["burst"]:
+    if nd["burst"] and results["rclpy->rclpy"]["burst"]:
         print(f"peer ceiling (rclpy -> rclpy, no node, same publishers and collector): {ceiling:.0f}/s; "
               f"node burst / ceiling {median_of(nd['burst'], 'per_s') / ceiling:.2f}")
     if args.json:
@@ -474,6 +493,10 @@ def main() -> int:
                     help="also the node with -p publish_markers:=false (what the markers cost)")
     ap.add_argument("--with-norecord", action="store_true",
                     help="also the node with -p record:=false (what recording to MCAP costs)")
+    ap.add_argument("--also-bin", action="append", default=[], metavar="LABEL=PATH",
+                    help="also this grasp_orient binary with the defaults, reported as LABEL (repeatable)")
+    ap.add_argument("--offered-only", action="store_true",
+                    help="only (c), the sustained offered rates: no ceiling, latency, windowed or burst")
     ap.add_argument("--repeat", type=int, default=3, help="interleaved repetitions; medians are reported (3)")
     ap.add_argument("--json", help="write every number to this file as JSON")
     args = ap.parse_args()

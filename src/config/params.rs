@@ -32,7 +32,8 @@ parameters! {
     friction_safety_factor: f64 = 1.0, "", in Domain::Real { min: 1.0, max: MAX_SAFETY_FACTOR };
     /// QoS history depth (keep-last, reliable, volatile) of every topic.
     qos_depth (fixed): i64 = 100, "messages", in Domain::Integer { min: 1, max: 100_000 };
-    /// Publish visualization_msgs/MarkerArray on grip_markers.
+    /// Publish visualization_msgs/MarkerArray on grip_markers; an answer's markers are built
+    /// only while grip_markers has a subscriber or record_markers is on.
     publish_markers: bool = true, "";
     /// Record candidates, answers and the settings in force to a new MCAP file (rosbag2
     /// conventions) named after the node and its start time. Takes effect when set: false

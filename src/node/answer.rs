@@ -48,6 +48,11 @@ pub struct Counts {
     pub sets_incomplete: u64,
     /// Candidates of those sets not solved (status 4); not counted as answered.
     pub not_solved: u64,
+    /// Marker arrays built (for a subscriber of `grip_markers` or for a recording that takes
+    /// them).
+    pub markers_built: u64,
+    /// Marker arrays published on `grip_markers` (only while it has a subscriber).
+    pub markers_published: u64,
 }
 
 /// The answer to one candidate, to publish in this order: `reply`, then `markers`.
@@ -55,7 +60,7 @@ pub struct Counts {
 pub struct Outcome {
     /// The recommendation.
     pub reply: GripRecommendation,
-    /// The markers, when they are on and the answer has status 0.
+    /// The markers, when they are on, wanted ([`Answerer::draws`]) and the answer has status 0.
     pub markers: Option<MarkerArray>,
     /// Lines to log.
     pub notes: Vec<Note>,
@@ -68,7 +73,7 @@ pub struct Outcome {
 pub struct PoseOutcome {
     /// The answer.
     pub reply: PoseRecommendation,
-    /// The markers, when they are on and the answer has status 0.
+    /// The markers, when they are on, wanted ([`Answerer::draws`]) and the answer has status 0.
     pub markers: Option<MarkerArray>,
     /// Lines to log.
     pub notes: Vec<Note>,
@@ -87,7 +92,8 @@ pub struct PoseOutcome {
 pub const INLINE_OFF_THREAD_TRIANGLES: usize = 100;
 
 /// Answering one pose candidate, apart from the node's counts and recording: the settings in
-/// force when it was received, and the node's meshes. It may run on another thread.
+/// force when it was received, whether its markers are wanted, and the node's meshes. It may run
+/// on another thread.
 #[derive(Debug, Clone)]
 pub struct PoseWork {
     settings: crate::solver::Settings,
@@ -98,7 +104,7 @@ pub struct PoseWork {
 }
 
 impl PoseWork {
-    /// The answer, and its markers when they are on and the answer has status 0.
+    /// The answer, and its markers when they are on and wanted and the answer has status 0.
     pub fn run(&self, candidate: &PoseCandidate) -> (PoseRecommendation, Option<MarkerArray>) {
         if self.echo {
             let empty = GripRecommendation {
@@ -415,9 +421,25 @@ impl Answerer {
         );
     }
 
+    /// Whether an answer's markers are built: `publish_markers` (`markers_on`) and somebody
+    /// takes them, a subscriber of `grip_markers` (`audience`, which the node asks DDS for each
+    /// answer) or the recording (`record_markers`); never in echo mode. Building, serializing
+    /// and publishing a marker array per candidate costs about as much as the answer itself, and
+    /// nobody sees markers published to no subscriber (the topic keeps no history for late ones).
+    pub fn draws(&self, markers_on: bool, audience: bool) -> bool {
+        markers_on && !self.echo && (audience || self.recording.records_markers())
+    }
+
     /// The answer to one candidate, received at `received` and sent at `sent` (ns since the
-    /// epoch), with the settings in force when it was received.
-    pub fn handle(&mut self, candidate: GraspCandidate, received: u64, sent: u64) -> Outcome {
+    /// epoch), with the settings in force when it was received; its markers if [`Self::draws`]
+    /// says so (`audience`: whether `grip_markers` has a subscriber now).
+    pub fn handle(
+        &mut self,
+        candidate: GraspCandidate,
+        received: u64,
+        sent: u64,
+        audience: bool,
+    ) -> Outcome {
         let mut notes = Vec::new();
         let (settings, markers_on, rules) = {
             let live = self.shared.lock();
@@ -441,14 +463,15 @@ impl Answerer {
             answer_one_in_full(&candidate, &settings, &rules)
         };
         self.count_one(&reply, &mut notes);
-        let markers = (markers_on && !self.echo && reply.status == GripRecommendation::STATUS_OK)
-            .then(|| {
-                markers::build(
-                    &rules.tolerances.apply(&candidate),
-                    &reply,
-                    spatial.as_deref(),
-                )
-            });
+        let draw = self.draws(markers_on, audience);
+        let markers = (draw && reply.status == GripRecommendation::STATUS_OK).then(|| {
+            markers::build(
+                &rules.tolerances.apply(&candidate),
+                &reply,
+                spatial.as_deref(),
+            )
+        });
+        self.counts.markers_built += u64::from(markers.is_some());
         let recorded = Recorded {
             reply: self
                 .recording
@@ -500,21 +523,23 @@ impl Answerer {
         candidate: PoseCandidate,
         received: u64,
         sent: u64,
+        audience: bool,
     ) -> PoseOutcome {
-        let work = self.pose_work(received);
+        let work = self.pose_work(received, audience);
         let (reply, markers) = work.run(&candidate);
         self.account_pose(candidate, reply, markers, received, sent)
     }
 
-    /// What answering a pose candidate received at `received` needs (the settings then in force
-    /// and the node's meshes), to run on any thread ([`PoseWork::run`]).
-    pub fn pose_work(&self, received: u64) -> PoseWork {
+    /// What answering a pose candidate received at `received` needs (the settings then in force,
+    /// whether its markers are wanted ([`Self::draws`]) and the node's meshes), to run on any
+    /// thread ([`PoseWork::run`]).
+    pub fn pose_work(&self, received: u64, audience: bool) -> PoseWork {
         let live = self.shared.lock();
         let version = live.version_at(received);
         PoseWork {
             settings: version.settings,
             rules: version.config.rules(),
-            markers_on: version.config.publish_markers && !self.echo,
+            markers_on: self.draws(version.config.publish_markers, audience),
             echo: self.echo,
             poses: PoseAnswerer::sharing(version.config.closing_axis, self.meshes.clone()),
         }
@@ -550,6 +575,7 @@ impl Answerer {
     ) -> PoseOutcome {
         let mut notes = Vec::new();
         self.count_one(&reply.recommendation, &mut notes);
+        self.counts.markers_built += u64::from(markers.is_some());
         let recorded = Recorded {
             reply: self
                 .recording
@@ -607,10 +633,17 @@ impl Answerer {
         (self.recording.is_on(), self.recording.records_markers())
     }
 
-    /// Counts a set's answer; the lines that say what was refused or left unsolved in it.
-    pub fn count_set(&mut self, reply: &SetReply) -> Vec<Note> {
+    /// Counts a marker array published on `grip_markers`.
+    pub fn count_published_markers(&mut self) {
+        self.counts.markers_published += 1;
+    }
+
+    /// Counts a set's answer (`drawn`: with markers of its best candidate); the lines that say
+    /// what was refused or left unsolved in it.
+    pub fn count_set(&mut self, reply: &SetReply, drawn: bool) -> Vec<Note> {
         let mut notes = Vec::new();
         self.counts.sets += 1;
+        self.counts.markers_built += u64::from(drawn);
         let (status, set_id, message) = (reply.status(), reply.set_id(), reply.message());
         let members = reply.members();
         let incomplete = status == GripRecommendationSet::STATUS_INCOMPLETE;
@@ -733,6 +766,13 @@ impl Answerer {
                 ),
             ));
         }
+        notes.push((
+            Level::Info,
+            format!(
+                "markers: {} arrays built, {} published",
+                c.markers_built, c.markers_published
+            ),
+        ));
         notes.extend(self.recording.stop().iter().map(note));
         notes
     }
@@ -795,7 +835,7 @@ mod tests {
         let mut a = answerer(no_recording(), false);
         assert!(a.start().expect("nothing to start").is_empty());
         let case = paper_case_a();
-        let out = a.handle(case.clone(), 10, 5);
+        let out = a.handle(case.clone(), 10, 5, true);
         assert_eq!(out.reply.status, GripRecommendation::STATUS_OK);
         assert_eq!(out.reply.candidate_id, case.id);
         assert_eq!(out.reply.objective, "norm2");
@@ -811,7 +851,7 @@ mod tests {
             id: "x".repeat(100).into(),
             ..case.clone()
         };
-        let out = a.handle(bad, 11, 6);
+        let out = a.handle(bad, 11, 6, true);
         assert_eq!(out.reply.status, GripRecommendation::STATUS_INVALID_INPUT);
         assert!(out.markers.is_none());
         let (level, text) = &out.notes[0];
@@ -833,6 +873,7 @@ mod tests {
                 no_closure: 0,
                 undecodable: 1,
                 undecodable_sets: 2,
+                markers_built: 1,
                 ..Counts::default()
             }
         );
@@ -846,6 +887,66 @@ mod tests {
             "0 candidates needed more than max_grip_force; 0 sets answered, 0 of them refused \
              whole, 0 incomplete (0 candidates not solved); 2 sets undecodable"
         );
+        assert_eq!(last[2].1, "markers: 1 arrays built, 0 published");
+    }
+
+    /// With nobody subscribed to `grip_markers` and no recording of markers, no marker array is
+    /// built (nor counted); a subscriber gets them from the next answer on; a recording that
+    /// takes markers gets them with no subscriber.
+    #[test]
+    fn markers_are_built_only_for_a_subscriber_or_a_recording() {
+        let mut a = answerer(no_recording(), false);
+        let out = a.handle(paper_case_a(), 10, 5, false);
+        assert_eq!(out.reply.status, GripRecommendation::STATUS_OK);
+        assert!(out.markers.is_none(), "built for nobody");
+        let boxed = r#""primitive": {"type": 1, "dimensions": [0.04, 0.06, 0.08]}"#;
+        let pose = a.handle_pose(pose_on("box", boxed), 11, 6, false);
+        assert_eq!(pose.reply.recommendation.status, 0, "{:?}", pose.reply);
+        assert!(pose.markers.is_none(), "built for nobody");
+        let (reply, markers) = a.pose_work(12, false).run(&pose_on("box", boxed));
+        assert!(markers.is_none() && reply.recommendation.status == 0);
+        assert_eq!(a.counts().markers_built, 0);
+
+        // A subscriber came: the next answer is drawn.
+        let out = a.handle(paper_case_a(), 13, 8, true);
+        assert!(out.markers.as_ref().is_some_and(|m| !m.markers.is_empty()));
+        let pose = a.handle_pose(pose_on("box", boxed), 14, 9, true);
+        assert!(pose.markers.is_some());
+        a.count_published_markers();
+        let c = a.counts();
+        assert_eq!((c.markers_built, c.markers_published), (2, 1));
+        assert!(!a.draws(false, true), "publish_markers false wins");
+
+        // Recorded markers are built with no subscriber, and recorded.
+        let dir = tempfile::tempdir().expect("a temporary folder");
+        let config = Config {
+            record_dir: dir.path().display().to_string(),
+            record_markers: true,
+            ..Config::default()
+        };
+        let mut a = answerer(config, false);
+        a.start().expect("starts");
+        assert!(a.draws(true, false));
+        let out = a.handle(paper_case_a(), 3, 2, false);
+        assert!(out.markers.is_some() && out.recorded.markers.is_some());
+        assert!(a.record(out.recorded, 4).is_empty());
+        let notes = a.finish();
+        assert!(
+            notes
+                .iter()
+                .any(|n| n.1 == "markers: 1 arrays built, 0 published"),
+            "{notes:?}"
+        );
+        assert!(
+            notes.iter().any(|n| n
+                .1
+                .ends_with("closed: 1 candidates, 1 recommendations, 1 marker arrays")),
+            "{notes:?}"
+        );
+
+        // Echo mode draws nothing, whoever listens.
+        let a = answerer(Config::default(), true);
+        assert!(!a.draws(true, true));
     }
 
     #[test]
@@ -865,11 +966,11 @@ mod tests {
         )
         .expect("valid");
         let after = crate::record::now_ns();
-        let out = a.handle(paper_case_a(), after, after);
+        let out = a.handle(paper_case_a(), after, after, true);
         assert_eq!(out.reply.objective, "norm1");
         assert!(out.markers.is_none());
         // Received before the set, answered after it: the settings of its time.
-        let out = a.handle(paper_case_a(), before, before);
+        let out = a.handle(paper_case_a(), before, before, true);
         assert_eq!(out.reply.objective, "norm2");
         assert!(out.markers.is_some());
     }
@@ -880,7 +981,7 @@ mod tests {
         let notes = a.start().expect("echo records nothing");
         assert_eq!(notes[0].0, Level::Warn);
         let case = paper_case_a();
-        let out = a.handle(case.clone(), 0, 0);
+        let out = a.handle(case.clone(), 0, 0, true);
         assert_eq!(out.reply.candidate_id, case.id);
         assert_eq!(out.reply.header, case.header);
         assert_eq!(out.reply.objective, "");
@@ -898,7 +999,7 @@ mod tests {
         let mut a = answerer(config, false);
         let started = a.start().expect("starts");
         assert!(started[0].1.starts_with("recording to "), "{started:?}");
-        let out = a.handle(paper_case_a(), 3, 2);
+        let out = a.handle(paper_case_a(), 3, 2, false);
         assert!(out.recorded.reply.is_some() && out.recorded.markers.is_some());
         assert!(a.record(out.recorded, 4).is_empty());
         let set = a.shared.set_action();
@@ -976,6 +1077,7 @@ mod tests {
             ),
             10,
             5,
+            true,
         );
         assert_eq!(out.reply.recommendation.status, 0, "{:?}", out.reply);
         assert_eq!(out.reply.contact_1.y, -0.03);
@@ -998,6 +1100,7 @@ mod tests {
             ),
             11,
             6,
+            true,
         );
         assert_eq!(refused.reply.recommendation.status, 2);
         assert!(refused.markers.is_none());
@@ -1039,7 +1142,7 @@ mod tests {
         let block = pose_on("block", &shape);
         assert!(a.loads_a_mesh(&block), "not loaded yet");
         assert!(a.answers_off_thread(&block), "not loaded yet");
-        let work = a.pose_work(12);
+        let work = a.pose_work(12, true);
         let (reply, markers) = work.run(&block);
         assert_eq!(reply.recommendation.status, 0, "{reply:?}");
         assert!(!a.loads_a_mesh(&block), "kept once answered");
@@ -1100,14 +1203,14 @@ mod tests {
         assert!(small.object.inline_mesh.triangles.len() < INLINE_OFF_THREAD_TRIANGLES);
         assert!(a.answers_off_thread(&large));
         assert!(!a.answers_off_thread(&small));
-        let work = a.pose_work(20);
+        let work = a.pose_work(20, true);
         let sent = large.clone();
         let run = std::thread::spawn(move || work.run(&sent));
         let (reply, markers) = run.join().expect("answered on another thread");
         assert_eq!(reply.recommendation.status, 0, "{reply:?}");
         let off = a.account_pose(large.clone(), reply, markers, 20, 9);
         assert!(a.answers_off_thread(&large), "an inline mesh is not kept");
-        let on = a.handle_pose(large, 21, 10);
+        let on = a.handle_pose(large, 21, 10, true);
         assert_eq!(format!("{:?}", off.reply), format!("{:?}", on.reply));
         let echo = answerer(no_recording(), true);
         assert!(!echo.answers_off_thread(&pose_on("echoed", &torus_inline(10, 5))));

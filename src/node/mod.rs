@@ -15,6 +15,7 @@
 pub mod answer;
 pub mod demo;
 
+mod markers_out;
 mod param_services;
 mod params;
 pub mod play;
@@ -32,6 +33,7 @@ use answer::{Answerer, Note, SetInput};
 use anyhow::Context as _;
 use demo::Demo;
 use futures::{FutureExt, StreamExt};
+use markers_out::MarkersOut;
 use param_services::ParameterServices;
 use params::Shared;
 use ros2_client::{MessageInfo, Node, NodeOptions, Publisher, Subscription};
@@ -114,7 +116,7 @@ struct Endpoints {
     topics: Topics,
     candidates: Subscription<GraspCandidate>,
     answers: Publisher<GripRecommendation>,
-    markers: Publisher<MarkerArray>,
+    markers: MarkersOut,
     sets: SetEndpoints,
     pose_candidates: Subscription<PoseCandidate>,
     pose_answers: Publisher<PoseRecommendation>,
@@ -160,9 +162,10 @@ impl Endpoints {
             answers: node
                 .create_publisher(&answers, None)
                 .context("cannot publish recommendations")?,
-            markers: node
-                .create_publisher(&markers, None)
-                .context("cannot publish markers")?,
+            markers: MarkersOut::new(
+                node.create_publisher(&markers, None)
+                    .context("cannot publish markers")?,
+            ),
             topics,
         })
     }
@@ -219,6 +222,7 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
         // The parameter services run as a task of their own, woken only by their requests.
         let local = smol::LocalExecutor::new();
         let _services = local.spawn(services.serve(node));
+        let _markers_watch = local.spawn(endpoints.markers.watch(node));
         let mut loading = Loading::new();
         let mut loop_state = Loop {
             answerer: &mut answerer,
@@ -486,7 +490,8 @@ async fn answer_one(
     info: &MessageInfo,
 ) {
     let (received, sent) = message_times(info);
-    let outcome = answerer.handle(candidate, received, sent);
+    let audience = endpoints.markers.heard(node);
+    let outcome = answerer.handle(candidate, received, sent, audience);
     log::debug!(
         "candidate {:?}: status {}, gravity angle {}, {} {} N",
         short_id(&outcome.reply.candidate_id),
@@ -521,8 +526,9 @@ async fn take_pose(
     info: &MessageInfo,
 ) {
     let (received, sent) = message_times(info);
+    let audience = endpoints.markers.heard(node);
     if loading.len() < MAX_LOADING && answerer.answers_off_thread(&candidate) {
-        let work = answerer.pose_work(received);
+        let work = answerer.pose_work(received, audience);
         loading.push(smol::unblock(move || {
             let (reply, markers) = work.run(&candidate);
             Loaded {
@@ -535,7 +541,7 @@ async fn take_pose(
         }));
         return;
     }
-    let outcome = answerer.handle_pose(candidate, received, sent);
+    let outcome = answerer.handle_pose(candidate, received, sent, audience);
     send_pose(node, endpoints, answerer, outcome).await;
 }
 
@@ -596,7 +602,8 @@ async fn send_pose(
     markers_then_record(node, endpoints, answerer, outcome.markers, outcome.recorded).await;
 }
 
-/// After an answer went out: its markers, then its record with the time the answer was sent.
+/// After an answer went out: its markers (if `grip_markers` has a subscriber: they may have been
+/// built for the recording alone), then its record with the time the answer was sent.
 async fn markers_then_record(
     node: &Node,
     endpoints: &Endpoints,
@@ -605,11 +612,7 @@ async fn markers_then_record(
     recorded: answer::Recorded,
 ) {
     let answered = now_ns();
-    if let Some(array) = markers {
-        if let Err(e) = endpoints.markers.async_publish(array).await {
-            log::warn!("cannot publish markers: {e:?}");
-        }
-    }
+    endpoints.markers.publish(node, answerer, markers).await;
     let notes = answerer.record(recorded, answered);
     tell(node, notes);
 }

@@ -58,6 +58,9 @@ pub struct SetJob {
     pub record: bool,
     /// Whether the recording takes markers.
     pub record_markers: bool,
+    /// Whether `grip_markers` had a subscriber when the set was taken: the best candidate is
+    /// drawn only for it or for the recording.
+    pub audience: bool,
 }
 
 /// A set's answer, back from the set thread.
@@ -256,13 +259,14 @@ impl Solver {
             via,
             record,
             record_markers,
+            audience,
         } = job;
         let now = {
             let live = self.shared.lock();
             let version = live.version_at(received);
             InForce {
                 settings: version.settings,
-                markers_on: version.config.publish_markers,
+                markers_on: version.config.publish_markers && (audience || record_markers),
                 rules: version.config.rules(),
                 threads: version.config.solver_threads,
                 budget: version.config.max_set_time,
@@ -535,6 +539,7 @@ mod tests {
             },
             record: false,
             record_markers: false,
+            audience: true,
         }
     }
 
@@ -581,6 +586,35 @@ mod tests {
         assert!(
             done.outcome.markers.is_some(),
             "markers of the best candidate"
+        );
+    }
+
+    /// With nobody subscribed to `grip_markers` and no recording of markers, the best candidate
+    /// is not drawn; a recording that takes markers has them drawn.
+    #[test]
+    fn a_set_is_drawn_only_for_a_subscriber_or_a_recording() {
+        let mut w = worker(Config {
+            max_set_time: 0.0,
+            ..Config::default()
+        });
+        let unheard = SetJob {
+            audience: false,
+            ..job("unheard", 3)
+        };
+        w.submit(unheard).expect("taken");
+        let done = next(&mut w);
+        assert!(!done.outcome.reply.candidates().ranking.is_empty());
+        assert!(done.outcome.markers.is_none(), "drawn for nobody");
+        let recorded = SetJob {
+            audience: false,
+            record: true,
+            record_markers: true,
+            ..job("recorded", 3)
+        };
+        w.submit(recorded).expect("taken");
+        assert!(
+            next(&mut w).outcome.markers.is_some(),
+            "drawn for the recording"
         );
     }
 
@@ -705,6 +739,7 @@ mod tests {
             },
             record: true,
             record_markers: false,
+            audience: true,
         }
     }
 

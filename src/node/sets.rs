@@ -8,12 +8,12 @@
 //! thread's queue is full is answered the same way, at once.
 
 use super::answer::{Answerer, SetInput, SetOutcome, SetReply};
+use super::markers_out::MarkersOut;
 use super::session::{create_topic, qos, say, Session};
 use super::set_worker::{SetDone, SetJob, SetWorker, Via};
 use crate::msg::{
-    short_id, GraspCandidateSet, GripRecommendationSet, MarkerArray, PoseCandidateSet,
-    PoseRecommendationSet, RecommendPosesRequest, RecommendPosesResponse, RecommendRequest,
-    RecommendResponse,
+    short_id, GraspCandidateSet, GripRecommendationSet, PoseCandidateSet, PoseRecommendationSet,
+    RecommendPosesRequest, RecommendPosesResponse, RecommendRequest, RecommendResponse,
 };
 use crate::record::{now_ns, PoseTopics, SetTopics};
 use anyhow::Context as _;
@@ -122,7 +122,7 @@ where
 pub async fn take_topic(
     node: &Node,
     endpoints: &SetEndpoints,
-    markers: &Publisher<MarkerArray>,
+    markers: &MarkersOut,
     answerer: &mut Answerer,
     worker: &SetWorker,
     set: SetInput,
@@ -140,6 +140,7 @@ pub async fn take_topic(
         via: Via::Topic { taken },
         record,
         record_markers,
+        audience: markers.heard(node),
     };
     if let Err(done) = worker.submit(job) {
         answer_done(node, endpoints, markers, answerer, *done).await;
@@ -151,7 +152,7 @@ pub async fn take_topic(
 pub async fn take_call(
     node: &Node,
     endpoints: &SetEndpoints,
-    markers: &Publisher<MarkerArray>,
+    markers: &MarkersOut,
     answerer: &mut Answerer,
     worker: &SetWorker,
     id: RmwRequestId,
@@ -166,6 +167,7 @@ pub async fn take_call(
         via: Via::Service(id),
         record,
         record_markers,
+        audience: markers.heard(node),
     };
     if let Err(done) = worker.submit(job) {
         answer_done(node, endpoints, markers, answerer, *done).await;
@@ -177,7 +179,7 @@ pub async fn take_call(
 pub async fn answer_done(
     node: &Node,
     endpoints: &SetEndpoints,
-    markers: &Publisher<MarkerArray>,
+    markers: &MarkersOut,
     answerer: &mut Answerer,
     done: SetDone,
 ) {
@@ -192,7 +194,7 @@ pub async fn answer_done(
         markers: array,
         recorded,
     } = outcome;
-    super::tell(node, answerer.count_set(&reply));
+    super::tell(node, answerer.count_set(&reply, array.is_some()));
     let (how, taken) = match via {
         Via::Topic { taken } => ("topic", Some(taken)),
         Via::Service(_) => ("service", None),
@@ -205,7 +207,7 @@ pub async fn answer_done(
         say(node, log::Level::Error, &e);
     }
     let answered = now_ns();
-    publish_markers(markers, array).await;
+    markers.publish(node, answerer, array).await;
     super::tell(node, answerer.record_set(recorded, answered));
 }
 
@@ -304,14 +306,6 @@ impl AnswerLine {
                 sending.as_secs_f64() * 1e3,
                 waited.as_secs_f64() * 1e3
             );
-        }
-    }
-}
-
-async fn publish_markers(markers: &Publisher<MarkerArray>, array: Option<MarkerArray>) {
-    if let Some(array) = array {
-        if let Err(e) = markers.async_publish(array).await {
-            log::warn!("cannot publish markers: {e:?}");
         }
     }
 }

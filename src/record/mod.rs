@@ -479,11 +479,13 @@ impl BagWriter {
         self.stop(cause)
     }
 
+    /// The MCAP writer, while the file is open. (The error is made only when it is needed: it
+    /// had cost every message a copy of the path, made and dropped.)
     fn writer(&mut self) -> Result<&mut mcap::Writer<BufWriter<sink::Sink>>, RecordError> {
-        let path = self.path.clone();
+        let path = &self.path;
         self.writer
             .as_mut()
-            .ok_or(RecordError::AlreadyStopped { path })
+            .ok_or_else(|| RecordError::AlreadyStopped { path: path.clone() })
     }
 
     /// Writes one message (markers and sets are dropped when the recording has no channel for

@@ -368,6 +368,58 @@ def test_markers_in_candidate_frame(peer, client):
         peer.node.destroy_subscription(sub)
 
 
+def markers_line(n) -> tuple[int, int]:
+    """(built, published) from the node's last words: `markers: N arrays built, M published`."""
+    lines = [line for line in n.lines if "markers: " in line and " arrays built, " in line]
+    assert lines, f"no markers line in the node's last words:\n{n.output(8)}"
+    words = lines[-1].split("markers: ", 1)[1].split()
+    return int(words[0]), int(words[3])
+
+
+def test_markers_built_only_for_a_subscriber(start_node, peer):
+    """With nobody subscribed to grip_markers and record_markers off, the node builds no marker array at all
+    (its last words count them); a subscriber that comes later gets markers for the answers from then on,
+    and every array built is published to it."""
+    n = start_node("--ros-args", "-r", "__ns:=/lazy_markers", "-p", "record:=false",
+                   name="grasp_orient node (markers on demand)")
+    c = GraspClient(peer, ns="/lazy_markers")
+    got: list = []
+    sub = None
+    try:
+        c.ensure_roundtrip()
+        cands = random_batch(20, SEED + 9, "unwatched")
+        answers = c.send_and_collect(cands)
+        solved = [x for x in cands if answers[x["id"]].status == GripRecommendation.STATUS_OK]
+        assert solved, f"none of {len(cands)} candidates solved: {answers}"
+        sub = peer.node.create_subscription(MarkerArray, "/lazy_markers/grip_markers", got.append,
+                                            reliable_qos(100))
+        assert peer.spin_until(lambda: sub.get_publisher_count() > 0, 15.0), "no publisher on grip_markers"
+        # the node sees our reader matched a little after we see its writer: resend until markers come
+        frame = "watched_frame"
+        deadline = time.monotonic() + 15.0
+        k = 0
+        while not got and time.monotonic() < deadline:
+            w = dict(solved[k % len(solved)], id=f"watched-{k}")
+            w["header"] = dict(w["header"], frame_id=frame)
+            c.send_and_collect([w], timeout=10.0)
+            peer.spin_until(lambda: bool(got), 1.0)
+            k += 1
+        assert got, "no MarkerArray for a subscriber that came after the first answers"
+        assert all(m.markers and m.markers[0].header.frame_id == frame for m in got), \
+            "markers of a candidate answered before anybody subscribed"
+        peer.spin_for(0.3)
+        received = len(got)
+    finally:
+        if sub is not None:
+            peer.node.destroy_subscription(sub)
+        peer.node.destroy_publisher(c.pub)
+        peer.node.destroy_subscription(c.sub)
+    n.stop_and_check(signal.SIGINT)
+    built, published = markers_line(n)
+    assert 1 <= built <= k, f"{built} arrays built for {k} candidates sent while subscribed (none before)"
+    assert published == built == received, f"built {built}, published {published}, received {received}"
+
+
 # ---------------------------------------------------------------------------------------------------
 # Names, namespaces, remaps, params file, signals
 # ---------------------------------------------------------------------------------------------------
