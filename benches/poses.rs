@@ -130,6 +130,25 @@ fn ms(d: Duration) -> f64 {
     d.as_secs_f64() * 1e3
 }
 
+/// The medians of 5: parsing the mesh file alone, and loading and indexing it through a new
+/// cache.
+fn mesh_times(resource: &str, path: &std::path::Path) -> (Duration, Duration) {
+    let parse_only = median(
+        (0..5)
+            .map(|_| timed(|| parse(resource, path).expect("parses")))
+            .collect(),
+    );
+    let load_index = median(
+        (0..5)
+            .map(|_| {
+                let cache = MeshCache::new(AmentIndex::default(), MESH_CACHE_BYTES);
+                timed(|| cache.get(resource, [0.001; 3]).expect("loads"))
+            })
+            .collect(),
+    );
+    (parse_only, load_index)
+}
+
 fn main() {
     let rounds: usize = std::env::args()
         .skip(1)
@@ -140,19 +159,7 @@ fn main() {
     let triangles = torus::write_torus_stl(&path, 250, 200);
     let resource = path.display().to_string();
 
-    let parse_only = median(
-        (0..5)
-            .map(|_| timed(|| parse(&resource, &path).expect("parses")))
-            .collect(),
-    );
-    let load_index = median(
-        (0..5)
-            .map(|_| {
-                let cache = MeshCache::new(AmentIndex::default(), MESH_CACHE_BYTES);
-                timed(|| cache.get(&resource, [0.001; 3]).expect("loads"))
-            })
-            .collect(),
-    );
+    let (parse_only, load_index) = mesh_times(&resource, &path);
 
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     let frame = Isometry3::from_parts(

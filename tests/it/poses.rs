@@ -835,6 +835,21 @@ fn a_contact_on_an_edge_is_answered_with_a_note() {
     assert!((n1 - expected).norm() < 1e-12, "{n1}");
 }
 
+/// What `rank -` prints for `input`: its table.
+fn rank_table(input: &str) -> String {
+    let output = bin()
+        .args(["rank", "-"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .and_then(|mut c| {
+            c.stdin.take().expect("stdin").write_all(input.as_bytes())?;
+            c.wait_with_output()
+        })
+        .expect("rank runs");
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
 /// (e) `rank` of a pose set ranks by grip force and holds the set's max_grip_force; each member
 /// is the answer `solve` gives the same pose alone.
 #[test]
@@ -922,21 +937,7 @@ fn rank_of_a_pose_set_ranks_by_grip_force_within_the_limit() {
         assert_eq!(ranked.contains(&(i as u64)), expected == 0);
     }
     // The table names the limit.
-    let mut cmd = bin();
-    let output = cmd
-        .args(["rank", "-"])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .spawn()
-        .and_then(|mut c| {
-            c.stdin
-                .take()
-                .expect("stdin")
-                .write_all(set(limit).as_bytes())?;
-            c.wait_with_output()
-        })
-        .expect("rank runs");
-    let table = String::from_utf8_lossy(&output.stdout);
+    let table = rank_table(&set(limit));
     assert!(table.starts_with(&format!("6 candidates, 3 ranked by internal_force (gripper_drive coupled, max_grip_force {limit} N)")), "{table}");
 }
 

@@ -373,14 +373,7 @@ fn scan_tilts(
                 r.gripping_power_at
             );
             if range == AllowedRange::FromAbove {
-                for q in &dense {
-                    if let Some(g) = hang(&c, q, theta) {
-                        assert!(
-                            from_above_3d(&c, q, &g),
-                            "grasp {k}: at the allowed tilt {theta}, {q:?} does not hang from above"
-                        );
-                    }
-                }
+                assert_hang_from_above(&c, &dense, theta, k);
             }
         }
         if range == AllowedRange::FromAbove {
@@ -392,6 +385,24 @@ fn scan_tilts(
         scan.grasps += 1;
     }
     scan
+}
+
+/// Every point of `dense` that hangs at the tilt `theta` hangs from above by the 3D definition.
+/// `grasp` names the grasp in a failure.
+fn assert_hang_from_above(
+    c: &spatial::Candidate,
+    dense: &[Vector3<f64>],
+    theta: f64,
+    grasp: usize,
+) {
+    for q in dense {
+        if let Some(g) = hang(c, q, theta) {
+            assert!(
+                from_above_3d(c, q, &g),
+                "grasp {grasp}: at the allowed tilt {theta}, {q:?} does not hang from above"
+            );
+        }
+    }
 }
 
 /// `samples` and the solver's own worst point at the tilt `theta` (its answer with the range
