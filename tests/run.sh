@@ -57,18 +57,17 @@ CLIPPY_DRIVER=$(rustup which clippy-driver 2>/dev/null || command -v clippy-driv
     || { echo "clippy-driver not found (rustup component add clippy)" >&2; exit 1; }
 export RUSTC_WORKSPACE_WRAPPER="$CLIPPY_DRIVER"
 export CLIPPY_ARGS="-D__CLIPPY_HACKERY__warnings__CLIPPY_HACKERY__"
-# The node under test first: the rclpy tests that do not time the node run beside the rest of the
-# Rust build and `cargo test` (they mostly wait for answers, so the two cores were half idle while
-# they ran alone). The node under test is that binary copied aside: tests/ros/test_colcon.py builds
-# the repository in a colcon workspace with cargo in the same target folder (test profile;
-# Cargo.toml gives the node's dependencies the dev-dependencies' features, so little compiles),
-# which relinks target/debug/grasp_orient. `cargo build --profile test --bin grasp_orient` builds
-# the units `cargo test` builds for the binary, so nothing compiles twice.
-phase "cargo build --profile test --bin grasp_orient: the node under test, linted by clippy -D warnings"
-cargo build --profile test --bin grasp_orient
+# The rclpy tests that do not time the node run beside the Rust build and `cargo test`: they
+# mostly wait for answers, so alone they left the two cores half idle. They start as soon as the
+# build has linked the node: cargo reports each unit it has built (or found fresh) as a JSON line
+# on stdout (`--message-format=json-render-diagnostics`; its diagnostics still go to stderr as
+# text), and `start_beside` reads them. The node under test is that binary copied aside:
+# tests/ros/test_colcon.py builds the repository in a colcon workspace with cargo in the same
+# target folder (test profile; Cargo.toml gives the node's dependencies the dev-dependencies'
+# features, so little compiles), which relinks target/debug/grasp_orient.
 TARGET="${CARGO_TARGET_DIR:-$PWD/target}"
 mkdir -p "$TARGET/under-test"
-cp "$TARGET/debug/grasp_orient" "$TARGET/under-test/grasp_orient"
+UNDER_TEST="$TARGET/under-test/grasp_orient"
 
 # The rclpy tests that hold the node to a time (answers within a bound under load, a stop within a
 # second, runs over a lossy link within 2 s, the datagrams a slow reader drops) run after, alone.
@@ -84,19 +83,41 @@ done
 # test_colcon.py last: its cargo build waits for the target folder while `cargo test` holds it.
 mapfile -t BESIDE < <(printf '%s\n' "${BESIDE[@]}" | grep -v test_colcon.py; echo tests/ros/test_colcon.py)
 BESIDE_LOG="$TARGET/under-test/pytest-beside.log"
-echo "== started beside the Rust work below: pytest ${BESIDE[*]#tests/ros/} (output: $BESIDE_LOG, shown when it ends)"
-(
-    # shellcheck disable=SC1090
-    source "$ENV_SH"
-    GRASP_ORIENT_BIN="$TARGET/under-test/grasp_orient" \
-        exec python -m pytest "${BESIDE[@]}" -v --durations=10
-) >"$BESIDE_LOG" 2>&1 &
-BESIDE_PID=$!
-stop_beside() { kill "$BESIDE_PID" 2>/dev/null || true; }
+BESIDE_PID=
+stop_beside() { [ -z "$BESIDE_PID" ] || kill "$BESIDE_PID" 2>/dev/null || true; }
 trap 'stop_beside; phase_report' EXIT
+# `start_beside EXECUTABLE`: copies the node aside and starts pytest on BESIDE in the background.
+start_beside() {
+    cp "$1" "$UNDER_TEST"
+    echo "== started beside the Rust work: pytest ${BESIDE[*]#tests/ros/} (output: $BESIDE_LOG, shown when it ends)"
+    (
+        # shellcheck disable=SC1090
+        source "$ENV_SH"
+        GRASP_ORIENT_BIN="$UNDER_TEST" exec python -m pytest "${BESIDE[@]}" -v --durations=10
+    ) >"$BESIDE_LOG" 2>&1 &
+    BESIDE_PID=$!
+}
+# Reads cargo's JSON lines: at the node's binary (the `grasp_orient` bin target, not its test
+# harness), `start_beside` it.
+start_beside_at_the_node() {
+    local line exe
+    while IFS= read -r line; do
+        [ -z "$BESIDE_PID" ] || continue
+        case "$line" in
+        *'"reason":"compiler-artifact"'*'"kind":["bin"]'*'"name":"grasp_orient"'*'"test":false'*'"executable":"'*)
+            exe=${line##*\"executable\":\"}
+            start_beside "${exe%%\"*}"
+            ;;
+        esac
+    done
+}
 
-phase "cargo test --all-targets --no-run: every target built, and linted by clippy -D warnings"
-nice -n 19 cargo test --all-targets --no-run
+phase "cargo test --all-targets --no-run: every target built, and linted by clippy -D warnings; the rclpy tests start beside once the node is linked"
+# lastpipe: the loop runs in this shell, so BESIDE_PID stays set here.
+shopt -s lastpipe
+nice -n 19 cargo test --all-targets --no-run --message-format=json-render-diagnostics \
+    | start_beside_at_the_node
+[ -n "$BESIDE_PID" ] || { echo "cargo reported no grasp_orient binary" >&2; exit 1; }
 phase "cargo test"
 nice -n 19 cargo test
 phase "the message contract against the peer's Jazzy .msg files (cargo test --test it peer_ -- --ignored)"
