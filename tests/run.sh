@@ -71,38 +71,49 @@ UNDER_TEST="$TARGET/under-test/grasp_orient"
 
 # The rclpy tests that hold the node to a time (answers within a bound under load, a stop within a
 # second, runs over a lossy link within 2 s, the datagrams a slow reader drops) run after, alone.
-# The Rust work beside the others runs at the lowest CPU priority, so the node and its peers are
-# scheduled first; the two pytest sessions and the Rust tests that start nodes each use ROS
-# domains of their own (tests/ros/conftest.py: 1 to 100; tests/it: 140 to 199).
-TIMED=(tests/ros/test_responsive.py tests/ros/test_hosts.py tests/ros/test_slow_reader.py
-    tests/ros/test_adversarial.py)
-BESIDE=()
-for f in tests/ros/test_*.py; do
-    case " ${TIMED[*]} " in *" $f "*) ;; *) BESIDE+=("$f") ;; esac
-done
+# The others run beside the Rust work in two pytest sessions at once: FIRST (the colcon build and
+# the recordings' readers) and every other file. The Rust work runs at the lowest CPU priority, so
+# the node and its peers are scheduled first; each pytest session and the Rust tests that start
+# nodes use ROS domains of their own (tests/ros/conftest.py takes GRASP_ORIENT_TEST_DOMAIN_ID,
+# here 1 to 45 and 46 to 90; tests/it: 140 to 199), so they do not see each other's nodes.
+STOP_TEST=tests/ros/test_adversarial.py::test_stop_request_honoured_within_a_second_with_work_queued
+TIMED=(tests/ros/test_responsive.py tests/ros/test_hosts.py tests/ros/test_slow_reader.py "$STOP_TEST")
 # test_colcon.py last: its cargo build waits for the target folder while `cargo test` holds it.
-mapfile -t BESIDE < <(printf '%s\n' "${BESIDE[@]}" | grep -v test_colcon.py; echo tests/ros/test_colcon.py)
-BESIDE_LOG="$TARGET/under-test/pytest-beside.log"
-BESIDE_PID=
-stop_beside() { [ -z "$BESIDE_PID" ] || kill "$BESIDE_PID" 2>/dev/null || true; }
+FIRST=(tests/ros/test_adversarial.py tests/ros/test_foxglove.py tests/ros/test_large_services.py
+    tests/ros/test_mcap.py tests/ros/test_colcon.py)
+SECOND=()
+for f in tests/ros/test_*.py; do
+    case " ${TIMED[*]} ${FIRST[*]} " in *" $f "*) ;; *) SECOND+=("$f") ;; esac
+done
+BESIDE_PIDS=()
+stop_beside() { for pid in "${BESIDE_PIDS[@]}"; do kill "$pid" 2>/dev/null || true; done; }
 trap 'stop_beside; phase_report' EXIT
-# `start_beside EXECUTABLE`: copies the node aside and starts pytest on BESIDE in the background.
-start_beside() {
-    cp "$1" "$UNDER_TEST"
-    echo "== started beside the Rust work: pytest ${BESIDE[*]#tests/ros/} (output: $BESIDE_LOG, shown when it ends)"
+# `pytest_beside N DOMAIN FILE...`: pytest on FILEs in the background, its output in
+# target/under-test/pytest-beside-N.log.
+pytest_beside() {
+    local n=$1 domain=$2
+    shift 2
+    echo "== started beside the Rust work: pytest ${*#tests/ros/} (output: $TARGET/under-test/pytest-beside-$n.log, shown when it ends)"
     (
         # shellcheck disable=SC1090
         source "$ENV_SH"
-        GRASP_ORIENT_BIN="$UNDER_TEST" exec python -m pytest "${BESIDE[@]}" -v --durations=10
-    ) >"$BESIDE_LOG" 2>&1 &
-    BESIDE_PID=$!
+        GRASP_ORIENT_BIN="$UNDER_TEST" GRASP_ORIENT_TEST_DOMAIN_ID=$domain \
+            exec python -m pytest "$@" --deselect "$STOP_TEST" -v --durations=10
+    ) >"$TARGET/under-test/pytest-beside-$n.log" 2>&1 &
+    BESIDE_PIDS+=($!)
+}
+# `start_beside EXECUTABLE`: copies the node aside and starts the two sessions.
+start_beside() {
+    cp "$1" "$UNDER_TEST"
+    pytest_beside 1 $((1 + $$ % 45)) "${FIRST[@]}"
+    pytest_beside 2 $((46 + $$ % 45)) "${SECOND[@]}"
 }
 # Reads cargo's JSON lines: at the node's binary (the `grasp_orient` bin target, not its test
 # harness), `start_beside` it.
 start_beside_at_the_node() {
     local line exe
     while IFS= read -r line; do
-        [ -z "$BESIDE_PID" ] || continue
+        [ "${#BESIDE_PIDS[@]}" -eq 0 ] || continue
         case "$line" in
         *'"reason":"compiler-artifact"'*'"kind":["bin"]'*'"name":"grasp_orient"'*'"test":false'*'"executable":"'*)
             exe=${line##*\"executable\":\"}
@@ -113,11 +124,11 @@ start_beside_at_the_node() {
 }
 
 phase "cargo test --all-targets --no-run: every target built, and linted by clippy -D warnings; the rclpy tests start beside once the node is linked"
-# lastpipe: the loop runs in this shell, so BESIDE_PID stays set here.
+# lastpipe: the loop runs in this shell, so BESIDE_PIDS stays set here.
 shopt -s lastpipe
 nice -n 19 cargo test --all-targets --no-run --message-format=json-render-diagnostics \
     | start_beside_at_the_node
-[ -n "$BESIDE_PID" ] || { echo "cargo reported no grasp_orient binary" >&2; exit 1; }
+[ "${#BESIDE_PIDS[@]}" -gt 0 ] || { echo "cargo reported no grasp_orient binary" >&2; exit 1; }
 phase "cargo test"
 nice -n 19 cargo test
 phase "the message contract against the peer's Jazzy .msg files (cargo test --test it peer_ -- --ignored)"
@@ -127,14 +138,19 @@ phase "the message contract against the peer's Jazzy .msg files (cargo test --te
 AMENT_PREFIX_PATH=$(source "$ENV_SH" && printf '%s' "$AMENT_PREFIX_PATH") \
     nice -n 19 cargo test --test it peer_ -- --ignored
 
-phase "the pytest run beside, to its end (the node against rclpy, recordings read by Python and by Foxglove's decoders, the colcon workspace build)"
-BESIDE_STATUS=0
-wait "$BESIDE_PID" || BESIDE_STATUS=$?
-cat "$BESIDE_LOG"
-if [ "$BESIDE_STATUS" -ne 0 ]; then
-    echo "pytest beside the Rust work failed (exit $BESIDE_STATUS): $BESIDE_LOG" >&2
-    exit "$BESIDE_STATUS"
-fi
+phase "the pytest runs beside, to their end (the node against rclpy, recordings read by Python and by Foxglove's decoders, the colcon workspace build)"
+BESIDE_FAILED=0
+for i in "${!BESIDE_PIDS[@]}"; do
+    status=0
+    wait "${BESIDE_PIDS[$i]}" || status=$?
+    cat "$TARGET/under-test/pytest-beside-$((i + 1)).log"
+    if [ "$status" -ne 0 ]; then
+        echo "pytest beside the Rust work failed (exit $status): $TARGET/under-test/pytest-beside-$((i + 1)).log" >&2
+        BESIDE_FAILED=$status
+    fi
+done
+BESIDE_PIDS=()
+[ "$BESIDE_FAILED" -eq 0 ] || exit "$BESIDE_FAILED"
 
 phase "alone: pytest ${TIMED[*]#tests/ros/} (the node held to a time)"
 # shellcheck disable=SC1090
