@@ -71,23 +71,19 @@ UNDER_TEST="$TARGET/under-test/grasp_orient"
 
 # The rclpy tests that hold the node to a time (answers within a bound under load, a stop within a
 # second, runs over a lossy link within 2 s, the datagrams a slow reader drops) run after, alone.
-# The others run beside the Rust work in three pytest sessions at once: FIRST (the colcon build
-# and the recordings' readers), THIRD, and every other file. The Rust work runs at the lowest CPU priority, so
+# The others run beside the Rust work in two pytest sessions at once: FIRST (the colcon build and
+# the recordings' readers) and every other file. The Rust work runs at the lowest CPU priority, so
 # the node and its peers are scheduled first; each pytest session and the Rust tests that start
 # nodes use ROS domains of their own (tests/ros/conftest.py takes GRASP_ORIENT_TEST_DOMAIN_ID,
-# here 1 to 30, 31 to 60 and 61 to 90; tests/it: 140 to 199), so they do not see each other's nodes.
+# here 1 to 45 and 46 to 90; tests/it: 140 to 199), so they do not see each other's nodes.
 STOP_TEST=tests/ros/test_adversarial.py::test_stop_request_honoured_within_a_second_with_work_queued
 TIMED=(tests/ros/test_responsive.py tests/ros/test_hosts.py tests/ros/test_slow_reader.py "$STOP_TEST")
-# test_colcon.py first: its CMake and message generation run while the build ends, and its cargo
-# build takes the target folder before `cargo test` holds it for as long as the tests run (last,
-# it waited for them). test_adversarial.py (but its stop test) in a third session: with the first
-# it took 159 s, with the second 176 s, against 121 to 128 s for each of them without it.
-FIRST=(tests/ros/test_colcon.py tests/ros/test_foxglove.py tests/ros/test_large_services.py
-    tests/ros/test_mcap.py)
-THIRD=(tests/ros/test_adversarial.py)
+# test_colcon.py last: its cargo build waits for the target folder while `cargo test` holds it.
+FIRST=(tests/ros/test_adversarial.py tests/ros/test_foxglove.py tests/ros/test_large_services.py
+    tests/ros/test_mcap.py tests/ros/test_colcon.py)
 SECOND=()
 for f in tests/ros/test_*.py; do
-    case " ${TIMED[*]} ${FIRST[*]} ${THIRD[*]} " in *" $f "*) ;; *) SECOND+=("$f") ;; esac
+    case " ${TIMED[*]} ${FIRST[*]} " in *" $f "*) ;; *) SECOND+=("$f") ;; esac
 done
 BESIDE_PIDS=()
 stop_beside() { for pid in "${BESIDE_PIDS[@]}"; do kill "$pid" 2>/dev/null || true; done; }
@@ -106,12 +102,11 @@ pytest_beside() {
     ) >"$TARGET/under-test/pytest-beside-$n.log" 2>&1 &
     BESIDE_PIDS+=($!)
 }
-# `start_beside EXECUTABLE`: copies the node aside and starts the three sessions.
+# `start_beside EXECUTABLE`: copies the node aside and starts the two sessions.
 start_beside() {
     cp "$1" "$UNDER_TEST"
-    pytest_beside 1 $((1 + $$ % 30)) "${FIRST[@]}"
-    pytest_beside 2 $((31 + $$ % 30)) "${SECOND[@]}"
-    pytest_beside 3 $((61 + $$ % 30)) "${THIRD[@]}"
+    pytest_beside 1 $((1 + $$ % 45)) "${FIRST[@]}"
+    pytest_beside 2 $((46 + $$ % 45)) "${SECOND[@]}"
 }
 # Reads cargo's JSON lines: at the node's binary (the `grasp_orient` bin target, not its test
 # harness), `start_beside` it.
