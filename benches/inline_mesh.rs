@@ -15,47 +15,14 @@ static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 use grasp_orient::answer::{PoseAnswerer, Rules};
 use grasp_orient::geometry::{AmentIndex, ClosingAxis};
-use grasp_orient::msg::{
-    GraspObject, Mesh, MeshTriangle, Point, Pose, PoseCandidate, SolidPrimitive, Vector3,
-};
+use grasp_orient::msg::{GraspObject, Pose, PoseCandidate, SolidPrimitive, Vector3};
 use grasp_orient::solver::Settings;
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
-/// A closed torus of `2 × rings × sides` triangles in metres: its tube 25 mm in radius, its centre
-/// line 60 mm from an axis parallel to z through (0, -0.06, 0) and through the origin along x.
-fn torus(rings: u32, sides: u32) -> Mesh {
-    let mut vertices = Vec::new();
-    for i in 0..rings {
-        for j in 0..sides {
-            let u = std::f64::consts::TAU * f64::from(i) / f64::from(rings);
-            let v = std::f64::consts::TAU * f64::from(j) / f64::from(sides);
-            let rho = 0.06 + 0.025 * v.cos();
-            vertices.push(Point {
-                x: rho * u.sin(),
-                y: rho * u.cos() - 0.06,
-                z: 0.025 * v.sin(),
-            });
-        }
-    }
-    let at = |i: u32, j: u32| (i % rings) * sides + j % sides;
-    let mut triangles = Vec::new();
-    for i in 0..rings {
-        for j in 0..sides {
-            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
-            triangles.push(MeshTriangle {
-                vertex_indices: [a, b, c],
-            });
-            triangles.push(MeshTriangle {
-                vertex_indices: [a, c, d],
-            });
-        }
-    }
-    Mesh {
-        vertices,
-        triangles,
-    }
-}
+#[path = "../tests/it/util/torus.rs"]
+mod torus;
+use torus::torus;
 
 /// A gripper at the origin closing along its y axis from 90 mm apart, across the torus's tube (or
 /// the box), gravity along -z.

@@ -389,42 +389,6 @@ fn played_poses_are_answered_as_recorded_and_replay_unchanged() {
     );
 }
 
-/// A closed inline mesh of `2 × rings × sides` triangles, in metres: a torus whose tube (25 mm in
-/// radius) runs through the origin along x, its axis parallel to z through (0, -0.06, 0).
-fn torus(rings: u32, sides: u32) -> grasp_orient::msg::Mesh {
-    use grasp_orient::msg::{Mesh, MeshTriangle, Point};
-    let mut vertices = Vec::new();
-    for i in 0..rings {
-        for j in 0..sides {
-            let u = std::f64::consts::TAU * f64::from(i) / f64::from(rings);
-            let v = std::f64::consts::TAU * f64::from(j) / f64::from(sides);
-            let rho = 0.06 + 0.025 * v.cos();
-            vertices.push(Point {
-                x: rho * u.sin(),
-                y: rho * u.cos() - 0.06,
-                z: 0.025 * v.sin(),
-            });
-        }
-    }
-    let at = |i: u32, j: u32| (i % rings) * sides + j % sides;
-    let mut triangles = Vec::new();
-    for i in 0..rings {
-        for j in 0..sides {
-            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
-            triangles.push(MeshTriangle {
-                vertex_indices: [a, b, c],
-            });
-            triangles.push(MeshTriangle {
-                vertex_indices: [a, c, d],
-            });
-        }
-    }
-    Mesh {
-        vertices,
-        triangles,
-    }
-}
-
 /// A single pose candidate with a large inline mesh (300,000 triangles: a few hundred ms to
 /// index) is answered off the node's thread: a contact candidate played 150 ms after it, received
 /// while the mesh is being indexed, is answered before it. Before, the node indexed the mesh on
@@ -450,7 +414,7 @@ fn timed_a_large_inline_mesh_holds_up_no_candidate_sent_after_it() {
         id: "large-inline".into(),
         width: 0.09,
         object: GraspObject {
-            inline_mesh: torus(600, 250),
+            inline_mesh: crate::util::torus::torus(600, 250),
             scale: Vector3 {
                 x: 1.0,
                 y: 1.0,

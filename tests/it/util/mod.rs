@@ -13,6 +13,7 @@ pub mod run;
 pub use grasp_orient::solver::table_1;
 pub mod robust;
 pub mod spatial;
+pub mod torus;
 pub mod zstd_bomb;
 
 use grasp_orient::solver::planar::Candidate;
