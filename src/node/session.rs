@@ -171,6 +171,17 @@ impl Graph {
         ))
     }
 
+    /// `domain_id` on this host alone, with no static peers: for tests of the node's endpoints in
+    /// one process.
+    #[cfg(test)]
+    pub fn localhost(domain_id: u16) -> Self {
+        Self {
+            domain_id,
+            range: DiscoveryRange::Localhost,
+            peers: StaticPeers::NONE,
+        }
+    }
+
     /// The range and peers in force, with rcl's warnings.
     fn resolve(
         domain_id: u16,
