@@ -240,7 +240,8 @@ def run_wire_sets(tmp_path: Path) -> dict:
         snap = (f"{ip} netns exec {node_ns} {nft} -j list counters table inet gowire; echo @@@; "
                 f"{ip} netns exec {node_ns} cat /proc/net/snmp; echo @@@; cat /proc/net/snmp")
         env = env_for("SUBNET", None)
-        peer_env = dict(env, FASTRTPS_DEFAULT_PROFILES_FILE=str(HERE / "fastdds_large_receive_buffer.xml"))
+        profile = str(HERE / "fastdds_large_receive_buffer.xml")
+        peer_env = dict(env, FASTRTPS_DEFAULT_PROFILES_FILE=profile, FASTDDS_DEFAULT_PROFILES_FILE=profile)
         with node_in(node_ns, env, tmp_path):
             return run_peer(peer_ns, peer_env, "sets", "--sets", str(WIRE_SETS), "--n", str(WIRE_N),
                             "--snapshot", snap, "--timeout", "30", timeout=240)
