@@ -5,7 +5,9 @@ them once with multicast discovery, and once with ROS_AUTOMATIC_DISCOVERY_RANGE=
 ROS_STATIC_PEERS naming the other side (Jazzy's set-up for networks without multicast). Then a lossy link:
 5% of the packets into the node's namespace dropped at random (nftables), runs of 205 candidates at 500/s:
 every answer arrives, most runs end within 2 s of their last candidate; the figures are printed.
-Also: a node with the range OFF is found by no one.
+Also: a node with the range OFF is found by no one; and on the lossless link, sets of 1,000 candidates
+(248 kB each, DATA_FRAGs from Fast DDS) cross into the node once and their answers out of it once, counted in
+bytes by nftables on the veth against the sets' and answers' CDR sizes (RustDDS patch 0009).
 
 Needs root (CI runs as root), iproute2 and nftables (tests/peer/setup.sh installs them). A namespace that
 cannot be made fails the test, never skips it. Each test removes its namespaces (and with them the veth
@@ -190,3 +192,98 @@ def test_every_answer_arrives_over_a_lossy_link(tmp_path):
     on_time = sum(1 for x in lasts if x <= LOSS_LIMIT_S)
     assert on_time >= len(runs) / 2, (f"only {on_time} of {len(runs)} runs had every answer within "
                                       f"{LOSS_LIMIT_S} s of their last candidate")
+
+
+WIRE_SETS = 10
+WIRE_N = 1000
+WIRE_RATIO = 1.2
+# Per set, on top of WIRE_RATIO x its CDR size: the HEARTBEATs and ACKNACKs (tens of bytes each) of a set and its
+# answer, beside the RTPS, UDP and IP headers (about 100 bytes a datagram) that the ratio already covers.
+WIRE_ALLOWANCE = 8192
+# nftables in the node's namespace: UDP bytes and packets through the veth, in and out, all of it and the part
+# to odd ports (RTPS user traffic: port 7400 + 250 x domain + 11 + 2 x participant for unicast, + 1 for
+# multicast; discovery goes to the even ones). A counter counts IP packets (IP header included) and sees a
+# datagram whole: reassembled before the input hook, not yet fragmented at the output hook.
+WIRE_NFT = """table inet gowire {
+  counter in_all {}
+  counter in_user {}
+  counter out_all {}
+  counter out_user {}
+  chain i { type filter hook input priority 0; policy accept;
+    iifname "vgo0" meta l4proto udp counter name in_all; iifname "vgo0" udp dport & 1 == 1 counter name in_user; }
+  chain o { type filter hook output priority 0; policy accept;
+    oifname "vgo0" meta l4proto udp counter name out_all; oifname "vgo0" udp dport & 1 == 1 counter name out_user; }
+}
+"""
+
+
+def wire_snapshot(text: str) -> dict:
+    """{counter: (packets, bytes)} from `nft -j list counters`, and UDP's RcvbufErrors in each namespace."""
+    nft, node_snmp, peer_snmp = text.split("@@@")
+    out = {c["counter"]["name"]: (c["counter"]["packets"], c["counter"]["bytes"])
+           for c in json.loads(nft)["nftables"] if "counter" in c}
+    for side, snmp in (("node", node_snmp), ("peer", peer_snmp)):
+        head, values = [l.split()[1:] for l in snmp.splitlines() if l.startswith("Udp:")][:2]
+        out[f"{side}_rcvbuf_errors"] = int(dict(zip(head, values))["RcvbufErrors"])
+    return out
+
+
+def run_wire_sets(tmp_path: Path) -> dict:
+    """The node in one namespace with WIRE_NFT's counters, the peer's `sets` in the other (4 MB receive
+    buffer, default send buffer: tests/ros/fastdds_large_receive_buffer.xml); the peer's output."""
+    nft, ip = tool("nft"), tool("ip")
+    with two_hosts("w") as (node_ns, peer_ns):
+        (tmp_path / "wire.nft").write_text(WIRE_NFT)
+        sh(ip, "netns", "exec", node_ns, nft, "-f", str(tmp_path / "wire.nft"))
+        # Run by the peer (in its namespace) before and after the sets: the counters, and /proc/net/snmp of
+        # both namespaces (`cat` runs in the peer's).
+        snap = (f"{ip} netns exec {node_ns} {nft} -j list counters table inet gowire; echo @@@; "
+                f"{ip} netns exec {node_ns} cat /proc/net/snmp; echo @@@; cat /proc/net/snmp")
+        env = env_for("SUBNET", None)
+        profile = str(HERE / "fastdds_large_receive_buffer.xml")
+        peer_env = dict(env, FASTRTPS_DEFAULT_PROFILES_FILE=profile, FASTDDS_DEFAULT_PROFILES_FILE=profile)
+        with node_in(node_ns, env, tmp_path):
+            return run_peer(peer_ns, peer_env, "sets", "--sets", str(WIRE_SETS), "--n", str(WIRE_N),
+                            "--snapshot", snap, "--timeout", "30", timeout=240)
+
+
+def test_a_large_set_crosses_the_wire_once(tmp_path):
+    """WIRE_SETS sets of WIRE_N candidates (248 kB of CDR each), one at a time, each answered (355 kB), over the
+    lossless veth: the UDP bytes into the node's namespace per set are at most WIRE_RATIO x the set's CDR size
+    plus WIRE_ALLOWANCE, and the bytes out per answer likewise. Counted by nftables on the veth, to the RTPS
+    user ports only (odd ports; discovery uses the even ones), less what crossed to them in as long a time with
+    no sets just after. The figures are printed. No datagram may be dropped at a socket in either namespace
+    (UDP RcvbufErrors), else repairs would count: the peer has a 4 MB receive buffer.
+
+    The peer's send buffer is the system's default: with it Fast DDS sends a HEARTBEAT announcing a set while
+    the set's fragments are still on their way. A node whose reader answered it at once (before RustDDS patch
+    0009, or 0009 with its response delay set to 0) asked for those fragments and they crossed again: 1.34 to
+    1.48 x the set, where 1.00 to 1.10 x with the delay (a loaded machine; docs/performance.md)."""
+    require_environment()
+    out = run_wire_sets(tmp_path)
+    before, after, idle = (wire_snapshot(s["out"]) for s in out["snapshots"])
+    sets_s = out["snapshots"][1]["t"] - out["snapshots"][0]["t"]
+    req, ans = out["request_bytes"], out["answer_bytes"]
+    assert len(ans) == WIRE_SETS, f"{len(ans)} answers to {WIRE_SETS} sets"
+    dropped = {k: after[k] - before[k] for k in ("node_rcvbuf_errors", "peer_rcvbuf_errors")}
+
+    def per_set(name: str) -> tuple[float, float, int]:
+        """Bytes per set (less the idle baseline), packets per set, and the idle bytes."""
+        idle_b = idle[name][1] - after[name][1]
+        b = (after[name][1] - before[name][1] - idle_b) / WIRE_SETS
+        return b, (after[name][0] - before[name][0]) / WIRE_SETS, idle_b
+
+    (in_b, in_p, in_idle), (out_b, out_p, out_idle) = per_set("in_user"), per_set("out_user")
+    req_b, ans_b = sum(req) / len(req), sum(ans) / len(ans)
+    in_all, out_all = per_set("in_all")[0], per_set("out_all")[0]
+    print(f"\n{WIRE_SETS} sets of {WIRE_N} across the veth in {sets_s:.2f} s: set {req_b:.0f} B of CDR, "
+          f"into the node {in_b:.0f} B a set in {in_p:.1f} datagrams ({in_b / req_b:.3f} x; all UDP "
+          f"{in_all:.0f} B); answer {ans_b:.0f} B, out of the node {out_b:.0f} B in {out_p:.1f} datagrams "
+          f"({out_b / ans_b:.3f} x; all UDP {out_all:.0f} B); idle baseline over {sets_s:.2f} s: in {in_idle} B, "
+          f"out {out_idle} B; datagrams dropped at a socket {dropped}")
+    assert not any(dropped.values()), f"datagrams dropped at a socket during the sets: {dropped}"
+    in_limit, out_limit = WIRE_RATIO * req_b + WIRE_ALLOWANCE, WIRE_RATIO * ans_b + WIRE_ALLOWANCE
+    assert in_b <= in_limit, (f"{in_b:.0f} B crossed into the node per set of {req_b:.0f} B "
+                              f"({in_b / req_b:.2f} x; at most {in_limit:.0f}): fragments sent more than once")
+    assert out_b <= out_limit, (f"{out_b:.0f} B crossed out of the node per answer of {ans_b:.0f} B "
+                                f"({out_b / ans_b:.2f} x; at most {out_limit:.0f}): fragments sent more than once")
