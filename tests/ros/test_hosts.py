@@ -4,7 +4,7 @@ the node, .2 for the peer; the addresses exist only inside the namespaces), the 
 them once with multicast discovery, and once with ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST and
 ROS_STATIC_PEERS naming the other side (Jazzy's set-up for networks without multicast). Then a lossy link:
 5% of the packets into the node's namespace dropped at random (nftables), runs of 205 candidates at 500/s:
-every answer arrives, most runs end within 2 s of their last candidate; the figures are printed.
+every answer arrives, every run ends within 2 s of its last candidate; the figures are printed.
 Also: a node with the range OFF is found by no one; and on the lossless link, sets of 1,000 candidates
 (248 kB each, DATA_FRAGs from Fast DDS) cross into the node once and their answers out of it once, counted in
 bytes by nftables on the veth against the sets' and answers' CDR sizes (RustDDS patch 0009).
@@ -161,11 +161,14 @@ def quantile(xs: list[float], q: float) -> float:
 
 def test_every_answer_arrives_over_a_lossy_link(tmp_path):
     """5% of the packets into the node's namespace are dropped; LOSS_RUNS runs of LOSS_N candidates, one every
-    LOSS_INTERVAL_S. Every answer arrives (before RustDDS patch 0008 some never did), and most runs end
-    within LOSS_LIMIT_S of their last candidate (before 0008 almost none did: a lost candidate waited for
-    the writer's next HEARTBEAT, every 3 s from Fast DDS). Not every run can: when a run's last candidate is
-    lost, or the repair of a lost one is lost too, no later DATA tells the node, and the writer's next
-    HEARTBEAT does; the figures (printed) say how often."""
+    LOSS_INTERVAL_S. Every answer arrives (before RustDDS patch 0008 some never did), and every run ends
+    within LOSS_LIMIT_S of its last candidate. Before 0008 almost none did: a lost candidate waited for the
+    writer's next HEARTBEAT, every 3 s from Fast DDS. With 0008 but not 0011, 75 of 80 runs did: when a
+    run's last candidate, or the repair of a lost one, was lost, no later DATA told the node, and only the
+    writer's next HEARTBEAT did (2.07 to 2.71 s). With 0011 the node's reader polls a writer that went quiet
+    after DATA (50 ms after it, then 150, 350, 750 ms) and Fast DDS answers with a HEARTBEAT at once; the
+    figures (printed) show the runs that needed it (a last answer some 60 to 360 ms after the last
+    candidate)."""
     require_environment()
     nft = tool("nft")
     with two_hosts("l") as (node_ns, peer_ns):
@@ -189,9 +192,9 @@ def test_every_answer_arrives_over_a_lossy_link(tmp_path):
           f"p99 {quantile(trips, 0.99) * 1e3:.1f} ms, max {max(trips) * 1e3:.1f} ms")
     short = [(k, r["answered"]) for k, r in enumerate(runs) if r["answered"] != LOSS_N]
     assert not short, f"runs with answers missing 10 s after the last candidate (run, answered): {short}"
-    on_time = sum(1 for x in lasts if x <= LOSS_LIMIT_S)
-    assert on_time >= len(runs) / 2, (f"only {on_time} of {len(runs)} runs had every answer within "
-                                      f"{LOSS_LIMIT_S} s of their last candidate")
+    over = [(k, round(x, 3)) for k, x in enumerate(lasts) if not x <= LOSS_LIMIT_S]
+    assert not over, (f"runs whose last answer came over {LOSS_LIMIT_S} s after their last candidate "
+                      f"(run, s): {over}")
 
 
 WIRE_SETS = 10

@@ -19,6 +19,12 @@ impl VendorId {
 
   pub const THIS_IMPLEMENTATION: Self = Self::ATOSTEK;
 
+  // Patched for grasp_orient (0011-quiet-writer-poll.patch): eProsima (Fast DDS), whose writers
+  // answer a preemptive ACKNACK (bitmapBase 0) with a HEARTBEAT at once.
+  pub const EPROSIMA: Self = Self {
+    vendor_id: [0x01, 0x0F],
+  };
+
   pub fn as_bytes(&self) -> [u8; 2] {
     self.vendor_id
   }

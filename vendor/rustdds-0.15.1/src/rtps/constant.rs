@@ -36,6 +36,22 @@ pub const NACK_SUPPRESSION_DURATION: Duration = Duration::from_millis(0);
 pub const HEARTBEAT_RESPONSE_DELAY: Duration = Duration::from_millis(5);
 pub const HEARTBEAT_SUPPRESSION_DURATION: Duration = Duration::from_millis(5);
 
+// Patched for grasp_orient (0011-quiet-writer-poll.patch). A reliable reader of a user topic
+// whose writer went quiet after DATA, with no HEARTBEAT since and so no word of whether that
+// DATA was its last, polls the writer: first QUIET_POLL_DELAY after the last DATA, then twice
+// as long after each poll (50, 150, 350, 750 ms after the last DATA), at most QUIET_POLL_MAX
+// times, and it stops at the first HEARTBEAT once nothing is missing. Polls to one writer are
+// at least QUIET_POLL_SPACING apart, and none goes out within QUIET_POLL_SPACING of the
+// reader's answer to a HEARTBEAT. So a writer that sends a sample every 50 to 100 ms gets at most
+// ten polls a second (as often as this crate's writer sends HEARTBEATs to a reader that is
+// behind, HEARTBEAT_PERIOD_FAST), each answered by one HEARTBEAT; one that sends faster gets one
+// poll per pause. 50 ms is long next to the gaps within a burst (2 ms at 500 samples/s) and
+// short next to Fast DDS's 3 s heartbeat period, the only other way the reader learns that the
+// burst's last DATA was lost.
+pub const QUIET_POLL_DELAY: Duration = Duration::from_millis(50);
+pub const QUIET_POLL_SPACING: Duration = Duration::from_millis(100);
+pub const QUIET_POLL_MAX: u32 = 4;
+
 // Time between two repair rounds (SendRepairData, SendRepairFrags) for one
 // reader, and the backoff while the reader's send socket has queued control
 // datagrams. A Writer with a finite, positive Deadline uses a fifth of it,

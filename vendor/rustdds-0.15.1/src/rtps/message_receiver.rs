@@ -84,6 +84,10 @@ pub struct MessageReceiverState<'a> {
 
   pub source_timestamp: Option<Timestamp>,
 
+  // Patched for grasp_orient (0011-quiet-writer-poll.patch): the vendor of the message's
+  // sender (RTPS header or INFO_SOURCE), for the reader's poll of a quiet writer.
+  pub source_vendor_id: VendorId,
+
   #[allow(dead_code)] // TODO: Remove this when/if SecureWrapping actually does something.
   #[cfg(feature = "security")]
   pub secure_rtps_wrapped: Option<SecureWrapping>,
@@ -96,6 +100,7 @@ impl Default for MessageReceiverState<'_> {
       unicast_reply_locator_list: &[],
       multicast_reply_locator_list: &[],
       source_timestamp: Some(Timestamp::INVALID),
+      source_vendor_id: VendorId::VENDOR_UNKNOWN,
       #[cfg(feature = "security")]
       secure_rtps_wrapped: None,
     }
@@ -210,6 +215,7 @@ impl MessageReceiver {
       unicast_reply_locator_list: &self.unicast_reply_locator_list,
       multicast_reply_locator_list: &self.multicast_reply_locator_list,
       source_timestamp: self.source_timestamp,
+      source_vendor_id: self.source_vendor_id,
       #[cfg(feature = "security")]
       secure_rtps_wrapped: self.secure_rtps_wrapped.clone(),
     };

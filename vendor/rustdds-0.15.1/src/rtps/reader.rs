@@ -42,7 +42,10 @@ use crate::{
   network::udp_sender::UDPSender,
   polling::{ReadySender, SharedTimer, WakeReceiver},
   rtps::{
-    constant::{HEARTBEAT_RESPONSE_DELAY, HEARTBEAT_SUPPRESSION_DURATION},
+    constant::{
+      HEARTBEAT_RESPONSE_DELAY, HEARTBEAT_SUPPRESSION_DURATION, QUIET_POLL_DELAY, QUIET_POLL_MAX,
+      QUIET_POLL_SPACING,
+    },
     fragment_assembler::FragmentAssembler,
     message_receiver::MessageReceiverState,
     rtps_writer_proxy::RtpsWriterProxy,
@@ -73,6 +76,27 @@ pub(crate) enum TimedEvent {
   // Patched for grasp_orient (0009-heartbeat-response-delay.patch): the heartbeat response
   // delay of this writer's HEARTBEAT has passed; answer it now.
   HeartbeatResponse { writer_guid: GUID },
+  // Patched for grasp_orient (0011-quiet-writer-poll.patch): time to see whether this writer
+  // has been quiet long enough after DATA to be polled.
+  QuietPoll { writer_guid: GUID },
+}
+
+// Patched for grasp_orient (0011-quiet-writer-poll.patch): per writer, what the reader knows of
+// its last activity, for the poll of a writer that went quiet after DATA.
+#[derive(Clone, Debug)]
+struct QuietPoll {
+  last_data: Instant,
+  // A HEARTBEAT came after the last DATA: the writer has said what it wrote.
+  heard_heartbeat: bool,
+  // The highest sequence number a HEARTBEAT announced (the writer wrote it).
+  announced: SequenceNumber,
+  // Polls sent since the last DATA, and when the last poll (of any quiet period) went out.
+  polls: u32,
+  last_poll: Option<Instant>,
+  // The writer's messages come from Fast DDS (RTPS vendor id 1.15).
+  fast_dds: bool,
+  // A QuietPoll timed event is pending for this writer.
+  timer_armed: bool,
 }
 
 // Patched for grasp_orient (0009-heartbeat-response-delay.patch): what a HEARTBEAT (or several
@@ -153,6 +177,8 @@ pub(crate) struct Reader {
   // with the last_sn it covered.
   heartbeats_to_answer: BTreeMap<GUID, HeartbeatToAnswer>,
   heartbeats_answered: BTreeMap<GUID, (Instant, SequenceNumber)>,
+  // Per writer, for the poll of a writer that went quiet after DATA (0011-quiet-writer-poll.patch).
+  quiet_polls: BTreeMap<GUID, QuietPoll>,
 
   received_heartbeat_count: i32,
 
@@ -224,6 +250,7 @@ impl Reader {
       heartbeat_suppression_duration: HEARTBEAT_SUPPRESSION_DURATION,
       heartbeats_to_answer: BTreeMap::new(),
       heartbeats_answered: BTreeMap::new(),
+      quiet_polls: BTreeMap::new(),
       received_heartbeat_count: 0,
       fragment_assemblers: BTreeMap::new(),
       last_fragment_garbage_collect: Timestamp::now(),
@@ -354,6 +381,7 @@ impl Reader {
           self.answer_heartbeat(writer_guid, &to_answer);
         }
       }
+      TimedEvent::QuietPoll { writer_guid } => self.quiet_poll_due(writer_guid),
     }
   }
 
@@ -498,6 +526,7 @@ impl Reader {
   pub fn remove_writer_proxy(&mut self, writer_guid: GUID) {
     self.heartbeats_to_answer.remove(&writer_guid);
     self.heartbeats_answered.remove(&writer_guid);
+    self.quiet_polls.remove(&writer_guid);
     if self.matched_writers.contains_key(&writer_guid) {
       self.matched_writers.remove(&writer_guid);
       self
@@ -640,6 +669,7 @@ impl Reader {
       if highest > SequenceNumber::zero() && writer_seq_num > highest + SequenceNumber::new(1) {
         self.nack_revealed_gap(writer_guid, writer_seq_num, mr_state);
       }
+      self.note_data_for_quiet_poll(writer_guid, mr_state);
     }
   }
 
@@ -711,6 +741,182 @@ impl Reader {
     );
   }
 
+  // Patched for grasp_orient (0011-quiet-writer-poll.patch). A reliable reader learns of a lost
+  // DATA from a later DATA (0008) or from the writer's HEARTBEAT. When the lost one is the last
+  // of a burst (or the repair of one), no later DATA comes, and Fast DDS's next periodic
+  // HEARTBEAT is up to 3 s away; a non-final ACKNACK that only acknowledges does not bring one
+  // sooner from Fast DDS, whose periodic HEARTBEAT timer is already running. So a writer that
+  // goes quiet after DATA, with no HEARTBEAT since, is polled (see QUIET_POLL_DELAY for the
+  // timing and the bounds). Called for every DATA and DATA_FRAG from a writer of a reliable
+  // user topic's reader; nothing is polled before the first DATA (the preemptive ACKNACK is
+  // for that).
+  fn note_data_for_quiet_poll(&mut self, writer_guid: GUID, mr_state: &MessageReceiverState) {
+    let now = Instant::now();
+    let fast_dds = mr_state.source_vendor_id == VendorId::EPROSIMA;
+    let quiet = self
+      .quiet_polls
+      .entry(writer_guid)
+      .or_insert_with(|| QuietPoll {
+        last_data: now,
+        heard_heartbeat: false,
+        announced: SequenceNumber::zero(),
+        polls: 0,
+        last_poll: None,
+        fast_dds,
+        timer_armed: false,
+      });
+    quiet.last_data = now;
+    quiet.heard_heartbeat = false;
+    quiet.polls = 0;
+    quiet.fast_dds = fast_dds;
+    if !quiet.timer_armed {
+      quiet.timer_armed = true;
+      self.arm_quiet_poll(writer_guid, QUIET_POLL_DELAY);
+    }
+  }
+
+  fn arm_quiet_poll(&self, writer_guid: GUID, after: StdDuration) {
+    self.timed_event_timer.borrow_mut().set_timeout(
+      after,
+      DpTimerEvent::Reader {
+        entity_id: self.my_guid.entity_id,
+        event: TimedEvent::QuietPoll { writer_guid },
+      },
+    );
+  }
+
+  // When the next poll of this writer is due: QUIET_POLL_DELAY after the last DATA, then twice
+  // as long after each poll; never sooner than QUIET_POLL_SPACING after the last poll.
+  fn quiet_poll_due_at(quiet: &QuietPoll) -> Instant {
+    let due = match (quiet.polls, quiet.last_poll) {
+      (0, _) | (_, None) => quiet.last_data + QUIET_POLL_DELAY,
+      (n, Some(last)) => last + QUIET_POLL_DELAY * 2u32.saturating_pow(n.min(16)),
+    };
+    match quiet.last_poll {
+      Some(last) => due.max(last + QUIET_POLL_SPACING),
+      None => due,
+    }
+  }
+
+  fn quiet_poll_due(&mut self, writer_guid: GUID) {
+    let Some(quiet) = self.quiet_polls.get_mut(&writer_guid) else {
+      return; // the writer was unmatched
+    };
+    quiet.timer_armed = false;
+    let now = Instant::now();
+    let mut due = Self::quiet_poll_due_at(quiet);
+    // An answer to a HEARTBEAT (waiting, or sent within QUIET_POLL_SPACING) already tells the
+    // writer what the reader has: no poll beside it.
+    if let Some(&(answered_at, _)) = self.heartbeats_answered.get(&writer_guid) {
+      due = due.max(answered_at + QUIET_POLL_SPACING);
+    }
+    if self.heartbeats_to_answer.contains_key(&writer_guid) {
+      due = due.max(now + self.heartbeat_response_delay);
+    }
+    if now < due {
+      quiet.timer_armed = true;
+      self.arm_quiet_poll(writer_guid, due - now);
+      return;
+    }
+    let (heard_heartbeat, polls, fast_dds, announced) = (
+      quiet.heard_heartbeat,
+      quiet.polls,
+      quiet.fast_dds,
+      quiet.announced,
+    );
+    let Some(writer_proxy) = self.matched_writers.get(&writer_guid) else {
+      return;
+    };
+    // Only what the writer is known to have written: up to the highest sequence number received
+    // or announced by a HEARTBEAT. Never a speculative NACK past that, which a writer may answer
+    // with a GAP that would make the reader drop the real sample when it comes.
+    let known = writer_proxy.highest_received().max(announced);
+    let missing = if writer_proxy.all_ackable_before() <= known {
+      writer_proxy.missing_seqnums(writer_proxy.all_ackable_before(), known)
+    } else {
+      Vec::new()
+    };
+    if (heard_heartbeat && missing.is_empty()) || polls >= QUIET_POLL_MAX {
+      return; // settled, or the writer's HEARTBEAT will do
+    }
+    self.send_quiet_poll(writer_guid, &missing, fast_dds);
+    if let Some(quiet) = self.quiet_polls.get_mut(&writer_guid) {
+      quiet.polls += 1;
+      quiet.last_poll = Some(now);
+      if quiet.polls < QUIET_POLL_MAX {
+        let next = Self::quiet_poll_due_at(quiet);
+        quiet.timer_armed = true;
+        self.arm_quiet_poll(writer_guid, next.saturating_duration_since(now));
+      }
+    }
+  }
+
+  // The poll itself, one ACKNACK with the final flag clear (RTPS 2.5 8.3.7.1: the reader asks
+  // for a response; a reader may send an ACKNACK at any time):
+  // - something is missing: the reader's state, base at the first missing sequence number and
+  //   the missing ones (at most 256) in the set; a writer resends them (GAP for ones it no
+  //   longer has). A sample of which fragments arrived is left out of the set (the HEARTBEAT
+  //   answer asks for its fragments with a NACK_FRAG).
+  // - nothing is missing, Fast DDS writer, VOLATILE reader: bitmapBase 0 and an empty set, what
+  //   Fast DDS calls a preemptive ACKNACK: its StatefulWriter::process_acknack answers it with a
+  //   HEARTBEAT to this reader at once, which the reader answers (after its heartbeat response
+  //   delay) with a NACK of what was lost. The spec requires bitmapBase >= 1 (8.3.5.5), so base 0
+  //   is a Fast DDS interoperability convention, sent only to writers whose messages carry
+  //   eProsima's vendor id. It acknowledges nothing; for a non-VOLATILE reader Fast DDS takes
+  //   base 0 as a request to resend its history, hence VOLATILE only.
+  // - nothing is missing, any other writer or reader: base at what the reader can acknowledge
+  //   and an empty set. This crate's writer answers it with a HEARTBEAT when the reader has not
+  //   acknowledged all it wrote; Cyclone DDS answers a non-final ACKNACK with a HEARTBEAT.
+  fn send_quiet_poll(&mut self, writer_guid: GUID, missing: &[SequenceNumber], fast_dds: bool) {
+    let reader_id = self.entity_id();
+    let volatile = matches!(
+      self.qos_policy.durability(),
+      None | Some(policy::Durability::Volatile)
+    );
+    let partial: Vec<SequenceNumber> = missing
+      .iter()
+      .copied()
+      .filter(|sn| self.is_frag_partially_received(writer_guid, *sn))
+      .collect();
+    let Some(writer_proxy) = self.matched_writers.get_mut(&writer_guid) else {
+      return;
+    };
+    let reader_sn_state = match missing.first() {
+      Some(&first_missing) => SequenceNumberSet::from_base_and_set(
+        first_missing,
+        &missing
+          .iter()
+          .copied()
+          .take_while(|sn| *sn < first_missing + SequenceNumber::new(256))
+          .filter(|sn| !partial.contains(sn))
+          .collect(),
+      ),
+      None if fast_dds && volatile => SequenceNumberSet::new_empty(SequenceNumber::zero()),
+      None => SequenceNumberSet::new_empty(writer_proxy.all_ackable_before()),
+    };
+    let acknack = AckNack {
+      reader_id,
+      writer_id: writer_guid.entity_id,
+      reader_sn_state,
+      count: writer_proxy.next_ack_nack_sequence_number(),
+    };
+    let locators = writer_proxy.unicast_locator_list.clone();
+    debug!(
+      "Writer {writer_guid:?} quiet after DATA: poll {:?}. topic={:?}",
+      acknack.reader_sn_state, self.topic_name
+    );
+    let flags = BitFlags::<ACKNACK_Flags>::from_flag(ACKNACK_Flags::Endianness);
+    self.send_acknack_to(
+      flags,
+      acknack,
+      InfoDestination {
+        guid_prefix: writer_guid.prefix,
+      },
+      &locators,
+      writer_guid,
+    );
+  }
+
   pub fn handle_datafrag_msg(
     &mut self,
     datafrag: &DataFrag,
@@ -721,6 +927,10 @@ impl Reader {
     let seq_num = datafrag.writer_sn;
     let receive_timestamp = Timestamp::now();
     //trace!("DATAFRAG received topic={:?}", self.topic_name);
+    // Patched for grasp_orient (0011-quiet-writer-poll.patch): a fragment is DATA activity too.
+    if self.gap_watch(writer_guid).is_some() {
+      self.note_data_for_quiet_poll(writer_guid, mr_state);
+    }
 
     // check if this submessage is expired already
     // TODO: Maybe this check is in the wrong place altogether? It should be
@@ -1056,6 +1266,11 @@ impl Reader {
         writer_guid, self.topic_name, self.my_guid
       );
       return false;
+    }
+    // Patched for grasp_orient (0011-quiet-writer-poll.patch): the writer has said what it wrote.
+    if let Some(quiet) = self.quiet_polls.get_mut(&writer_guid) {
+      quiet.heard_heartbeat = true;
+      quiet.announced = quiet.announced.max(heartbeat.last_sn);
     }
     // sanity check
     if heartbeat.first_sn < SequenceNumber::default() {
@@ -2256,6 +2471,126 @@ mod tests {
     run_due_timers(&mut reader, &timer);
     let (asked, acknacks) = requests_sent(&socket);
     assert_eq!((asked, acknacks), (vec![(2, None)], 1));
+  }
+
+  // The ACKNACKs the reader sent to `socket` since the last call: (bitmapBase, the sequence
+  // numbers in the set, final flag) each.
+  fn acknacks_sent(socket: &std::net::UdpSocket) -> Vec<(i64, Vec<i64>, bool)> {
+    std::thread::sleep(StdDuration::from_millis(20));
+    let mut acknacks = Vec::new();
+    let mut buf = vec![0u8; 65536];
+    while let Ok(n) = socket.recv(&mut buf) {
+      let message = Message::read_from_buffer(&bytes::Bytes::copy_from_slice(&buf[..n])).unwrap();
+      for sub in message.submessages() {
+        if let crate::rtps::SubmessageBody::Reader(ReaderSubmessage::AckNack(a, flags)) = sub.body {
+          acknacks.push((
+            i64::from(a.reader_sn_state.base()),
+            a.reader_sn_state.iter().map(i64::from).collect(),
+            flags.contains(ACKNACK_Flags::Final),
+          ));
+        }
+      }
+    }
+    acknacks
+  }
+
+  // Waits until the quiet poll due `after` the previous step has had its time, and runs timers.
+  fn run_timers_after(reader: &mut Reader, timer: &SharedTimer<DpTimerEvent>, after: StdDuration) {
+    std::thread::sleep(after + StdDuration::from_millis(5));
+    run_due_timers(reader, timer);
+  }
+
+  #[test]
+  fn a_writer_quiet_after_data_is_polled() {
+    // 0011-quiet-writer-poll.patch. A Fast DDS writer sends DATA 1 to 3, then DATA 4, which is
+    // lost, then nothing: no later DATA reveals the loss, and its next HEARTBEAT is 3 s away.
+    let (mut reader, writer_guid, socket, timer) = reader_answering_to_a_socket();
+    let fast_dds = MessageReceiverState {
+      source_guid_prefix: writer_guid.prefix,
+      source_vendor_id: VendorId::EPROSIMA,
+      ..Default::default()
+    };
+    let other = MessageReceiverState {
+      source_guid_prefix: writer_guid.prefix,
+      ..Default::default()
+    };
+    let _preemptive = acknacks_sent(&socket);
+    let reader_id = reader.my_guid.entity_id;
+    let data = |reader: &mut Reader, sn: i64, mr_state: &MessageReceiverState| {
+      let d = Data {
+        reader_id,
+        writer_id: writer_guid.entity_id,
+        writer_sn: SequenceNumber::new(sn),
+        ..Data::default()
+      };
+      reader.handle_data_msg(d, BitFlags::from_flag(DATA_Flags::Data), mr_state);
+    };
+    let heartbeat = |reader: &mut Reader, count: i32, last: i64| {
+      let hb = Heartbeat {
+        reader_id,
+        writer_id: writer_guid.entity_id,
+        first_sn: SequenceNumber::new(1),
+        last_sn: SequenceNumber::new(last),
+        count,
+      };
+      reader.handle_heartbeat_msg(&hb, false, &fast_dds);
+    };
+    for sn in 1..=3 {
+      data(&mut reader, sn, &fast_dds);
+    }
+    run_due_timers(&mut reader, &timer);
+    assert_eq!(
+      acknacks_sent(&socket),
+      vec![],
+      "polled while DATA was coming"
+    );
+    // Quiet for QUIET_POLL_DELAY: a preemptive ACKNACK (base 0, final flag clear), which Fast
+    // DDS answers with a HEARTBEAT at once.
+    run_timers_after(&mut reader, &timer, QUIET_POLL_DELAY);
+    assert_eq!(
+      acknacks_sent(&socket),
+      vec![(0, vec![], false)],
+      "no poll when the writer went quiet after DATA"
+    );
+    // The HEARTBEAT announces 4; its answer asks for 4 (0009: after the response delay).
+    heartbeat(&mut reader, 1, 4);
+    run_timers_after(&mut reader, &timer, HEARTBEAT_RESPONSE_DELAY);
+    assert_eq!(acknacks_sent(&socket), vec![(4, vec![4], true)]);
+    // The repair is lost too: the next poll, twice the delay after the first and no sooner than
+    // QUIET_POLL_SPACING after the HEARTBEAT's answer, asks for 4 again.
+    run_timers_after(&mut reader, &timer, QUIET_POLL_SPACING + QUIET_POLL_DELAY);
+    assert_eq!(
+      acknacks_sent(&socket),
+      vec![(4, vec![4], false)],
+      "the lost repair was not asked for again"
+    );
+    // The repair comes, then a HEARTBEAT that announces nothing newer: settled, no more polls.
+    data(&mut reader, 4, &fast_dds);
+    heartbeat(&mut reader, 2, 4);
+    run_timers_after(&mut reader, &timer, HEARTBEAT_RESPONSE_DELAY);
+    let _ack = acknacks_sent(&socket);
+    run_timers_after(&mut reader, &timer, QUIET_POLL_DELAY + QUIET_POLL_SPACING);
+    assert_eq!(
+      acknacks_sent(&socket),
+      vec![],
+      "polled a writer that had said all it wrote"
+    );
+    // A writer that never answers is polled QUIET_POLL_MAX times after its last DATA, no more.
+    data(&mut reader, 5, &fast_dds);
+    let mut polls = 0;
+    for _ in 0..16 {
+      run_timers_after(&mut reader, &timer, StdDuration::from_millis(95));
+      polls += acknacks_sent(&socket).len();
+    }
+    assert_eq!(
+      polls, QUIET_POLL_MAX as usize,
+      "polls of a writer that never answers"
+    );
+    // Another vendor's writer gets a spec-conforming poll: base at what the reader can
+    // acknowledge (6), empty set, final flag clear.
+    data(&mut reader, 6, &other);
+    run_timers_after(&mut reader, &timer, QUIET_POLL_DELAY);
+    assert_eq!(acknacks_sent(&socket), vec![(7, vec![], false)]);
   }
 
   #[test]
