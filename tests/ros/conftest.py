@@ -121,6 +121,28 @@ def load_paper_cases() -> list[dict]:
 from mcap_util import random_grasp  # noqa: E402,F401
 
 
+# Round-trip probes: paper case (a), which the node solves (so it gets markers), in a frame of its own. Tests
+# leave that frame out of what they check of grip_markers: a probe answered before the node matched a marker
+# reader has its markers recorded (record_markers) but not received.
+PROBE_FRAME = "grasp_orient_test_probe"
+
+
+def probe_candidate(cid: str) -> dict:
+    """Paper case (a) with id `cid`, in PROBE_FRAME."""
+    p = load_paper_cases()[0]
+    p["id"] = cid
+    p["header"]["frame_id"] = PROBE_FRAME
+    return p
+
+
+def is_probe_markers(arr: Any) -> bool:
+    """Whether a marker array (a ROS message, or a dict as the recording readers and `to_plain` give it) is a
+    probe's: all its markers in PROBE_FRAME."""
+    ms = arr["markers"] if isinstance(arr, dict) else arr.markers
+    frames = {m["header"]["frame_id"] if isinstance(m, dict) else m.header.frame_id for m in ms}
+    return frames == {PROBE_FRAME}
+
+
 def fill_message(msg, data: dict):
     """Set the fields of a ROS message from a JSON-like dict (nested dicts for nested messages)."""
     for k, v in data.items():
@@ -402,17 +424,36 @@ class GraspClient:
                     f"(ROS_DOMAIN_ID={DOMAIN_ID}); graph: {self.peer.node.get_node_names_and_namespaces()}")
 
     def ensure_roundtrip(self, timeout: float = 15.0):
-        """Match, then send a probe (paper case a) until one is answered: both directions are live."""
+        """Match, then send a probe (`probe_candidate`, ids probe-N) until one is answered: both directions
+        are live."""
         self.wait_matched(timeout)
+        self._send_probes(timeout, None)
+
+    def ensure_markers(self, markers: list, timeout: float = 15.0) -> int:
+        """Send probes until one is answered and a probe's marker array has arrived in `markers` (the list a
+        grip_markers subscription of this peer appends to). `get_publisher_count() > 0` on that subscription
+        says only that we matched the node's writer; the node matches our reader when our announcement
+        reaches it, a little later, and what it answers in between gets no published markers. Once a
+        probe's markers are here, every later answer's are sent to us. Leave PROBE_FRAME out of the checks.
+        Returns the number of probes sent."""
+        self.wait_matched(timeout)
+        return self._send_probes(timeout, markers)
+
+    def _send_probes(self, timeout: float, markers: list | None) -> int:
         deadline = time.monotonic() + timeout
-        probe = load_paper_cases()[0]
+        sent = 0
         while time.monotonic() < deadline:
             self._probe += 1
-            probe["id"] = f"probe-{self._probe}"
+            sent += 1
+            probe = probe_candidate(f"probe-{self._probe}")
             self.pub.publish(candidate_msg(probe))
-            if self.peer.spin_until(lambda: probe["id"] in self.answers, 1.0):
-                return
-        raise AssertionError(f"no answer to a probe on {self.ns}/grasp_candidates within {timeout} s")
+            if self.peer.spin_until(lambda: probe["id"] in self.answers and (
+                    markers is None or any(is_probe_markers(m) for m in markers)), 1.0):
+                return sent
+        raise AssertionError(f"no answer to a probe on {self.ns}/grasp_candidates within {timeout} s"
+                             if markers is None else
+                             f"no probe answered with its markers on {self.ns}/grip_markers within {timeout} s "
+                             f"({sent} probes sent, {len(markers)} marker arrays received)")
 
     def send_and_collect(self, cands: list[dict], timeout: float = 60.0, window: int = 50) -> dict[str, Any]:
         """Publish every candidate, at most `window` unanswered at a time (below the node's depth 100, so

@@ -18,7 +18,7 @@ import pytest
 
 from conftest import (
     CANDIDATE_TYPE, DOMAIN_ID, EXAMPLE_SCRIPT, MARKER_ARRAY_TYPE, RECOMMENDATION_TYPE, GraspClient, compare,
-    load_paper_cases, random_grasp, reliable_qos, ros_env, run_solve, to_plain,
+    is_probe_markers, load_paper_cases, random_grasp, reliable_qos, ros_env, run_solve, to_plain,
 )
 
 from grasp_orient.msg import GripRecommendation  # noqa: E402  (conftest reports a missing rclpy as a failure)
@@ -339,11 +339,10 @@ def test_markers_in_candidate_frame(peer, client):
         def mine():
             return [m for m in got if m.markers and any(x.header.frame_id == frame for x in m.markers)]
 
-        # the node's marker writer may match our reader a little after we see it: resend until one arrives
-        deadline = time.monotonic() + 15.0
-        while not mine() and time.monotonic() < deadline:
-            client.send_and_collect([c], timeout=10.0)
-            peer.spin_until(lambda: bool(mine()), 1.0)
+        # the node's marker writer may match our reader a little after we see it: probe until it has
+        client.ensure_markers(got)
+        client.send_and_collect([c], timeout=10.0)
+        peer.spin_until(lambda: bool(mine()), 10.0)
         arrays = mine()
         assert arrays, f"no MarkerArray with markers in frame {frame!r} on /grip_markers ({len(got)} arrays seen)"
         arr = arrays[-1]
@@ -394,20 +393,18 @@ def test_markers_built_only_for_a_subscriber(start_node, peer):
         sub = peer.node.create_subscription(MarkerArray, "/lazy_markers/grip_markers", got.append,
                                             reliable_qos(100))
         assert peer.spin_until(lambda: sub.get_publisher_count() > 0, 15.0), "no publisher on grip_markers"
-        # the node sees our reader matched a little after we see its writer: resend until markers come
+        # the node sees our reader matched a little after we see its writer: probe until markers come
+        probes = c.ensure_markers(got)
         frame = "watched_frame"
-        deadline = time.monotonic() + 15.0
-        k = 0
-        while not got and time.monotonic() < deadline:
-            w = dict(solved[k % len(solved)], id=f"watched-{k}")
-            w["header"] = dict(w["header"], frame_id=frame)
-            c.send_and_collect([w], timeout=10.0)
-            peer.spin_until(lambda: bool(got), 1.0)
-            k += 1
-        assert got, "no MarkerArray for a subscriber that came after the first answers"
-        assert all(m.markers and m.markers[0].header.frame_id == frame for m in got), \
-            "markers of a candidate answered before anybody subscribed"
+        watched = [dict(x, id=f"watched-{k}", header=dict(x["header"], frame_id=frame))
+                   for k, x in enumerate(solved[:3])]
+        c.send_and_collect(watched, timeout=10.0)
+        mine = lambda: [m for m in got if not is_probe_markers(m)]  # noqa: E731
+        peer.spin_until(lambda: len(mine()) >= len(watched), 10.0)
         peer.spin_for(0.3)
+        assert len(mine()) == len(watched), f"{len(mine())} marker arrays for {len(watched)} watched candidates"
+        assert all(m.markers and m.markers[0].header.frame_id == frame for m in mine()), \
+            "markers of a candidate answered before anybody subscribed"
         received = len(got)
     finally:
         if sub is not None:
@@ -416,7 +413,8 @@ def test_markers_built_only_for_a_subscriber(start_node, peer):
         peer.node.destroy_subscription(c.sub)
     n.stop_and_check(signal.SIGINT)
     built, published = markers_line(n)
-    assert 1 <= built <= k, f"{built} arrays built for {k} candidates sent while subscribed (none before)"
+    k = probes + len(watched)
+    assert len(watched) < built <= k, f"{built} arrays built for {k} candidates sent while subscribed (none before)"
     assert published == built == received, f"built {built}, published {published}, received {received}"
 
 
