@@ -210,11 +210,12 @@ def test_empty_set_gets_an_empty_answer(sets):
     assert ans["set_id"] == "empty" and ans["ranked_by"] == "internal_force"
 
 
-def test_markers_show_the_best_candidate_of_a_set(peer, sets):
+def test_markers_show_the_best_candidate_of_a_set(peer, client, sets):
     got: list = []
     sub = peer.node.create_subscription(MarkerArray, "grip_markers", got.append, reliable_qos(100))
     try:
         assert peer.spin_until(lambda: sub.get_publisher_count() > 0, 15), "no publisher on grip_markers"
+        client.ensure_markers(got)  # the node has matched our reader too (probes in a frame of their own)
         frames = [f"best_frame_{k}" for k in range(6)]
         cands = batch(6, SEED + 3, "mark", frames)
         ans = to_plain(sets.send(set_msg(cands, "markers")))
