@@ -31,7 +31,12 @@ process, no node in between (rclpy -> rclpy, GraspCandidate). When the node's an
 that ceiling, Python/rclpy is the bottleneck, not the node. On two cores, an rclpy publisher and collector
 saturate the machine near 8,000 messages per second; (c) is the measurement the throughput target is read from.
 
---offered-only skips the ceiling, (a) and (b).
+--offered-only skips the ceiling, (a) and (b); --burst-only keeps only the ceiling and (b)'s burst. Each burst also
+reports the CPU seconds of the node, of the collector (this process) and of the publishers until the last answer,
+the datagrams the kernel dropped meanwhile at a full UDP receive buffer (/proc/net/snmp, Udp RcvbufErrors:
+machine-wide, but in a burst nearly all at the collector's socket), and the time the collector waited with nothing
+received for over 5 ms between the first and last answer (stalled: waiting on repair). The rclpy -> rclpy ceiling
+travels over Fast DDS's shared memory on one host, not UDP, so it has no socket to overflow.
 
 All traffic stays on this machine (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, one ROS_DOMAIN_ID for the run).
 """
@@ -95,6 +100,7 @@ def worker(topic: str, count: int, tag: str) -> int:
     if sys.stdin.readline().strip() != "go":
         return 1
     t0 = time.perf_counter()
+    c0 = time.process_time()
     for k in range(count):
         m = pool[k % len(pool)]
         m.id = f"{tag}-{k}"
@@ -102,7 +108,8 @@ def worker(topic: str, count: int, tag: str) -> int:
     t1 = time.perf_counter()
     acked = pub.wait_for_all_acked(rclpy.duration.Duration(seconds=60))
     t2 = time.perf_counter()
-    print(json.dumps({"publish_s": t1 - t0, "acked_s": t2 - t0, "acked": bool(acked)}), flush=True)
+    print(json.dumps({"publish_s": t1 - t0, "acked_s": t2 - t0, "acked": bool(acked),
+                      "cpu_s": time.process_time() - c0}), flush=True)
     # keep the writer alive until the parent is done with the answers (it closes stdin)
     sys.stdin.readline()
     node.destroy_node()
@@ -221,15 +228,50 @@ def cdr_id(buf: bytes) -> bytes:
     return buf[o + 4:o + 4 + n - 1]
 
 
-def measure_burst(peer, in_topic: str, out_topic: str, out_type, n: int, k: int, idle: float, prefix: str) -> dict:
+# A gap between two answers longer than this counts as a stall (the collector waiting, not working).
+STALL_S = 0.005
+
+
+def udp_rcvbuf_errors() -> int:
+    """Datagrams the kernel dropped because a UDP socket's receive buffer was full (/proc/net/snmp, Udp
+    RcvbufErrors): for the whole network namespace, so every socket on this machine counts, though in a burst
+    nearly all are the collector's (the socket that receives the node's answers)."""
+    try:
+        lines = [line.split() for line in Path("/proc/net/snmp").read_text().splitlines() if line.startswith("Udp:")]
+        return int(lines[1][lines[0].index("RcvbufErrors")])
+    except (OSError, ValueError, IndexError):
+        return -1
+
+
+def process_cpu_s(pid: int | None) -> float:
+    """User plus system CPU seconds of process `pid` so far, all its threads (/proc/<pid>/stat)."""
+    if pid is None:
+        return float("nan")
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return float("nan")
+
+
+def measure_burst(peer, in_topic: str, out_topic: str, out_type, n: int, k: int, idle: float, prefix: str,
+                  node_pid: int | None = None) -> dict:
     """k publisher processes send n candidates on in_topic as fast as they can; count distinct ids on out_topic
-    (received raw: serialized bytes, id read from the CDR, so that this subscriber is as cheap as rclpy allows)."""
+    (received raw: serialized bytes, id read from the CDR, so that this subscriber is as cheap as rclpy allows).
+    Also the CPU seconds of the node (node_pid), of this collector process and of the publishers from the start
+    to the last answer (the idle wait after it excluded), and the UDP receive-buffer drops meanwhile."""
     got = set()
     t_last = [0.0]
+    # time with nothing received for more than STALL_S (waiting on repair, once the first answer came)
+    stalls = [0.0, 0]
 
     def on(raw: bytes):
         got.add(cdr_id(raw))
-        t_last[0] = time.perf_counter()
+        now = time.perf_counter()
+        if got and t_last[0] > 0 and now - t_last[0] > STALL_S:
+            stalls[0] += now - t_last[0]
+            stalls[1] += 1
+        t_last[0] = now
 
     sub = peer.node.create_subscription(out_type, out_topic, on, C.reliable_qos(n + 100), raw=True)
     procs, shares = start_workers(in_topic, n, k, prefix)
@@ -238,6 +280,8 @@ def measure_burst(peer, in_topic: str, out_topic: str, out_type, n: int, k: int,
         if not peer.spin_until(lambda: sub.get_publisher_count() > 0, 15):
             raise RuntimeError(f"nothing publishes on {out_topic}")
         peer.spin_for(0.5)
+        drops0, node_cpu0, cpu0 = udp_rcvbuf_errors(), process_cpu_s(node_pid), time.process_time()
+        node_cpu_last, cpu_last, drops_last = node_cpu0, cpu0, drops0
         t0 = time.perf_counter()
         for p in procs:
             p.stdin.write("go\n")
@@ -248,6 +292,7 @@ def measure_burst(peer, in_topic: str, out_topic: str, out_type, n: int, k: int,
             ex.spin_once(timeout_sec=0.05)
             if len(got) != last_count:
                 last_count, last_change = len(got), time.perf_counter()
+                node_cpu_last, cpu_last, drops_last = process_cpu_s(node_pid), time.process_time(), udp_rcvbuf_errors()
             elif time.perf_counter() - last_change > idle:
                 break
         stats = finish_workers(procs)
@@ -260,7 +305,11 @@ def measure_burst(peer, in_topic: str, out_topic: str, out_type, n: int, k: int,
     pub_rate = sum(shares) / max(s.get("publish_s", float("nan")) for s in stats) if stats else float("nan")
     return {"n": n, "publishers": k, "answered": len(got), "lost": n - len(got),
             "per_s": len(got) / span if got else 0.0, "seconds": span,
-            "publish_only_per_s": pub_rate, "workers": stats}
+            "publish_only_per_s": pub_rate, "workers": stats,
+            "node_cpu_s": node_cpu_last - node_cpu0, "collector_cpu_s": cpu_last - cpu0,
+            "publisher_cpu_s": sum(s.get("cpu_s", float("nan")) for s in stats),
+            "rcvbuf_drops": drops_last - drops0 if drops0 >= 0 else -1,
+            "stall_s": stalls[0], "stalls": stalls[1]}
 
 
 def offered_count(rate: int, seconds: float) -> int:
@@ -329,11 +378,13 @@ def run(args) -> int:
             r = measure_burst(peer, f"/bench_loop_{rep}", f"/bench_loop_{rep}", GraspCandidate, args.n_throughput,
                               args.publishers, args.idle, f"loop{rep}-")
             results["rclpy->rclpy"]["burst"].append(r)
-            log(f"[bench] #{rep} rclpy->rclpy burst {r['per_s']:.0f}/s, lost {r['lost']}")
+            log(f"[bench] #{rep} rclpy->rclpy burst {r['per_s']:.0f}/s, lost {r['lost']}, CPU s collector "
+                f"{r['collector_cpu_s']:.2f} publisher {r['publisher_cpu_s']:.2f}, UDP receive-buffer drops "
+                f"{r['rcvbuf_drops']}")
         for name, extra in variants:
             # (c) starts a fresh node for every rate: in one node, each publisher/collector pair that has come
             # and gone leaves the next run a higher p99 lag (docs/performance.md, "Known limit: peers that leave"), which would mix the rates up.
-            phases = [] if args.offered_only else ["latency+windowed", "burst"]
+            phases = ([] if args.offered_only else ["burst"] if args.burst_only else ["latency+windowed", "burst"])
             for phase in [*phases, *(f"offered{rate}" for rate in args.rates)]:
                 ns = f"/bench_{name}_{phase.split('+')[0]}_{rep}"
                 ros_args = ["-r", f"__ns:={ns}"]
@@ -385,9 +436,17 @@ def run(args) -> int:
                     else:
                         b = measure_burst(peer, f"{ns}/grasp_candidates", f"{ns}/grip_recommendations",
                                           GripRecommendation, args.n_throughput, args.publishers, args.idle,
-                                          f"{name}{rep}-")
+                                          f"{name}{rep}-", node_pid=proc.proc.pid)
+                        # answers the node could not hand to DDS (its log says so), as opposed to lost on the way
+                        errors = [line for line in proc.all_lines() if "cannot publish" in line]
+                        b["publish_errors"] = len(errors)
+                        if errors:
+                            log(f"[bench] {name}: {errors[0][:300]}")
                         res["burst"].append(b)
-                        log(f"[bench] #{rep} {name}: burst {b['per_s']:.0f}/s lost {b['lost']}")
+                        log(f"[bench] #{rep} {name}: {b['publish_errors']} publish errors; burst {b['per_s']:.0f}/s lost {b['lost']}, CPU s node "
+                            f"{b['node_cpu_s']:.2f} collector {b['collector_cpu_s']:.2f} publisher "
+                            f"{b['publisher_cpu_s']:.2f}, UDP receive-buffer drops {b['rcvbuf_drops']}, {b['stalls']} stalls "
+                            f"over {1e3 * STALL_S:.0f} ms, {b['stall_s']:.2f} s in all")
                     peer.node.destroy_publisher(client.pub)
                     peer.node.destroy_subscription(client.sub)
                 finally:
@@ -422,6 +481,10 @@ def run(args) -> int:
         if B_:
             line += (f"   burst {median_of(B_, 'per_s'):7.0f}{spread(B_, 'per_s', '.0f')} "
                      f"lost {sum(b['lost'] for b in B_)}   publish {median_of(B_, 'publish_only_per_s'):.0f}")
+            line += (f"   CPU s node {median_of(B_, 'node_cpu_s'):.2f} collector {median_of(B_, 'collector_cpu_s'):.2f} "
+                     f"publisher {median_of(B_, 'publisher_cpu_s'):.2f}   UDP drops "
+                     f"{median_of(B_, 'rcvbuf_drops'):.0f}{spread(B_, 'rcvbuf_drops', '.0f')}   stalled "
+                     f"{median_of(B_, 'stall_s'):.2f} s{spread(B_, 'stall_s', '.2f')}")
         print(line)
     if args.rates:
         print(f"\n(c) sustained offered rate: one rcl publisher process -> node -> one rcl collector process "
@@ -466,6 +529,12 @@ def run(args) -> int:
     if nd["burst"] and results["rclpy->rclpy"]["burst"]:
         print(f"peer ceiling (rclpy -> rclpy, no node, same publishers and collector): {ceiling:.0f}/s; "
               f"node burst / ceiling {median_of(nd['burst'], 'per_s') / ceiling:.2f}")
+        # each repetition's burst over the ceiling measured just before it
+        for name in names[1:]:
+            pairs = zip(results["rclpy->rclpy"]["burst"], results[name]["burst"])
+            ratios = [f"{b['per_s'] / c['per_s']:.2f}" for c, b in pairs if c["per_s"] > 0]
+            if ratios:
+                print(f"    {name} burst / ceiling of its repetition: {', '.join(ratios)}")
     if args.json:
         Path(args.json).write_text(json.dumps(results, indent=2))
     failed = (any(r["errors"] for r in results.values())
@@ -497,6 +566,8 @@ def main() -> int:
                     help="also this grasp_orient binary with the defaults, reported as LABEL (repeatable)")
     ap.add_argument("--offered-only", action="store_true",
                     help="only (c), the sustained offered rates: no ceiling, latency, windowed or burst")
+    ap.add_argument("--burst-only", action="store_true",
+                    help="only the ceiling and (b)'s burst: no latency, windowed or offered rates")
     ap.add_argument("--repeat", type=int, default=3, help="interleaved repetitions; medians are reported (3)")
     ap.add_argument("--json", help="write every number to this file as JSON")
     args = ap.parse_args()
@@ -505,6 +576,8 @@ def main() -> int:
     if C.RCLPY_IMPORT_ERROR:
         log(C.RCLPY_IMPORT_ERROR)
         return 1
+    if args.burst_only:
+        args.rates = []
     if args.rates:
         try:
             rcl_peer.binary()

@@ -35,7 +35,7 @@ use crate::{
   polling::{wake_channel, BoundSender, Doorbell, ReadySender, WakeSender},
   rtps::{
     constant::DEFAULT_WRITER_MAX_SAMPLES, reader::ReaderIngredients, writer::WriterIngredients,
-    writer_send_buffer::WriterSendBuffer,
+    writer_send_buffer::{writer_max_samples, WriterSendBuffer},
   },
   serialization::{CDRDeserializerAdapter, CDRSerializerAdapter},
   structure::{
@@ -521,8 +521,9 @@ impl InnerPublisher {
     // stop-and-wait -- every write must await the previous sample's ACK -- and
     // spuriously returns `WouldBlock` when an ACK is slower than
     // `max_blocking_time` (e.g. under the normal discovery race). Use the
-    // resource limit when set, otherwise the default.
-    let window_limit = resource_max.unwrap_or(DEFAULT_WRITER_MAX_SAMPLES);
+    // resource limit when set, otherwise the default. Patched for grasp_orient
+    // (0012-keep-last-window.patch): the default is at least a KeepLast writer's depth.
+    let window_limit = writer_max_samples(&writer_qos);
     // nonblocking-transmit: the unsent-backlog limit bounds how many admitted
     // samples may await transmission when the network socket is congested. We
     // reuse the same capacity as the reliable window.

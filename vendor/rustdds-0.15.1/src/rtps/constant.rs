@@ -88,6 +88,12 @@ pub const HEARTBEAT_PERIOD_FAST: crate::structure::duration::Duration =
 // they remain available for repair) rather than being evicted eagerly.
 pub const DEFAULT_WRITER_MAX_SAMPLES: usize = 8192;
 
+// Patched for grasp_orient (0012-keep-last-window.patch): without ResourceLimits, a reliable
+// KeepLast writer may hold as many unacknowledged samples as its depth (at least
+// DEFAULT_WRITER_MAX_SAMPLES), up to this bound (src/rtps/writer_send_buffer.rs,
+// writer_max_samples).
+pub const KEEP_LAST_WRITER_MAX_SAMPLES: usize = 1 << 20;
+
 // Memory-safety backstop for the per-matched-reader set of sequence numbers a
 // Writer still intends to send (`RtpsReaderProxy::unsent_changes`). In normal
 // operation this set is pruned as samples are pushed or acknowledged, but a

@@ -28,7 +28,7 @@ use crate::{
   polling::SharedTimer,
   rtps::{
     constant::{
-      DEFAULT_WRITER_MAX_SAMPLES, FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE, FRAGMENT_SIZE,
+      FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE, FRAGMENT_SIZE,
       HEARTBEAT_PERIOD_FAST, HEARTBEAT_PERIOD_SLOW, HEARTBEAT_SUBMESSAGE_SERIALIZED_SIZE,
       NACK_RESPONSE_DELAY, NACK_SUPPRESSION_DURATION, REPAIR_INTERVAL_DEFAULT, REPAIR_INTERVAL_MAX,
       REPAIR_INTERVAL_MIN,
@@ -37,7 +37,7 @@ use crate::{
     rtps_reader_proxy::RtpsReaderProxy,
     timed_event::DpTimerEvent,
     transmit::{DefaultRouteSelector, InterfaceObservations, RouteKey},
-    writer_send_buffer::WriterSendBuffer,
+    writer_send_buffer::{writer_max_samples, WriterSendBuffer},
     Message, MessageBuilder,
   },
   structure::{
@@ -555,14 +555,9 @@ impl Writer {
     // default so that a reliable Writer keeps unacknowledged samples available
     // for repair instead of evicting them eagerly. This is only a memory-safety
     // backstop, not a normal operating limit.
-    let resource_limit = self
-      .qos_policies
-      .resource_limits()
-      .map(|rl| rl.max_samples)
-      .filter(|&max_samples| max_samples > 0)
-      .map_or(DEFAULT_WRITER_MAX_SAMPLES, |max_samples| {
-        max_samples as usize
-      });
+    // Patched for grasp_orient (0012-keep-last-window.patch): the same bound as the send
+    // window's, at least a KeepLast writer's depth.
+    let resource_limit = writer_max_samples(&self.qos_policies);
 
     match self.qos_policies.history {
       None => {
@@ -2821,7 +2816,7 @@ mod tests {
         elements::serialized_payload::SerializedPayload, submessages::AckNack,
       },
       polling::new_shared_timer,
-      rtps::writer_send_buffer::Admission,
+      rtps::{constant::DEFAULT_WRITER_MAX_SAMPLES, writer_send_buffer::Admission},
       structure::{guid::EntityKind, sequence_number::SequenceNumberSet},
       RepresentationIdentifier,
     };
@@ -2854,9 +2849,11 @@ mod tests {
           true, // reliable
           writer_id.kind().is_built_in(),
           false,
-          DEFAULT_WRITER_MAX_SAMPLES,
-          DEFAULT_WRITER_MAX_SAMPLES,
-          DEFAULT_WRITER_MAX_SAMPLES,
+          // Patched for grasp_orient (0012-keep-last-window.patch): the limits
+          // DomainParticipant::create_datawriter gives a writer with this QoS.
+          writer_max_samples(&writer_qos),
+          writer_max_samples(&writer_qos),
+          writer_max_samples(&writer_qos),
         );
         for _ in 0..sample_count {
           let data = DDSData::new(SerializedPayload::new(
@@ -3139,6 +3136,49 @@ mod tests {
         1,
         "no HEARTBEAT after the round that sent the last of what was asked for"
       );
+    }
+
+    // Patched for grasp_orient (0012-keep-last-window.patch): a reliable KeepLast
+    // writer without ResourceLimits holds as many unacknowledged samples as its
+    // depth, beyond DEFAULT_WRITER_MAX_SAMPLES: admitted without waiting (the
+    // fixture asserts it) and kept through cache cleaning for repair.
+    #[test]
+    fn a_keep_last_writer_keeps_its_depth_unacknowledged() {
+      let qos = QosPolicyBuilder::new()
+        .reliability(Reliability::Reliable {
+          max_blocking_time: Duration::from_millis(100),
+        })
+        .history(History::KeepLast { depth: 20_000 })
+        .durability(Durability::TransientLocal)
+        .build();
+      let held = 10_000;
+      let mut f = Fixture::new(
+        EntityId::new([0, 0, 1], EntityKind::WRITER_WITH_KEY_USER_DEFINED),
+        qos.clone(),
+        EntityId::new([0, 0, 2], EntityKind::READER_WITH_KEY_USER_DEFINED),
+        &qos,
+        held,
+        8,
+        None,
+      );
+      f.writer.handle_timed_event(TimedEvent::CacheCleaning);
+      assert_eq!(
+        f.writer.send_buffer.first_change_sequence_number(),
+        SequenceNumber::new(1),
+        "cache cleaning dropped unacknowledged samples within the depth"
+      );
+      assert_eq!(
+        f.writer.send_buffer.last_change_sequence_number(),
+        SequenceNumber::new(held)
+      );
+      assert_eq!(writer_max_samples(&qos), 20_000);
+      // Other writers keep the old bound.
+      let keep_all = QosPolicyBuilder::new().history(History::KeepAll).build();
+      assert_eq!(writer_max_samples(&keep_all), DEFAULT_WRITER_MAX_SAMPLES);
+      let shallow = QosPolicyBuilder::new()
+        .history(History::KeepLast { depth: 100 })
+        .build();
+      assert_eq!(writer_max_samples(&shallow), DEFAULT_WRITER_MAX_SAMPLES);
     }
 
     // A sample larger than a whole round still goes out, one per round. These

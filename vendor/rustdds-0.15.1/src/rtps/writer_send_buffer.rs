@@ -10,9 +10,37 @@ use core::task::Waker;
 use log::{debug, error, trace, warn};
 
 use crate::{
-  dds::{ddsdata::DDSData, with_key::datawriter::WriteOptions},
+  dds::{
+    ddsdata::DDSData,
+    qos::{policy, QosPolicies},
+    with_key::datawriter::WriteOptions,
+  },
+  rtps::constant::{DEFAULT_WRITER_MAX_SAMPLES, KEEP_LAST_WRITER_MAX_SAMPLES},
   structure::{cache_change::CacheChange, guid::GUID, sequence_number::SequenceNumber},
 };
+
+/// Patched for grasp_orient (0012-keep-last-window.patch): the most samples a writer with
+/// `qos` keeps for its readers, acknowledged or not: its reliable send window (a write waits,
+/// then fails, while that many are unacknowledged) and the bound of its history.
+/// ResourceLimits' max_samples when set; otherwise a KeepLast writer's depth, but at least
+/// DEFAULT_WRITER_MAX_SAMPLES and at most KEEP_LAST_WRITER_MAX_SAMPLES; otherwise
+/// DEFAULT_WRITER_MAX_SAMPLES. It was DEFAULT_WRITER_MAX_SAMPLES whatever the depth, so a
+/// KeepLast(20,000) writer whose reader was 8,192 samples behind failed its writes after
+/// max_blocking_time: samples lost that the depth promised to keep.
+pub(crate) fn writer_max_samples(qos: &QosPolicies) -> usize {
+  let resource_max = qos
+    .resource_limits()
+    .map(|rl| rl.max_samples)
+    .filter(|&m| m > 0)
+    .map(|m| m as usize);
+  let keep_last = match qos.history() {
+    Some(policy::History::KeepLast { depth }) => usize::try_from(depth).unwrap_or(0),
+    _ => 0,
+  };
+  resource_max.unwrap_or_else(|| {
+    keep_last.clamp(DEFAULT_WRITER_MAX_SAMPLES, KEEP_LAST_WRITER_MAX_SAMPLES)
+  })
+}
 
 /// Result of an admission attempt into the [`WriterSendBuffer`].
 pub(crate) enum Admission {
