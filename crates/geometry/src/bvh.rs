@@ -433,21 +433,7 @@ mod tests {
             }
         }
         let torus = Mesh::from_triangles("torus", &vertices, &triangles, [1.0; 3]).expect("torus");
-        let cube_vertices: Vec<[f64; 3]> = (0..8)
-            .map(|i| [i & 1, (i >> 1) & 1, (i >> 2) & 1].map(f64::from))
-            .collect();
-        let quads = [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ];
-        let cube_triangles: Vec<[u32; 3]> = quads
-            .iter()
-            .flat_map(|q: &[u32; 4]| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-            .collect();
+        let (cube_vertices, cube_triangles) = crate::mesh::tests::cube_split(1.0);
         let cube =
             Mesh::from_triangles("cube", &cube_vertices, &cube_triangles, [1.0; 3]).expect("cube");
         vec![torus, cube]

@@ -305,10 +305,12 @@ fn estimate_bytes(trimesh: &TriMesh, resource: &str) -> usize {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn cube_split(unit: f64) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+    /// The cube of side `unit` with a corner at the origin: its 8 corners and 12 triangles (each
+    /// face split along a diagonal). Also the BVH tests' cube.
+    pub(crate) fn cube_split(unit: f64) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
         let v = (0..8)
             .map(|i| {
                 [
