@@ -830,6 +830,15 @@ mod tests {
         }
     }
 
+    /// Recording into `dir`, markers included.
+    fn recording_markers(dir: &std::path::Path) -> Config {
+        Config {
+            record_dir: dir.display().to_string(),
+            record_markers: true,
+            ..Config::default()
+        }
+    }
+
     #[test]
     fn answers_count_and_mark_without_dds() {
         let mut a = answerer(no_recording(), false);
@@ -919,11 +928,7 @@ mod tests {
 
         // Recorded markers are built with no subscriber, and recorded.
         let dir = tempfile::tempdir().expect("a temporary folder");
-        let config = Config {
-            record_dir: dir.path().display().to_string(),
-            record_markers: true,
-            ..Config::default()
-        };
+        let config = recording_markers(dir.path());
         let mut a = answerer(config, false);
         a.start().expect("starts");
         assert!(a.draws(true, false));
@@ -991,11 +996,7 @@ mod tests {
     #[test]
     fn record_switches_and_settings_take_effect_when_set() {
         let dir = tempfile::tempdir().expect("a temporary folder");
-        let config = Config {
-            record_dir: dir.path().display().to_string(),
-            record_markers: true,
-            ..Config::default()
-        };
+        let config = recording_markers(dir.path());
         let mut a = answerer(config, false);
         let started = a.start().expect("starts");
         assert!(started[0].1.starts_with("recording to "), "{started:?}");
