@@ -401,7 +401,7 @@ fn played_poses_are_answered_as_recorded_and_replay_unchanged() {
 #[ignore = "timed: run alone by tests/run.sh (cargo test --test it timed_ -- --ignored)"]
 fn timed_a_large_inline_mesh_holds_up_no_candidate_sent_after_it() {
     use grasp_orient::msg::{GraspCandidate, GraspObject, PoseCandidate, Quaternion, Vector3};
-    use grasp_orient::record::{BagWriter, Entry, Payload, PoseTopics, Topics};
+    use grasp_orient::record::{BagWriter, Entry, Payload};
 
     let _turn = TEST_DOMAIN.lock().unwrap_or_else(|e| e.into_inner());
     let dir = temp_dir("play_inline");
@@ -440,13 +440,7 @@ fn timed_a_large_inline_mesh_holds_up_no_candidate_sent_after_it() {
             .expect("a case"),
     )
     .expect("a candidate");
-    let topics = Topics {
-        candidates: "/grasp_candidates".into(),
-        recommendations: "/grip_recommendations".into(),
-        markers: None,
-        sets: None,
-        poses: Some(PoseTopics::default_names()),
-    };
+    let topics = crate::util::pose_bag_topics();
     let mut w = BagWriter::create(&source, &topics, 100).expect("create");
     let at = |payload, t| Entry {
         payload,

@@ -10,7 +10,7 @@ use grasp_orient::config::Config;
 use grasp_orient::geometry::{AmentIndex, ClosingAxis};
 use grasp_orient::msg::{PoseCandidate, PoseCandidateSet, PoseRecommendation};
 use grasp_orient::record::settings::SettingsRecord;
-use grasp_orient::record::{BagWriter, Entry, Payload, PoseTopics, Topics};
+use grasp_orient::record::{BagWriter, Entry, Payload};
 use std::path::{Path, PathBuf};
 
 /// The test install prefix: `package://grasp_orient/meshes/block_mm.obj` resolves there.
@@ -71,13 +71,7 @@ fn write_bag(path: &Path, change: impl Fn(&mut PoseRecommendation)) {
     let settings = config.solver_settings().expect("valid");
     let rules: Rules = config.rules();
     let poses = PoseAnswerer::new(ClosingAxis::Y, AmentIndex::new([prefix()]));
-    let topics = Topics {
-        candidates: "/grasp_candidates".into(),
-        recommendations: "/grip_recommendations".into(),
-        markers: None,
-        sets: None,
-        poses: Some(PoseTopics::default_names()),
-    };
+    let topics = crate::util::pose_bag_topics();
     let mut w = BagWriter::create(path, &topics, 100).expect("create");
     let mut entries = vec![Payload::Settings(Box::new(SettingsRecord {
         since: 0,

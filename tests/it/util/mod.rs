@@ -16,6 +16,18 @@ pub mod spatial;
 pub mod torus;
 pub mod zstd_bomb;
 
+/// The channels of a recording of contact and pose candidates under the node's default names,
+/// with no markers and no sets.
+pub fn pose_bag_topics() -> grasp_orient::record::Topics {
+    grasp_orient::record::Topics {
+        candidates: "/grasp_candidates".into(),
+        recommendations: "/grip_recommendations".into(),
+        markers: None,
+        sets: None,
+        poses: Some(grasp_orient::record::PoseTopics::default_names()),
+    }
+}
+
 use grasp_orient::solver::planar::Candidate;
 use nalgebra::{Matrix3x4, Matrix4x3, Vector2, Vector3, Vector4};
 use rand::Rng;
