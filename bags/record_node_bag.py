@@ -21,14 +21,8 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import random
-import shutil
-import signal
-import subprocess
 import sys
-import tempfile
-import threading
 import time
 from pathlib import Path
 
@@ -39,9 +33,9 @@ sys.path.insert(0, str(HERE))
 
 import mcap_util as mu  # noqa: E402
 import make_bags  # noqa: E402
+import node_run  # noqa: E402
+from node_run import NODE, NS  # noqa: E402
 
-NS = "/golden"
-NODE = f"{NS}/grasp_orient"
 T0 = 1_735_689_600_000_000_000  # 2025-01-01T00:00:00Z
 PERIOD = 10_000_000
 
@@ -70,12 +64,7 @@ def main():
     ap.add_argument("--bin", type=Path, default=REPO_ROOT / "target" / "debug" / "grasp_orient")
     ap.add_argument("--out", type=Path, default=HERE / "node_recorded.mcap")
     args = ap.parse_args()
-    if not args.bin.is_file():
-        die(f"no binary at {args.bin} (cargo build, or --bin)")
-    os.environ["ROS_DOMAIN_ID"] = os.environ.get("GRASP_ORIENT_TEST_DOMAIN_ID") or str(200 + os.getpid() % 30)
-    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    os.environ.pop("ROS_LOCALHOST_ONLY", None)
-    os.environ.setdefault("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
+    node_run.use_private_domain()
     try:
         import rclpy
         from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -86,77 +75,47 @@ def main():
         die(f"cannot import rclpy / grasp_orient.msg ({e}); source \"$(bash tests/peer/setup.sh | tail -n 1)\" first")
 
     before, after = candidates()
-    with tempfile.TemporaryDirectory() as tmp:
-        record_dir = Path(tmp) / "runs"
-        lines: list[str] = []
-        ready = threading.Event()
-        proc = subprocess.Popen(
-            [str(args.bin), "node", "--ros-args", "-r", f"__ns:={NS}", "-p", f"record_dir:={record_dir}",
-             "-p", "record_markers:=true", "-p", "range:=graspable", "-p", "friction_safety_factor:=1.25"],
-            cwd=tmp, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-            errors="replace")
+    params = ["-p", "record_markers:=true", "-p", "range:=graspable", "-p", "friction_safety_factor:=1.25"]
+    with node_run.recording_node("record_node_bag.py", args.bin, args.out, params) as run:
+        rclpy.init()
+        node = rclpy.create_node("grasp_orient_record_node_bag")
+        qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST,
+                         durability=DurabilityPolicy.VOLATILE)
+        got: dict[str, object] = {}
+        pub = node.create_publisher(GraspCandidate, f"{NS}/grasp_candidates", qos)
+        node.create_subscription(GripRecommendation, f"{NS}/grip_recommendations",
+                                 lambda m: got.setdefault(m.candidate_id, m), qos)
+        deadline = time.monotonic() + 20
+        while not (pub.get_subscription_count() and node.count_publishers(f"{NS}/grip_recommendations")):
+            rclpy.spin_once(node, timeout_sec=0.05)
+            if time.monotonic() > deadline:
+                run.die("no match with the node within 20 s")
+        time.sleep(0.5)  # both directions discovered
 
-        def pump():
-            for line in proc.stdout:
-                lines.append(line.rstrip("\n"))
-                if "waiting for" in line:
-                    ready.set()
+        def send(cands: list[dict]):
+            for c in cands:
+                m = GraspCandidate()
+                make_bags.fill(m, c)
+                pub.publish(m)
+                deadline = time.monotonic() + 10
+                while c["id"][:1024] not in got:
+                    rclpy.spin_once(node, timeout_sec=0.05)
+                    if time.monotonic() > deadline:
+                        run.die(f"no answer to {c['id'][:40]} within 10 s:\n" + run.last_lines(20))
 
-        threading.Thread(target=pump, daemon=True).start()
-        try:
-            if not ready.wait(30):
-                die("the node did not come up within 30 s:\n" + "\n".join(lines[-30:]))
-            rclpy.init()
-            node = rclpy.create_node("grasp_orient_record_node_bag")
-            qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST,
-                             durability=DurabilityPolicy.VOLATILE)
-            got: dict[str, object] = {}
-            pub = node.create_publisher(GraspCandidate, f"{NS}/grasp_candidates", qos)
-            node.create_subscription(GripRecommendation, f"{NS}/grip_recommendations",
-                                     lambda m: got.setdefault(m.candidate_id, m), qos)
-            deadline = time.monotonic() + 20
-            while not (pub.get_subscription_count() and node.count_publishers(f"{NS}/grip_recommendations")):
-                rclpy.spin_once(node, timeout_sec=0.05)
-                if time.monotonic() > deadline:
-                    die("no match with the node within 20 s")
-            time.sleep(0.5)  # both directions discovered
-
-            def send(cands: list[dict]):
-                for c in cands:
-                    m = GraspCandidate()
-                    make_bags.fill(m, c)
-                    pub.publish(m)
-                    deadline = time.monotonic() + 10
-                    while c["id"][:1024] not in got:
-                        rclpy.spin_once(node, timeout_sec=0.05)
-                        if time.monotonic() > deadline:
-                            die(f"no answer to {c['id'][:40]} within 10 s:\n" + "\n".join(lines[-20:]))
-
-            send(before)
-            client = node.create_client(SetParameters, f"{NODE}/set_parameters")
-            if not client.wait_for_service(timeout_sec=10):
-                die(f"no {NODE}/set_parameters service")
-            value = ParameterValue(type=ParameterType.PARAMETER_STRING, string_value="norm1")
-            future = client.call_async(SetParameters.Request(parameters=[Parameter(name="objective", value=value)]))
-            rclpy.spin_until_future_complete(node, future, timeout_sec=10)
-            if not (future.done() and future.result().results[0].successful):
-                die("objective:=norm1 was not accepted")
-            send(after)
-            node.destroy_node()
-            rclpy.shutdown()
-        finally:
-            proc.send_signal(signal.SIGINT)
-            try:
-                proc.wait(15)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-        if proc.returncode != 0:
-            die(f"the node exited with {proc.returncode}:\n" + "\n".join(lines[-30:]))
-        files = sorted(record_dir.glob("*.mcap"))
-        if len(files) != 1:
-            die(f"expected one recording, found {files}")
-        shutil.copyfile(files[0], args.out)
-    print(f"wrote {args.out}: {len(before) + len(after)} candidates from {files[0].name}")
+        send(before)
+        client = node.create_client(SetParameters, f"{NODE}/set_parameters")
+        if not client.wait_for_service(timeout_sec=10):
+            run.die(f"no {NODE}/set_parameters service")
+        value = ParameterValue(type=ParameterType.PARAMETER_STRING, string_value="norm1")
+        future = client.call_async(SetParameters.Request(parameters=[Parameter(name="objective", value=value)]))
+        rclpy.spin_until_future_complete(node, future, timeout_sec=10)
+        if not (future.done() and future.result().results[0].successful):
+            run.die("objective:=norm1 was not accepted")
+        send(after)
+        node.destroy_node()
+        rclpy.shutdown()
+    print(f"wrote {args.out}: {len(before) + len(after)} candidates from {run.recorded}")
 
 
 if __name__ == "__main__":

@@ -20,24 +20,18 @@ from __future__ import annotations
 
 import argparse
 import copy
-import os
-import shutil
-import signal
-import subprocess
 import sys
-import tempfile
-import threading
 import time
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 REPO_ROOT = HERE.parent
 sys.path.insert(0, str(REPO_ROOT / "tests" / "ros"))
+sys.path.insert(0, str(HERE))
 
+import node_run  # noqa: E402
 import pose_cases as pc  # noqa: E402
-
-NS = "/golden"
-NODE = f"{NS}/grasp_orient"
+from node_run import NODE, NS  # noqa: E402
 
 
 def die(msg: str):
@@ -50,12 +44,7 @@ def main():
     ap.add_argument("--bin", type=Path, default=REPO_ROOT / "target" / "debug" / "grasp_orient")
     ap.add_argument("--out", type=Path, default=HERE / "node_poses.mcap")
     args = ap.parse_args()
-    if not args.bin.is_file():
-        die(f"no binary at {args.bin} (cargo build, or --bin)")
-    os.environ["ROS_DOMAIN_ID"] = os.environ.get("GRASP_ORIENT_TEST_DOMAIN_ID") or str(200 + os.getpid() % 30)
-    os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    os.environ.pop("ROS_LOCALHOST_ONLY", None)
-    os.environ.setdefault("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
+    node_run.use_private_domain()
     try:
         import rclpy
         from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -67,83 +56,52 @@ def main():
     singles, sets = pc.singles(), pc.sets()
     by_service = copy.deepcopy(sets[0])
     by_service["id"] += "-service"
-    with tempfile.TemporaryDirectory() as tmp:
-        record_dir = Path(tmp) / "runs"
-        lines: list[str] = []
-        ready = threading.Event()
-        proc = subprocess.Popen(
-            [str(args.bin), "node", "--ros-args", "-r", f"__ns:={NS}", "-p", f"record_dir:={record_dir}",
-             "-p", "record_markers:=true"],
-            cwd=tmp, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-            errors="replace")
+    with node_run.recording_node("record_node_poses.py", args.bin, args.out, ["-p", "record_markers:=true"]) as run:
+        rclpy.init()
+        node = rclpy.create_node("grasp_orient_record_node_poses")
+        qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST,
+                         durability=DurabilityPolicy.VOLATILE)
+        got: dict[str, object] = {}
+        pub = node.create_publisher(PoseCandidate, f"{NS}/pose_candidates", qos)
+        set_pub = node.create_publisher(PoseCandidateSet, f"{NS}/pose_candidate_sets", qos)
+        node.create_subscription(PoseRecommendation, f"{NS}/pose_recommendations",
+                                 lambda m: got.setdefault(m.recommendation.candidate_id, m), qos)
+        node.create_subscription(PoseRecommendationSet, f"{NS}/pose_recommendation_sets",
+                                 lambda m: got.setdefault(m.set_id, m), qos)
+        deadline = time.monotonic() + 20
+        while not (pub.get_subscription_count() and set_pub.get_subscription_count()
+                   and node.count_publishers(f"{NS}/pose_recommendations")
+                   and node.count_publishers(f"{NS}/pose_recommendation_sets")):
+            rclpy.spin_once(node, timeout_sec=0.05)
+            if time.monotonic() > deadline:
+                run.die("no match with the node within 20 s")
+        time.sleep(0.5)  # both directions discovered
 
-        def pump():
-            for line in proc.stdout:
-                lines.append(line.rstrip("\n"))
-                if "waiting for" in line:
-                    ready.set()
-
-        threading.Thread(target=pump, daemon=True).start()
-        try:
-            if not ready.wait(30):
-                die("the node did not come up within 30 s:\n" + "\n".join(lines[-30:]))
-            rclpy.init()
-            node = rclpy.create_node("grasp_orient_record_node_poses")
-            qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST,
-                             durability=DurabilityPolicy.VOLATILE)
-            got: dict[str, object] = {}
-            pub = node.create_publisher(PoseCandidate, f"{NS}/pose_candidates", qos)
-            set_pub = node.create_publisher(PoseCandidateSet, f"{NS}/pose_candidate_sets", qos)
-            node.create_subscription(PoseRecommendation, f"{NS}/pose_recommendations",
-                                     lambda m: got.setdefault(m.recommendation.candidate_id, m), qos)
-            node.create_subscription(PoseRecommendationSet, f"{NS}/pose_recommendation_sets",
-                                     lambda m: got.setdefault(m.set_id, m), qos)
+        def await_answer(key: str):
             deadline = time.monotonic() + 20
-            while not (pub.get_subscription_count() and set_pub.get_subscription_count()
-                       and node.count_publishers(f"{NS}/pose_recommendations")
-                       and node.count_publishers(f"{NS}/pose_recommendation_sets")):
+            while key not in got:
                 rclpy.spin_once(node, timeout_sec=0.05)
                 if time.monotonic() > deadline:
-                    die("no match with the node within 20 s")
-            time.sleep(0.5)  # both directions discovered
+                    run.die(f"no answer to {key} within 20 s:\n" + run.last_lines(20))
 
-            def await_answer(key: str):
-                deadline = time.monotonic() + 20
-                while key not in got:
-                    rclpy.spin_once(node, timeout_sec=0.05)
-                    if time.monotonic() > deadline:
-                        die(f"no answer to {key} within 20 s:\n" + "\n".join(lines[-20:]))
-
-            for c in singles:
-                pub.publish(pc.fill(PoseCandidate(), c))
-                await_answer(c["id"])
-            for s in sets:
-                set_pub.publish(pc.fill(PoseCandidateSet(), s))
-                await_answer(s["id"])
-            client = node.create_client(RecommendPoses, f"{NODE}/recommend_poses")
-            if not client.wait_for_service(timeout_sec=10):
-                die(f"no {NODE}/recommend_poses service")
-            req = RecommendPoses.Request()
-            req.pose_set = pc.fill(PoseCandidateSet(), by_service)
-            future = client.call_async(req)
-            rclpy.spin_until_future_complete(node, future, timeout_sec=20)
-            if not (future.done() and future.result().recommendation_set.set_id == by_service["id"]):
-                die("no answer from the service")
-            node.destroy_node()
-            rclpy.shutdown()
-        finally:
-            proc.send_signal(signal.SIGINT)
-            try:
-                proc.wait(15)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-        if proc.returncode != 0:
-            die(f"the node exited with {proc.returncode}:\n" + "\n".join(lines[-30:]))
-        files = sorted(record_dir.glob("*.mcap"))
-        if len(files) != 1:
-            die(f"expected one recording, found {files}")
-        shutil.copyfile(files[0], args.out)
-    print(f"wrote {args.out}: {len(singles)} pose candidates and {len(sets) + 1} pose sets from {files[0].name}")
+        for c in singles:
+            pub.publish(pc.fill(PoseCandidate(), c))
+            await_answer(c["id"])
+        for s in sets:
+            set_pub.publish(pc.fill(PoseCandidateSet(), s))
+            await_answer(s["id"])
+        client = node.create_client(RecommendPoses, f"{NODE}/recommend_poses")
+        if not client.wait_for_service(timeout_sec=10):
+            run.die(f"no {NODE}/recommend_poses service")
+        req = RecommendPoses.Request()
+        req.pose_set = pc.fill(PoseCandidateSet(), by_service)
+        future = client.call_async(req)
+        rclpy.spin_until_future_complete(node, future, timeout_sec=20)
+        if not (future.done() and future.result().recommendation_set.set_id == by_service["id"]):
+            run.die("no answer from the service")
+        node.destroy_node()
+        rclpy.shutdown()
+    print(f"wrote {args.out}: {len(singles)} pose candidates and {len(sets) + 1} pose sets from {run.recorded}")
 
 
 if __name__ == "__main__":
