@@ -68,6 +68,18 @@ pub const REPAIR_INTERVAL_MAX: Duration = Duration::from_millis(100);
 // budget; the reader's ACKNACKs grow and shrink it (src/rtps/repair_window.rs).
 pub const REPAIR_BATCH_MAX_BYTES: usize = 8192;
 
+// Patched for grasp_orient (0013-paced-fragments.patch). A reader whose socket overflowed
+// (it sent a NACK_FRAG) gets the DATA_FRAG datagrams of each later sample paced: the first
+// PACED_FRAGS_AT_ONCE at once, then one every PACED_FRAG_INTERVAL. Linux's default receive
+// buffer (net.core.rmem_default, 212,992 bytes) holds three 64 kB datagrams, so a sample of
+// six (a 354 kB answer) sent back to back overflows it unless the receiving thread drains one
+// during the send, and the lost fragments wait for the reader's NACK_FRAG (Fast DDS answers a
+// HEARTBEAT after 5 ms) and the repair: 10 to 15 ms. A receiving thread takes a 64 kB datagram
+// in tens of microseconds; 100 us (some 160 us with the kernel's timer slack) between two caps
+// a paced sample at about 400 MB/s. A reader that never lost a fragment is sent as before.
+pub const PACED_FRAGS_AT_ONCE: usize = 2;
+pub const PACED_FRAG_INTERVAL: std::time::Duration = std::time::Duration::from_micros(100);
+
 // Periodic HEARTBEAT period for reliable Writers. The period is adaptive: while
 // some matched reader is behind (has unacknowledged samples), heartbeats are
 // sent at the FAST period to prompt prompt repair (some peers rely on a

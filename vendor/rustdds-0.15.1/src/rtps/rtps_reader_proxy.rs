@@ -100,6 +100,10 @@ pub(crate) struct RtpsReaderProxy {
   // Patched for grasp_orient (0010-repair-window.patch): the bytes one repair round may send
   // to this reader, grown and shrunk by its ACKNACKs.
   pub repair_window: RepairWindow,
+  // Patched for grasp_orient (0013-paced-fragments.patch): this reader has asked for lost
+  // fragments (NACK_FRAG), so the fragments of later samples are paced to it
+  // (PACED_FRAG_INTERVAL).
+  pub paced_fragments: bool,
 }
 
 impl RtpsReaderProxy {
@@ -125,6 +129,7 @@ impl RtpsReaderProxy {
       send_route: SendRoute::default(),
       max_datagram_payload: FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE,
       repair_window: RepairWindow::default(),
+      paced_fragments: false,
     }
   }
 
@@ -255,6 +260,7 @@ impl RtpsReaderProxy {
       send_route: SendRoute::default(),
       max_datagram_payload: FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE,
       repair_window: RepairWindow::default(),
+      paced_fragments: false,
     }
   }
 
@@ -334,6 +340,7 @@ impl RtpsReaderProxy {
       send_route: SendRoute::default(),
       max_datagram_payload: FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE,
       repair_window: RepairWindow::default(),
+      paced_fragments: false,
     }
   }
 

@@ -30,8 +30,8 @@ use crate::{
     constant::{
       FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE, FRAGMENT_SIZE,
       HEARTBEAT_PERIOD_FAST, HEARTBEAT_PERIOD_SLOW, HEARTBEAT_SUBMESSAGE_SERIALIZED_SIZE,
-      NACK_RESPONSE_DELAY, NACK_SUPPRESSION_DURATION, REPAIR_INTERVAL_DEFAULT, REPAIR_INTERVAL_MAX,
-      REPAIR_INTERVAL_MIN,
+      NACK_RESPONSE_DELAY, NACK_SUPPRESSION_DURATION, PACED_FRAGS_AT_ONCE, PACED_FRAG_INTERVAL,
+      REPAIR_INTERVAL_DEFAULT, REPAIR_INTERVAL_MAX, REPAIR_INTERVAL_MIN,
     },
     outbound::{SocketId, TrafficClass},
     rtps_reader_proxy::RtpsReaderProxy,
@@ -1007,10 +1007,20 @@ impl Writer {
     let messages_to_send =
       FragmentationIter::new_resume(self, cc, target_reader_opt, send_also_heartbeat, cursor);
     let fragmentation_needed = messages_to_send.fragmentation_needed();
+    // Patched for grasp_orient (0013-paced-fragments.patch): DATA_FRAGs paced to a
+    // reader that lost fragments before (to all readers when one of them did).
+    let paced = fragmentation_needed
+      && target_reader_opt.map_or_else(
+        || self.readers.values().any(|r| r.paced_fragments),
+        |r| r.paced_fragments,
+      );
 
     // Send the messages, either to all readers or just one, stopping at the
     // first message that a socket could not accept.
-    for (resume_cursor, msg) in messages_to_send {
+    for (sent, (resume_cursor, msg)) in messages_to_send.enumerate() {
+      if paced && sent >= PACED_FRAGS_AT_ONCE {
+        std::thread::sleep(PACED_FRAG_INTERVAL);
+      }
       let blocked = match target_reader_opt {
         None => self.send_message_to_readers(
           DeliveryMode::Multicast,
@@ -1317,6 +1327,8 @@ impl Writer {
           return;
         }
         reader_proxy.last_nackfrag_count = Some(nackfrag.count);
+        // Patched for grasp_orient (0013-paced-fragments.patch).
+        reader_proxy.paced_fragments = true;
         reader_proxy.mark_frags_requested(nackfrag.writer_sn, &nackfrag.fragment_number_state);
         self.schedule_repair_frags(reader_guid, self.nackfrag_response_delay);
       }
@@ -3288,6 +3300,66 @@ mod tests {
           .iter()
           .any(|e| matches!(e, TimedEvent::SendRepairFrags { .. })),
         "no repair round within 2 ms of the NACK_FRAG"
+      );
+    }
+
+    // Patched for grasp_orient (0013-paced-fragments.patch): a reader that sent a
+    // NACK_FRAG gets the fragments of later samples paced; one that did not, at once.
+    #[test]
+    fn fragments_are_paced_to_a_reader_that_lost_some() {
+      use crate::{
+        messages::submessages::submessages::NackFrag,
+        structure::sequence_number::{FragmentNumber, FragmentNumberSet},
+      };
+      // 100 kB in datagrams of FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE: about 70. A
+      // locator (not loopback, which waits for route resolution) so that every
+      // datagram is sent, not logged as having no locator.
+      let mut f = Fixture::user(1, 100_000, Some(SocketAddr::from(([192, 0, 2, 1], 9))));
+      let send = |f: &Fixture| {
+        let cc = f
+          .writer
+          .send_buffer
+          .get_by_sn(SequenceNumber::new(1))
+          .expect("sample 1");
+        let start = Instant::now();
+        let (fragmented, progress) = f.writer.send_cache_change_from(
+          &cc,
+          false,
+          Some(f.reader_proxy()),
+          SampleCursor::Fresh,
+          TrafficClass::Bulk,
+        );
+        assert!(fragmented && matches!(progress, SendProgress::Complete));
+        start.elapsed()
+      };
+      let datagrams = 100_000 / FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE;
+      let paced_at_least = PACED_FRAG_INTERVAL * (datagrams - PACED_FRAGS_AT_ONCE) as u32;
+      assert!(!f.reader_proxy().paced_fragments);
+      let at_once = send(&f);
+
+      let requested: BTreeSet<FragmentNumber> = (2..=20).map(FragmentNumber::new).collect();
+      let nack_frag = NackFrag {
+        reader_id: f.reader_guid.entity_id,
+        writer_id: f.writer.my_guid.entity_id,
+        writer_sn: SequenceNumber::new(1),
+        fragment_number_state: FragmentNumberSet::from_base_and_set(
+          FragmentNumber::new(2),
+          &requested,
+        ),
+        count: 1,
+      };
+      f.writer
+        .handle_ack_nack(f.reader_guid.prefix, &AckSubmessage::NackFrag(nack_frag));
+      assert!(f.reader_proxy().paced_fragments);
+      let paced = send(&f);
+      assert!(
+        paced >= paced_at_least,
+        "{paced:?} for {datagrams} datagrams to a reader that lost fragments"
+      );
+      // The same send without the pauses.
+      assert!(
+        at_once < paced,
+        "{at_once:?} before the NACK_FRAG, {paced:?} after"
       );
     }
 
