@@ -98,8 +98,8 @@ def env_for(range_: str, static_peer: str | None) -> dict:
 
 
 @contextlib.contextmanager
-def node_in(netns: str, env: dict, tmp_path: Path):
-    node = NodeProcess([], env, tmp_path, f"grasp_orient node in {netns}", preexec_fn=enter(netns))
+def node_in(netns: str, env: dict, tmp_path: Path, args: list[str] | None = None):
+    node = NodeProcess(args or [], env, tmp_path, f"grasp_orient node in {netns}", preexec_fn=enter(netns))
     try:
         node.wait_ready()
         yield node
