@@ -55,7 +55,7 @@ def recording_node(script: str, binary: Path, out: Path, params: list[str]):
     recording to `out`."""
     run = NodeRun(script)
     if not binary.is_file():
-        run.die(f"no binary at {binary} (cargo build, or --bin)")
+        run.die(f"no binary at {binary} (cargo build --profile test, or --bin)")
     with tempfile.TemporaryDirectory() as tmp:
         record_dir = Path(tmp) / "runs"
         ready = threading.Event()

@@ -2,7 +2,7 @@
 """Records bags/node_poses.mcap with `grasp_orient node` itself: pose candidates and pose sets (docs/poses.md)
 through the code path users run (see bags/README.md).
 
-    cargo build && source "$(bash tests/peer/setup.sh | tail -n 1)" && python bags/record_node_poses.py [--bin PATH] [--out PATH]
+    cargo build --profile test && source "$(bash tests/peer/setup.sh | tail -n 1)" && python bags/record_node_poses.py [--bin PATH] [--out PATH]
 
 The node runs in namespace /golden with record_markers:=true. From rclpy (Fast DDS, on a private ROS domain) it is
 sent, one at a time, each answer awaited, the pose candidates and pose sets of tests/ros/pose_cases.py: every grasp

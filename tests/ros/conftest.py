@@ -1,6 +1,6 @@
 """Fixtures and helpers for driving the grasp_orient ROS 2 node from a real rclpy peer (Fast DDS).
 
-Run (after `bash tests/peer/setup.sh` and `cargo build`):
+Run (after `bash tests/peer/setup.sh` and `cargo build --profile test`, the build `cargo test` makes):
 
     source "$(bash tests/peer/setup.sh | tail -n1)"
     python -m pytest tests/ros -v
@@ -104,7 +104,7 @@ def require_environment() -> Path:
     b = binary_path()
     if not b.is_file() or not os.access(b, os.X_OK):
         pytest.fail(
-            f"grasp_orient binary not found at {b} (build it with `cargo build`, or set GRASP_ORIENT_BIN)",
+            f"grasp_orient binary not found at {b} (build it with `cargo build --profile test`, or set GRASP_ORIENT_BIN)",
             pytrace=False,
         )
     return b

@@ -7,7 +7,7 @@ comes from the workspace. Run by tests/run.sh; on its own:
 
     source "$(bash tests/peer/setup.sh | tail -n1)"
     export GRASP_ORIENT_COLCON="$(bash tests/colcon/setup.sh | tail -n1)"
-    cargo build && python -m pytest tests/ros/test_colcon.py -v
+    cargo build --profile test && python -m pytest tests/ros/test_colcon.py -v
 
 Environment:
     GRASP_ORIENT_COLCON          the colcon executable (required; tests/colcon/setup.sh prints it)

@@ -68,16 +68,20 @@ pub const REPAIR_INTERVAL_MAX: Duration = Duration::from_millis(100);
 // budget; the reader's ACKNACKs grow and shrink it (src/rtps/repair_window.rs).
 pub const REPAIR_BATCH_MAX_BYTES: usize = 8192;
 
-// Patched for grasp_orient (0013-paced-fragments.patch). A reader whose socket overflowed
-// (it sent a NACK_FRAG) gets the DATA_FRAG datagrams of each later sample paced: the first
-// PACED_FRAGS_AT_ONCE at once, then one every PACED_FRAG_INTERVAL. Linux's default receive
-// buffer (net.core.rmem_default, 212,992 bytes) holds three 64 kB datagrams, so a sample of
-// six (a 354 kB answer) sent back to back overflows it unless the receiving thread drains one
-// during the send, and the lost fragments wait for the reader's NACK_FRAG (Fast DDS answers a
-// HEARTBEAT after 5 ms) and the repair: 10 to 15 ms. A receiving thread takes a 64 kB datagram
-// in tens of microseconds; 100 us (some 160 us with the kernel's timer slack) between two caps
-// a paced sample at about 400 MB/s. A reader that never lost a fragment is sent as before.
-pub const PACED_FRAGS_AT_ONCE: usize = 2;
+// Patched for grasp_orient (0013-paced-fragments.patch). A reader that asked for lost
+// fragments (sent a NACK_FRAG) gets the datagrams of each later fragmented sample paced:
+// PACED_BYTES_AT_ONCE at once, then a pause of PACED_FRAG_INTERVAL before each next
+// PACED_BYTES_PER_PAUSE. Counted in bytes, so a reader behind a 1,500-byte path MTU
+// (datagrams of 1,452 bytes) gets as many pauses per byte as one on loopback (64 kB
+// datagrams). Linux's default receive buffer (net.core.rmem_default, 212,992 bytes) holds
+// three 64 kB datagrams, so a sample of six (a 354 kB answer) sent back to back overflows it
+// unless the receiving thread drains one during the send; the lost fragments then wait for the
+// reader's NACK_FRAG (Fast DDS answers a HEARTBEAT after 5 ms) and the repair round. A
+// receiving thread takes a 64 kB datagram in tens of microseconds; 100 us (some 160 us with the
+// kernel's timer slack) per 64 kB caps a paced sample at about 400 MB/s past its first 128 kB.
+// A reader that never asked for fragments is sent to as before.
+pub const PACED_BYTES_AT_ONCE: usize = 131_072;
+pub const PACED_BYTES_PER_PAUSE: usize = 65_536;
 pub const PACED_FRAG_INTERVAL: std::time::Duration = std::time::Duration::from_micros(100);
 
 // Periodic HEARTBEAT period for reliable Writers. The period is adaptive: while
