@@ -18,6 +18,7 @@ import subprocess
 import sys
 import tempfile
 import threading
+import time
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -40,6 +41,17 @@ class NodeRun:
     def last_lines(self, n: int) -> str:
         return "\n".join(self.lines[-n:])
 
+    def spin_until(self, node, done, timeout: float, failure):
+        """Spins the rclpy `node` until `done()`; after `timeout` seconds ends the script with `failure` (a text,
+        or a function that makes it then, with the node's lines up to that moment)."""
+        import rclpy
+
+        deadline = time.monotonic() + timeout
+        while not done():
+            rclpy.spin_once(node, timeout_sec=0.05)
+            if time.monotonic() > deadline:
+                self.die(failure() if callable(failure) else failure)
+
 
 def use_private_domain():
     """A ROS domain of this run's own (GRASP_ORIENT_TEST_DOMAIN_ID, else 200 to 229), on this host, over Fast DDS."""
@@ -60,7 +72,7 @@ def recording_node(script: str, binary: Path, out: Path, params: list[str]):
         record_dir = Path(tmp) / "runs"
         ready = threading.Event()
         proc = subprocess.Popen(
-            [str(binary), "node", "--ros-args", "-r", f"__ns:={NS}", "-p", f"record_dir:={record_dir}", *params],
+            [str(binary.resolve()), "node", "--ros-args", "-r", f"__ns:={NS}", "-p", f"record_dir:={record_dir}", *params],
             cwd=tmp, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
             errors="replace")
 

@@ -85,11 +85,9 @@ def main():
         pub = node.create_publisher(GraspCandidate, f"{NS}/grasp_candidates", qos)
         node.create_subscription(GripRecommendation, f"{NS}/grip_recommendations",
                                  lambda m: got.setdefault(m.candidate_id, m), qos)
-        deadline = time.monotonic() + 20
-        while not (pub.get_subscription_count() and node.count_publishers(f"{NS}/grip_recommendations")):
-            rclpy.spin_once(node, timeout_sec=0.05)
-            if time.monotonic() > deadline:
-                run.die("no match with the node within 20 s")
+        run.spin_until(node, lambda: pub.get_subscription_count()
+                       and node.count_publishers(f"{NS}/grip_recommendations"),
+                       20, "no match with the node within 20 s")
         time.sleep(0.5)  # both directions discovered
 
         def send(cands: list[dict]):
@@ -97,11 +95,8 @@ def main():
                 m = GraspCandidate()
                 make_bags.fill(m, c)
                 pub.publish(m)
-                deadline = time.monotonic() + 10
-                while c["id"][:1024] not in got:
-                    rclpy.spin_once(node, timeout_sec=0.05)
-                    if time.monotonic() > deadline:
-                        run.die(f"no answer to {c['id'][:40]} within 10 s:\n" + run.last_lines(20))
+                run.spin_until(node, lambda: c["id"][:1024] in got, 10,
+                               lambda: f"no answer to {c['id'][:40]} within 10 s:\n" + run.last_lines(20))
 
         send(before)
         client = node.create_client(SetParameters, f"{NODE}/set_parameters")

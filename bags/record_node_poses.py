@@ -68,21 +68,15 @@ def main():
                                  lambda m: got.setdefault(m.recommendation.candidate_id, m), qos)
         node.create_subscription(PoseRecommendationSet, f"{NS}/pose_recommendation_sets",
                                  lambda m: got.setdefault(m.set_id, m), qos)
-        deadline = time.monotonic() + 20
-        while not (pub.get_subscription_count() and set_pub.get_subscription_count()
-                   and node.count_publishers(f"{NS}/pose_recommendations")
-                   and node.count_publishers(f"{NS}/pose_recommendation_sets")):
-            rclpy.spin_once(node, timeout_sec=0.05)
-            if time.monotonic() > deadline:
-                run.die("no match with the node within 20 s")
+        run.spin_until(node, lambda: pub.get_subscription_count() and set_pub.get_subscription_count()
+                       and node.count_publishers(f"{NS}/pose_recommendations")
+                       and node.count_publishers(f"{NS}/pose_recommendation_sets"),
+                       20, "no match with the node within 20 s")
         time.sleep(0.5)  # both directions discovered
 
         def await_answer(key: str):
-            deadline = time.monotonic() + 20
-            while key not in got:
-                rclpy.spin_once(node, timeout_sec=0.05)
-                if time.monotonic() > deadline:
-                    run.die(f"no answer to {key} within 20 s:\n" + run.last_lines(20))
+            run.spin_until(node, lambda: key in got, 20,
+                           lambda: f"no answer to {key} within 20 s:\n" + run.last_lines(20))
 
         for c in singles:
             pub.publish(pc.fill(PoseCandidate(), c))
