@@ -21,7 +21,7 @@ import subprocess
 from pathlib import Path
 
 from conftest import require_environment
-from test_hosts import enter, env_for, node_in, sh, tool, two_hosts
+from test_hosts import drop_into, enter, env_for, node_in, tool, two_hosts
 
 import mcap_util as mu
 
@@ -45,11 +45,7 @@ def test_a_recording_played_from_another_host_arrives_whole_over_a_lossy_link(tm
     nft = tool("nft")
     losing: list[tuple[int, list[int]]] = []
     with two_hosts("s") as (node_ns, peer_ns):
-        ip = tool("ip")
-        for rule in (["add", "table", "inet", "t"],
-                     ["add", "chain", "inet", "t", "c", "{ type filter hook input priority 0; }"],
-                     ["add", "rule", "inet", "t", "c", "numgen", "random", "mod", "100", "<", "5", "drop"]):
-            sh(ip, "netns", "exec", node_ns, nft, *rule)
+        drop_into(node_ns, nft)
         env = env_for("SUBNET", None)
         env["RUST_LOG"] = LOGS
         for run in range(RUNS):

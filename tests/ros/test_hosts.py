@@ -154,6 +154,15 @@ def test_a_node_with_discovery_off_is_found_by_no_one(tmp_path):
     assert out.get("error", "").startswith("no match on /grasp_candidates"), out
 
 
+def drop_into(netns: str, nft: str):
+    """nftables in `netns`: 5% of the packets into it dropped at random."""
+    ip = tool("ip")
+    for rule in (["add", "table", "inet", "t"],
+                 ["add", "chain", "inet", "t", "c", "{ type filter hook input priority 0; }"],
+                 ["add", "rule", "inet", "t", "c", "numgen", "random", "mod", "100", "<", "5", "drop"]):
+        sh(ip, "netns", "exec", netns, nft, *rule)
+
+
 def quantile(xs: list[float], q: float) -> float:
     xs = sorted(xs)
     return xs[min(len(xs) - 1, int(q * len(xs)))]
@@ -172,11 +181,7 @@ def test_every_answer_arrives_over_a_lossy_link(tmp_path):
     require_environment()
     nft = tool("nft")
     with two_hosts("l") as (node_ns, peer_ns):
-        ip = tool("ip")
-        for rule in (["add", "table", "inet", "t"],
-                     ["add", "chain", "inet", "t", "c", "{ type filter hook input priority 0; }"],
-                     ["add", "rule", "inet", "t", "c", "numgen", "random", "mod", "100", "<", "5", "drop"]):
-            sh(ip, "netns", "exec", node_ns, nft, *rule)
+        drop_into(node_ns, nft)
         env = env_for("SUBNET", None)
         with node_in(node_ns, env, tmp_path):
             out = run_peer(peer_ns, env, "burst", "--runs", str(LOSS_RUNS), "--n", str(LOSS_N),
