@@ -113,6 +113,9 @@ pub(crate) enum SendProgress {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum TimedEvent {
   Heartbeat,
+  // Patched for grasp_orient (0014-prompt-heartbeat.patch): the HEARTBEAT
+  // HEARTBEAT_PERIOD_FAST after new data, repeated while a reader is behind.
+  PromptHeartbeat,
   CacheCleaning,
   SendRepairData { to_reader: GUID },
   SendRepairFrags { to_reader: GUID },
@@ -154,6 +157,9 @@ pub(crate) struct Writer {
   /// Faster Heartbeat period used while some matched reader still has
   /// unacknowledged samples. `None` for BestEffort (no periodic Heartbeat).
   pub heartbeat_period_fast: Option<Duration>,
+  /// Patched for grasp_orient (0014-prompt-heartbeat.patch): a PromptHeartbeat
+  /// is pending. New data arms it; it ends when every reader has acknowledged.
+  prompt_heartbeat_armed: bool,
   /// duration to launch cache change remove from DDSCache
   pub cache_cleaning_period: Duration,
   /// Protocol tuning parameter that
@@ -336,6 +342,7 @@ impl Writer {
       push_mode: true,
       heartbeat_period,
       heartbeat_period_fast,
+      prompt_heartbeat_armed: false,
       cache_cleaning_period,
       nack_response_delay: NACK_RESPONSE_DELAY, // default value from dp_event_loop
       // A NACK_FRAG is answered at once: Fast DDS sends one only after its own
@@ -484,6 +491,22 @@ impl Writer {
   // which dispatches each expired event to the addressed Writer.
   pub fn handle_timed_event(&mut self, event: TimedEvent) {
     match event {
+      // Patched for grasp_orient (0014-prompt-heartbeat.patch): while the prompt
+      // chain runs, it sends the HEARTBEATs; the periodic one only keeps time.
+      TimedEvent::Heartbeat if self.prompt_heartbeat_armed => {
+        if let Some(period) = self.heartbeat_period {
+          self.schedule_timed_event(std::time::Duration::from(period), TimedEvent::Heartbeat);
+        }
+      }
+      TimedEvent::PromptHeartbeat => {
+        let readers_behind = self.handle_heartbeat_tick(false);
+        match self.heartbeat_period_fast {
+          Some(fast) if readers_behind => {
+            self.schedule_timed_event(std::time::Duration::from(fast), TimedEvent::PromptHeartbeat);
+          }
+          _ => self.prompt_heartbeat_armed = false,
+        }
+      }
       TimedEvent::Heartbeat => {
         let readers_behind = self.handle_heartbeat_tick(false);
         // ^^ false = This is automatic heartbeat by timer, not manual by application
@@ -771,6 +794,33 @@ impl Writer {
   }
 
   pub fn process_pending(&mut self) {
+    let sent_before = self.last_sent;
+    self.push_pending();
+    if self.last_sent > sent_before {
+      self.arm_prompt_heartbeat();
+    }
+  }
+
+  // Patched for grasp_orient (0014-prompt-heartbeat.patch). New data carries a
+  // piggybacked HEARTBEAT, but when its datagram is lost, nothing tells the
+  // reader about it until the periodic HEARTBEAT, and the writer that was idle
+  // (every reader acknowledged) has that on HEARTBEAT_PERIOD_SLOW: a lost reply
+  // to a service call, or the last sample of a burst, waited up to a second.
+  // So new data arms a HEARTBEAT after HEARTBEAT_PERIOD_FAST, repeated at that
+  // period while some reader is behind. A reader that has acknowledged by then
+  // gets nothing more: handle_heartbeat_tick sends only to a writer with
+  // unacknowledged data.
+  fn arm_prompt_heartbeat(&mut self) {
+    if self.prompt_heartbeat_armed || self.like_stateless || self.readers.is_empty() {
+      return;
+    }
+    if let Some(fast) = self.heartbeat_period_fast {
+      self.prompt_heartbeat_armed = true;
+      self.schedule_timed_event(std::time::Duration::from(fast), TimedEvent::PromptHeartbeat);
+    }
+  }
+
+  fn push_pending(&mut self) {
     // The doorbell enqueues this writer's id and then wakes. A sample admitted
     // while we are here pushes another id, so the next wake runs us again. The
     // shared buffer's `last_seq` is the source of truth.
@@ -3047,7 +3097,9 @@ mod tests {
               let to_reader = match event {
                 TimedEvent::SendRepairData { to_reader }
                 | TimedEvent::SendRepairFrags { to_reader } => Some(to_reader),
-                TimedEvent::Heartbeat | TimedEvent::CacheCleaning => None,
+                TimedEvent::Heartbeat | TimedEvent::PromptHeartbeat | TimedEvent::CacheCleaning => {
+                  None
+                }
               };
               if to_reader == Some(self.reader_guid) {
                 found.push(event);
@@ -3081,6 +3133,24 @@ mod tests {
             return None;
           }
           std::thread::sleep(StdDuration::from_millis(1));
+        }
+      }
+
+      // Handles the periodic and prompt HEARTBEAT events that expire within
+      // `max_wait`, as the event loop would. Other timeouts are dropped.
+      fn run_heartbeats(&mut self, max_wait: StdDuration) {
+        let give_up = Instant::now() + max_wait;
+        while Instant::now() < give_up {
+          let fired = self.timer.borrow_mut().poll();
+          match fired {
+            Some(DpTimerEvent::Writer { event, .. })
+              if matches!(event, TimedEvent::Heartbeat | TimedEvent::PromptHeartbeat) =>
+            {
+              self.writer.handle_timed_event(event);
+            }
+            Some(_) => {}
+            None => std::thread::sleep(StdDuration::from_millis(1)),
+          }
         }
       }
 
@@ -3194,6 +3264,43 @@ mod tests {
         heartbeats(&f),
         1,
         "no HEARTBEAT after the round that sent the last of what was asked for"
+      );
+    }
+
+    // Patched for grasp_orient (0014-prompt-heartbeat.patch): new data that a
+    // reader has not acknowledged is announced again HEARTBEAT_PERIOD_FAST
+    // later, not at the idle writer's HEARTBEAT_PERIOD_SLOW, and once every
+    // reader has acknowledged, the HEARTBEATs stop.
+    #[test]
+    fn new_data_is_heartbeated_at_the_fast_period_until_acknowledged() {
+      let mut f = Fixture::user(3, 100, None);
+      let mut counted = f.writer.next_heartbeat_count();
+      let mut heartbeats = |f: &Fixture| {
+        let now = f.writer.next_heartbeat_count();
+        let sent = now - counted - 1;
+        counted = now;
+        sent
+      };
+      f.writer.process_pending();
+      let piggybacked = heartbeats(&f);
+      assert!(piggybacked >= 1, "the new data went without a HEARTBEAT");
+      let fast = StdDuration::from(HEARTBEAT_PERIOD_FAST);
+      f.run_heartbeats(fast + fast / 2);
+      assert!(
+        heartbeats(&f) >= 1,
+        "no HEARTBEAT within 1.5 x HEARTBEAT_PERIOD_FAST of data the reader has not acknowledged"
+      );
+      f.run_heartbeats(fast);
+      assert!(
+        heartbeats(&f) >= 1,
+        "the HEARTBEATs stopped while the reader was behind"
+      );
+      f.ack_nack_from(4, [], 1);
+      f.run_heartbeats(3 * fast);
+      assert_eq!(
+        heartbeats(&f),
+        0,
+        "HEARTBEATs after the reader acknowledged all"
       );
     }
 
