@@ -12,53 +12,15 @@ static TEST_DOMAIN: Mutex<()> = Mutex::new(());
 
 #[test]
 fn played_candidates_are_answered_recorded_and_replay_unchanged() {
+    let _turn = TEST_DOMAIN.lock().unwrap_or_else(|e| e.into_inner());
     let dir = temp_dir("play");
-    let domain = (200 + std::process::id() % 30).to_string();
-    let mut node = bin()
-        .args(["node", "--ros-args", "-p"])
-        .arg(format!("record_dir:={}", dir.path().display()))
-        .env("ROS_DOMAIN_ID", &domain)
-        .env("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("node starts");
-    let bag = concat!(env!("CARGO_MANIFEST_DIR"), "/bags/paper_cases.mcap");
-    let played = bin()
-        .args(["play", bag, "--rate", "0", "--wait", "20"])
-        .env("ROS_DOMAIN_ID", &domain)
-        .env("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
-        .output()
-        .expect("play runs");
-    std::thread::sleep(Duration::from_millis(500));
-    let _ = Command::new("kill")
-        .args(["-INT", &node.id().to_string()])
-        .status();
-    let deadline = Instant::now() + Duration::from_secs(10);
-    let status = loop {
-        if let Some(s) = node.try_wait().expect("wait") {
-            break Some(s);
-        }
-        if Instant::now() > deadline {
-            let _ = node.kill();
-            break None;
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    };
-    let text = String::from_utf8_lossy(&played.stdout).into_owned()
-        + &String::from_utf8_lossy(&played.stderr);
-    assert!(played.status.success(), "{text}");
+    let bag = std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/bags/paper_cases.mcap"
+    ));
+    let (text, recording) =
+        play_into_a_recording_node(bag, &dir.path().join("runs"), &test_domain(), &[]);
     assert!(text.contains("published 4 of 4 candidates"), "{text}");
-    assert!(
-        status.is_some_and(|s| s.success()),
-        "node did not exit cleanly on SIGINT"
-    );
-    let recording = std::fs::read_dir(dir.path())
-        .expect("record dir")
-        .filter_map(Result::ok)
-        .map(|e| e.path())
-        .find(|p| p.extension().is_some_and(|x| x == "mcap"))
-        .expect("the node wrote a recording");
     let out = bin()
         .args(["replay", recording.to_str().expect("utf-8")])
         .output()
@@ -69,6 +31,13 @@ fn played_candidates_are_answered_recorded_and_replay_unchanged() {
         summary.contains("4 compared with a recorded recommendation, 0 differ"),
         "{summary}"
     );
+}
+
+/// The domain of the tests that take turns on `TEST_DOMAIN`: `GRASP_ORIENT_TEST_DOMAIN_ID`, or
+/// 170 to 199 by the process id (tests/it/node_start.rs's nodes use 140 to 169).
+fn test_domain() -> String {
+    std::env::var("GRASP_ORIENT_TEST_DOMAIN_ID")
+        .unwrap_or_else(|_| (170 + std::process::id() % 30).to_string())
 }
 
 /// A recording of 3 candidates and 3 sets (the last with a `max_grip_force` of its own), with the
@@ -135,6 +104,9 @@ fn play_at_rate_into_a_recording_node(
     node_env: &[(&str, &str)],
     rate: &str,
 ) -> (String, std::path::PathBuf) {
+    // The node's log, beside its record_dir, for the failure messages.
+    let log_path = runs.with_extension("node.log");
+    let log = std::fs::File::create(&log_path).expect("node log");
     let mut node = bin()
         .args(["node", "--ros-args", "-p"])
         .arg(format!("record_dir:={}", runs.display()))
@@ -142,9 +114,22 @@ fn play_at_rate_into_a_recording_node(
         .env("ROS_DOMAIN_ID", domain)
         .env("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
         .stdout(Stdio::null())
-        .stderr(Stdio::null())
+        .stderr(log)
         .spawn()
         .expect("node starts");
+    let node_log = || -> String {
+        let tail: String = std::fs::read_to_string(&log_path)
+            .unwrap_or_default()
+            .lines()
+            .rev()
+            .take(40)
+            .collect::<Vec<_>>()
+            .into_iter()
+            .rev()
+            .map(|l| format!("\n  {l}"))
+            .collect();
+        format!("the node's log (last 40 lines):{tail}")
+    };
     let played = bin()
         .args(["play", source.to_str().expect("utf-8")])
         .args(["--rate", rate, "--wait", "20"])
@@ -169,10 +154,15 @@ fn play_at_rate_into_a_recording_node(
     };
     let text = String::from_utf8_lossy(&played.stdout).into_owned()
         + &String::from_utf8_lossy(&played.stderr);
-    assert!(played.status.success(), "{text}");
+    assert!(
+        played.status.success(),
+        "{text}\nthe node on domain {domain}: {status:?}; {}",
+        node_log()
+    );
     assert!(
         status.is_some_and(|s| s.success()),
-        "node did not exit cleanly"
+        "node did not exit cleanly on SIGINT: {status:?}; {}",
+        node_log()
     );
     let recording = std::fs::read_dir(runs)
         .expect("record dir")
@@ -191,8 +181,7 @@ fn played_sets_are_answered_recorded_and_replay_unchanged() {
     let dir = temp_dir("play_sets");
     let source = dir.path().join("source.mcap");
     write_candidates_and_sets(&source);
-    let domain = std::env::var("GRASP_ORIENT_TEST_DOMAIN_ID")
-        .unwrap_or_else(|_| (170 + std::process::id() % 30).to_string());
+    let domain = test_domain();
     let (text, recording) =
         play_into_a_recording_node(&source, &dir.path().join("runs"), &domain, &[]);
     assert!(text.contains("published 3 of 3 candidates"), "{text}");
@@ -277,8 +266,7 @@ fn played_spatial_candidates_are_answered_in_3d_and_replay_unchanged() {
         .expect("write");
     w.finish().expect("finish");
 
-    let domain = std::env::var("GRASP_ORIENT_TEST_DOMAIN_ID")
-        .unwrap_or_else(|_| (140 + std::process::id() % 30).to_string());
+    let domain = test_domain();
     let (text, recording) =
         play_into_a_recording_node(&source, &dir.path().join("runs"), &domain, &[]);
     assert!(text.contains("published 4 of 4 candidates"), "{text}");
@@ -346,8 +334,7 @@ fn played_poses_are_answered_as_recorded_and_replay_unchanged() {
     let dir = temp_dir("play_poses");
     let source = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/bags/node_poses.mcap"));
     let prefix = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/prefix");
-    let domain = std::env::var("GRASP_ORIENT_TEST_DOMAIN_ID")
-        .unwrap_or_else(|_| (110 + std::process::id() % 30).to_string());
+    let domain = test_domain();
     let runs = dir.path().join("runs");
     let node_env = [("AMENT_PREFIX_PATH", prefix)];
     let (text, recording) = play_into_a_recording_node(source, &runs, &domain, &node_env);
@@ -454,8 +441,7 @@ fn timed_a_large_inline_mesh_holds_up_no_candidate_sent_after_it() {
         .expect("write");
     w.finish().expect("finish");
 
-    let domain = std::env::var("GRASP_ORIENT_TEST_DOMAIN_ID")
-        .unwrap_or_else(|_| (170 + std::process::id() % 30).to_string());
+    let domain = test_domain();
     let runs = dir.path().join("runs");
     let (text, recording) = play_at_rate_into_a_recording_node(&source, &runs, &domain, &[], "1");
     assert!(text.contains("published 1 of 1 candidates"), "{text}");
