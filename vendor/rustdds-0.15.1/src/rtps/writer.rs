@@ -114,7 +114,9 @@ pub(crate) enum SendProgress {
 pub(crate) enum TimedEvent {
   Heartbeat,
   // Patched for grasp_orient (0014-prompt-heartbeat.patch): the HEARTBEAT
-  // HEARTBEAT_PERIOD_FAST after new data, repeated while a reader is behind.
+  // heartbeat_period_fast (HEARTBEAT_PERIOD_FAST, or a third of a ManualByTopic
+  // lease when that is shorter) after new data or a newly matched reader,
+  // repeated while a reader is behind.
   PromptHeartbeat,
   CacheCleaning,
   SendRepairData { to_reader: GUID },
@@ -806,10 +808,10 @@ impl Writer {
   // reader about it until the periodic HEARTBEAT, and the writer that was idle
   // (every reader acknowledged) has that on HEARTBEAT_PERIOD_SLOW: a lost reply
   // to a service call, or the last sample of a burst, waited up to a second.
-  // So new data arms a HEARTBEAT after HEARTBEAT_PERIOD_FAST, repeated at that
-  // period while some reader is behind. A reader that has acknowledged by then
-  // gets nothing more: handle_heartbeat_tick sends only to a writer with
-  // unacknowledged data.
+  // So new data arms a HEARTBEAT after heartbeat_period_fast, repeated at that
+  // period while some reader is behind (reliable writers with a matched reader
+  // only). Once every reader has acknowledged, nothing more is sent:
+  // handle_heartbeat_tick sends only while some reader has unacknowledged data.
   fn arm_prompt_heartbeat(&mut self) {
     if self.prompt_heartbeat_armed || self.like_stateless || self.readers.is_empty() {
       return;
@@ -2173,6 +2175,12 @@ impl Writer {
                 &mut std::iter::once(rp),
               );
             }
+            // Patched for grasp_orient (0014-prompt-heartbeat.patch): should this
+            // HEARTBEAT be lost, the next comes heartbeat_period_fast later, not
+            // at the periodic one, while the new reader is behind.
+            if last >= first {
+              self.arm_prompt_heartbeat();
+            }
           }
           info!(
             "Matched new remote reader on topic={:?} reader={:?}",
@@ -3267,40 +3275,90 @@ mod tests {
       );
     }
 
+    // Patched for grasp_orient (0014-prompt-heartbeat.patch). HEARTBEATs built
+    // since the last call (each takes the next count); the fixture's reader has no
+    // locator, so they are built and not sent.
+    fn heartbeats_since(f: &Fixture, counted: &mut i32) -> i32 {
+      let now = f.writer.next_heartbeat_count();
+      let sent = now - *counted - 1;
+      *counted = now;
+      sent
+    }
+
     // Patched for grasp_orient (0014-prompt-heartbeat.patch): new data that a
-    // reader has not acknowledged is announced again HEARTBEAT_PERIOD_FAST
-    // later, not at the idle writer's HEARTBEAT_PERIOD_SLOW, and once every
-    // reader has acknowledged, the HEARTBEATs stop.
+    // reader has not acknowledged is announced again heartbeat_period_fast later,
+    // not at the idle writer's HEARTBEAT_PERIOD_SLOW; the periodic HEARTBEAT adds
+    // none meanwhile; once every reader has acknowledged, the HEARTBEATs stop and
+    // the periodic one takes over again.
     #[test]
     fn new_data_is_heartbeated_at_the_fast_period_until_acknowledged() {
       let mut f = Fixture::user(3, 100, None);
       let mut counted = f.writer.next_heartbeat_count();
-      let mut heartbeats = |f: &Fixture| {
-        let now = f.writer.next_heartbeat_count();
-        let sent = now - counted - 1;
-        counted = now;
-        sent
-      };
       f.writer.process_pending();
-      let piggybacked = heartbeats(&f);
-      assert!(piggybacked >= 1, "the new data went without a HEARTBEAT");
-      let fast = StdDuration::from(HEARTBEAT_PERIOD_FAST);
-      f.run_heartbeats(fast + fast / 2);
       assert!(
-        heartbeats(&f) >= 1,
-        "no HEARTBEAT within 1.5 x HEARTBEAT_PERIOD_FAST of data the reader has not acknowledged"
+        heartbeats_since(&f, &mut counted) >= 1,
+        "the new data went without a HEARTBEAT"
       );
-      f.run_heartbeats(fast);
+      f.writer.handle_timed_event(TimedEvent::Heartbeat);
+      assert_eq!(
+        heartbeats_since(&f, &mut counted),
+        0,
+        "the periodic HEARTBEAT sent one beside the prompt ones"
+      );
+      let fast = StdDuration::from(HEARTBEAT_PERIOD_FAST);
+      f.run_heartbeats(fast * 5 / 2);
       assert!(
-        heartbeats(&f) >= 1,
+        heartbeats_since(&f, &mut counted) >= 1,
+        "no HEARTBEAT within 2.5 x HEARTBEAT_PERIOD_FAST of data the reader has not acknowledged"
+      );
+      f.run_heartbeats(fast * 2);
+      assert!(
+        heartbeats_since(&f, &mut counted) >= 1,
         "the HEARTBEATs stopped while the reader was behind"
       );
       f.ack_nack_from(4, [], 1);
-      f.run_heartbeats(3 * fast);
+      f.run_heartbeats(fast * 3);
       assert_eq!(
-        heartbeats(&f),
+        heartbeats_since(&f, &mut counted),
         0,
         "HEARTBEATs after the reader acknowledged all"
+      );
+      assert!(
+        !f.writer.prompt_heartbeat_armed,
+        "the prompt HEARTBEATs go on"
+      );
+      // A sample the reader has not had, with nothing pushed: the periodic
+      // HEARTBEAT announces it again.
+      let data = DDSData::new(SerializedPayload::new(
+        RepresentationIdentifier::CDR_LE,
+        vec![0; 100],
+      ));
+      assert!(matches!(
+        f.writer
+          .send_buffer
+          .admit_blocking(WriteOptions::default(), data, Some(StdDuration::ZERO)),
+        Admission::Admitted(_)
+      ));
+      f.writer.handle_timed_event(TimedEvent::Heartbeat);
+      assert_eq!(
+        heartbeats_since(&f, &mut counted),
+        1,
+        "the periodic HEARTBEAT stayed silent after the prompt ones ended"
+      );
+    }
+
+    // Patched for grasp_orient (0014-prompt-heartbeat.patch): a reader matched
+    // when the writer already holds samples gets its first HEARTBEAT at once and
+    // the next heartbeat_period_fast later, should the first be lost.
+    #[test]
+    fn a_reader_matched_late_is_heartbeated_again_at_the_fast_period() {
+      // The fixture matches its reader after its 3 samples were written.
+      let mut f = Fixture::user(3, 100, None);
+      let mut counted = f.writer.next_heartbeat_count();
+      f.run_heartbeats(StdDuration::from(HEARTBEAT_PERIOD_FAST) * 5 / 2);
+      assert!(
+        heartbeats_since(&f, &mut counted) >= 1,
+        "no HEARTBEAT within 2.5 x HEARTBEAT_PERIOD_FAST of the match"
       );
     }
 
