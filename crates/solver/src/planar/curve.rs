@@ -148,13 +148,19 @@ pub(crate) trait Piece {
 /// - each piece's stationary minima;
 /// - the interval's end where the curve falls into it.
 ///
-/// Minima closer than `SAME_ANGLE` (1e-9 rad) to the one before are one. `power` gives the
-/// objective of a minimum in newtons, and `label` the paper's candidate it coincides with.
+/// Minima closer than `SAME_ANGLE` (1e-9 rad) to the one before are one. A piece narrower than
+/// `SAME_ANGLE` is left out: where two breakpoints are the same angle (the start of the range and
+/// a paper candidate, say), rounding can leave a sliver between them whose curve has the other
+/// slope, and its start would be a minimum in one frame of the same scene and not in another.
+/// `power` gives the objective of a minimum in newtons, and `label` the paper's candidate it
+/// coincides with.
 pub(crate) fn local_minima<P: Piece>(
     pieces: &[P],
     power: impl Fn(&Angle, &Curve) -> f64,
     label: impl Fn(f64) -> Option<PaperCandidate>,
 ) -> Vec<LocalMinimum> {
+    let wide = |p: &&P| p.hi().theta - p.lo().theta >= SAME_ANGLE;
+    let slivers_only = !pieces.iter().any(|p| wide(&p));
     let mut found: Vec<LocalMinimum> = Vec::with_capacity(8);
     let mut push = |at: &Angle, curve: &Curve| {
         let theta = at.theta;
@@ -169,22 +175,20 @@ pub(crate) fn local_minima<P: Piece>(
             });
         }
     };
-    for (k, piece) in pieces.iter().enumerate() {
+    let mut before: Option<&P> = None;
+    for piece in pieces.iter().filter(|p| slivers_only || wide(p)) {
         let lo = piece.lo();
         let right = piece.curve().slope(&lo);
-        let left = if k == 0 {
-            f64::NEG_INFINITY
-        } else {
-            pieces[k - 1].curve().slope(&lo)
-        };
+        let left = before.map_or(f64::NEG_INFINITY, |b| b.curve().slope(&lo));
         if left <= 0.0 && right >= 0.0 {
             push(&lo, piece.curve());
         }
         for t in piece.minima() {
             push(&t, piece.curve());
         }
+        before = Some(piece);
     }
-    if let Some(last) = pieces.last() {
+    if let Some(last) = before {
         let hi = last.hi();
         if last.curve().slope(&hi) <= 0.0 {
             push(&hi, last.curve());
