@@ -55,6 +55,19 @@ fn solve(c: &spatial::Candidate, s: &Settings) -> spatial::Recommendation {
     }
 }
 
+/// The scene of `c` rotated by `rot` about the origin and shifted by `t`, gravity included.
+fn moved(c: &spatial::Candidate, rot: &Rotation3<f64>, t: &Vector3<f64>) -> spatial::Candidate {
+    spatial::Candidate {
+        contact_1: rot * c.contact_1 + t,
+        contact_2: rot * c.contact_2 + t,
+        normal_1: rot * c.normal_1,
+        normal_2: rot * c.normal_2,
+        center_of_mass: rot * c.center_of_mass + t,
+        gravity: rot * c.gravity,
+        ..*c
+    }
+}
+
 /// How well the data fix the grasp plane, rad: rounding of coordinates of magnitude `M` at the
 /// centre of mass's distance `dist` from the contact axis turns it by about `ε M / dist`. Near
 /// the axis a motion of the scene that rounds the coordinates differently can move the answer by
@@ -202,15 +215,7 @@ proptest! {
         prop_assume!(axis.norm() > 0.1);
         let rot = Rotation3::from_axis_angle(&Unit::new_normalize(axis), angle);
         let t = Vector3::from(shift);
-        let moved = spatial::Candidate {
-            contact_1: rot * c.contact_1 + t,
-            contact_2: rot * c.contact_2 + t,
-            normal_1: rot * c.normal_1,
-            normal_2: rot * c.normal_2,
-            center_of_mass: rot * c.center_of_mass + t,
-            gravity: rot * c.gravity,
-            ..c
-        };
+        let moved = moved(&c, &rot, &t);
         let (a, b) = (solve(&c, &s), solve(&moved, &s));
         if a.axis == AxisRelation::NearAxis
             && plane_uncertainty(&c).max(plane_uncertainty(&moved)) > 1e-11
@@ -297,15 +302,7 @@ fn a_sliver_of_a_piece_makes_no_local_minimum() {
     let axis = Vector3::new(0.46008559556291156, 0.7761605544859097, 0.8469968345599933);
     let rot = Rotation3::from_axis_angle(&Unit::new_normalize(axis), 0.2726617687664031);
     let t = Vector3::new(1.1650448727038034, -2.0005198796210877, 2.5480441419205215);
-    let moved = spatial::Candidate {
-        contact_1: rot * c.contact_1 + t,
-        contact_2: rot * c.contact_2 + t,
-        normal_1: rot * c.normal_1,
-        normal_2: rot * c.normal_2,
-        center_of_mass: rot * c.center_of_mass + t,
-        gravity: rot * c.gravity,
-        ..c
-    };
+    let moved = moved(&c, &rot, &t);
     let (a, b) = (solve(&c, &s), solve(&moved, &s));
     let angles = |r: &spatial::Recommendation| -> Vec<f64> {
         r.planar
