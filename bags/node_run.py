@@ -53,6 +53,13 @@ class NodeRun:
                 self.die(failure() if callable(failure) else failure)
 
 
+def reliable_qos(depth: int):
+    """Reliable, volatile, keep-last `depth`: the node's QoS (its `qos_depth`), for the script's endpoints."""
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+    return QoSProfile(depth=depth, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST,
+                      durability=DurabilityPolicy.VOLATILE)
+
+
 def use_private_domain():
     """A ROS domain of this run's own (GRASP_ORIENT_TEST_DOMAIN_ID, else 200 to 229), on this host, over Fast DDS."""
     os.environ["ROS_DOMAIN_ID"] = os.environ.get("GRASP_ORIENT_TEST_DOMAIN_ID") or str(200 + os.getpid() % 30)

@@ -67,7 +67,6 @@ def main():
     node_run.use_private_domain()
     try:
         import rclpy
-        from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
         from grasp_orient.msg import GraspCandidate, GripRecommendation
         from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
         from rcl_interfaces.srv import SetParameters
@@ -79,8 +78,7 @@ def main():
     with node_run.recording_node("record_node_bag.py", args.bin, args.out, params) as run:
         rclpy.init()
         node = rclpy.create_node("grasp_orient_record_node_bag")
-        qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST,
-                         durability=DurabilityPolicy.VOLATILE)
+        qos = node_run.reliable_qos(1000)
         got: dict[str, object] = {}
         pub = node.create_publisher(GraspCandidate, f"{NS}/grasp_candidates", qos)
         node.create_subscription(GripRecommendation, f"{NS}/grip_recommendations",

@@ -47,7 +47,6 @@ def main():
     node_run.use_private_domain()
     try:
         import rclpy
-        from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
         from grasp_orient.msg import PoseCandidate, PoseCandidateSet, PoseRecommendation, PoseRecommendationSet
         from grasp_orient.srv import RecommendPoses
     except ImportError as e:
@@ -59,8 +58,7 @@ def main():
     with node_run.recording_node("record_node_poses.py", args.bin, args.out, ["-p", "record_markers:=true"]) as run:
         rclpy.init()
         node = rclpy.create_node("grasp_orient_record_node_poses")
-        qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST,
-                         durability=DurabilityPolicy.VOLATILE)
+        qos = node_run.reliable_qos(100)
         got: dict[str, object] = {}
         pub = node.create_publisher(PoseCandidate, f"{NS}/pose_candidates", qos)
         set_pub = node.create_publisher(PoseCandidateSet, f"{NS}/pose_candidate_sets", qos)
