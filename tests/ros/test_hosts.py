@@ -220,13 +220,13 @@ def played_candidates(recording: Path) -> list[tuple]:
 
 def spans(positions: list[int]) -> str:
     """[3, 4, 5, 9] as "3-5, 9"."""
-    out: list[str] = []
+    runs: list[list[int]] = []  # [first, last] of each run of consecutive positions
     for k in positions:
-        if out and k == int(out[-1].split("-")[-1]) + 1:
-            out[-1] = f"{out[-1].split('-')[0]}-{k}"
+        if runs and k == runs[-1][1] + 1:
+            runs[-1][1] = k
         else:
-            out.append(str(k))
-    return ", ".join(out)
+            runs.append([k, k])
+    return ", ".join(str(a) if a == b else f"{a}-{b}" for a, b in runs)
 
 
 def play_over_a_lossy_link(tmp_path: Path, runs: int, rate: float, node_args: list[str]) -> list[tuple[int, str]]:
