@@ -272,8 +272,8 @@ pub struct Recommendation {
     /// Distance of the centre of mass from the contact axis over the contact distance.
     pub center_of_mass_offset: f64,
     /// The planar candidate solved in Π, for [`analyse`]: contacts and centre of mass in
-    /// the coordinates `(plane_x, plane_y)` (as given, or relative to the centre of mass over the
-    /// reach), the projected normals, the sliced coefficients (already divided by the safety
+    /// the coordinates `(plane_x, plane_y)` (as given, or halved to fit the planar limits), the
+    /// projected normals, the sliced coefficients (already divided by the safety
     /// factor), unit gravity along the projection of the current one, and the weight `m |g|` as
     /// its mass, so that its powers are in newtons.
     plane_candidate: crate::planar::Candidate,

@@ -215,8 +215,6 @@ pub(super) struct Geometry {
     pub weight: f64,
     /// Contact distance, in the unit of `p`.
     pub d: f64,
-    /// Largest distance of a contact from the centre of mass, in the unit of `p`.
-    pub reach: f64,
     /// Unit contact axis, contact 2 → contact 1.
     pub a: Vector3<f64>,
     /// Distance of the centre of mass from the axis over the contact distance.
@@ -298,7 +296,6 @@ impl Geometry {
             g0,
             weight,
             d,
-            reach,
             a,
             offset,
             magnitude,
@@ -306,18 +303,25 @@ impl Geometry {
     }
 
     /// Contacts and centre of mass in the coordinates of `basis`: as given (exact for a grasp in
-    /// the x-y plane) when they fit the planar model's limits, else relative to the centre of mass
-    /// over the reach. Lengths do not change the answer.
+    /// the x-y plane) when they fit the planar model's limits, else halved until they do.
+    ///
+    /// # Why halving
+    /// A coordinate in Π can exceed the limit by up to √3 while each of the three it comes from
+    /// fits. Halving is exact, and the planar model gives a power-of-two multiple of a scene the
+    /// same answer bit for bit, so the answer does not depend on which side of the limit a scene
+    /// falls (`tests/it/magnitudes.rs`, the spatial scaling property). Re-centring on the centre
+    /// of mass instead rounds, and a scene and its double then differed in the last bit.
     pub fn planar_points(&self, basis: &Basis) -> [Vector2<f64>; 3] {
-        let raw = [self.p[0], self.p[1], self.c].map(|q| basis.in_plane(&q));
-        if raw
-            .iter()
-            .all(|q| q.x.abs() <= MAX_COORDINATE && q.y.abs() <= MAX_COORDINATE)
-        {
-            raw
-        } else {
-            [self.p[0], self.p[1], self.c].map(|q| basis.in_plane(&((q - self.c) / self.reach)))
+        let mut q = [self.p[0], self.p[1], self.c].map(|q| basis.in_plane(&q));
+        // Each coordinate is finite and at most √3 × MAX_COORDINATE: one halving does. The bound
+        // only keeps a contract broken elsewhere from looping; the planar model then refuses.
+        for _ in 0..4 {
+            if q.iter().all(|q| q.amax() <= MAX_COORDINATE) {
+                break;
+            }
+            q = q.map(|q| q * 0.5);
         }
+        q
     }
 
     /// How far out of Π (rad) the current gravity may be and still count as in it:
@@ -679,7 +683,6 @@ mod tests {
                 g0: -Vector3::z(),
                 weight: 1.0,
                 d: 1.0,
-                reach: 1.0,
                 a: Vector3::x(),
                 offset: 1.0,
                 magnitude: 1.0,
@@ -701,7 +704,6 @@ mod tests {
             g0: -Vector3::y(),
             weight: 1.0,
             d: 1.0,
-            reach: 1.0,
             a: Vector3::x(),
             offset: 1.0,
             magnitude: 1.0,
