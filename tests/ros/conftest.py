@@ -20,6 +20,7 @@ import math
 import os
 import random
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -209,6 +210,51 @@ def compare(ros: Any, ref: Any, path: str = "", status: int | None = None) -> li
             return []
         return [f"{p}: {ros!r} vs solve {ref!r} (rel diff {abs(ros - ref) / max(abs(ros), abs(ref)):.3g})"]
     return [] if ros == ref else [f"{p}: {ros!r} vs solve {ref!r}"]
+
+
+def run_python(args: list[str], env: dict, timeout: float, **kw) -> subprocess.CompletedProcess:
+    """`python ARGS` (an rclpy script), as subprocess.run with captured text output. A script still
+    running after `timeout` fails the test with where it was: its threads' names and kernel wait
+    channels, their native stacks when gdb is installed, and its Python stacks (faulthandler,
+    printed on SIGABRT)."""
+    p = subprocess.Popen([sys.executable, "-X", "faulthandler", *args], env=env, stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, **kw)
+    try:
+        out, err = p.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        where = hung_process_report(p.pid)
+        p.send_signal(signal.SIGABRT)
+        try:
+            out, err = p.communicate(timeout=10)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            out, err = p.communicate()
+        raise AssertionError(f"{' '.join(args)} still running after {timeout:g} s\n{where}\n"
+                             f"stdout:\n{out[-3000:]}\nstderr (Python stacks at the end):\n{err[-6000:]}") from None
+    return subprocess.CompletedProcess(p.args, p.returncode, out, err)
+
+
+def hung_process_report(pid: int) -> str:
+    """The threads of a process that does not end: name and kernel wait channel of each, and the
+    native stacks when gdb is on the machine."""
+    lines = []
+    for task in sorted(Path(f"/proc/{pid}/task").glob("*"), key=lambda t: int(t.name)):
+        try:
+            comm = (task / "comm").read_text().strip()
+            wchan = (task / "wchan").read_text().strip()
+        except OSError:
+            continue
+        lines.append(f"  thread {task.name} {comm!r}: waiting in {wchan or '-'}")
+    report = "threads:\n" + "\n".join(lines)
+    gdb = shutil.which("gdb")
+    if gdb:
+        try:
+            r = subprocess.run([gdb, "-p", str(pid), "-batch", "-ex", "thread apply all bt 30"],
+                               capture_output=True, text=True, timeout=60)
+            report += "\nnative stacks (gdb):\n" + r.stdout[-12000:]
+        except subprocess.TimeoutExpired:
+            report += "\ngdb did not answer within 60 s"
+    return report
 
 
 def run_solve(lines: Iterable[dict], *flags: str, timeout: float = 120.0) -> list[dict]:

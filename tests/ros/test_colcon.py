@@ -37,7 +37,7 @@ from pathlib import Path
 import pytest
 
 from conftest import (
-    DOMAIN_ID, PAPER_CASES, REPO_ROOT, _ALL_NODES, NodeProcess, compare, load_paper_cases, ros_env, run_solve,
+    DOMAIN_ID, PAPER_CASES, REPO_ROOT, _ALL_NODES, NodeProcess, compare, load_paper_cases, ros_env, run_python, run_solve,
 )
 
 ASK_INSTALLED = REPO_ROOT / "tests" / "colcon" / "ask_installed.py"
@@ -190,8 +190,7 @@ def test_installed_node_answers_rclpy_using_the_installed_messages(workspace, tm
     _ALL_NODES.append(node)
     node.wait_ready()
     try:
-        r = subprocess.run([sys.executable, str(ASK_INSTALLED), str(PAPER_CASES), "--ns", "/colcon"], env=env, capture_output=True,
-                           text=True, timeout=120)
+        r = run_python([str(ASK_INSTALLED), str(PAPER_CASES), "--ns", "/colcon"], env, timeout=120)
         assert r.returncode == 0, f"ask_installed.py exited {r.returncode}:\n{r.stderr[-3000:]}"
         got = json.loads(r.stdout.strip().splitlines()[-1])
     finally:

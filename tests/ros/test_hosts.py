@@ -28,7 +28,7 @@ from pathlib import Path
 import pytest
 
 import mcap_util as mu
-from conftest import DOMAIN_ID, NodeProcess, require_environment, ros_env
+from conftest import DOMAIN_ID, NodeProcess, require_environment, ros_env, run_python
 
 HERE = Path(__file__).resolve().parent
 PEER = HERE / "hosts_peer.py"
@@ -113,8 +113,7 @@ def node_in(netns: str, env: dict, tmp_path: Path, args: list[str] | None = None
 
 
 def run_peer(netns: str, env: dict, *args: str, timeout: float, fails: bool = False) -> dict:
-    r = subprocess.run([sys.executable, str(PEER), *args], env=env, capture_output=True, text=True,
-                       timeout=timeout, preexec_fn=enter(netns))
+    r = run_python([str(PEER), *args], env, timeout=timeout, preexec_fn=enter(netns))
     lines = [l for l in r.stdout.splitlines() if l.startswith("{")]
     assert lines, f"the peer printed no result (exit {r.returncode}); stderr:\n{r.stderr[-3000:]}"
     out = json.loads(lines[-1])

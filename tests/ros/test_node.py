@@ -18,7 +18,7 @@ import pytest
 
 from conftest import (
     CANDIDATE_TYPE, DOMAIN_ID, EXAMPLE_SCRIPT, MARKER_ARRAY_TYPE, RECOMMENDATION_TYPE, GraspClient, compare,
-    is_probe_markers, load_paper_cases, random_grasp, reliable_qos, ros_env, run_solve, to_plain,
+    is_probe_markers, load_paper_cases, random_grasp, reliable_qos, ros_env, run_python, run_solve, to_plain,
 )
 
 from grasp_orient.msg import GripRecommendation  # noqa: E402  (conftest reports a missing rclpy as a failure)
@@ -481,7 +481,7 @@ def test_sigint_exits_zero(start_node):
 # ---------------------------------------------------------------------------------------------------
 def test_example_script(grasp_node, client, tmp_path):
     env = ros_env(DOMAIN_ID)
-    r = subprocess.run([sys.executable, str(EXAMPLE_SCRIPT)], env=env, capture_output=True, text=True, timeout=60)
+    r = run_python([str(EXAMPLE_SCRIPT)], env, timeout=60)
     assert r.returncode == 0, f"exit {r.returncode}\nstdout:\n{r.stdout}\nstderr:\n{r.stderr}"
     assert "paper-a" in r.stdout and "wrist rotation" in r.stdout and "deg" in r.stdout, r.stdout
     ref = run_solve(load_paper_cases()[:1])[0]
@@ -489,15 +489,13 @@ def test_example_script(grasp_node, client, tmp_path):
 
     f = tmp_path / "one.json"
     f.write_text(json.dumps(random_batch(1, SEED + 6, "example-file")[0]))
-    r = subprocess.run([sys.executable, str(EXAMPLE_SCRIPT), str(f)], env=env, capture_output=True, text=True,
-                       timeout=60)
+    r = run_python([str(EXAMPLE_SCRIPT), str(f)], env, timeout=60)
     assert r.returncode == 0 and "example-file-0" in r.stdout and "status 0" in r.stdout, \
         f"exit {r.returncode}\nstdout:\n{r.stdout}\nstderr:\n{r.stderr}"
 
     # no node on that namespace: a clear message and exit 1 within the timeout
     t0 = time.monotonic()
-    r = subprocess.run([sys.executable, str(EXAMPLE_SCRIPT), "--ns", "/nobody_here", "--timeout", "2"], env=env,
-                       capture_output=True, text=True, timeout=60)
+    r = run_python([str(EXAMPLE_SCRIPT), "--ns", "/nobody_here", "--timeout", "2"], env, timeout=60)
     assert r.returncode == 1 and f"ROS_DOMAIN_ID={DOMAIN_ID}" in r.stderr, (r.returncode, r.stderr)
     assert time.monotonic() - t0 < 20
 

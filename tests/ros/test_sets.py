@@ -29,7 +29,7 @@ import mcap_util as mu
 import test_node as TN  # the Params helper (a module reference: its tests are not collected twice)
 from conftest import (
     DOMAIN_ID, GraspClient, NodeProcess, Peer, candidate_msg, compare, load_paper_cases, random_grasp,
-    reliable_qos, ros_env, run_solve, to_plain,
+    reliable_qos, ros_env, run_python, run_solve, to_plain,
 )
 from test_foxglove import assert_decodes_everything, foxglove_decode, foxglove_dir, same_as_python_readers  # noqa: F401
 from test_mcap import both_readers, check_conventions, finite
@@ -350,8 +350,7 @@ def test_sets_in_quick_succession_are_never_held_back(start_node):
     start_node("--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false", "-p", "publish_markers:=false",
                name="grasp_orient node (sets in succession)")
     script = Path(__file__).resolve().parent / "sets_in_succession.py"
-    out = subprocess.run([sys.executable, str(script), ns, "--sets", "200"], env=ros_env(DOMAIN_ID),
-                         capture_output=True, text=True, timeout=600)
+    out = run_python([str(script), ns, "--sets", "200"], ros_env(DOMAIN_ID), timeout=600)
     assert out.returncode == 0, f"{script.name} failed ({out.returncode}):\n{out.stdout}\n{out.stderr[-3000:]}"
     # The last line that is JSON: Fast DDS may print its own errors to standard output.
     res = json.loads([line for line in out.stdout.splitlines() if line.startswith("{")][-1])
