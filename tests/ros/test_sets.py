@@ -79,15 +79,21 @@ class SetClient:
     """Publisher on NS/grasp_candidate_sets, subscriber on NS/grip_recommendation_sets (answers by set_id), and
     a client of NS/grasp_orient/recommend."""
 
-    def __init__(self, peer: Peer, ns: str = "", depth: int = 10):
+    def __init__(self, peer: Peer, ns: str = "", depth: int = 10, raw: bool = False):
+        """With `raw`, answers on the topic are kept as their CDR bytes in `raw_answers` (`answered_ids`
+        decodes them) and `answers` stays empty: rclpy builds the Python objects of a 10,000-answer set in
+        about 0.4 s on this machine, holding the peer's only executor thread, and a test that times other
+        requests on that thread would time that instead."""
         self.peer = peer
         ns = ns.rstrip("/")
         self.pub = peer.node.create_publisher(GraspCandidateSet, f"{ns}/grasp_candidate_sets" if ns
                                               else "grasp_candidate_sets", reliable_qos(depth))
         self.answers: dict[str, list] = {}
+        self.raw_answers: list[bytes] = []
         self.sub = peer.node.create_subscription(
             GripRecommendationSet, f"{ns}/grip_recommendation_sets" if ns else "grip_recommendation_sets",
-            lambda m: self.answers.setdefault(m.set_id, []).append(m), reliable_qos(depth))
+            self.raw_answers.append if raw else lambda m: self.answers.setdefault(m.set_id, []).append(m),
+            reliable_qos(depth), raw=raw)
         self.srv = peer.node.create_client(Recommend, f"{ns}/grasp_orient/recommend")
 
     def wait_matched(self, timeout: float = 15.0):
@@ -102,6 +108,11 @@ class SetClient:
         ok = self.peer.spin_until(lambda: msg.id in self.answers, timeout)
         assert ok, f"no answer to set {msg.id!r} ({len(msg.candidates)} candidates) within {timeout} s"
         return self.answers[msg.id][0]
+
+    def answered_ids(self) -> set[str]:
+        """The set ids answered on the topic so far, raw or not."""
+        from rclpy.serialization import deserialize_message
+        return set(self.answers) | {deserialize_message(b, GripRecommendationSet).set_id for b in self.raw_answers}
 
     def call(self, msg: GraspCandidateSet, timeout: float = 30.0) -> GripRecommendationSet:
         req = Recommend.Request()
