@@ -4,17 +4,19 @@
 //! the complete definition exactly as rosbag2 writes it ([`crate::msg::definitions`]); message
 //! encoding `cdr` with the 4-byte encapsulation header; channel metadata `offered_qos_profiles`;
 //! `log_time` the receive time, `publish_time` the send time; the settings in force as metadata
-//! ([`settings`]). Chunks are lz4-compressed and closed at least once a second, so a killed
-//! process loses at most the last second ([`recover`] reads the rest).
+//! ([`settings`]). Chunks are lz4-compressed and closed about once a second (at most 1.2 s apart
+//! when the cores are saturated, [`pump`]), so a killed process loses about the last second
+//! ([`recover`] reads the rest).
 //!
 //! Files are never truncated or shared: a recording is created new (`O_EXCL`) under a name
 //! carrying the node's name and the start time, with a numeric suffix on a clash
 //! ([`Recorder::start`]); commands write their outputs beside the destination and rename them
 //! into place when complete ([`output`]).
 //!
-//! Writing happens on its own thread: the answering loop only hands over messages, so a slow disk
+//! Writing happens on threads of its own ([`pump`]: a writer at idle priority, and a rescuer for
+//! when the cores are saturated): the answering loop only hands over messages, so a slow disk
 //! delays the file, never the answers. When a write fails (a full disk), the file is cut back to
-//! its last complete flush and closed there, so what it holds stays readable, and the thread
+//! its last complete flush and closed there, so what it holds stays readable, and the recording
 //! stops with the cause ([`RecordError::Stopped`]). [`lifecycle`] starts and stops the files of
 //! a node run as its `record` parameters say.
 
@@ -22,6 +24,7 @@ pub mod bag;
 pub mod channels;
 pub mod lifecycle;
 pub mod output;
+mod pump;
 pub mod recover;
 pub(crate) mod resync;
 pub mod scan;
@@ -40,16 +43,14 @@ use std::fs::{File, OpenOptions};
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 #[cfg(test)]
-use std::sync::atomic::AtomicU64;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{mpsc, Arc};
-use std::thread::JoinHandle;
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+#[cfg(test)]
+use std::time::Instant;
+use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 /// Longest time between two flushes of the file.
 pub const FLUSH_EVERY: Duration = Duration::from_secs(1);
-/// How often the writer thread takes what the answering loop handed over.
-const BATCH_EVERY: Duration = Duration::from_millis(10);
 /// Chunk size before compression, bytes.
 const CHUNK_SIZE: u64 = 1 << 20;
 
@@ -623,17 +624,14 @@ impl BagWriter {
     }
 }
 
-/// A recording being written by its own thread.
+/// A recording being written by its own threads ([`pump`]).
 #[derive(Debug)]
 pub struct Recorder {
     path: PathBuf,
-    /// Entries go over in batches that are written together: a flush never falls inside one.
-    tx: Option<mpsc::Sender<Vec<Entry>>>,
-    thread: Option<JoinHandle<Result<Written, RecordError>>>,
-    stopped: Arc<AtomicBool>,
+    writers: pump::Writers,
 }
 
-/// Called from the writer thread when it stops on a failure.
+/// Called from a writer thread when it stops on a failure.
 pub type OnStop = Arc<dyn Fn() + Send + Sync>;
 
 impl Recorder {
@@ -656,31 +654,13 @@ impl Recorder {
         Self::spawn(bag, on_stop)
     }
 
-    fn spawn(mut bag: BagWriter, on_stop: OnStop) -> Result<Self, RecordError> {
+    fn spawn(bag: BagWriter, on_stop: OnStop) -> Result<Self, RecordError> {
         let path = bag.path().to_path_buf();
-        let (tx, rx) = mpsc::channel::<Vec<Entry>>();
-        let stopped = Arc::new(AtomicBool::new(false));
-        let flag = stopped.clone();
-        let thread = std::thread::Builder::new()
-            .name("grasp_orient-record".into())
-            .spawn(move || {
-                let result = pump(&mut bag, &rx).and_then(|()| bag.finish());
-                if result.is_err() {
-                    flag.store(true, Ordering::SeqCst);
-                    on_stop();
-                }
-                result
-            })
-            .map_err(|source| RecordError::Create {
-                path: path.clone(),
-                source,
-            })?;
-        Ok(Self {
-            path,
-            tx: Some(tx),
-            thread: Some(thread),
-            stopped,
-        })
+        let writers = pump::Writers::start(bag, on_stop).map_err(|source| RecordError::Create {
+            path: path.clone(),
+            source,
+        })?;
+        Ok(Self { path, writers })
     }
 
     /// The file being written.
@@ -690,7 +670,7 @@ impl Recorder {
 
     /// Whether the writer stopped on a failure ([`Recorder::finish`] gives it).
     pub fn has_stopped(&self) -> bool {
-        self.stopped.load(Ordering::SeqCst)
+        self.writers.has_stopped()
     }
 
     /// Hands a message to the writer; never blocks. Returns false once the writer has stopped
@@ -702,58 +682,12 @@ impl Recorder {
     /// Hands messages to the writer to be written together (no flush falls between them, so a
     /// candidate and its answer are both in the file or neither is); never blocks.
     pub fn record_all(&self, entries: Vec<Entry>) -> bool {
-        self.tx.as_ref().is_some_and(|tx| tx.send(entries).is_ok())
+        self.writers.hand_over(entries)
     }
 
     /// Writes everything handed over, closes the file, and says how much it holds.
     pub fn finish(mut self) -> Result<Written, RecordError> {
-        drop(self.tx.take());
-        match self.thread.take().map(JoinHandle::join) {
-            Some(Ok(result)) => result,
-            Some(Err(_)) => Err(RecordError::Thread),
-            None => Ok(Written::default()),
-        }
-    }
-}
-
-impl Drop for Recorder {
-    fn drop(&mut self) {
-        drop(self.tx.take());
-        if let Some(thread) = self.thread.take() {
-            if let Ok(Err(e)) = thread.join() {
-                log::error!("{e}");
-            }
-        }
-    }
-}
-
-/// The writer thread's loop: wakes every [`BATCH_EVERY`] and writes what has come, rather than
-/// once per message (on a small machine the answering path and DDS keep the cores); flushes at
-/// least every [`FLUSH_EVERY`]. Ends when the sender is gone, or at the first failure.
-fn pump(bag: &mut BagWriter, rx: &mpsc::Receiver<Vec<Entry>>) -> Result<(), RecordError> {
-    let mut last_flush = Instant::now();
-    let mut dirty = false;
-    loop {
-        std::thread::sleep(BATCH_EVERY);
-        loop {
-            match rx.try_recv() {
-                Ok(batch) => {
-                    for entry in &batch {
-                        bag.write(entry)?;
-                    }
-                    dirty = true;
-                }
-                Err(mpsc::TryRecvError::Empty) => break,
-                Err(mpsc::TryRecvError::Disconnected) => return Ok(()),
-            }
-        }
-        if last_flush.elapsed() >= FLUSH_EVERY {
-            if dirty {
-                bag.flush()?;
-                dirty = false;
-            }
-            last_flush = Instant::now();
-        }
+        self.writers.finish()
     }
 }
 
