@@ -4,9 +4,9 @@
 //! the complete definition exactly as rosbag2 writes it ([`crate::msg::definitions`]); message
 //! encoding `cdr` with the 4-byte encapsulation header; channel metadata `offered_qos_profiles`;
 //! `log_time` the receive time, `publish_time` the send time; the settings in force as metadata
-//! ([`settings`]). Chunks are lz4-compressed and closed about once a second (at most 1.2 s apart
-//! when the cores are saturated, [`pump`]), so a killed process loses about the last second
-//! ([`recover`] reads the rest).
+//! ([`settings`]). Chunks are lz4-compressed and closed about once a second (on saturated cores
+//! a little later, [`pump`]), so a killed process loses about the last second ([`recover`] reads
+//! the rest).
 //!
 //! Files are never truncated or shared: a recording is created new (`O_EXCL`) under a name
 //! carrying the node's name and the start time, with a numeric suffix on a clash

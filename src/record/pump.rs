@@ -14,9 +14,14 @@
 //! the rescuer, started at normal priority, wakes every [`RESCUE_EVERY`] and writes everything
 //! handed over itself when the backlog passes [`RESCUE_BACKLOG`] messages or the last flush is
 //! more than [`FLUSH_EVERY`] plus [`RESCUE_EVERY`] old. The two share the file writer under a
-//! lock, which the writer holds for at most [`SLICE`] batches at a time, so a starved writer
-//! keeps the rescuer waiting for no more than that. [`Recorder::finish`] writes what is left on
-//! its caller's thread.
+//! lock. The writer takes at most [`SLICE`] batches under one hold, and lets go after the batch
+//! it is on as soon as the rescuer or [`Recorder::finish`] wants the lock; a writer preempted in
+//! the middle of a batch still holds it until the kernel gives it a core again, which on
+//! saturated cores a thread at `SCHED_IDLE` gets now and then, not at once. [`Recorder::finish`]
+//! writes what is left on its caller's thread and does not wait for the writer to leave.
+//!
+//! [`Recorder::record_all`]: super::Recorder::record_all
+//! [`Recorder::finish`]: super::Recorder::finish
 
 use super::{BagWriter, Entry, OnStop, RecordError, Written, FLUSH_EVERY};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -67,9 +72,30 @@ struct Shared {
     stopped: AtomicBool,
     /// The recording ended.
     ended: AtomicBool,
+    /// A thread of normal priority waits for the lock: the writer lets go after its batch.
+    wanted: AtomicBool,
     on_stop: OnStop,
-    /// [`RESCUE_BACKLOG`], lowered by tests.
-    rescue_backlog: u64,
+    /// When the rescuer steps in: [`RESCUE_BACKLOG`] and [`FLUSH_EVERY`] + [`RESCUE_EVERY`],
+    /// other values in tests.
+    rescue: Rescue,
+}
+
+/// When the rescuer writes.
+#[derive(Debug, Clone, Copy)]
+struct Rescue {
+    /// More messages waiting than this.
+    backlog: u64,
+    /// The last flush older than this.
+    flush_age: Duration,
+}
+
+impl Default for Rescue {
+    fn default() -> Self {
+        Self {
+            backlog: RESCUE_BACKLOG,
+            flush_age: FLUSH_EVERY + RESCUE_EVERY,
+        }
+    }
 }
 
 impl Shared {
@@ -79,6 +105,14 @@ impl Shared {
         self.pump
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
+    /// The lock for a thread of normal priority: the writer lets go of it after its batch.
+    fn lock_wanted(&self) -> MutexGuard<'_, Pump> {
+        self.wanted.store(true, Ordering::SeqCst);
+        let guard = self.lock();
+        self.wanted.store(false, Ordering::SeqCst);
+        guard
     }
 
     fn backlog(&self) -> u64 {
@@ -94,6 +128,9 @@ impl Shared {
         }
         let mut turn = Turn::More;
         for _ in 0..batches {
+            if self.wanted.load(Ordering::Relaxed) && batches == SLICE {
+                break;
+            }
             match p.rx.try_recv() {
                 Ok(batch) => {
                     self.taken.fetch_add(batch.len() as u64, Ordering::Relaxed);
@@ -133,14 +170,16 @@ impl Shared {
             (Ok(()), None) => Ok(Written::default()),
             (Err(e), _) => Err(e),
         };
-        if outcome.is_err() {
+        // Nothing more is taken: what is handed over from now on is refused, not kept (before
+        // `stopped` is seen, so that a stopped recorder refuses at once).
+        p.rx = mpsc::channel().1;
+        let failed = outcome.is_err();
+        p.outcome = Some(outcome);
+        self.ended.store(true, Ordering::SeqCst);
+        if failed {
             self.stopped.store(true, Ordering::SeqCst);
             (self.on_stop)();
         }
-        p.outcome = Some(outcome);
-        // Nothing more is taken: what is handed over from now on is refused, not kept.
-        p.rx = mpsc::channel().1;
-        self.ended.store(true, Ordering::SeqCst);
         Turn::Ended
     }
 }
@@ -175,7 +214,7 @@ impl Pump {
 pub(super) struct Writers {
     tx: Option<mpsc::Sender<Vec<Entry>>>,
     shared: Arc<Shared>,
-    threads: Vec<JoinHandle<()>>,
+    rescuer: Option<JoinHandle<()>>,
 }
 
 impl std::fmt::Debug for Shared {
@@ -191,15 +230,15 @@ impl std::fmt::Debug for Shared {
 impl Writers {
     /// Starts the writer (at idle priority) and the rescuer (at the caller's) on `bag`.
     pub fn start(bag: BagWriter, on_stop: OnStop) -> std::io::Result<Self> {
-        Self::start_with(bag, on_stop, RESCUE_BACKLOG, true)
+        Self::start_with(bag, on_stop, Rescue::default(), true)
     }
 
-    /// As [`Writers::start`], with the rescuer's bound, and without the writer thread when
+    /// As [`Writers::start`], with when the rescuer writes, and without the writer thread when
     /// `writer` is false (tests of the rescue).
     fn start_with(
         bag: BagWriter,
         on_stop: OnStop,
-        rescue_backlog: u64,
+        rescue: Rescue,
         writer: bool,
     ) -> std::io::Result<Self> {
         let (tx, rx) = mpsc::channel::<Vec<Entry>>();
@@ -215,36 +254,35 @@ impl Writers {
             taken: AtomicU64::new(0),
             stopped: AtomicBool::new(false),
             ended: AtomicBool::new(false),
+            wanted: AtomicBool::new(false),
             on_stop,
-            rescue_backlog,
+            rescue,
         });
-        let mut threads = Vec::with_capacity(2);
-        let rescuer = shared.clone();
-        threads.push(
-            std::thread::Builder::new()
-                .name("record-rescue".into())
-                .spawn(move || rescue(&rescuer))?,
-        );
-        if writer {
-            let writing = shared.clone();
-            let spawned = std::thread::Builder::new()
-                .name("record-writer".into())
-                .spawn(move || write(&writing));
-            match spawned {
-                Ok(t) => threads.push(t),
-                Err(e) => {
-                    // The rescuer must not outlive a recorder that never started.
-                    shared.ended.store(true, Ordering::SeqCst);
-                    stop_threads(&mut threads);
-                    return Err(e);
-                }
-            }
-        }
-        Ok(Self {
+        let rescuing = shared.clone();
+        let rescuer = std::thread::Builder::new()
+            .name("record-rescue".into())
+            .spawn(move || run_rescuer(&rescuing))?;
+        let mut writers = Self {
             tx: Some(tx),
             shared,
-            threads,
-        })
+            rescuer: Some(rescuer),
+        };
+        if writer {
+            let writing = writers.shared.clone();
+            // Not joined: `finish` does the writer's last work, and the writer leaves when it
+            // next runs, which at idle priority may be a while.
+            let spawned = std::thread::Builder::new()
+                .name("record-writer".into())
+                .spawn(move || run_writer(&writing));
+            if let Err(e) = spawned {
+                // The rescuer must not outlive a recorder that never started.
+                writers.shared.ended.store(true, Ordering::SeqCst);
+                writers.stop_rescuer();
+                writers.tx = None;
+                return Err(e);
+            }
+        }
+        Ok(writers)
     }
 
     /// Hands messages over; false once the recording has ended.
@@ -262,18 +300,28 @@ impl Writers {
         self.shared.stopped.load(Ordering::SeqCst)
     }
 
-    /// Writes what is left on this thread, closes the file, stops both threads; how the
-    /// recording ended. Called again, it gives the first ending's counts (or an already-stopped
-    /// error).
+    /// Writes what is left on this thread, closes the file, stops the rescuer; how the
+    /// recording ended. Only the first call ends it (later ones give [`RecordError::Thread`]).
     pub fn finish(&mut self) -> Result<Written, RecordError> {
-        drop(self.tx.take());
         let outcome = {
-            let mut p = self.shared.lock();
+            // The lock first, so that the writer does not start the closing at idle priority.
+            let mut p = self.shared.lock_wanted();
+            drop(self.tx.take());
             self.shared.drain(&mut p);
             p.outcome.take()
         };
-        stop_threads(&mut self.threads);
+        self.stop_rescuer();
         outcome.unwrap_or_else(|| Err(RecordError::Thread))
+    }
+
+    /// Wakes the rescuer to see that the recording ended, and joins it.
+    fn stop_rescuer(&mut self) {
+        if let Some(t) = self.rescuer.take() {
+            t.thread().unpark();
+            if t.join().is_err() {
+                log::error!("the recording's rescuer thread panicked");
+            }
+        }
     }
 }
 
@@ -287,21 +335,9 @@ impl Drop for Writers {
     }
 }
 
-/// Joins `threads` once the recording has ended (the rescuer is woken for it).
-fn stop_threads(threads: &mut Vec<JoinHandle<()>>) {
-    for t in threads.iter() {
-        t.thread().unpark();
-    }
-    for t in threads.drain(..) {
-        if t.join().is_err() {
-            log::error!("a recording thread panicked");
-        }
-    }
-}
-
 /// The writer: at idle priority, every [`BATCH_EVERY`] it writes what has come, [`SLICE`]
 /// batches per hold of the lock.
-fn write(shared: &Shared) {
+fn run_writer(shared: &Shared) {
     lower_priority();
     loop {
         std::thread::sleep(BATCH_EVERY);
@@ -318,15 +354,15 @@ fn write(shared: &Shared) {
 
 /// The rescuer: every [`RESCUE_EVERY`], when the writer has fallen behind by more than the
 /// bound or the last flush is overdue, it writes everything handed over.
-fn rescue(shared: &Shared) {
+fn run_rescuer(shared: &Shared) {
     loop {
         std::thread::park_timeout(RESCUE_EVERY);
         if shared.ended.load(Ordering::SeqCst) {
             return;
         }
-        if shared.backlog() <= shared.rescue_backlog {
-            let mut p = shared.lock();
-            if p.last_flush.elapsed() <= FLUSH_EVERY + RESCUE_EVERY {
+        if shared.backlog() <= shared.rescue.backlog {
+            let mut p = shared.lock_wanted();
+            if p.last_flush.elapsed() <= shared.rescue.flush_age {
                 continue;
             }
             if shared.drain(&mut p) == Turn::Ended {
@@ -338,7 +374,7 @@ fn rescue(shared: &Shared) {
             "the recording's writer is {} messages behind: writing them at normal priority",
             shared.backlog()
         );
-        if shared.drain(&mut shared.lock()) == Turn::Ended {
+        if shared.drain(&mut shared.lock_wanted()) == Turn::Ended {
             return;
         }
     }
@@ -360,7 +396,7 @@ fn lower_priority() {
             idle,
         );
         if let Err(e) = set {
-            log::debug!("the recording's writer stays at normal priority: {e:?}");
+            log::debug!("the recording's writer's priority was not (wholly) lowered: {e:?}");
         }
     }
 }
@@ -405,45 +441,55 @@ mod tests {
     }
 
     /// With no writer thread at all (as a writer that never gets a core), the rescuer writes
-    /// what passes its bound, flushes what stays below it once the flush is overdue, and
-    /// `finish` writes the rest.
+    /// what passes its bound, and `finish` writes the rest.
     #[test]
-    fn the_rescuer_writes_what_a_starved_writer_leaves() {
+    fn the_rescuer_writes_what_a_starved_writer_leaves_past_the_bound() {
         let dir = tempfile::tempdir().expect("dir");
         let (bag, path) = writer_in(dir.path());
-        let started = Instant::now();
-        let mut w = Writers::start_with(bag, never(), 10, false).expect("start");
+        let rescue = Rescue {
+            backlog: 10,
+            flush_age: Duration::from_secs(3600),
+        };
+        let mut w = Writers::start_with(bag, never(), rescue, false).expect("start");
         let taken = |w: &Writers| w.shared.taken.load(Ordering::Relaxed);
-        for i in 0..50 {
+        for i in 0..5 {
+            assert!(w.hand_over(vec![candidate(i)]));
+        }
+        std::thread::sleep(RESCUE_EVERY * 3);
+        assert_eq!(taken(&w), 0, "taken within the bound");
+        for i in 5..50 {
             assert!(w.hand_over(vec![candidate(i)]));
         }
         assert!(wait_until(|| taken(&w) == 50), "not rescued: {}", taken(&w));
-        let before = std::fs::metadata(&path).expect("file").len();
         for i in 50..55 {
             assert!(w.hand_over(vec![candidate(i)]));
         }
-        std::thread::sleep(RESCUE_EVERY * 2);
-        // No flush is due before FLUSH_EVERY + RESCUE_EVERY (a machine this slow skips the check).
-        if started.elapsed() < FLUSH_EVERY {
-            assert_eq!(
-                taken(&w),
-                50,
-                "taken below the bound before the flush was due"
-            );
-        }
-        assert!(wait_until(|| taken(&w) == 55), "the overdue flush");
-        assert!(
-            wait_until(|| std::fs::metadata(&path).map_or(0, |m| m.len()) > before),
-            "nothing flushed"
-        );
-        for i in 55..60 {
+        let written = w.finish().expect("finish");
+        assert_eq!(written.candidates, 55);
+        let bag = crate::record::bag::read(&path).expect("readable");
+        assert_eq!(bag.candidates.len(), 55);
+        assert!(!w.hand_over(vec![candidate(55)]), "taken after the end");
+    }
+
+    /// With no writer thread, the rescuer flushes what stays within its bound once the last
+    /// flush is overdue.
+    #[test]
+    fn the_rescuer_flushes_when_a_starved_writer_has_not() {
+        let dir = tempfile::tempdir().expect("dir");
+        let (bag, path) = writer_in(dir.path());
+        let rescue = Rescue {
+            backlog: u64::MAX,
+            ..Rescue::default()
+        };
+        let mut w = Writers::start_with(bag, never(), rescue, false).expect("start");
+        let before = std::fs::metadata(&path).expect("file").len();
+        for i in 0..5 {
             assert!(w.hand_over(vec![candidate(i)]));
         }
-        let written = w.finish().expect("finish");
-        assert_eq!(written.candidates, 60);
-        let bag = crate::record::bag::read(&path).expect("readable");
-        assert_eq!(bag.candidates.len(), 60);
-        assert!(!w.hand_over(vec![candidate(60)]), "taken after the end");
+        let size = || std::fs::metadata(&path).map_or(0, |m| m.len());
+        assert!(wait_until(|| size() > before), "nothing flushed");
+        assert_eq!(w.shared.taken.load(Ordering::Relaxed), 5);
+        assert_eq!(w.finish().expect("finish").candidates, 5);
     }
 
     /// The writer threads run at `SCHED_IDLE` (policy 5), the rescuers at `SCHED_OTHER` (0).
