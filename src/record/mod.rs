@@ -771,7 +771,8 @@ mod tests {
         );
     }
 
-    fn topics() -> Topics {
+    /// The candidate and answer channels only (for the record module's tests).
+    pub(super) fn topics() -> Topics {
         Topics {
             candidates: "/grasp_candidates".into(),
             recommendations: "/grip_recommendations".into(),
@@ -781,7 +782,8 @@ mod tests {
         }
     }
 
-    fn candidate(i: usize) -> Entry {
+    /// Paper case `i % 4` as a candidate received at `i` ns.
+    pub(super) fn candidate(i: usize) -> Entry {
         let c = crate::msg::paper_cases().swap_remove(i % 4);
         Entry {
             payload: Payload::Candidate(Box::new(c)),

@@ -120,15 +120,16 @@ impl Shared {
         handed.saturating_sub(self.taken.load(Ordering::Relaxed))
     }
 
-    /// Takes at most `batches` batches and writes them, then flushes if [`FLUSH_EVERY`] has
-    /// passed; ends the recording when the sender is gone or a write fails.
-    fn turn(&self, p: &mut Pump, batches: usize) -> Turn {
+    /// Takes at most `batches` batches and writes them (fewer when `give_way` and another
+    /// thread wants the lock), then flushes if [`FLUSH_EVERY`] has passed; ends the recording
+    /// when the sender is gone or a write fails.
+    fn turn(&self, p: &mut Pump, batches: usize, give_way: bool) -> Turn {
         if self.ended.load(Ordering::SeqCst) {
             return Turn::Ended;
         }
         let mut turn = Turn::More;
         for _ in 0..batches {
-            if self.wanted.load(Ordering::Relaxed) && batches == SLICE {
+            if give_way && self.wanted.load(Ordering::Relaxed) {
                 break;
             }
             match p.rx.try_recv() {
@@ -154,7 +155,7 @@ impl Shared {
     /// Takes and writes until nothing is waiting or the recording ended.
     fn drain(&self, p: &mut Pump) -> Turn {
         loop {
-            match self.turn(p, usize::MAX) {
+            match self.turn(p, usize::MAX, false) {
                 Turn::More => {}
                 other => return other,
             }
@@ -342,7 +343,7 @@ fn run_writer(shared: &Shared) {
     loop {
         std::thread::sleep(BATCH_EVERY);
         loop {
-            let turn = shared.turn(&mut shared.lock(), SLICE);
+            let turn = shared.turn(&mut shared.lock(), SLICE, true);
             match turn {
                 Turn::More => {}
                 Turn::Empty => break,
@@ -360,21 +361,19 @@ fn run_rescuer(shared: &Shared) {
         if shared.ended.load(Ordering::SeqCst) {
             return;
         }
-        if shared.backlog() <= shared.rescue.backlog {
-            let mut p = shared.lock_wanted();
+        let backlog = shared.backlog();
+        let mut p = shared.lock_wanted();
+        if backlog <= shared.rescue.backlog {
             if p.last_flush.elapsed() <= shared.rescue.flush_age {
                 continue;
             }
-            if shared.drain(&mut p) == Turn::Ended {
-                return;
-            }
-            continue;
+        } else {
+            log::debug!(
+                "the recording's writer is {backlog} messages behind: writing them at normal \
+                 priority"
+            );
         }
-        log::debug!(
-            "the recording's writer is {} messages behind: writing them at normal priority",
-            shared.backlog()
-        );
-        if shared.drain(&mut shared.lock_wanted()) == Turn::Ended {
+        if shared.drain(&mut p) == Turn::Ended {
             return;
         }
     }
@@ -404,28 +403,12 @@ fn lower_priority() {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::record::{BagWriter, Entry, Payload, Topics};
+    use crate::record::tests::{candidate, topics};
 
     fn writer_in(dir: &std::path::Path) -> (BagWriter, std::path::PathBuf) {
         let path = dir.join("r.mcap");
-        let topics = Topics {
-            candidates: "/grasp_candidates".into(),
-            recommendations: "/grip_recommendations".into(),
-            markers: None,
-            sets: None,
-            poses: None,
-        };
-        let bag = BagWriter::create(&path, &topics, 100).expect("create");
+        let bag = BagWriter::create(&path, &topics(), 100).expect("create");
         (bag, path)
-    }
-
-    fn candidate(i: usize) -> Entry {
-        let c = crate::msg::paper_cases().swap_remove(i % 4);
-        Entry {
-            payload: Payload::Candidate(Box::new(c)),
-            log_time: i as u64,
-            publish_time: i as u64,
-        }
     }
 
     fn never() -> OnStop {

@@ -803,7 +803,7 @@ mod tests {
     use super::*;
     use crate::record::bag::{read_bytes, Bag};
     use crate::record::settings::{SettingsRecord, METADATA_NAME};
-    use crate::record::{BagWriter, Entry, Payload, Topics};
+    use crate::record::{BagWriter, Entry, Payload};
     use std::io::Cursor;
 
     /// A small recording as the node writes it: settings metadata, the paper's cases with their
@@ -811,14 +811,7 @@ mod tests {
     fn node_bag() -> Vec<u8> {
         let dir = tempfile::tempdir().expect("a temporary folder");
         let path = dir.path().join("node.mcap");
-        let topics = Topics {
-            candidates: "/grasp_candidates".into(),
-            recommendations: "/grip_recommendations".into(),
-            markers: None,
-            sets: None,
-            poses: None,
-        };
-        let mut w = BagWriter::create(&path, &topics, 100).expect("create");
+        let mut w = BagWriter::create(&path, &crate::record::tests::topics(), 100).expect("create");
         let settings = SettingsRecord {
             since: 0,
             node: "/grasp_orient".into(),
