@@ -253,10 +253,11 @@ def play_over_a_lossy_link(tmp_path: Path, runs: int, rate: float, node_args: li
             got = set(played_candidates(recordings[0]))
             missing = [k for k, w in enumerate(want) if w not in got]
             if missing:
-                losing.append((run, spans(missing)))
+                where = spans(missing)
+                losing.append((run, where))
                 (cwd / "node.log").write_text("\n".join(node.all_lines()))
                 (cwd / "play.log").write_text(r.stderr)
-                print(f"run {run}: missing positions {spans(missing)} of {len(want)} (logs in {cwd})")
+                print(f"run {run}: missing positions {where} of {len(want)} (logs in {cwd})")
     print(f"\n{runs} runs of {len(want)} candidates played at {rate:g} times the recorded pace, "
           f"{len(losing)} with candidates missing")
     return losing
@@ -271,7 +272,6 @@ def test_a_recording_played_over_a_lossy_link_arrives_whole(tmp_path):
     100 ms after sending it: 0 of 260 runs lost any. tests/ros/soak_play_lossy.py runs this longer."""
     losing = play_over_a_lossy_link(tmp_path, PLAY_RUNS, PLAY_RATE, [])
     assert not losing, f"runs that lost candidates (run, positions in the bag): {losing}"
-
 
 
 WIRE_SETS = 10
