@@ -4,6 +4,7 @@
     source "$(bash tests/peer/setup.sh | tail -n1)"
     cargo build --release
     python benches/bench_sets.py --bin target/release/grasp_orient [--n 1000] [--sets 60] [--singles 300]
+        [--also-bin LABEL=PATH ...] [--large-buffers]
 
 (a) A set of --n candidates published on grasp_candidate_sets and its answer received on
     grip_recommendation_sets, one set at a time: min, p50 and p99 of the round trip, for `grasp_orient node` and for
@@ -17,11 +18,15 @@
 Each variant runs in a node of its own (namespace), record:=false, publish_markers:=false, so that only the
 answering is measured; the echo, the node, and the node with solver_threads:=1 (one solver thread: what the
 threads buy) are interleaved over --repeat repetitions and the medians printed.
-(c) The set round trip of (a) again in turns: the three nodes running at once, one set sent to each in turn
-    (--sets x --repeat rounds, the order turned each round), so that all three are measured over the same
+(c) The set round trip of (a) again in turns: every variant's node running at once, one set sent to each in
+    turn (--sets x --repeat rounds, the order turned each round), so that all are measured over the same
     minutes; its p50s, and the median over rounds of the node's round trip over the echo's and minus it. And
     where each set's time in each node went, from the node's debug line per set (src/node/sets.rs): from the
-    set's arrival in its DDS reader to the start of its answer, the answer, the publishing.
+    set's arrival in its DDS reader to the start of its answer, the answer, the publishing; and after it, from
+    the answer handed to DDS to its arrival in this process's callback (both on the system clock): the
+    transport and rclpy's share, which grows with the answer's bytes.
+--also-bin LABEL=PATH adds another binary (an older build, say), run as shipped like the node, to (a), (b)
+and (c): a change measured against the build before it in the same run.
 With --large-buffers, this process (the rclpy side) uses tests/ros/fastdds_large_buffers.xml: 4 MB socket
 buffers instead of the system's 208 kB, which an answer of 240 to 320 kB overflows; lost fragments then wait
 for the writer's next heartbeat to be repaired.
@@ -86,13 +91,17 @@ def set_message(cands: list[dict], sid: str):
 
 
 class Raw:
-    """A raw subscription: counts arrivals (bytes) with their times."""
+    """A raw subscription: counts arrivals (bytes) with their times, and the same times on the system clock
+    (ns since the epoch, the clock of the node's debug lines)."""
 
     def __init__(self, peer, msg_type, topic: str):
         self.times: list[tuple[float, int]] = []
-        self.sub = peer.node.create_subscription(
-            msg_type, topic, lambda raw: self.times.append((time.perf_counter(), len(raw))), C.reliable_qos(100),
-            raw=True)
+        self.wall_ns: list[int] = []
+        self.sub = peer.node.create_subscription(msg_type, topic, self._arrived, C.reliable_qos(100), raw=True)
+
+    def _arrived(self, raw: bytes):
+        self.times.append((time.perf_counter(), len(raw)))
+        self.wall_ns.append(time.time_ns())
 
 
 def round_trips(peer, publish, raw: Raw, count: int, warmup: int, timeout: float = 10.0) -> list[float]:
@@ -132,28 +141,39 @@ def service_trips(peer, client, request, count: int, warmup: int, timeout: float
     return out
 
 
-def start_variant(ns: str, extra: list[str], params: list[str], workdir: Path, label: str):
-    """One variant's node in namespace `ns`, recording and markers off, so that only the answering is
+# Binaries other than the one under test, by variant name (--also-bin LABEL=PATH).
+BINARIES: dict[str, Path] = {}
+
+
+def start_variant(ns: str, extra: list[str], params: list[str], workdir: Path, label: str, name: str):
+    """Variant `name`'s node in namespace `ns`, recording and markers off, so that only the answering is
     measured."""
     return C.NodeProcess([*extra, "--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false",
-                          "-p", "publish_markers:=false", *params], C.ros_env(C.DOMAIN_ID), workdir, label)
+                          "-p", "publish_markers:=false", *params], C.ros_env(C.DOMAIN_ID), workdir, label,
+                         binary=BINARIES.get(name))
 
 
 # The node's line at debug for each set answered on the topic (src/node/sets.rs, AnswerLine).
 SET_LINE = re.compile(r'\(topic\): (\d+) candidates.*taken ([0-9.]+) ms after it arrived, answered in ([0-9.]+) ms, '
-                      r'published in ([0-9.]+) ms')
+                      r'published in ([0-9.]+) ms(?:.*handed to DDS at (\d+) ns)?')
 
 
-def node_times(node, n: int) -> dict | None:
+def node_times(node, n: int, arrived_ns: list[int], skip: int) -> dict | None:
     """Medians over the sets of `n` candidates a node answered (its debug lines): from the set's arrival in
     its DDS reader to the start of its answer (the thread waking, the set decoded), the answer, the
-    publishing."""
-    rows = [tuple(map(float, m.groups()[1:])) for line in node.all_lines()
+    publishing; and from the answer handed to DDS to its arrival here (`arrived_ns`, this process's system
+    clock, one per set the node answered, in order): the transport and rclpy, none if the counts differ.
+    The first `skip` sets (the warm-up) are left out."""
+    # Builds before 2026-12-05 do not say when they handed the answer to DDS (None).
+    rows = [(*map(float, m.groups()[1:4]), m.group(5) and int(m.group(5))) for line in node.all_lines()
             for m in [SET_LINE.search(line)] if m and int(m.group(1)) == n]
     if not rows:
         return None
-    return {key: statistics.median(r[i] for r in rows) for i, key in
-            enumerate(("taken_ms", "answered_ms", "published_ms"))}
+    out = {key: statistics.median(r[i] for r in rows[skip:]) for i, key in
+           enumerate(("taken_ms", "answered_ms", "published_ms"))}
+    out["to_client_ms"] = (statistics.median((a - r[3]) / 1e6 for a, r in list(zip(arrived_ns, rows))[skip:])
+                           if len(rows) == len(arrived_ns) and all(r[3] for r in rows) else None)
+    return out
 
 
 def measure(peer, args, name: str, extra: list[str], params: list[str], rep: int, workdir: Path) -> dict:
@@ -162,7 +182,7 @@ def measure(peer, args, name: str, extra: list[str], params: list[str], rep: int
     from grasp_orient.srv import Recommend
 
     ns = f"/bench_sets_{name}_{rep}"
-    node = start_variant(ns, extra, params, workdir, f"{name} #{rep}")
+    node = start_variant(ns, extra, params, workdir, f"{name} #{rep}", name)
     try:
         node.wait_ready()
         res: dict = {}
@@ -213,7 +233,8 @@ def measure_interleaved(peer, args, variants, workdir: Path) -> dict:
             # Debug lines: where each set's time in the node goes (node_times). One node at a time:
             # three participants started in the same instant did not always discover the peer.
             debug = ["--log-level", "grasp_orient.node.sets:=debug"]
-            nodes[name] = start_variant(spaces[name], extra, [*params, *debug], workdir, f"{name} (turns)")
+            nodes[name] = start_variant(spaces[name], extra, [*params, *debug], workdir, f"{name} (turns)",
+                                        name)
             nodes[name].wait_ready()
         for name, ns in spaces.items():
             pubs[name] = peer.node.create_publisher(GraspCandidateSet, f"{ns}/grasp_candidate_sets",
@@ -226,12 +247,15 @@ def measure_interleaved(peer, args, variants, workdir: Path) -> dict:
         big = serialize_message(set_message(candidates(args.n, 77, "turns"), "turns"))
         names = [name for name, _, _ in variants]
         lat: dict[str, list[float]] = {name: [] for name in names}
-        rounds = args.sets * args.repeat
-        for k in range(rounds + 5):
+        arrived_ns: dict[str, list[int]] = {name: [] for name in names}
+        rounds, warmup = args.sets * args.repeat, 5
+        for k in range(rounds + warmup):
             order = names[k % len(names):] + names[:k % len(names)]
             for name in order:
+                before = len(raws[name].wall_ns)
                 (t,) = round_trips(peer, lambda: pubs[name].publish(big), raws[name], 1, 0, timeout=30)
-                if k >= 5:
+                arrived_ns[name].append(raws[name].wall_ns[before])
+                if k >= warmup:
                     lat[name].append(t)
         for name in names:
             peer.node.destroy_publisher(pubs[name])
@@ -243,7 +267,7 @@ def measure_interleaved(peer, args, variants, workdir: Path) -> dict:
             out[f"{name}_minus_echo_per_round_ms"] = 1e3 * statistics.median(
                 a - b for a, b in zip(lat[name], lat[names[0]]))
         for name in names:
-            out[f"{name}_in_node"] = node_times(nodes[name], args.n)
+            out[f"{name}_in_node"] = node_times(nodes[name], args.n, arrived_ns[name], warmup)
         return out
     finally:
         for node in nodes.values():
@@ -262,6 +286,9 @@ def main() -> int:
     ap.add_argument("--singles", type=int, default=300, help="one-candidate round trips per run (default 300)")
     ap.add_argument("--repeat", type=int, default=3, help="repetitions, echo, node and node_1 interleaved (default 3)")
     ap.add_argument("--json", help="write every measurement here")
+    ap.add_argument("--also-bin", action="append", default=[], metavar="LABEL=PATH",
+                    help="another grasp_orient binary (an older build, say), run as shipped like the node and "
+                         "measured in the same run; repeatable")
     ap.add_argument("--large-buffers", action="store_true",
                     help="rclpy side with 4 MB socket buffers (tests/ros/fastdds_large_buffers.xml)")
     args = ap.parse_args()
@@ -274,7 +301,13 @@ def main() -> int:
     workdir = Path(tempfile.mkdtemp(prefix="grasp_orient_bench_sets_"))
     # (name, arguments before --ros-args, parameters): the floor, the node as shipped (solver_threads 0:
     # one per core), and the node solving on its own thread alone, which shows what the threads buy.
-    variants = (("echo", ["--echo"], []), ("node", [], []), ("node_1", [], ["-p", "solver_threads:=1"]))
+    variants = [("echo", ["--echo"], []), ("node", [], []), ("node_1", [], ["-p", "solver_threads:=1"])]
+    for spec in args.also_bin:
+        label, _, path = spec.partition("=")
+        if not label or not path or label in ("echo", "node", "node_1") or label in BINARIES:
+            ap.error(f"--also-bin {spec!r}: want LABEL=PATH with a new label")
+        BINARIES[label] = Path(path).resolve()
+        variants.append((label, [], []))
     runs: dict[str, list[dict]] = {name: [] for name, _, _ in variants}
     log(f"[bench_sets] ROS_DOMAIN_ID={C.DOMAIN_ID}, binary {C.binary_path()}, sets of {args.n}, "
         f"{args.repeat} repetitions, {'4 MB' if args.large_buffers else 'default'} socket buffers on the rclpy side")
@@ -305,7 +338,7 @@ def main() -> int:
     print(f"target: node p50 <= 1.5 x echo p50: "
           f"{'met' if med(n, 'set', 'p50_ms') <= 1.5 * med(e, 'set', 'p50_ms') else 'NOT met'}")
     te, tn, tn1 = turns["echo"], turns["node"], turns["node_1"]
-    print(f"in turns, the three nodes running at once and one set to each in turn, {te['n']} rounds:")
+    print(f"in turns, every node running at once and one set to each in turn, {te['n']} rounds:")
     print(f"  set round trip p50 (ms)          {te['p50_ms']:8.2f} {tn['p50_ms']:8.2f} {tn['p50_ms'] / te['p50_ms']:7.2f} "
           f"{tn1['p50_ms']:8.2f} {tn1['p50_ms'] / te['p50_ms']:7.2f}")
     print(f"  set round trip p99 (ms)          {te['p99_ms']:8.2f} {tn['p99_ms']:8.2f} {tn['p99_ms'] / te['p99_ms']:7.2f} "
@@ -317,12 +350,21 @@ def main() -> int:
           f"{turns['node_1_minus_echo_per_round_ms']:.2f} ms")
     print(f"target in turns: node p50 <= 1.5 x echo p50: "
           f"{'met' if tn['p50_ms'] <= 1.5 * te['p50_ms'] else 'NOT met'}")
+    for label in BINARIES:
+        o = runs[label]
+        print(f"{label} ({BINARIES[label]}): set p50 {med(o, 'set', 'p50_ms'):.2f} ms "
+              f"({med(o, 'set', 'p50_ms') / med(e, 'set', 'p50_ms'):.2f} x echo), p99 {med(o, 'set', 'p99_ms'):.2f} ms; "
+              f"in turns p50 {turns[label]['p50_ms']:.2f} ms ({turns[label]['p50_ms'] / te['p50_ms']:.2f} x echo), "
+              f"median over rounds {label} / echo {turns[f'{label}_over_echo_per_round']:.2f}, "
+              f"{label} - echo {turns[f'{label}_minus_echo_per_round_ms']:.2f} ms")
     print("  in the node, medians over the sets (its debug lines): set arrived -> answer started (thread woken, set "
-          "decoded) / answered / published (ms):")
+          "decoded) / answered / published; then from the answer handed to DDS to its arrival in rclpy (ms):")
     for name, _, _ in variants:
         t = turns[f"{name}_in_node"]
+        to_client = "?" if t is None or t["to_client_ms"] is None else f"{t['to_client_ms']:.3f}"
         print(f"    {name:8} " + ("no debug lines" if t is None else
-                                  f"{t['taken_ms']:.3f} / {t['answered_ms']:.3f} / {t['published_ms']:.3f}"))
+                                  f"{t['taken_ms']:.3f} / {t['answered_ms']:.3f} / {t['published_ms']:.3f}; "
+                                  f"{to_client}"))
     print("one candidate, node (p50 / p99 ms):")
     t = (med(n, "topic_one", "p50_ms"), med(n, "topic_one", "p99_ms"))
     for label, key in (("topic grasp_candidates -> grip_recommendations", "topic_one"),

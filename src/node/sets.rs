@@ -202,11 +202,11 @@ pub async fn answer_done(
     let line = AnswerLine::new(&reply, how, taken, took, waited);
     let sending = Instant::now();
     let sent = send(endpoints, via, reply).await;
-    line.log(sending.elapsed(), sent.is_ok());
+    let answered = now_ns();
+    line.log(sending.elapsed(), sent.is_ok(), answered);
     if let Err(e) = sent {
         say(node, log::Level::Error, &e);
     }
-    let answered = now_ns();
     markers.publish(node, answerer, array).await;
     super::tell(node, answerer.record_set(recorded, answered));
 }
@@ -254,7 +254,9 @@ async fn send(endpoints: &SetEndpoints, via: Via, reply: SetReply) -> Result<(),
 /// recording's copy; `published in`: serializing the answer and handing it to DDS, and freeing
 /// it; `waited`: from the hand-over to the set thread to the start of its solving (the thread
 /// waking, and the sets before it in the queue). `taken` also holds any wait behind the
-/// previous message, and is 0 when DDS gave no arrival time.
+/// previous message, and is 0 when DDS gave no arrival time. The line ends with the time the
+/// answer was handed to DDS, in ns since the epoch on the system clock (the clock of DDS's own
+/// timestamps), so that a client on the same machine can tell the node's time from the transport's.
 /// `benches/bench_sets.py` reads these lines.
 struct AnswerLine {
     /// The line up to the publishing time, and the wait for the set thread; none when debug
@@ -294,7 +296,7 @@ impl AnswerLine {
         }
     }
 
-    fn log(self, sending: Duration, sent: bool) {
+    fn log(self, sending: Duration, sent: bool, handed_ns: u64) {
         if let Some((text, waited)) = self.text {
             let how = if sent {
                 "published in"
@@ -302,7 +304,8 @@ impl AnswerLine {
                 "not published, after"
             };
             log::debug!(
-                "{text}, {how} {:.3} ms; it waited {:.3} ms for the set thread",
+                "{text}, {how} {:.3} ms; it waited {:.3} ms for the set thread; handed to DDS at \
+                 {handed_ns} ns",
                 sending.as_secs_f64() * 1e3,
                 waited.as_secs_f64() * 1e3
             );
