@@ -2,7 +2,7 @@
 //! (`docs/theory.md#conventions`).
 
 use super::{Candidate, Contact, InvalidInput};
-use nalgebra::Vector2;
+use nalgebra::{SVector, Vector2};
 
 /// Largest accepted coordinate magnitude, m.
 pub const MAX_COORDINATE: f64 = 1e6;
@@ -73,6 +73,7 @@ pub(crate) struct GraspFrame {
     pub(crate) e_y: Vector2<f64>,
 }
 
+/// `v` when it is finite.
 fn finite(field: &'static str, v: f64) -> Result<f64, InvalidInput> {
     if v.is_finite() {
         Ok(v)
@@ -81,6 +82,7 @@ fn finite(field: &'static str, v: f64) -> Result<f64, InvalidInput> {
     }
 }
 
+/// `v` when it is finite and at most `limit` in magnitude.
 fn bounded(
     field: &'static str,
     v: f64,
@@ -100,7 +102,9 @@ fn bounded(
     }
 }
 
-fn positive(
+/// `v` when it is finite, positive and at most `limit`. The spatial model checks its input
+/// with this and [`vector`] too.
+pub(crate) fn positive(
     field: &'static str,
     v: f64,
     limit: f64,
@@ -114,14 +118,16 @@ fn positive(
     }
 }
 
-fn vector(
-    fields: [&'static str; 2],
-    v: &Vector2<f64>,
+/// Each component of `v` finite and within `limit`, the first that is not named by its field.
+pub(crate) fn vector<const N: usize>(
+    fields: [&'static str; N],
+    v: &SVector<f64, N>,
     limit: f64,
     unit: &'static str,
 ) -> Result<(), InvalidInput> {
-    bounded(fields[0], v.x, limit, unit)?;
-    bounded(fields[1], v.y, limit, unit)?;
+    for (field, x) in fields.into_iter().zip(v.iter()) {
+        bounded(field, *x, limit, unit)?;
+    }
     Ok(())
 }
 

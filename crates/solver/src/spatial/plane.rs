@@ -3,7 +3,7 @@
 
 use super::{planar_outcome, v2, AxisRelation, CurrentPose, PlanarOutcome};
 use crate::planar::frame::{
-    friction, times_pow2, MAX_COORDINATE, MAX_FRICTION, MAX_GRAVITY, MAX_MASS,
+    friction, positive, times_pow2, vector, MAX_COORDINATE, MAX_FRICTION, MAX_GRAVITY, MAX_MASS,
     MAX_NORMAL_COMPONENT, MAX_SAFETY_FACTOR, MIN_FRICTION, MIN_WEIGHT,
 };
 use crate::{
@@ -31,58 +31,6 @@ pub fn sliced_friction(mu: f64, tan_tilt: f64) -> Option<f64> {
         return None;
     }
     Some(((mu - tan_tilt) * (mu + tan_tilt) / (1.0 + tan_tilt * tan_tilt)).sqrt())
-}
-
-fn finite(field: &'static str, v: f64) -> Result<f64, InvalidInput> {
-    if v.is_finite() {
-        Ok(v)
-    } else {
-        Err(InvalidInput::NotFinite { field })
-    }
-}
-
-fn bounded(
-    field: &'static str,
-    v: f64,
-    limit: f64,
-    unit: &'static str,
-) -> Result<f64, InvalidInput> {
-    finite(field, v)?;
-    if v.abs() > limit {
-        return Err(InvalidInput::OutOfRange {
-            field,
-            value: v,
-            limit,
-            unit,
-        });
-    }
-    Ok(v)
-}
-
-fn positive(
-    field: &'static str,
-    v: f64,
-    limit: f64,
-    unit: &'static str,
-) -> Result<f64, InvalidInput> {
-    bounded(field, v, limit, unit)?;
-    if v > 0.0 {
-        Ok(v)
-    } else {
-        Err(InvalidInput::NotPositive { field, value: v })
-    }
-}
-
-fn vector(
-    fields: [&'static str; 3],
-    v: &Vector3<f64>,
-    limit: f64,
-    unit: &'static str,
-) -> Result<(), InvalidInput> {
-    for (field, x) in fields.into_iter().zip(v.iter()) {
-        bounded(field, *x, limit, unit)?;
-    }
-    Ok(())
 }
 
 /// Magnitudes whose products of up to four factors neither underflow nor overflow: the squares
