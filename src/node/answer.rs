@@ -471,20 +471,13 @@ impl Answerer {
                 spatial.as_deref(),
             )
         });
-        self.counts.markers_built += u64::from(markers.is_some());
-        let recorded = Recorded {
-            reply: self
-                .recording
-                .is_on()
-                .then(|| Payload::Recommendation(Box::new(reply.clone()))),
-            markers: markers
-                .as_ref()
-                .filter(|_| self.recording.records_markers())
-                .cloned(),
-            candidate: Payload::Candidate(Box::new(candidate)),
+        let recorded = self.readied(
+            Payload::Candidate(Box::new(candidate)),
+            || Payload::Recommendation(Box::new(reply.clone())),
+            markers.as_ref(),
             received,
             sent,
-        };
+        );
         Outcome {
             reply,
             markers,
@@ -575,25 +568,41 @@ impl Answerer {
     ) -> PoseOutcome {
         let mut notes = Vec::new();
         self.count_one(&reply.recommendation, &mut notes);
-        self.counts.markers_built += u64::from(markers.is_some());
-        let recorded = Recorded {
-            reply: self
-                .recording
-                .is_on()
-                .then(|| Payload::PoseRecommendation(Box::new(reply.clone()))),
-            markers: markers
-                .as_ref()
-                .filter(|_| self.recording.records_markers())
-                .cloned(),
-            candidate: Payload::PoseCandidate(Box::new(candidate)),
+        let recorded = self.readied(
+            Payload::PoseCandidate(Box::new(candidate)),
+            || Payload::PoseRecommendation(Box::new(reply.clone())),
+            markers.as_ref(),
             received,
             sent,
-        };
+        );
         PoseOutcome {
             reply,
             markers,
             notes,
             recorded,
+        }
+    }
+
+    /// Counts the markers built for one answer, and readies what the recording keeps of it: the
+    /// candidate with its times, a copy of the `reply` while recording, the `markers` when they
+    /// are recorded too.
+    fn readied(
+        &mut self,
+        candidate: Payload,
+        reply: impl FnOnce() -> Payload,
+        markers: Option<&MarkerArray>,
+        received: u64,
+        sent: u64,
+    ) -> Recorded {
+        self.counts.markers_built += u64::from(markers.is_some());
+        Recorded {
+            reply: self.recording.is_on().then(reply),
+            markers: markers
+                .filter(|_| self.recording.records_markers())
+                .cloned(),
+            candidate,
+            received,
+            sent,
         }
     }
 
