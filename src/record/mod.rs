@@ -127,7 +127,10 @@ fn closed_words(kept: &Written, closed: &Result<(), std::io::Error>) -> String {
             kept.candidates, kept.recommendations, kept.markers
         ),
         Err(why) => format!(
-            "the file could not be closed ({why}); `grasp_orient recover` saves what it holds"
+            "the file could not be closed ({why}): it ends at its last complete flush, without \
+             its index, and holds {} candidates, {} recommendations, {} marker arrays, which \
+             `grasp_orient recover` copies into a closed file",
+            kept.candidates, kept.recommendations, kept.markers
         ),
     }
 }
@@ -851,6 +854,105 @@ mod tests {
             bag::read(&path).expect("still whole").candidates.len() as u64,
             kept.candidates,
             "dropping the writer after the failure writes nothing"
+        );
+    }
+
+    /// A file-size limit the last flush ended too near for the summary (some kilobytes: it
+    /// repeats the schemas): the close fails and says why, the file is cut back to that flush,
+    /// and `recover` copies every candidate it held. With room, the same bytes close.
+    #[test]
+    fn a_close_with_no_room_for_the_summary_leaves_the_file_at_its_last_flush() {
+        /// An in-memory file whose writes fail past `limit` bytes, as under `RLIMIT_FSIZE`.
+        struct Limited {
+            bytes: std::io::Cursor<Vec<u8>>,
+            limit: u64,
+        }
+        impl std::io::Read for Limited {
+            fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+                self.bytes.read(buf)
+            }
+        }
+        impl std::io::Seek for Limited {
+            fn seek(&mut self, pos: std::io::SeekFrom) -> std::io::Result<u64> {
+                self.bytes.seek(pos)
+            }
+        }
+        impl std::io::Write for Limited {
+            fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+                let room = self.limit.saturating_sub(self.bytes.position());
+                if room == 0 {
+                    return Err(std::io::ErrorKind::FileTooLarge.into());
+                }
+                let n = buf.len().min(usize::try_from(room).unwrap_or(usize::MAX));
+                self.bytes.write(&buf[..n])
+            }
+            fn flush(&mut self) -> std::io::Result<()> {
+                Ok(())
+            }
+        }
+        impl sink::Cut for Limited {
+            fn cut(&mut self, length: u64) -> std::io::Result<()> {
+                let length = usize::try_from(length).expect("in memory");
+                self.bytes.get_mut().resize(length, 0);
+                Ok(())
+            }
+            fn sync(&mut self) -> std::io::Result<()> {
+                Ok(())
+            }
+        }
+
+        let dir = tempfile::tempdir().expect("a temporary folder");
+        let path = dir.path().join("limited.mcap");
+        let mut bag = BagWriter::create(&path, &topics(), 100).expect("create");
+        for i in 0..300 {
+            bag.write(&candidate(i)).expect("written");
+            if i % 100 == 99 {
+                bag.flush().expect("flushed");
+            }
+        }
+        let (length, kept) = bag.committed;
+        assert_eq!(kept.candidates, 300);
+        let at_flush = std::fs::read(&path).expect("read")[..length as usize].to_vec();
+        let defs = bag.definitions.clone();
+        drop(bag);
+
+        let mut file = Limited {
+            bytes: std::io::Cursor::new(at_flush.clone()),
+            limit: length + 100,
+        };
+        let e = sink::close(&mut file, length, &defs).expect_err("no room for the summary");
+        assert_eq!(e.kind(), std::io::ErrorKind::FileTooLarge);
+        assert_eq!(
+            file.bytes.get_ref().as_slice(),
+            at_flush.as_slice(),
+            "cut back to the last flush, nothing of the end left"
+        );
+        let (got, _) = recover::recover_bytes(file.bytes.get_ref(), std::io::Cursor::new(vec![]))
+            .expect("recovers");
+        assert_eq!(got.kept.get("/grasp_candidates"), Some(&300), "{got:?}");
+        assert!(!got.lost_anything(), "recover exits 0 on it: {got:?}");
+
+        let mut roomy = Limited {
+            bytes: std::io::Cursor::new(at_flush),
+            limit: u64::MAX,
+        };
+        sink::close(&mut roomy, length, &defs).expect("closed");
+        let closed = scan::scan(roomy.bytes.get_ref()).expect("an MCAP file");
+        assert!(
+            closed.data_verified && closed.summary_verified,
+            "{closed:?}"
+        );
+        assert_eq!(closed.statistics.map(|(n, _)| n), Some(300));
+        let text = RecordError::Stopped {
+            path: path.clone(),
+            cause: Box::new(RecordError::AlreadyStopped { path }),
+            kept,
+            closed: Err(e),
+        }
+        .to_string();
+        assert!(
+            text.contains("could not be closed") && text.contains("holds 300 candidates"),
+            "{text}"
         );
     }
 

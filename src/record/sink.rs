@@ -9,7 +9,8 @@
 //! from the records the file holds, the footer with the summary's CRC, the magic. Every reader
 //! then opens what was written, indexed (`rosbags` refuses unindexed files whose messages are
 //! not in time order, as a node's recording is not: an answer is logged after the next
-//! candidate may have been received).
+//! candidate may have been received). When there is no room for that end, the file is left
+//! ending at its last complete flush, for `grasp_orient recover` ([`close`]).
 
 use super::scan::{op, MAGIC};
 use std::collections::BTreeMap;
@@ -155,16 +156,62 @@ pub struct Definitions {
     pub channels: Vec<ChannelDef>,
 }
 
+/// A file a recording is closed in: read, written, and cut to a length.
+pub trait Cut: Read + Write + Seek {
+    /// Cuts (or extends) the file to `length` bytes.
+    fn cut(&mut self, length: u64) -> std::io::Result<()>;
+    /// Makes what was written durable.
+    fn sync(&mut self) -> std::io::Result<()>;
+}
+
+impl Cut for File {
+    fn cut(&mut self, length: u64) -> std::io::Result<()> {
+        self.set_len(length)
+    }
+
+    fn sync(&mut self) -> std::io::Result<()> {
+        self.sync_all()
+    }
+}
+
 /// Cuts the MCAP file at `path` back to `length` bytes (the end of its last complete flush)
 /// and ends it there: a data end record with the CRC of those bytes, a summary of what they
-/// hold (with `defs`), the footer, the end magic.
+/// hold (with `defs`), the footer, the end magic ([`close`]).
 pub fn close_at(path: &Path, length: u64, defs: &Definitions) -> std::io::Result<()> {
     let mut file = OpenOptions::new().read(true).write(true).open(path)?;
-    file.set_len(length)?;
+    close(&mut file, length, defs)
+}
+
+/// [`close_at`] on an open file. When the end does not fit (a disk full again, a file-size
+/// limit the last flush ended just short of: the summary repeats every schema, some kilobytes),
+/// the file is cut back to `length` once more and the error returned: it then holds every chunk
+/// up to its last complete flush and nothing after, which `grasp_orient recover` copies whole into
+/// a closed file. A summary without the schemas or the chunk index would fit more often, but
+/// `rosbags` cannot read a recording through it (its messages are not in time order), so none is
+/// written.
+pub fn close<F: Cut>(file: &mut F, length: u64, defs: &Definitions) -> std::io::Result<()> {
+    file.cut(length)?;
+    let end = end_of(file, length, defs)?;
+    file.seek(SeekFrom::Start(length))?;
+    if let Err(e) = file.write_all(&end).and_then(|()| file.sync()) {
+        // Whatever part of the end was written goes. Should the cut fail too, `e` still says
+        // why the file is not closed.
+        let _cut = file.cut(length);
+        return Err(e);
+    }
+    Ok(())
+}
+
+/// The records that end a file cut at `length`: data end, summary, footer, magic.
+fn end_of<F: Read + Seek>(
+    file: &mut F,
+    length: u64,
+    defs: &Definitions,
+) -> std::io::Result<Vec<u8>> {
     file.seek(SeekFrom::Start(0))?;
     let mut hasher = crc32fast::Hasher::new();
     let mut buf = vec![0u8; 1 << 16];
-    let mut reader = (&mut file).take(length);
+    let mut reader = (&mut *file).take(length);
     loop {
         let n = reader.read(&mut buf)?;
         if n == 0 {
@@ -172,7 +219,7 @@ pub fn close_at(path: &Path, length: u64, defs: &Definitions) -> std::io::Result
         }
         hasher.update(&buf[..n]);
     }
-    let index = Index::of(&mut file, length)?;
+    let index = Index::of(file, length)?;
     let mut end = Vec::new();
     record(&mut end, op::DATA_END, &hasher.finalize().to_le_bytes());
     let summary_start = length + end.len() as u64;
@@ -190,9 +237,7 @@ pub fn close_at(path: &Path, length: u64, defs: &Definitions) -> std::io::Result
     footer.extend_from_slice(&crc.finalize().to_le_bytes());
     end.extend_from_slice(&footer);
     end.extend_from_slice(MAGIC);
-    file.seek(SeekFrom::Start(length))?;
-    file.write_all(&end)?;
-    file.sync_all()
+    Ok(end)
 }
 
 /// A chunk of the file, as its chunk index record describes it.
@@ -222,7 +267,7 @@ struct Index {
 impl Index {
     /// Walks the records of the first `length` bytes of `file` (whole records: the file was cut
     /// at a flush), reading only their headers.
-    fn of(file: &mut File, length: u64) -> std::io::Result<Self> {
+    fn of<F: Read + Seek>(file: &mut F, length: u64) -> std::io::Result<Self> {
         let mut out = Index::default();
         let mut at = MAGIC.len() as u64;
         let mut head = [0u8; 9];
@@ -234,7 +279,7 @@ impl Index {
             if next > length {
                 break;
             }
-            let body = |file: &mut File, n: u64| -> std::io::Result<Vec<u8>> {
+            let body = |file: &mut F, n: u64| -> std::io::Result<Vec<u8>> {
                 let mut b = vec![0u8; usize::try_from(n.min(size)).unwrap_or(0)];
                 file.read_exact(&mut b)?;
                 Ok(b)

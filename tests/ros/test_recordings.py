@@ -206,7 +206,12 @@ def test_a_full_disk_is_reported_once_and_recording_comes_back(start_node, rclpy
 
     lines = [l for l in node.all_lines() if " stopped: " in l]
     assert len(lines) == 1, f"the failure is logged {len(lines)} times:\n" + "\n".join(lines[:5])
-    assert "File too large" in stopped and "closed at its last complete flush" in stopped, stopped
+    # The file is cut back to its last complete flush and closed there; unless that flush ended too
+    # near the 64 KiB limit for the summary (which repeats every schema): then the close fails and
+    # says so, and `recover` makes the closed file. Where the flushes fall depends on the timing.
+    closed = "closed at its last complete flush" in stopped
+    assert "File too large" in stopped, stopped
+    assert closed or ("could not be closed" in stopped and "grasp_orient recover" in stopped), stopped
     assert "set record to true to start a new file" in stopped, stopped
     assert len(rosout) == 1, f"/rosout has the failure {len(rosout)} times: {rosout[:3]}"
     kept = int(re.search(r"holds (\d+) candidates", stopped).group(1))
@@ -217,6 +222,11 @@ def test_a_full_disk_is_reported_once_and_recording_comes_back(start_node, rclpy
     first = next(f for f in files if f.name in stopped)
     second = next(f for f in files if f.name in restarted)
     assert first.stat().st_size <= 64 * 1024
+    if not closed:
+        fixed = tmp_path / "fixed.mcap"
+        r = run("recover", first, "-o", fixed)
+        assert r.returncode == 0, f"recover lost something of a file cut at a flush:\n{(r.stdout + r.stderr)[-2000:]}"
+        first = fixed
     r = run("replay", first)
     assert r.returncode == 0, f"the closed file does not replay:\n{(r.stdout + r.stderr)[-2000:]}"
     assert f"replayed {kept} candidates" in r.stdout, r.stdout
