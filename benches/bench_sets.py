@@ -155,7 +155,8 @@ def start_variant(ns: str, extra: list[str], params: list[str], workdir: Path, l
 
 # The node's line at debug for each set answered on the topic (src/node/sets.rs, AnswerLine).
 SET_LINE = re.compile(r'\(topic\): (\d+) candidates.*taken ([0-9.]+) ms after it arrived, answered in ([0-9.]+) ms, '
-                      r'published in ([0-9.]+) ms(?:.*handed to DDS at (\d+) ns)?')
+                      r'published in ([0-9.]+) ms; it waited ([0-9.]+) ms for the set thread'
+                      r'(?:; handed to DDS at (\d+) ns)?')
 
 
 def node_times(node, n: int, arrived_ns: list[int], skip: int) -> dict | None:
@@ -164,15 +165,21 @@ def node_times(node, n: int, arrived_ns: list[int], skip: int) -> dict | None:
     publishing; and from the answer handed to DDS to its arrival here (`arrived_ns`, this process's system
     clock, one per set the node answered, in order): the transport and rclpy, none if the counts differ.
     The first `skip` sets (the warm-up) are left out."""
-    # Builds before 2026-12-05 do not say when they handed the answer to DDS (None).
-    rows = [(*map(float, m.groups()[1:4]), m.group(5) and int(m.group(5))) for line in node.all_lines()
-            for m in [SET_LINE.search(line)] if m and int(m.group(1)) == n]
-    if not rows:
+    def lines():
+        # Builds before 2026-12-05 do not say when they handed the answer to DDS (None).
+        return [(*map(float, m.groups()[1:5]), m.group(6) and int(m.group(6))) for line in node.all_lines()
+                for m in [SET_LINE.search(line)] if m and int(m.group(1)) == n]
+
+    # The node's last line may still be on its way through the pipe that collects them.
+    deadline = time.monotonic() + 1.0
+    while len(rows := lines()) < len(arrived_ns) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    if len(rows) <= skip:
         return None
     out = {key: statistics.median(r[i] for r in rows[skip:]) for i, key in
-           enumerate(("taken_ms", "answered_ms", "published_ms"))}
-    out["to_client_ms"] = (statistics.median((a - r[3]) / 1e6 for a, r in list(zip(arrived_ns, rows))[skip:])
-                           if len(rows) == len(arrived_ns) and all(r[3] for r in rows) else None)
+           enumerate(("taken_ms", "answered_ms", "published_ms", "waited_ms"))}
+    out["to_client_ms"] = (statistics.median((a - r[4]) / 1e6 for a, r in list(zip(arrived_ns, rows))[skip:])
+                           if len(rows) == len(arrived_ns) and all(r[4] for r in rows) else None)
     return out
 
 
@@ -304,8 +311,10 @@ def main() -> int:
     variants = [("echo", ["--echo"], []), ("node", [], []), ("node_1", [], ["-p", "solver_threads:=1"])]
     for spec in args.also_bin:
         label, _, path = spec.partition("=")
-        if not label or not path or label in ("echo", "node", "node_1") or label in BINARIES:
-            ap.error(f"--also-bin {spec!r}: want LABEL=PATH with a new label")
+        # The label names the node's namespace: a ROS name token.
+        if (not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", label) or not path
+                or label in ("echo", "node", "node_1") or label in BINARIES):
+            ap.error(f"--also-bin {spec!r}: want LABEL=PATH with a new label of letters, digits and _")
         BINARIES[label] = Path(path).resolve()
         variants.append((label, [], []))
     runs: dict[str, list[dict]] = {name: [] for name, _, _ in variants}
@@ -363,7 +372,8 @@ def main() -> int:
         t = turns[f"{name}_in_node"]
         to_client = "?" if t is None or t["to_client_ms"] is None else f"{t['to_client_ms']:.3f}"
         print(f"    {name:8} " + ("no debug lines" if t is None else
-                                  f"{t['taken_ms']:.3f} / {t['answered_ms']:.3f} / {t['published_ms']:.3f}; "
+                                  f"{t['taken_ms']:.3f} / {t['answered_ms']:.3f} / {t['published_ms']:.3f} "
+                                  f"(waited for the set thread {t['waited_ms']:.3f}); "
                                   f"{to_client}"))
     print("one candidate, node (p50 / p99 ms):")
     t = (med(n, "topic_one", "p50_ms"), med(n, "topic_one", "p99_ms"))

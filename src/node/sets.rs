@@ -254,9 +254,10 @@ async fn send(endpoints: &SetEndpoints, via: Via, reply: SetReply) -> Result<(),
 /// recording's copy; `published in`: serializing the answer and handing it to DDS, and freeing
 /// it; `waited`: from the hand-over to the set thread to the start of its solving (the thread
 /// waking, and the sets before it in the queue). `taken` also holds any wait behind the
-/// previous message, and is 0 when DDS gave no arrival time. The line ends with the time the
-/// answer was handed to DDS, in ns since the epoch on the system clock (the clock of DDS's own
-/// timestamps), so that a client on the same machine can tell the node's time from the transport's.
+/// previous message, and is 0 when DDS gave no arrival time. A published answer's line ends with
+/// the time publishing returned (the answer handed to DDS, and freed), in ns since the epoch on
+/// the system clock (the clock of DDS's own timestamps), so that a client on the same machine can
+/// tell the node's time from the transport's.
 /// `benches/bench_sets.py` reads these lines.
 struct AnswerLine {
     /// The line up to the publishing time, and the wait for the set thread; none when debug
@@ -298,14 +299,13 @@ impl AnswerLine {
 
     fn log(self, sending: Duration, sent: bool, handed_ns: u64) {
         if let Some((text, waited)) = self.text {
-            let how = if sent {
-                "published in"
+            let (how, handed) = if sent {
+                ("published in", format!("; handed to DDS at {handed_ns} ns"))
             } else {
-                "not published, after"
+                ("not published, after", String::new())
             };
             log::debug!(
-                "{text}, {how} {:.3} ms; it waited {:.3} ms for the set thread; handed to DDS at \
-                 {handed_ns} ns",
+                "{text}, {how} {:.3} ms; it waited {:.3} ms for the set thread{handed}",
                 sending.as_secs_f64() * 1e3,
                 waited.as_secs_f64() * 1e3
             );

@@ -118,7 +118,8 @@ pub(crate) fn positive(
     }
 }
 
-/// Each component of `v` finite and within `limit`, the first that is not named by its field.
+/// Checks that every component of `v` is finite and within `limit`; the error names the field
+/// of the first that is not.
 pub(crate) fn vector<const N: usize>(
     fields: [&'static str; N],
     v: &SVector<f64, N>,
