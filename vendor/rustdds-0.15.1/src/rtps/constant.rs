@@ -40,7 +40,9 @@ pub const HEARTBEAT_SUPPRESSION_DURATION: Duration = Duration::from_millis(5);
 // whose writer went quiet after DATA, with no HEARTBEAT since and so no word of whether that
 // DATA was its last, polls the writer: first QUIET_POLL_DELAY after the last DATA, then twice
 // as long after each poll (50, 150, 350, 750 ms after the last DATA), at most QUIET_POLL_MAX
-// times, and it stops at the first HEARTBEAT once nothing is missing. Polls to one writer are
+// times, and it stops at the first HEARTBEAT that comes QUIET_POLL_DELAY or more after the last
+// DATA once nothing is missing (a sooner one may have been sent just before a DATA that was then
+// lost, which only the writer's next periodic HEARTBEAT would reveal). Polls to one writer are
 // at least QUIET_POLL_SPACING apart, and none goes out within QUIET_POLL_SPACING of the
 // reader's answer to a HEARTBEAT. So a writer that sends a sample every 50 to 100 ms gets at most
 // ten polls a second (as often as this crate's writer sends HEARTBEATs to a reader that is

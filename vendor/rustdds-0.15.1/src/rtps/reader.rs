@@ -86,7 +86,9 @@ pub(crate) enum TimedEvent {
 #[derive(Clone, Debug)]
 struct QuietPoll {
   last_data: Instant,
-  // A HEARTBEAT came after the last DATA: the writer has said what it wrote.
+  // A HEARTBEAT came QUIET_POLL_DELAY or more after the last DATA: the writer has said what it
+  // wrote. One that comes sooner may have been sent just before the writer's next DATA, lost,
+  // and so does not end the polls (it still says what is announced).
   heard_heartbeat: bool,
   // The highest sequence number a HEARTBEAT announced (the writer wrote it).
   announced: SequenceNumber,
@@ -1267,9 +1269,10 @@ impl Reader {
       );
       return false;
     }
-    // Patched for grasp_orient (0011-quiet-writer-poll.patch): the writer has said what it wrote.
+    // Patched for grasp_orient (0011-quiet-writer-poll.patch): the writer has said what it wrote,
+    // as of a moment QUIET_POLL_DELAY or more after its last DATA arrived.
     if let Some(quiet) = self.quiet_polls.get_mut(&writer_guid) {
-      quiet.heard_heartbeat = true;
+      quiet.heard_heartbeat |= Instant::now() >= quiet.last_data + QUIET_POLL_DELAY;
       quiet.announced = quiet.announced.max(heartbeat.last_sn);
     }
     // sanity check
@@ -2564,12 +2567,19 @@ mod tests {
       vec![(4, vec![4], false)],
       "the lost repair was not asked for again"
     );
-    // The repair comes, then a HEARTBEAT that announces nothing newer: settled, no more polls.
+    // The repair comes, and a HEARTBEAT right after it that announces nothing newer. It may
+    // have been sent just before a DATA that was lost, so the writer is still polled once.
     data(&mut reader, 4, &fast_dds);
     heartbeat(&mut reader, 2, 4);
     run_timers_after(&mut reader, &timer, HEARTBEAT_RESPONSE_DELAY);
     let _ack = acknacks_sent(&socket);
     run_timers_after(&mut reader, &timer, QUIET_POLL_DELAY + QUIET_POLL_SPACING);
+    assert_eq!(acknacks_sent(&socket), vec![(0, vec![], false)]);
+    // Its answer, a HEARTBEAT from a writer quiet since: settled, no more polls.
+    heartbeat(&mut reader, 3, 4);
+    run_timers_after(&mut reader, &timer, HEARTBEAT_RESPONSE_DELAY);
+    let _ack = acknacks_sent(&socket);
+    run_timers_after(&mut reader, &timer, 2 * (QUIET_POLL_DELAY + QUIET_POLL_SPACING));
     assert_eq!(
       acknacks_sent(&socket),
       vec![],
@@ -2591,6 +2601,21 @@ mod tests {
     data(&mut reader, 6, &other);
     run_timers_after(&mut reader, &timer, QUIET_POLL_DELAY);
     assert_eq!(acknacks_sent(&socket), vec![(7, vec![], false)]);
+    // A HEARTBEAT sent between DATA 7 and DATA 8, which is lost: it announces nothing missing,
+    // yet the writer is polled, and the answer reveals 8.
+    data(&mut reader, 7, &fast_dds);
+    heartbeat(&mut reader, 4, 7);
+    run_timers_after(&mut reader, &timer, HEARTBEAT_RESPONSE_DELAY);
+    let _ack = acknacks_sent(&socket);
+    run_timers_after(&mut reader, &timer, QUIET_POLL_DELAY + QUIET_POLL_SPACING);
+    assert_eq!(
+      acknacks_sent(&socket),
+      vec![(0, vec![], false)],
+      "a HEARTBEAT right after the last DATA ended the polls"
+    );
+    heartbeat(&mut reader, 5, 8);
+    run_timers_after(&mut reader, &timer, HEARTBEAT_RESPONSE_DELAY);
+    assert_eq!(acknacks_sent(&socket), vec![(8, vec![8], true)]);
   }
 
   #[test]
