@@ -37,12 +37,15 @@ pub const HEARTBEAT_RESPONSE_DELAY: Duration = Duration::from_millis(5);
 pub const HEARTBEAT_SUPPRESSION_DURATION: Duration = Duration::from_millis(5);
 
 // Patched for grasp_orient (0011-quiet-writer-poll.patch). A reliable reader of a user topic
-// whose writer went quiet after DATA, with no HEARTBEAT since and so no word of whether that
-// DATA was its last, polls the writer: first QUIET_POLL_DELAY after the last DATA, then twice
-// as long after each poll (50, 150, 350, 750 ms after the last DATA), at most QUIET_POLL_MAX
-// times, and it stops at the first HEARTBEAT that comes QUIET_POLL_DELAY or more after the last
-// DATA once nothing is missing (a sooner one may have been sent just before a DATA that was then
-// lost, which only the writer's next periodic HEARTBEAT would reveal). Polls to one writer are
+// whose writer went quiet after DATA, with no word since of whether that DATA was its last,
+// polls the writer: first QUIET_POLL_DELAY after the last DATA, then twice as long after each
+// poll (50, 150, 350, 750 ms after the last DATA; some 100 ms later each when an early
+// HEARTBEAT was answered), at most QUIET_POLL_MAX times, and it stops at the first HEARTBEAT
+// that comes QUIET_POLL_DELAY or more after the last DATA once nothing is missing. A sooner one
+// may have been sent just before a DATA that was then lost, which only the writer's next
+// periodic HEARTBEAT would reveal. (After a pause of QUIET_POLL_DELAY or more between two DATA,
+// the answer to a poll can still precede a lost next DATA: that loss waits for a later DATA
+// (0008) or the periodic HEARTBEAT, as before this patch.) Polls to one writer are
 // at least QUIET_POLL_SPACING apart, and none goes out within QUIET_POLL_SPACING of the
 // reader's answer to a HEARTBEAT. So a writer that sends a sample every 50 to 100 ms gets at most
 // ten polls a second (as often as this crate's writer sends HEARTBEATs to a reader that is

@@ -748,10 +748,10 @@ impl Reader {
   // of a burst (or the repair of one), no later DATA comes, and Fast DDS's next periodic
   // HEARTBEAT is up to 3 s away; a non-final ACKNACK that only acknowledges does not bring one
   // sooner from Fast DDS, whose periodic HEARTBEAT timer is already running. So a writer that
-  // goes quiet after DATA, with no HEARTBEAT since, is polled (see QUIET_POLL_DELAY for the
-  // timing and the bounds). Called for every DATA and DATA_FRAG from a writer of a reliable
-  // user topic's reader; nothing is polled before the first DATA (the preemptive ACKNACK is
-  // for that).
+  // goes quiet after DATA, with no HEARTBEAT since that came QUIET_POLL_DELAY or more after it,
+  // is polled (see QUIET_POLL_DELAY for the timing and the bounds). Called for every DATA and
+  // DATA_FRAG from a writer of a reliable user topic's reader; nothing is polled before the
+  // first DATA (the preemptive ACKNACK is for that).
   fn note_data_for_quiet_poll(&mut self, writer_guid: GUID, mr_state: &MessageReceiverState) {
     let now = Instant::now();
     let fast_dds = mr_state.source_vendor_id == VendorId::EPROSIMA;
@@ -1270,8 +1270,13 @@ impl Reader {
       return false;
     }
     // Patched for grasp_orient (0011-quiet-writer-poll.patch): the writer has said what it wrote,
-    // as of a moment QUIET_POLL_DELAY or more after its last DATA arrived.
-    if let Some(quiet) = self.quiet_polls.get_mut(&writer_guid) {
+    // as of a moment QUIET_POLL_DELAY or more after its last DATA arrived. A HEARTBEAT already
+    // seen (a duplicate, or one overtaken by a newer one) says nothing new.
+    let fresh = self
+      .matched_writers
+      .get(&writer_guid)
+      .is_some_and(|wp| heartbeat.count > wp.received_heartbeat_count);
+    if let Some(quiet) = self.quiet_polls.get_mut(&writer_guid).filter(|_| fresh) {
       quiet.heard_heartbeat |= Instant::now() >= quiet.last_data + QUIET_POLL_DELAY;
       quiet.announced = quiet.announced.max(heartbeat.last_sn);
     }
@@ -2569,12 +2574,25 @@ mod tests {
     );
     // The repair comes, and a HEARTBEAT right after it that announces nothing newer. It may
     // have been sent just before a DATA that was lost, so the writer is still polled once.
+    // (Both within QUIET_POLL_DELAY of each other, or the test thread stalled: a HEARTBEAT that
+    // late counts as the word of a quiet writer, and the ACKNACKs below differ.)
+    let at = Instant::now();
     data(&mut reader, 4, &fast_dds);
     heartbeat(&mut reader, 2, 4);
+    let stalled = at.elapsed();
+    assert!(stalled < QUIET_POLL_DELAY, "the test thread stalled {stalled:?}");
     run_timers_after(&mut reader, &timer, HEARTBEAT_RESPONSE_DELAY);
     let _ack = acknacks_sent(&socket);
+    // The same HEARTBEAT again, now QUIET_POLL_DELAY after the DATA: already seen, it says
+    // nothing new and does not end the polls either.
+    std::thread::sleep(QUIET_POLL_DELAY);
+    heartbeat(&mut reader, 2, 4);
     run_timers_after(&mut reader, &timer, QUIET_POLL_DELAY + QUIET_POLL_SPACING);
-    assert_eq!(acknacks_sent(&socket), vec![(0, vec![], false)]);
+    assert_eq!(
+      acknacks_sent(&socket),
+      vec![(0, vec![], false)],
+      "a HEARTBEAT right after the repair, or its duplicate, ended the polls"
+    );
     // Its answer, a HEARTBEAT from a writer quiet since: settled, no more polls.
     heartbeat(&mut reader, 3, 4);
     run_timers_after(&mut reader, &timer, HEARTBEAT_RESPONSE_DELAY);
@@ -2603,8 +2621,11 @@ mod tests {
     assert_eq!(acknacks_sent(&socket), vec![(7, vec![], false)]);
     // A HEARTBEAT sent between DATA 7 and DATA 8, which is lost: it announces nothing missing,
     // yet the writer is polled, and the answer reveals 8.
+    let at = Instant::now();
     data(&mut reader, 7, &fast_dds);
     heartbeat(&mut reader, 4, 7);
+    let stalled = at.elapsed();
+    assert!(stalled < QUIET_POLL_DELAY, "the test thread stalled {stalled:?}");
     run_timers_after(&mut reader, &timer, HEARTBEAT_RESPONSE_DELAY);
     let _ack = acknacks_sent(&socket);
     run_timers_after(&mut reader, &timer, QUIET_POLL_DELAY + QUIET_POLL_SPACING);
