@@ -127,9 +127,9 @@ fn closed_words(kept: &Written, closed: &Result<(), std::io::Error>) -> String {
             kept.candidates, kept.recommendations, kept.markers
         ),
         Err(why) => format!(
-            "the file could not be closed ({why}): it ends at its last complete flush, without \
-             its index, and holds {} candidates, {} recommendations, {} marker arrays, which \
-             `grasp_orient recover` copies into a closed file",
+            "the file could not be closed ({why}); up to its last complete flush it holds {} \
+             candidates, {} recommendations, {} marker arrays, which `grasp_orient recover` \
+             copies into a closed file",
             kept.candidates, kept.recommendations, kept.markers
         ),
     }
