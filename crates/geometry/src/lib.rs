@@ -67,6 +67,7 @@
 mod bvh;
 pub mod cast;
 pub mod error;
+pub mod formats;
 pub mod load;
 pub mod mass;
 pub mod mesh;
@@ -77,6 +78,7 @@ pub use cast::{
     UnknownClosingAxis, FEATURE_TOLERANCE,
 };
 pub use error::{Finger, GeometryError, MeshDefect};
+pub use formats::{parse_bytes, Triangles};
 pub use load::{load, parse, resolve, AmentIndex, MeshCache};
 pub use mass::{center_of_mass, check_closed};
 pub use mesh::Mesh;

@@ -10,9 +10,7 @@
 //! - Anything without `://`: a plain path. Other schemes are refused.
 //!
 //! # Formats
-//! By the file name's extension, case-insensitive: `.stl` (binary or ASCII), `.obj`, `.dae`
-//! (COLLADA, with its `<unit meter>` and node transforms applied), parsed by `mesh-loader`. All
-//! the meshes in a file are merged into one.
+//! By the file name's extension ([`crate::formats`]): STL, OBJ and COLLADA.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -20,6 +18,7 @@ use std::sync::{Arc, Mutex};
 use std::time::SystemTime;
 
 use crate::error::GeometryError;
+pub use crate::formats::{check_format, parse_bytes, Triangles};
 use crate::mesh::Mesh;
 
 /// The prefixes of an ament index (`AMENT_PREFIX_PATH`).
@@ -94,45 +93,15 @@ pub fn resolve(resource: &str, index: &AmentIndex) -> Result<PathBuf, GeometryEr
     }
 }
 
-/// A parsed mesh file: vertices in the file's units, triangles.
-pub type Triangles = (Vec<[f64; 3]>, Vec<[u32; 3]>);
-
 /// Read and parse a mesh file, without indexing it.
 pub fn parse(resource: &str, path: &Path) -> Result<Triangles, GeometryError> {
-    let extension = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    if !matches!(extension.as_deref(), Some("stl" | "obj" | "dae")) {
-        return Err(GeometryError::UnknownFormat {
-            resource: resource.to_owned(),
-        });
-    }
+    check_format(resource, path)?;
     let bytes = std::fs::read(path).map_err(|source| GeometryError::Unreadable {
         resource: resource.to_owned(),
         path: path.to_owned(),
         source,
     })?;
-    let scene = mesh_loader::Loader::default()
-        .merge_meshes(true)
-        .load_from_slice(&bytes, path)
-        .map_err(|source| GeometryError::Unparsable {
-            resource: resource.to_owned(),
-            path: path.to_owned(),
-            source,
-        })?;
-    let mut vertices = Vec::new();
-    let mut triangles = Vec::new();
-    for mesh in scene.meshes {
-        let offset = u32::try_from(vertices.len()).unwrap_or(u32::MAX);
-        vertices.extend(mesh.vertices.iter().map(|v| v.map(f64::from)));
-        triangles.extend(
-            mesh.faces
-                .iter()
-                .map(|f| f.map(|k| k.saturating_add(offset))),
-        );
-    }
-    Ok((vertices, triangles))
+    parse_bytes(resource, path, &bytes)
 }
 
 /// Resolve, parse and index a mesh resource, scaled per axis into metres.
