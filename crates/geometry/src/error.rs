@@ -216,6 +216,24 @@ pub enum GeometryError {
         /// The object's resource or primitive.
         resource: String,
     },
+    /// The file's bytes are malformed for its format in a way that is refused before (or
+    /// contained while) it is parsed: elements nested too deep, a count beyond the values held,
+    /// an index past its source, or a structure the parser fails on.
+    #[error("mesh resource {resource:?}: the file is malformed: {reason}")]
+    MalformedMesh {
+        /// The resource as given.
+        resource: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// A COLLADA file's `<unit meter>` is not a finite number greater than zero.
+    #[error("mesh resource {resource:?}: COLLADA <unit meter={unit:?}> must be a finite number of metres greater than zero")]
+    BadUnit {
+        /// The resource as given.
+        resource: String,
+        /// The unit as written.
+        unit: String,
+    },
 }
 
 impl GeometryError {

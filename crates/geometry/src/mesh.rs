@@ -70,10 +70,12 @@ impl Mesh {
             }
         });
         let scaled = scaled.collect::<Result<Vec<_>, _>>()?;
-        let (vertices, mut triangles) = merge_vertices(&scaled, triangles);
+        let tolerance = weld_tolerance(&scaled);
+        let (vertices, mut triangles) = merge_vertices(&scaled, triangles, tolerance);
         if triangles.is_empty() {
             return Err(GeometryError::EmptyMesh { resource });
         }
+        split_t_junctions(&vertices, &mut triangles, tolerance);
         let closed = check_closed(&triangles).and_then(|()| {
             let (volume, centroid) =
                 trimesh_signed_volume_and_center_of_mass(&vertices, &triangles);
@@ -272,11 +274,44 @@ fn check_indices(
     Ok(())
 }
 
-/// One vertex per distinct position (bit for bit, with −0 as +0), triangles renumbered, and
-/// triangles with two equal corners dropped.
-fn merge_vertices(vertices: &[Vector], triangles: &[[u32; 3]]) -> (Vec<Vector>, Vec<[u32; 3]>) {
+/// How close two vertices are to be one, m: [`WELD_TOLERANCE`] times the larger of the
+/// vertices' bounding-box diagonal and their largest coordinate's magnitude.
+///
+/// Why this size: mesh files hold single-precision coordinates, whose spacing (one unit in the
+/// last place) at a magnitude `M` is at most `M · 2⁻²³ ≈ 1.19e-7 · M`. An exporter that writes
+/// the two sides of a seam from different computations leaves them a few such units apart, so
+/// `1e-6 · max(diagonal, M)` (at least 8.4 units in the last place of any coordinate, as
+/// `max(diagonal, M) ≥ M`) joins them. Points that far apart are not features a single-precision
+/// file can place reliably, so nothing real is joined.
+pub(crate) fn weld_tolerance(vertices: &[Vector]) -> f64 {
+    let mut lo = Vector::splat(f64::INFINITY);
+    let mut hi = Vector::splat(f64::NEG_INFINITY);
+    for v in vertices {
+        lo = lo.min(*v);
+        hi = hi.max(*v);
+    }
+    if vertices.is_empty() {
+        return 0.0;
+    }
+    let diagonal = (hi - lo).length();
+    let magnitude = lo.abs().max(hi.abs()).max_element();
+    WELD_TOLERANCE * diagonal.max(magnitude)
+}
+
+/// The weld tolerance relative to the mesh's size ([`weld_tolerance`]).
+pub const WELD_TOLERANCE: f64 = 1e-6;
+
+/// One vertex per position up to `tolerance` (a vertex joins the first kept vertex within
+/// `tolerance` of it, Euclidean, in the order given; bit-identical positions first, by hashing,
+/// with −0 as +0), triangles renumbered, and triangles with two equal corners dropped. A kept
+/// vertex keeps its own position, so the mesh's geometry moves by at most `tolerance`.
+fn merge_vertices(
+    vertices: &[Vector],
+    triangles: &[[u32; 3]],
+    tolerance: f64,
+) -> (Vec<Vector>, Vec<[u32; 3]>) {
     let mut first: HashMap<[u64; 3], u32> = HashMap::with_capacity(vertices.len());
-    let mut merged = Vec::with_capacity(vertices.len());
+    let mut distinct = Vec::with_capacity(vertices.len());
     let mut new_index = Vec::with_capacity(vertices.len());
     for v in vertices {
         let key = [
@@ -285,18 +320,106 @@ fn merge_vertices(vertices: &[Vector], triangles: &[[u32; 3]]) -> (Vec<Vector>, 
             (v.z + 0.0).to_bits(),
         ];
         let index = *first.entry(key).or_insert_with(|| {
-            merged.push(*v);
+            distinct.push(*v);
             // At most as many as the input's vertices, which `u32` indices address.
-            (merged.len() - 1) as u32
+            (distinct.len() - 1) as u32
         });
         new_index.push(index);
     }
+    drop(first);
+    let (merged, welded) = weld(&distinct, tolerance);
     let triangles = triangles
         .iter()
-        .map(|t| t.map(|k| new_index[k as usize]))
+        .map(|t| t.map(|k| welded[new_index[k as usize] as usize]))
         .filter(|t| t[0] != t[1] && t[1] != t[2] && t[2] != t[0])
         .collect();
     (merged, triangles)
+}
+
+/// Distinct positions joined within `tolerance`: a grid of cells `tolerance` wide, where a vertex
+/// looks for a kept one in its cell and the 26 around it (every point within `tolerance` is in
+/// one of them). The kept vertices, and the kept index of each input vertex.
+fn weld(vertices: &[Vector], tolerance: f64) -> (Vec<Vector>, Vec<u32>) {
+    if tolerance.is_nan() || tolerance <= 0.0 || tolerance.is_infinite() {
+        return (vertices.to_vec(), (0..vertices.len() as u32).collect());
+    }
+    let cell = |v: &Vector| {
+        [v.x, v.y, v.z].map(|c| {
+            // Finite coordinates over a tolerance of 1e-6 of their magnitude: within ±1e7.
+            (c / tolerance).floor() as i64
+        })
+    };
+    // The kept vertices of a cell: `head[cell]`, then `next[k]` (u32::MAX ends the list).
+    let mut head: HashMap<[i64; 3], u32> = HashMap::with_capacity(vertices.len());
+    let mut next: Vec<u32> = Vec::with_capacity(vertices.len());
+    let mut kept: Vec<Vector> = Vec::with_capacity(vertices.len());
+    let mut index = Vec::with_capacity(vertices.len());
+    let squared = tolerance * tolerance;
+    for v in vertices {
+        let c = cell(v);
+        let mut found = None;
+        'search: for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let mut k = head
+                        .get(&[c[0] + dx, c[1] + dy, c[2] + dz])
+                        .copied()
+                        .unwrap_or(u32::MAX);
+                    while k != u32::MAX {
+                        if (kept[k as usize] - *v).length_squared() <= squared {
+                            found = Some(k);
+                            break 'search;
+                        }
+                        k = next[k as usize];
+                    }
+                }
+            }
+        }
+        let k = found.unwrap_or_else(|| {
+            let k = kept.len() as u32;
+            kept.push(*v);
+            let slot = head.entry(c).or_insert(u32::MAX);
+            next.push(*slot);
+            *slot = k;
+            k
+        });
+        index.push(k);
+    }
+    (kept, index)
+}
+
+/// Closes T-junctions: where a vertex lies on another triangle's edge (within `tolerance` of it,
+/// strictly between its ends), and that edge and the vertex's own edges are each in one triangle
+/// only (a crack of zero width), the triangle is split at the vertex into a fan from its opposite
+/// corner. Splitting a triangle `(a, b, c)` at `m = a + t(b − a)` leaves its area, its normal and
+/// its term of the volume integral unchanged: the signed volume `det(a, m, c) + det(m, b, c)` is
+/// `t·det(a, b, c) + (1 − t)·det(a, b, c)` by linearity in the second argument. Up to three
+/// passes (a triangle may have T-junctions on each of its edges); what remains open stays open.
+fn split_t_junctions(vertices: &[Vector], triangles: &mut Vec<[u32; 3]>, tolerance: f64) {
+    for _ in 0..3 {
+        let splits = crate::mass::t_junctions(vertices, triangles, tolerance);
+        if splits.is_empty() {
+            return;
+        }
+        let mut out = Vec::with_capacity(triangles.len() + splits.len() * 2);
+        for (i, t) in triangles.iter().enumerate() {
+            match splits.get(&(i as u32)) {
+                None => out.push(*t),
+                Some((edge, on)) => {
+                    // The edge runs t[edge] → t[edge + 1]; the opposite corner is t[edge + 2].
+                    let a = t[*edge];
+                    let b = t[(*edge + 1) % 3];
+                    let c = t[(*edge + 2) % 3];
+                    let mut from = a;
+                    for &m in on.iter().chain(std::iter::once(&b)) {
+                        out.push([from, m, c]);
+                        from = m;
+                    }
+                }
+            }
+        }
+        *triangles = out;
+    }
 }
 
 fn estimate_bytes(trimesh: &TriMesh, resource: &str) -> usize {
