@@ -7,8 +7,10 @@
 //! serde implementations, after RustDDS has read the encapsulation header), a decoded candidate
 //! answered and drawn as the node does (planar and spatial seeds: `model`, 3D components,
 //! `rotation_axis`), the MCAP reader behind `replay` and
-//! `play` (`bag::read_bytes`, which `bag::read` calls), `recover` (`recover::recover_bytes`), and
-//! the JSON-lines reader behind `solve`. Inputs are random bytes (one in five) or valid seeds with one to eight mutations: bit
+//! `play` (`bag::read_bytes`, which `bag::read` calls), `recover` (`recover::recover_bytes`),
+//! the JSON-lines reader behind `solve`, and mesh files (binary and ASCII STL, OBJ, COLLADA)
+//! through `geometry::parse_bytes` and `Mesh::from_triangles`, as `solve`, `replay` and the node
+//! load them (tests `mesh_stl_bytes`, `mesh_obj_bytes`, `mesh_collada_bytes`). Inputs are random bytes (one in five) or valid seeds with one to eight mutations: bit
 //! flips, bytes and boundary words (0, 0xff.., 2^31, 2^63, u64::MAX) written anywhere, insertions,
 //! deletions, copies and truncations.
 //!
@@ -28,7 +30,10 @@
 //!
 //! ```sh
 //! GRASP_ORIENT_FUZZ_CASES=1000000 cargo test --test fuzz -- --nocapture
+//! GRASP_ORIENT_FUZZ_CASES=100000 cargo test --test fuzz mesh_ -- --nocapture
 //! ```
+//!
+//! The tests share the allocator's limit and the watchdog, so they take turns (a lock).
 //!
 //! `GRASP_ORIENT_FUZZ_SEED=N` repeats a run; `GRASP_ORIENT_FUZZ_SAVE=FILE` writes each input to
 //! FILE before running it, to keep the one that aborted.
@@ -36,6 +41,7 @@
 use cap::Cap;
 use grasp_orient::answer::{answer, answer_in_full};
 use grasp_orient::answer::{answer_set, Rules};
+use grasp_orient::geometry::{parse_bytes, GeometryError, Mesh};
 use grasp_orient::jsonl::answer_lines;
 use grasp_orient::msg::{
     cdr, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet, MarkerArray,
@@ -46,8 +52,9 @@ use grasp_orient::solver::Settings;
 use proptest::prelude::*;
 use proptest::sample::Index;
 use proptest::test_runner::{Config, RngAlgorithm, TestCaseError, TestRng, TestRunner};
+use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, Once, OnceLock};
 use std::time::{Duration, Instant};
 
 #[global_allocator]
@@ -82,7 +89,26 @@ enum Mutation {
     Delete(Index, u16),
     Copy(Index, Index, u16),
     Truncate(Index),
+    /// The run of ASCII digits nearest the index replaced by a number on an edge (text formats:
+    /// counts, indices, units).
+    Number(Index, &'static str),
 }
+
+/// Numbers that sit on the edges of counts, indices and units written as text.
+const NUMBERS: [&str; 12] = [
+    "0",
+    "1",
+    "-1",
+    "2",
+    "3",
+    "255",
+    "65536",
+    "4294967295",
+    "4294967296",
+    "1e39",
+    "-0.001",
+    "nan",
+];
 
 /// Words that sit on the edges of lengths and counts.
 const WORDS: [u64; 12] = [
@@ -111,6 +137,7 @@ fn mutation() -> impl Strategy<Value = Mutation> {
         1 => (any::<Index>(), 1u16..64).prop_map(|(i, n)| Mutation::Delete(i, n)),
         1 => (any::<Index>(), any::<Index>(), 1u16..64).prop_map(|(a, b, n)| Mutation::Copy(a, b, n)),
         1 => any::<Index>().prop_map(Mutation::Truncate),
+        2 => (any::<Index>(), prop::sample::select(&NUMBERS[..])).prop_map(|(i, n)| Mutation::Number(i, n)),
     ]
 }
 
@@ -147,6 +174,24 @@ fn apply(bytes: &mut Vec<u8>, m: &Mutation) {
             }
         }
         Mutation::Truncate(i) => bytes.truncate(at(i)),
+        Mutation::Number(i, n) if len > 0 => {
+            let start = at(i);
+            let Some(first) = (start..len)
+                .chain((0..start).rev())
+                .find(|&k| bytes[k].is_ascii_digit())
+            else {
+                return;
+            };
+            let mut from = first;
+            while from > 0 && bytes[from - 1].is_ascii_digit() {
+                from -= 1;
+            }
+            let mut to = first;
+            while to < len && bytes[to].is_ascii_digit() {
+                to += 1;
+            }
+            bytes.splice(from..to, n.bytes());
+        }
         _ => {}
     }
 }
@@ -531,6 +576,234 @@ fn json_target() -> Target {
 }
 
 // ------------------------------------------------------------------------------------------
+// Mesh files
+// ------------------------------------------------------------------------------------------
+
+/// The corners of a 40 mm cube in millimetres and its 12 outward triangles.
+fn cube() -> (Vec<[f32; 3]>, Vec<[usize; 3]>) {
+    let v = (0..8)
+        .map(|i| [0, 1, 2].map(|k| 40.0 * ((i >> k) & 1) as f32 - 20.0))
+        .collect();
+    let t = vec![
+        [0, 2, 3],
+        [0, 3, 1],
+        [4, 5, 7],
+        [4, 7, 6],
+        [0, 1, 5],
+        [0, 5, 4],
+        [2, 6, 7],
+        [2, 7, 3],
+        [0, 4, 6],
+        [0, 6, 2],
+        [1, 3, 7],
+        [1, 7, 5],
+    ];
+    (v, t)
+}
+
+fn binary_stl(v: &[[f32; 3]], t: &[[usize; 3]]) -> Vec<u8> {
+    let mut out = vec![0u8; 80];
+    out.extend((t.len() as u32).to_le_bytes());
+    for tri in t {
+        out.extend([0u8; 12]);
+        for &k in tri {
+            for c in v[k] {
+                out.extend(c.to_le_bytes());
+            }
+        }
+        out.extend([0u8; 2]);
+    }
+    out
+}
+
+fn ascii_stl(v: &[[f32; 3]], t: &[[usize; 3]]) -> Vec<u8> {
+    let mut out = String::from("solid cube\n");
+    for tri in t {
+        out.push_str("  facet normal 0 0 0\n    outer loop\n");
+        for &k in tri {
+            let [x, y, z] = v[k];
+            out.push_str(&format!("      vertex {x:e} {y:e} {z:e}\n"));
+        }
+        out.push_str("    endloop\n  endfacet\n");
+    }
+    out.push_str("endsolid cube\n");
+    out.into_bytes()
+}
+
+fn obj(v: &[[f32; 3]], t: &[[usize; 3]]) -> Vec<u8> {
+    let mut out = String::from("# cube\no cube\n");
+    for [x, y, z] in v {
+        out.push_str(&format!("v {x} {y} {z}\n"));
+    }
+    out.push_str("vn 0 0 1\nvt 0 0\n");
+    for [a, b, c] in t {
+        out.push_str(&format!("f {}/1/1 {}/1/1 {}/1/1\n", a + 1, b + 1, c + 1));
+    }
+    out.into_bytes()
+}
+
+/// The cube as COLLADA: as `<triangles>`, or as a `<polylist>` of its six quads with normals,
+/// with a unit and the geometry under `depth` nested nodes.
+fn collada(polylist: bool, unit: &str, depth: usize) -> Vec<u8> {
+    let (v, t) = cube();
+    let corners: Vec<String> = v.iter().flatten().map(|c| c.to_string()).collect();
+    let primitive = if polylist {
+        let quads = "0 2 3 1 4 5 7 6 0 1 5 4 2 6 7 3 0 4 6 2 1 3 7 5";
+        let with_normals: Vec<String> = quads
+            .split(' ')
+            .enumerate()
+            .map(|(i, k)| format!("{k} {}", i / 4))
+            .collect();
+        format!(
+            r##"<polylist count="6"><input semantic="VERTEX" source="#v" offset="0"/><input semantic="NORMAL" source="#n" offset="1"/><vcount>4 4 4 4 4 4</vcount><p>{}</p></polylist>"##,
+            with_normals.join(" ")
+        )
+    } else {
+        let p: Vec<String> = t.iter().flatten().map(|k| k.to_string()).collect();
+        format!(
+            r##"<triangles count="12"><input semantic="VERTEX" source="#v" offset="0"/><p>{}</p></triangles>"##,
+            p.join(" ")
+        )
+    };
+    let open = "<node>".repeat(depth);
+    let close = "</node>".repeat(depth);
+    format!(
+        r##"<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+<asset><unit meter="{unit}"/><up_axis>Z_UP</up_axis></asset>
+<library_geometries><geometry id="g"><mesh>
+<source id="p"><float_array id="pa" count="24">{}</float_array><technique_common><accessor source="#pa" count="8" stride="3"><param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/></accessor></technique_common></source>
+<source id="n"><float_array id="na" count="18">0 0 -1 0 0 1 0 -1 0 0 1 0 -1 0 0 1 0 0</float_array><technique_common><accessor source="#na" count="6" stride="3"><param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/></accessor></technique_common></source>
+<vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
+{primitive}
+</mesh></geometry></library_geometries>
+<library_visual_scenes><visual_scene id="s">{open}<node id="c"><matrix>1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1</matrix><instance_geometry url="#g"/></node>{close}</visual_scene></library_visual_scenes>
+<scene><instance_visual_scene url="#s"/></scene>
+</COLLADA>
+"##,
+        corners.join(" ")
+    )
+    .into_bytes()
+}
+
+/// Parsed as `name` says and, when it parses, built as the node builds a mesh: refused with
+/// status 2 or built, a closed one with a finite positive volume. The first `closed` seeds are
+/// checked to build closed meshes first (the seeds reach the whole parser).
+fn mesh_target(
+    name: &'static str,
+    file: &'static str,
+    seeds: Vec<Vec<u8>>,
+    closed: usize,
+    budget: fn(usize) -> usize,
+) -> Target {
+    for (i, seed) in seeds.iter().take(closed).enumerate() {
+        let (v, t) = parse_bytes(file, Path::new(file), seed)
+            .unwrap_or_else(|e| panic!("{name}: seed {i}: {e}"));
+        let mesh = Mesh::from_triangles(file, &v, &t, [0.001; 3])
+            .unwrap_or_else(|e| panic!("{name}: seed {i}: {e}"));
+        assert!(mesh.is_closed(), "{name}: seed {i} is not closed");
+    }
+    Target {
+        name,
+        seeds,
+        budget,
+        run: Box::new(move |bytes| {
+            let refused = |e: &GeometryError| {
+                prop_assert_eq!(e.status(), 2, "{}", e);
+                Ok(())
+            };
+            match parse_bytes(file, Path::new(file), bytes) {
+                Err(e) => refused(&e),
+                Ok((vertices, triangles)) => {
+                    match Mesh::from_triangles(file, &vertices, &triangles, [0.001; 3]) {
+                        Err(e) => refused(&e),
+                        Ok(mesh) => {
+                            if let Ok(v) = mesh.volume() {
+                                prop_assert!(v.is_finite() && v > 0.0, "volume {}", v);
+                            }
+                            prop_assert!(mesh.triangle_count() <= triangles.len() * 2);
+                            Ok(())
+                        }
+                    }
+                }
+            }
+        }),
+    }
+}
+
+fn stl_targets() -> [Target; 2] {
+    let (v, t) = cube();
+    let binary = binary_stl(&v, &t);
+    let mut open = t.clone();
+    open.pop();
+    // A mesh-loader-made binary STL whose count disagrees with its size, and one of a single
+    // triangle.
+    let mut miscounted = binary.clone();
+    miscounted[80..84].copy_from_slice(&u32::MAX.to_le_bytes());
+    let ascii = ascii_stl(&v, &t);
+    [
+        mesh_target(
+            "mesh binary STL",
+            "fuzz.stl",
+            vec![
+                binary,
+                miscounted,
+                binary_stl(&v, &open),
+                binary_stl(&v, &t[..1]),
+            ],
+            2,
+            // Per 50-byte triangle: three f32 corners and a face from mesh-loader, three f64
+            // corners, and the built mesh (merged vertices, BVH, triangles at vertices):
+            // within 40 bytes per input byte.
+            |n| 40 * n + 4 * MIB,
+        ),
+        mesh_target(
+            "mesh ASCII STL",
+            "fuzz.stl",
+            vec![
+                ascii.clone(),
+                ascii_stl(&v, &open),
+                ascii[..ascii.len() / 2].to_vec(),
+            ],
+            1,
+            |n| 16 * n + 4 * MIB,
+        ),
+    ]
+}
+
+fn obj_target() -> Target {
+    let (v, t) = cube();
+    mesh_target(
+        "mesh OBJ",
+        "fuzz.obj",
+        vec![
+            include_bytes!("../meshes/block_mm.obj").to_vec(),
+            obj(&v, &t),
+            b"mtllib m.mtl\nusemtl a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\ng one\nf 1 3 2\nf -4 -3 -1\ng two\nf 1 4 3 2\nl 1 2\n".to_vec(),
+        ],
+        2,
+        // A face line of a few bytes makes three corners (f32, then f64) and a built mesh's share.
+        |n| 64 * n + 4 * MIB,
+    )
+}
+
+fn collada_target() -> Target {
+    mesh_target(
+        "mesh COLLADA",
+        "fuzz.dae",
+        vec![
+            collada(false, "0.001", 0),
+            collada(true, "1", 3),
+            collada(false, "0,01", 40),
+        ],
+        3,
+        // The text twice (decoded, then with its unit blanked), two XML trees (the check's and
+        // mesh-loader's, a few tens of bytes per node), and the mesh as for the others.
+        |n| 96 * n + 4 * MIB,
+    )
+}
+
+// ------------------------------------------------------------------------------------------
 // The run
 // ------------------------------------------------------------------------------------------
 
@@ -598,8 +871,8 @@ fn run_target(target: &Target, cases: u32, seed: u64, running: &AtomicU64, epoch
     );
 }
 
-#[test]
-fn no_bytes_panic_abort_hang_or_take_memory_beyond_their_size() {
+/// The cases per target, and the seed, from the environment (printed, to repeat the run).
+fn cases_and_seed() -> (u32, u64) {
     let cases =
         env_number("GRASP_ORIENT_FUZZ_CASES").map_or(2_000, |n| n.min(u32::MAX.into()) as u32);
     let seed = env_number("GRASP_ORIENT_FUZZ_SEED").unwrap_or_else(|| {
@@ -608,19 +881,41 @@ fn no_bytes_panic_abort_hang_or_take_memory_beyond_their_size() {
             .map_or(0, |d| d.as_nanos() as u64)
     });
     println!("fuzz seed {seed} (GRASP_ORIENT_FUZZ_SEED={seed} repeats this run)");
+    (cases, seed)
+}
+
+/// Runs the targets, one test at a time (they share the allocator's limit): the panic hook and
+/// the watchdog are started once for the binary.
+fn run_targets(targets: &[Target], cases: u32, seed: u64) {
+    static TURN: Mutex<()> = Mutex::new(());
+    static HOOK: Once = Once::new();
+    static WATCHDOG: OnceLock<(Arc<AtomicU64>, Instant)> = OnceLock::new();
+    let _turn = TURN.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
     // A panicking case prints its message, and with RUST_BACKTRACE a backtrace, whose symbols
     // are read with allocations, before proptest catches it. The case's memory limit must not
     // apply to that: a failed allocation inside the hook waits forever on the backtrace lock its
     // own thread holds, and the run hung (the watchdog's message waited on the output lock)
     // instead of failing with the case that panicked. Installed before proptest's own hook, which
     // calls it.
-    let previous = std::panic::take_hook();
-    std::panic::set_hook(Box::new(move |info| {
-        ALLOCATOR.set_limit(usize::MAX).ok();
-        previous(info);
-    }));
-    let epoch = Instant::now();
-    let running = watchdog(Duration::from_secs(20), epoch);
+    HOOK.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            ALLOCATOR.set_limit(usize::MAX).ok();
+            previous(info);
+        }));
+    });
+    let (running, epoch) = WATCHDOG.get_or_init(|| {
+        let epoch = Instant::now();
+        (watchdog(Duration::from_secs(20), epoch), epoch)
+    });
+    for target in targets {
+        run_target(target, cases, seed, running, *epoch);
+    }
+}
+
+#[test]
+fn no_bytes_panic_abort_hang_or_take_memory_beyond_their_size() {
+    let (cases, seed) = cases_and_seed();
     let targets = [
         cdr_target::<GraspCandidate>("CDR GraspCandidate", cdr_seeds(&all_cases())),
         answer_target(),
@@ -632,7 +927,26 @@ fn no_bytes_panic_abort_hang_or_take_memory_beyond_their_size() {
         mcap_recover_target(),
         json_target(),
     ];
-    for target in &targets {
-        run_target(target, cases, seed, &running, epoch);
-    }
+    run_targets(&targets, cases, seed);
+}
+
+/// Mesh files: a panic inside the parser is contained by `parse_bytes` (and counted as a
+/// refusal); a stack overflow or a failed allocation would abort the run. Ten times the cases of
+/// the other targets (a case takes tens of microseconds).
+#[test]
+fn mesh_stl_bytes() {
+    let (cases, seed) = cases_and_seed();
+    run_targets(&stl_targets(), cases.saturating_mul(10), seed);
+}
+
+#[test]
+fn mesh_obj_bytes() {
+    let (cases, seed) = cases_and_seed();
+    run_targets(&[obj_target()], cases.saturating_mul(10), seed);
+}
+
+#[test]
+fn mesh_collada_bytes() {
+    let (cases, seed) = cases_and_seed();
+    run_targets(&[collada_target()], cases.saturating_mul(10), seed);
 }

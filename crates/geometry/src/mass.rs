@@ -78,12 +78,14 @@ pub const T_JUNCTION_TESTS: u64 = 50_000_000;
 /// asks again.
 ///
 /// The search sorts the boundary vertices along the axis where they spread most and tests, for
-/// each boundary edge, those within its span on that axis; beyond [`T_JUNCTION_TESTS`] tests it
-/// returns none.
+/// each boundary edge, those within its span on that axis; beyond [`T_JUNCTION_TESTS`] tests, or
+/// more than `most` vertices found on edges (the caller's bound on the triangles that splitting
+/// adds), it returns none.
 pub fn t_junctions(
     vertices: &[Vector],
     triangles: &[[u32; 3]],
     tolerance: f64,
+    most: usize,
 ) -> HashMap<u32, (usize, Vec<u32>)> {
     let mut found = HashMap::new();
     // (low, high, triangle, edge) for every edge; an edge in one triangle is a boundary edge.
@@ -133,6 +135,7 @@ pub fn t_junctions(
     rim.sort_by(|&p, &q| along(p).total_cmp(&along(q)));
     let keys: Vec<f64> = rim.iter().map(|&k| along(k)).collect();
     let mut tests = 0u64;
+    let mut points = 0usize;
     for &(t, e) in &boundary {
         let tri = triangles[t as usize];
         let (a, b) = (tri[e], tri[(e + 1) % 3]);
@@ -162,6 +165,10 @@ pub fn t_junctions(
             .collect();
         if on.is_empty() || found.contains_key(&t) {
             continue;
+        }
+        points += on.len();
+        if points > most {
+            return HashMap::new();
         }
         on.sort_by(|p, q| p.0.total_cmp(&q.0));
         found.insert(t, (e, on.into_iter().map(|(_, m)| m).collect()));

@@ -394,13 +394,19 @@ fn weld(vertices: &[Vector], tolerance: f64) -> (Vec<Vector>, Vec<u32>) {
 /// corner. Splitting a triangle `(a, b, c)` at `m = a + t(b − a)` leaves its area, its normal and
 /// its term of the volume integral unchanged: the signed volume `det(a, m, c) + det(m, b, c)` is
 /// `t·det(a, b, c) + (1 − t)·det(a, b, c)` by linearity in the second argument. Up to three
-/// passes (a triangle may have T-junctions on each of its edges); what remains open stays open.
+/// passes (a triangle may have T-junctions on each of its edges), adding at most as many
+/// triangles as there were (a real T-junction adds one per vertex on an edge; vertices by the
+/// thousand on a line of overlapping triangles would add them by the million); what remains
+/// open stays open.
 fn split_t_junctions(vertices: &[Vector], triangles: &mut Vec<[u32; 3]>, tolerance: f64) {
+    let mut most = triangles.len();
     for _ in 0..3 {
-        let splits = crate::mass::t_junctions(vertices, triangles, tolerance);
+        let splits = crate::mass::t_junctions(vertices, triangles, tolerance, most);
         if splits.is_empty() {
             return;
         }
+        let added: usize = splits.values().map(|(_, on)| on.len()).sum();
+        most -= added.min(most);
         let mut out = Vec::with_capacity(triangles.len() + splits.len() * 2);
         for (i, t) in triangles.iter().enumerate() {
             match splits.get(&(i as u32)) {

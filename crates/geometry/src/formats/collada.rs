@@ -276,14 +276,19 @@ fn check_geometry(doc: &Document) -> Result<(), Refusal> {
         .iter()
         .flat_map(|m| m.children().filter(|n| n.has_tag_name("source")))
         .collect();
+    // mesh-loader keeps the last array of each source (and the last accessor), so these are
+    // the ones looked at here too.
     let arrays: HashMap<&str, Node> = source_nodes
         .iter()
-        .flat_map(|s| s.children())
-        .filter(|n| {
-            matches!(
-                n.tag_name().name(),
-                "float_array" | "IDREF_array" | "Name_array"
-            )
+        .filter_map(|s| {
+            s.children()
+                .filter(|n| {
+                    matches!(
+                        n.tag_name().name(),
+                        "float_array" | "IDREF_array" | "Name_array"
+                    )
+                })
+                .last()
         })
         .filter_map(|n| n.attribute("id").map(|id| (id, n)))
         .collect();
@@ -308,7 +313,8 @@ fn source(node: Node, arrays: &HashMap<&str, Node>) -> Option<Source> {
         .children()
         .filter(|n| n.has_tag_name("technique_common"))
         .flat_map(|t| t.children())
-        .find(|n| n.has_tag_name("accessor"))?;
+        .filter(|n| n.has_tag_name("accessor"))
+        .last()?;
     let count = attr_u64(accessor, "count").unwrap_or(0);
     let stride = attr_u64(accessor, "stride").unwrap_or(1);
     let params = || accessor.children().filter(|n| n.has_tag_name("param"));
@@ -380,7 +386,11 @@ fn used(semantic: &str) -> bool {
 }
 
 fn check_mesh(mesh: Node, sources: &HashMap<&str, Source>) -> Result<(), Refusal> {
-    let vertices = mesh.children().find(|n| n.has_tag_name("vertices"));
+    // The last `<vertices>`, as mesh-loader keeps it.
+    let vertices = mesh
+        .children()
+        .filter(|n| n.has_tag_name("vertices"))
+        .last();
     let vertices_id = vertices.and_then(|v| v.attribute("id")).unwrap_or("");
     // The `<vertices>`' inputs: the counts a VERTEX index must stay under.
     let mut vertex_limits = Vec::new();
@@ -505,6 +515,19 @@ fn check_primitive(primitive: Node, inputs: &[Input]) -> Result<(), Refusal> {
         if count > 0 && count > sizes {
             return Err(malformed(format!(
                 "<polylist count=\"{count}\"> has {sizes} <vcount> values"
+            )));
+        }
+        // mesh-loader reserves the indices the first `count` polygon sizes add up to.
+        let corners = vcount.map_or(0, |v| {
+            values(v)
+                .take(usize::try_from(count).unwrap_or(usize::MAX))
+                .map(|n| n.parse::<u64>().unwrap_or(u64::MAX))
+                .fold(0u64, u64::saturating_add)
+        });
+        let expected = corners.saturating_mul(stride);
+        if count > 0 && !ps.is_empty() && expected != held {
+            return Err(malformed(format!(
+                "<polylist> sizes need {expected} indices but it holds {held}"
             )));
         }
     } else if per.is_none() && count > ps.len() as u64 {
