@@ -696,3 +696,155 @@ fn tolerances_every_candidate_would_be_refused_for_are_refused_when_set() {
         assert_ne!(line["status"], 2, "{} {stderr}", line["message"]);
     }
 }
+
+/// A COLLADA cube (40 units a side) whose `<p>` holds `indices`, its geometry under `depth`
+/// nested `<node>` elements.
+fn collada_cube(indices: &str, depth: usize) -> String {
+    let open = "<node>".repeat(depth);
+    let close = "</node>".repeat(depth);
+    format!(
+        r##"<?xml version="1.0"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+<asset><unit meter="0.001"/></asset>
+<library_geometries><geometry id="g"><mesh>
+<source id="pos"><float_array id="pos-a" count="24">-20 -20 -20 20 -20 -20 -20 20 -20 20 20 -20 -20 -20 20 20 -20 20 -20 20 20 20 20 20</float_array>
+<technique_common><accessor source="#pos-a" count="8" stride="3"><param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/></accessor></technique_common></source>
+<vertices id="v"><input semantic="POSITION" source="#pos"/></vertices>
+<triangles count="12"><input semantic="VERTEX" source="#v" offset="0"/><p>{indices}</p></triangles>
+</mesh></geometry></library_geometries>
+<library_visual_scenes><visual_scene id="s">{open}<node id="n"><instance_geometry url="#g"/></node>{close}</visual_scene></library_visual_scenes>
+<scene><instance_visual_scene url="#s"/></scene>
+</COLLADA>"##
+    )
+}
+
+const CUBE_INDICES: &str =
+    "0 2 3 0 3 1 4 5 7 4 7 6 0 1 5 0 5 4 2 6 7 2 7 3 0 4 6 0 6 2 1 3 7 1 7 5";
+
+/// A pose candidate on the mesh file `mesh` (a 40 mm cube about the origin): the fingers close
+/// along the world's x axis at a 60 mm opening.
+fn pose_on(id: &str, mesh: &str) -> String {
+    serde_json::json!({
+        "header": {"frame_id": "world"}, "id": id,
+        "grasp_pose": {"position": {"x": 0.0, "y": 0.0, "z": 0.0}, "orientation": {"x": 0.0, "y": 0.0, "z": -0.7071067811865476, "w": 0.7071067811865476}},
+        "width": 0.06,
+        "object": {
+            "pose": {"position": {"x": 0.0, "y": 0.0, "z": 0.0}, "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}},
+            "mesh": mesh, "mass": 0.1, "friction": 0.5,
+        },
+        "gravity": {"x": 0.0, "y": 0.0, "z": -9.81},
+    })
+    .to_string()
+}
+
+/// Malformed COLLADA files (an index past the vertices; 10,000 nested `<node>` elements): `solve`
+/// answers each with status 2 naming the cause, does not crash (a panic exited 101, the stack
+/// overflow 134), and answers the next line; the well-formed cube (its millimetre unit applied)
+/// is answered.
+#[test]
+fn malformed_collada_files_are_refused_and_solve_goes_on() {
+    let dir = temp_dir("cli_malformed_collada");
+    let write = |name: &str, text: String| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).expect("write");
+        path.display().to_string()
+    };
+    let past = write(
+        "past.dae",
+        collada_cube(&CUBE_INDICES.replace("0 2 3", "0 2 99"), 0),
+    );
+    let deep = write("deep.dae", collada_cube(CUBE_INDICES, 10_000));
+    let good = write("good.dae", collada_cube(CUBE_INDICES, 3));
+    let input = [
+        pose_on("past", &past),
+        pose_on("deep", &deep),
+        pose_on("good", &good),
+    ]
+    .join("\n");
+    let mut cmd = bin();
+    cmd.arg("solve");
+    let (out, written) = run_fed(cmd, &input);
+    written.expect("write stdin");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !matches!(out.status.code(), Some(101 | 134) | None),
+        "solve crashed: {:?} {stderr}",
+        out.status
+    );
+    let lines = json_lines(&out);
+    assert_eq!(lines.len(), 3, "{lines:?} {stderr}");
+    let r = |i: usize| &lines[i]["recommendation"];
+    assert_eq!(r(0)["status"], 2, "{}", lines[0]);
+    let m = r(0)["message"].as_str().unwrap_or("");
+    assert!(
+        m.contains("the file is malformed") && m.contains("index 99, past the 8 values"),
+        "{m}"
+    );
+    assert_eq!(r(1)["status"], 2, "{}", lines[1]);
+    let m = r(1)["message"].as_str().unwrap_or("");
+    assert!(m.contains("nest deeper than 256 levels"), "{m}");
+    assert_eq!(r(2)["status"], 0, "{}", lines[2]);
+    // The contacts on the cube's faces at x = ∓20 mm: the unit was applied.
+    let c1 = lines[2]["contact_1"]["x"].as_f64().unwrap_or(f64::NAN);
+    assert!((c1 + 0.02).abs() < 1e-6, "{}", lines[2]);
+}
+
+/// `replay` of a recording whose pose candidates name the malformed files: each answer (status 2,
+/// the cause named) is reproduced, and `replay` finishes (a panic exited 101, the stack overflow
+/// 134).
+#[test]
+fn replay_of_malformed_collada_files_finishes() {
+    use grasp_orient::answer::{PoseAnswerer, Rules};
+    use grasp_orient::config::Config;
+    use grasp_orient::geometry::{AmentIndex, ClosingAxis};
+    use grasp_orient::msg::PoseCandidate;
+    use grasp_orient::record::{BagWriter, Entry, Payload};
+
+    let dir = temp_dir("cli_replay_malformed_collada");
+    let mut entries = Vec::new();
+    let config = Config::default();
+    let settings = config.solver_settings().expect("valid");
+    let rules: Rules = config.rules();
+    let poses = PoseAnswerer::new(
+        ClosingAxis::Y,
+        AmentIndex::new(Vec::<std::path::PathBuf>::new()),
+    );
+    for (name, text) in [
+        (
+            "past.dae",
+            collada_cube(&CUBE_INDICES.replace("0 2 3", "0 2 99"), 0),
+        ),
+        ("deep.dae", collada_cube(CUBE_INDICES, 10_000)),
+    ] {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).expect("write");
+        let c: PoseCandidate =
+            serde_json::from_str(&pose_on(name, &path.display().to_string())).expect("a pose");
+        let a = poses.answer(&c, &settings, &rules);
+        assert_eq!(a.recommendation.status, 2, "{a:?}");
+        entries.push(Payload::PoseCandidate(Box::new(c)));
+        entries.push(Payload::PoseRecommendation(Box::new(a)));
+    }
+    let bag = dir.path().join("malformed.mcap");
+    let mut w = BagWriter::create(&bag, &crate::util::pose_bag_topics(), 100).expect("create");
+    for (k, payload) in entries.into_iter().enumerate() {
+        let t = 1_000 + k as u64;
+        w.write(&Entry {
+            payload,
+            log_time: t,
+            publish_time: t,
+        })
+        .expect("write");
+    }
+    w.finish().expect("finish");
+    let out = bin().arg("replay").arg(&bag).output().expect("runs");
+    let text =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !matches!(out.status.code(), Some(101 | 134) | None),
+        "replay crashed: {:?} {text}",
+        out.status
+    );
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert!(text.contains("0 differ"), "{text}");
+}
