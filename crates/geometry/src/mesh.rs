@@ -75,8 +75,14 @@ impl Mesh {
         if triangles.is_empty() {
             return Err(GeometryError::EmptyMesh { resource });
         }
-        split_t_junctions(&vertices, &mut triangles, tolerance);
-        let closed = check_closed(&triangles).and_then(|()| {
+        // T-junctions are looked for only where an edge is open (a closed mesh has none, and is
+        // not sorted twice).
+        let mut closed = check_closed(&triangles);
+        if matches!(closed, Err(MeshDefect::EdgeUse { triangles: 1, .. })) {
+            split_t_junctions(&vertices, &mut triangles, tolerance);
+            closed = check_closed(&triangles);
+        }
+        let closed = closed.and_then(|()| {
             let (volume, centroid) =
                 trimesh_signed_volume_and_center_of_mass(&vertices, &triangles);
             if volume == 0.0 || !volume.is_finite() {
