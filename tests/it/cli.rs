@@ -726,7 +726,7 @@ const CUBE_INDICES: &str =
 fn pose_on(id: &str, mesh: &str) -> String {
     serde_json::json!({
         "header": {"frame_id": "world"}, "id": id,
-        "grasp_pose": {"position": {"x": 0.0, "y": 0.0, "z": 0.0}, "orientation": {"x": 0.0, "y": 0.0, "z": -0.7071067811865476, "w": 0.7071067811865476}},
+        "grasp_pose": {"position": {"x": 0.0, "y": 0.0, "z": 0.0}, "orientation": {"x": 0.0, "y": 0.0, "z": -std::f64::consts::FRAC_1_SQRT_2, "w": std::f64::consts::FRAC_1_SQRT_2}},
         "width": 0.06,
         "object": {
             "pose": {"position": {"x": 0.0, "y": 0.0, "z": 0.0}, "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}},

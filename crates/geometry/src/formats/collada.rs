@@ -281,14 +281,12 @@ fn check_geometry(doc: &Document) -> Result<(), Refusal> {
     let arrays: HashMap<&str, Node> = source_nodes
         .iter()
         .filter_map(|s| {
-            s.children()
-                .filter(|n| {
-                    matches!(
-                        n.tag_name().name(),
-                        "float_array" | "IDREF_array" | "Name_array"
-                    )
-                })
-                .last()
+            s.children().rfind(|n| {
+                matches!(
+                    n.tag_name().name(),
+                    "float_array" | "IDREF_array" | "Name_array"
+                )
+            })
         })
         .filter_map(|n| n.attribute("id").map(|id| (id, n)))
         .collect();
@@ -313,8 +311,7 @@ fn source(node: Node, arrays: &HashMap<&str, Node>) -> Option<Source> {
         .children()
         .filter(|n| n.has_tag_name("technique_common"))
         .flat_map(|t| t.children())
-        .filter(|n| n.has_tag_name("accessor"))
-        .last()?;
+        .rfind(|n| n.has_tag_name("accessor"))?;
     let count = attr_u64(accessor, "count").unwrap_or(0);
     let stride = attr_u64(accessor, "stride").unwrap_or(1);
     let params = || accessor.children().filter(|n| n.has_tag_name("param"));
@@ -387,10 +384,7 @@ fn used(semantic: &str) -> bool {
 
 fn check_mesh(mesh: Node, sources: &HashMap<&str, Source>) -> Result<(), Refusal> {
     // The last `<vertices>`, as mesh-loader keeps it.
-    let vertices = mesh
-        .children()
-        .filter(|n| n.has_tag_name("vertices"))
-        .last();
+    let vertices = mesh.children().rfind(|n| n.has_tag_name("vertices"));
     let vertices_id = vertices.and_then(|v| v.attribute("id")).unwrap_or("");
     // The `<vertices>`' inputs: the counts a VERTEX index must stay under.
     let mut vertex_limits = Vec::new();
