@@ -73,6 +73,9 @@ pub(crate) struct DiscoveryReach {
   pub multicast: bool,
   /// Take in other participants found by SPDP.
   pub discover_others: bool,
+  /// The largest sample a user reader assembles from fragments (patched for grasp_orient,
+  /// 0015-bounded-fragment-assembly.patch).
+  pub max_sample_size: usize,
 }
 
 /// Builder object to create a [`DomainParticipant`] with non-default
@@ -93,6 +96,7 @@ pub struct DomainParticipantBuilder {
   initial_peer_participant_ids: u16, // participant ids probed at each initial peer
   multicast_discovery: bool,      // join the multicast groups and announce multicast locators
   discover_others: bool,          // take in other participants found by SPDP
+  max_sample_size: usize,         // the largest sample a user reader assembles from DATA_FRAGs
 
   socket_receive_buffer_size: usize,
   socket_send_buffer_size: usize,
@@ -113,6 +117,7 @@ impl DomainParticipantBuilder {
       initial_peer_participant_ids: 0,
       multicast_discovery: true,
       discover_others: true,
+      max_sample_size: Self::DEFAULT_MAX_SAMPLE_SIZE,
       socket_receive_buffer_size: Self::DEFAULT_SOCKET_RECEIVE_BUFFER_SIZE,
       socket_send_buffer_size: Self::DEFAULT_SOCKET_SEND_BUFFER_SIZE,
       #[cfg(feature = "security")]
@@ -185,6 +190,23 @@ impl DomainParticipantBuilder {
   /// talks to nobody, as Fast DDS's limit of one participant makes it.
   pub fn discover_other_participants(mut self, enabled: bool) -> Self {
     self.discover_others = enabled;
+    self
+  }
+
+  /// The default of [`Self::max_sample_size`]: 256 MiB.
+  pub const DEFAULT_MAX_SAMPLE_SIZE: usize =
+    crate::rtps::fragment_assembler::DEFAULT_MAX_SAMPLE_SIZE;
+
+  /// The largest sample, in bytes of serialized payload, that this participant's user
+  /// readers assemble from DATA_FRAG submessages (default
+  /// [`Self::DEFAULT_MAX_SAMPLE_SIZE`]). A DATA_FRAG claiming a larger sampleSize is dropped
+  /// without allocating anything and logged. The incomplete assemblies of one reader hold at
+  /// most twice this together; memory grows with the fragments received, not with the size
+  /// claimed, and only for writers the reader has matched. Built-in (discovery) readers take
+  /// samples of up to 64 KiB, whatever this says. A sample that arrives in one DATA is not
+  /// affected (the transport bounds it to a datagram).
+  pub fn max_sample_size(mut self, bytes: usize) -> Self {
+    self.max_sample_size = bytes;
     self
   }
 
@@ -411,6 +433,7 @@ impl DomainParticipantBuilder {
         ),
         multicast: self.multicast_discovery,
         discover_others: self.discover_others,
+        max_sample_size: self.max_sample_size,
       },
       dp_waker,
       discovery_sample_sender,
@@ -1476,6 +1499,7 @@ impl DomainParticipantInner {
     let security_plugins_clone = security_plugins_handle.clone();
     let only_networks_for_ev_loop = only_networks.clone();
     let initial_peer_locators = reach.initial_peer_locators;
+    let max_sample_size = reach.max_sample_size;
     let ev_loop_handle = thread::Builder::new()
       .name(format!("RustDDS Participant {participant_id} event loop"))
       .spawn(move || {
@@ -1511,6 +1535,7 @@ impl DomainParticipantInner {
           socket_send_buffer_size,
           same_host_loopback,
           initial_peer_locators,
+          max_sample_size,
           reader_ready_rx,
           writer_ready_rx,
           dp_waker,
