@@ -76,6 +76,9 @@ pub(crate) struct DiscoveryReach {
   /// The largest sample a user reader assembles from fragments (patched for grasp_orient,
   /// 0015-bounded-fragment-assembly.patch).
   pub max_sample_size: usize,
+  /// The most remote participants discovery keeps (patched for grasp_orient,
+  /// 0016-bounded-remote-participants.patch).
+  pub max_remote_participants: usize,
 }
 
 /// Builder object to create a [`DomainParticipant`] with non-default
@@ -97,6 +100,7 @@ pub struct DomainParticipantBuilder {
   multicast_discovery: bool,      // join the multicast groups and announce multicast locators
   discover_others: bool,          // take in other participants found by SPDP
   max_sample_size: usize,         // the largest sample a user reader assembles from DATA_FRAGs
+  max_remote_participants: usize, // the most remote participants discovery keeps
 
   socket_receive_buffer_size: usize,
   socket_send_buffer_size: usize,
@@ -118,6 +122,7 @@ impl DomainParticipantBuilder {
       multicast_discovery: true,
       discover_others: true,
       max_sample_size: Self::DEFAULT_MAX_SAMPLE_SIZE,
+      max_remote_participants: Self::DEFAULT_MAX_REMOTE_PARTICIPANTS,
       socket_receive_buffer_size: Self::DEFAULT_SOCKET_RECEIVE_BUFFER_SIZE,
       socket_send_buffer_size: Self::DEFAULT_SOCKET_SEND_BUFFER_SIZE,
       #[cfg(feature = "security")]
@@ -207,6 +212,21 @@ impl DomainParticipantBuilder {
   /// affected (the transport bounds it to a datagram).
   pub fn max_sample_size(mut self, bytes: usize) -> Self {
     self.max_sample_size = bytes;
+    self
+  }
+
+  /// The default of [`Self::max_remote_participants`].
+  pub const DEFAULT_MAX_REMOTE_PARTICIPANTS: usize = 1000;
+
+  /// The most remote participants discovery keeps at a time (default
+  /// [`Self::DEFAULT_MAX_REMOTE_PARTICIPANTS`]). SPDP data of a participant not yet
+  /// known while that many are is ignored (one warning every 10 s says how many were):
+  /// every participant taken in is matched by the built-in endpoints, which then send it
+  /// HEARTBEATs, SEDP data and ACKNACKs, so each costs memory and time in the event loop,
+  /// and SPDP data with invented GUID prefixes costs the sender nothing. A participant that
+  /// leaves (or whose lease expires) makes room again.
+  pub fn max_remote_participants(mut self, count: usize) -> Self {
+    self.max_remote_participants = count;
     self
   }
 
@@ -434,6 +454,7 @@ impl DomainParticipantBuilder {
         multicast: self.multicast_discovery,
         discover_others: self.discover_others,
         max_sample_size: self.max_sample_size,
+        max_remote_participants: self.max_remote_participants,
       },
       dp_waker,
       discovery_sample_sender,
@@ -1484,11 +1505,13 @@ impl DomainParticipantInner {
       std::sync::mpsc::sync_channel::<()>(1);
 
     // Discovert DB creation
-    let discovery_db = Arc::new(RwLock::new(DiscoveryDB::new(
+    let mut discovery_db = DiscoveryDB::new(
       participant_guid,
       discovery_db_event_sender,
       status_sender.clone(),
-    )));
+    );
+    discovery_db.set_max_remote_participants(reach.max_remote_participants);
+    let discovery_db = Arc::new(RwLock::new(discovery_db));
 
     let (stop_poll_sender, stop_poll_receiver) = wake_channel_unbounded(&dp_waker);
 
