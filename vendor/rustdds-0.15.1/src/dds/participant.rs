@@ -73,6 +73,12 @@ pub(crate) struct DiscoveryReach {
   pub multicast: bool,
   /// Take in other participants found by SPDP.
   pub discover_others: bool,
+  /// The largest sample a user reader assembles from fragments (patched for grasp_orient,
+  /// 0015-bounded-fragment-assembly.patch).
+  pub max_sample_size: usize,
+  /// The most remote participants discovery keeps (patched for grasp_orient,
+  /// 0016-bounded-remote-participants.patch).
+  pub max_remote_participants: usize,
 }
 
 /// Builder object to create a [`DomainParticipant`] with non-default
@@ -93,6 +99,8 @@ pub struct DomainParticipantBuilder {
   initial_peer_participant_ids: u16, // participant ids probed at each initial peer
   multicast_discovery: bool,      // join the multicast groups and announce multicast locators
   discover_others: bool,          // take in other participants found by SPDP
+  max_sample_size: usize,         // the largest sample a user reader assembles from DATA_FRAGs
+  max_remote_participants: usize, // the most remote participants discovery keeps
 
   socket_receive_buffer_size: usize,
   socket_send_buffer_size: usize,
@@ -113,6 +121,8 @@ impl DomainParticipantBuilder {
       initial_peer_participant_ids: 0,
       multicast_discovery: true,
       discover_others: true,
+      max_sample_size: Self::DEFAULT_MAX_SAMPLE_SIZE,
+      max_remote_participants: Self::DEFAULT_MAX_REMOTE_PARTICIPANTS,
       socket_receive_buffer_size: Self::DEFAULT_SOCKET_RECEIVE_BUFFER_SIZE,
       socket_send_buffer_size: Self::DEFAULT_SOCKET_SEND_BUFFER_SIZE,
       #[cfg(feature = "security")]
@@ -185,6 +195,38 @@ impl DomainParticipantBuilder {
   /// talks to nobody, as Fast DDS's limit of one participant makes it.
   pub fn discover_other_participants(mut self, enabled: bool) -> Self {
     self.discover_others = enabled;
+    self
+  }
+
+  /// The default of [`Self::max_sample_size`]: 256 MiB.
+  pub const DEFAULT_MAX_SAMPLE_SIZE: usize =
+    crate::rtps::fragment_assembler::DEFAULT_MAX_SAMPLE_SIZE;
+
+  /// The largest sample, in bytes of serialized payload, that this participant's user
+  /// readers assemble from DATA_FRAG submessages (default
+  /// [`Self::DEFAULT_MAX_SAMPLE_SIZE`]). A DATA_FRAG claiming a larger sampleSize is dropped
+  /// without allocating anything and logged. The incomplete assemblies of one reader hold at
+  /// most twice this together; memory grows with the fragments received, not with the size
+  /// claimed, and only for writers the reader has matched. Built-in (discovery) readers take
+  /// samples of up to 64 KiB, whatever this says. A sample that arrives in one DATA is not
+  /// affected (the transport bounds it to a datagram).
+  pub fn max_sample_size(mut self, bytes: usize) -> Self {
+    self.max_sample_size = bytes;
+    self
+  }
+
+  /// The default of [`Self::max_remote_participants`].
+  pub const DEFAULT_MAX_REMOTE_PARTICIPANTS: usize = 1000;
+
+  /// The most remote participants discovery keeps at a time (default
+  /// [`Self::DEFAULT_MAX_REMOTE_PARTICIPANTS`]). SPDP data of a participant not yet
+  /// known while that many are is ignored (one warning every 10 s says how many were):
+  /// every participant taken in is matched by the built-in endpoints, which then send it
+  /// HEARTBEATs, SEDP data and ACKNACKs, so each costs memory and time in the event loop,
+  /// and SPDP data with invented GUID prefixes costs the sender nothing. A participant that
+  /// leaves (or whose lease expires) makes room again.
+  pub fn max_remote_participants(mut self, count: usize) -> Self {
+    self.max_remote_participants = count;
     self
   }
 
@@ -411,6 +453,8 @@ impl DomainParticipantBuilder {
         ),
         multicast: self.multicast_discovery,
         discover_others: self.discover_others,
+        max_sample_size: self.max_sample_size,
+        max_remote_participants: self.max_remote_participants,
       },
       dp_waker,
       discovery_sample_sender,
@@ -1461,11 +1505,13 @@ impl DomainParticipantInner {
       std::sync::mpsc::sync_channel::<()>(1);
 
     // Discovert DB creation
-    let discovery_db = Arc::new(RwLock::new(DiscoveryDB::new(
+    let mut discovery_db = DiscoveryDB::new(
       participant_guid,
       discovery_db_event_sender,
       status_sender.clone(),
-    )));
+    );
+    discovery_db.set_max_remote_participants(reach.max_remote_participants);
+    let discovery_db = Arc::new(RwLock::new(discovery_db));
 
     let (stop_poll_sender, stop_poll_receiver) = wake_channel_unbounded(&dp_waker);
 
@@ -1476,6 +1522,7 @@ impl DomainParticipantInner {
     let security_plugins_clone = security_plugins_handle.clone();
     let only_networks_for_ev_loop = only_networks.clone();
     let initial_peer_locators = reach.initial_peer_locators;
+    let max_sample_size = reach.max_sample_size;
     let ev_loop_handle = thread::Builder::new()
       .name(format!("RustDDS Participant {participant_id} event loop"))
       .spawn(move || {
@@ -1511,6 +1558,7 @@ impl DomainParticipantInner {
           socket_send_buffer_size,
           same_host_loopback,
           initial_peer_locators,
+          max_sample_size,
           reader_ready_rx,
           writer_ready_rx,
           dp_waker,

@@ -976,78 +976,95 @@ impl Discovery {
     });
   }
 
+  // Patched for grasp_orient (0016-bounded-remote-participants.patch): the pending SPDP samples
+  // are taken all at once, not one by one. Each take selects from, and sorts, every sample
+  // pending in the reader, so taking them one at a time cost time quadratic in the backlog: with
+  // SPDP data of thousands of invented participants pending, the discovery thread spent
+  // seconds on it, and the participant's shutdown, which joins that thread, waited for it.
   pub fn spdp_receive(&mut self) {
     loop {
-      let s = self.dcps_participant.reader.take_next_sample();
-      debug!("spdp_receive read {:?}", s);
-      match s {
-        Ok(Some(ds)) => {
-          #[cfg(not(feature = "security"))]
-          let permission = NormalDiscoveryPermission::Allow;
-
-          #[cfg(feature = "security")]
-          let permission = if let Some(security) = self.security_opt.as_mut() {
-            // Security is enabled. Do a secure read, potentially starting the
-            // authentication protocol. The return value tells if normal Discovery is
-            // allowed to process the message.
-            security.participant_read(
-              &ds,
-              &self.discovery_db,
-              &self.discovery_updated_sender,
-              &self.dcps_participant_stateless_message.writer,
-            )
-          } else {
-            // No security configured, always allowed
-            NormalDiscoveryPermission::Allow
-          };
-
-          if permission == NormalDiscoveryPermission::Allow {
-            match ds.value {
-              Sample::Value(participant_data) => {
-                debug!("spdp_receive discovered {:?}", participant_data);
-                self.process_discovered_participant_data(&participant_data);
-              }
-              // Sample::Dispose means that DomainParticipant was disposed
-              Sample::Dispose(participant_guid) => {
-                self.process_participant_dispose(participant_guid.0.prefix);
-              }
-            }
-          } else {
-            // Speed up *secure* discovery.
-            //
-            // While the remote is still being authenticated, `participant_read`
-            // returns a permission other than `Allow`, which skips
-            // `process_discovered_participant_data` above — and with it the normal
-            // "quick SPDP response" optimization. Without that, the remote would
-            // only learn about us on our next *periodic* SPDP (SPDP_PUBLISH_PERIOD),
-            // delaying the authentication handshake by up to a full period. Send an
-            // unsolicited one-shot quick SPDP response now (at most once per remote).
-            // We only re-announce our own public SPDP data, so this discloses nothing
-            // extra.
-            #[cfg(feature = "security")]
-            if let Sample::Value(participant_data) = &ds.value {
-              let remote_prefix = participant_data.participant_guid.prefix;
-              if remote_prefix != self.domain_participant.guid().prefix
-                && self.spdp_quick_response_sent.insert(remote_prefix)
-              {
-                self.discovery_timer.borrow_mut().set_timeout(
-                  StdDuration::from_millis(10),
-                  DiscoveryTimerEvent::SendParticipantInfo { reschedule: false },
-                );
-              }
-            }
-          }
-        }
-        Ok(None) => {
+      let taken = self
+        .dcps_participant
+        .reader
+        .take(usize::MAX, ReadCondition::not_read());
+      match taken {
+        Ok(samples) if samples.is_empty() => {
           trace!("spdp_receive: no more data");
           return;
         } // no more data
+        Ok(samples) => {
+          for ds in samples {
+            debug!("spdp_receive read {:?}", ds);
+            self.spdp_receive_sample(ds);
+          }
+        }
         Err(e) => {
           error!(" !!! spdp_receive: {e:?}");
           return;
         }
       }
     } // loop
+  }
+
+  fn spdp_receive_sample(
+    &mut self,
+    ds: crate::dds::with_key::DataSample<SpdpDiscoveredParticipantData>,
+  ) {
+    #[cfg(not(feature = "security"))]
+    let permission = NormalDiscoveryPermission::Allow;
+
+    #[cfg(feature = "security")]
+    let permission = if let Some(security) = self.security_opt.as_mut() {
+      // Security is enabled. Do a secure read, potentially starting the
+      // authentication protocol. The return value tells if normal Discovery is
+      // allowed to process the message.
+      security.participant_read(
+        &ds,
+        &self.discovery_db,
+        &self.discovery_updated_sender,
+        &self.dcps_participant_stateless_message.writer,
+      )
+    } else {
+      // No security configured, always allowed
+      NormalDiscoveryPermission::Allow
+    };
+
+    if permission == NormalDiscoveryPermission::Allow {
+      match ds.value {
+        Sample::Value(participant_data) => {
+          debug!("spdp_receive discovered {:?}", participant_data);
+          self.process_discovered_participant_data(&participant_data);
+        }
+        // Sample::Dispose means that DomainParticipant was disposed
+        Sample::Dispose(participant_guid) => {
+          self.process_participant_dispose(participant_guid.0.prefix);
+        }
+      }
+    } else {
+      // Speed up *secure* discovery.
+      //
+      // While the remote is still being authenticated, `participant_read`
+      // returns a permission other than `Allow`, which skips
+      // `process_discovered_participant_data` above — and with it the normal
+      // "quick SPDP response" optimization. Without that, the remote would
+      // only learn about us on our next *periodic* SPDP (SPDP_PUBLISH_PERIOD),
+      // delaying the authentication handshake by up to a full period. Send an
+      // unsolicited one-shot quick SPDP response now (at most once per remote).
+      // We only re-announce our own public SPDP data, so this discloses nothing
+      // extra.
+      #[cfg(feature = "security")]
+      if let Sample::Value(participant_data) = &ds.value {
+        let remote_prefix = participant_data.participant_guid.prefix;
+        if remote_prefix != self.domain_participant.guid().prefix
+          && self.spdp_quick_response_sent.insert(remote_prefix)
+        {
+          self.discovery_timer.borrow_mut().set_timeout(
+            StdDuration::from_millis(10),
+            DiscoveryTimerEvent::SendParticipantInfo { reschedule: false },
+          );
+        }
+      }
+    }
   }
 
   fn process_discovered_participant_data(
@@ -1062,8 +1079,16 @@ impl Discovery {
       trace!("spdp_receive: ignoring {:?}", participant_data.participant_guid);
       return;
     }
-    let was_new = discovery_db_write(&self.discovery_db).update_participant(participant_data);
     let guid_prefix = participant_data.participant_guid.prefix;
+    let was_new = {
+      let mut db = discovery_db_write(&self.discovery_db);
+      // Patched for grasp_orient (0016-bounded-remote-participants.patch): a new participant
+      // beyond max_remote_participants is ignored, before anything is matched to it.
+      if !db.admits_participant(guid_prefix) {
+        return;
+      }
+      db.update_participant(participant_data)
+    };
 
     // Send notification to dp_event_loop. It will update local reader/writer
     // proxies as the SpdpDiscoveredParticipantData contains a bitmap of the

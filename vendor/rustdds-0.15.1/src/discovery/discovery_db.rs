@@ -45,12 +45,27 @@ const DEFAULT_PARTICIPANT_LEASE_DURATION: Duration = Duration::from_secs(60);
 // How much longer to wait than lease duration before pronouncing lost.
 const PARTICIPANT_LEASE_DURATION_TOLERANCE: Duration = Duration::from_secs(0);
 
+// Patched for grasp_orient (0016-bounded-remote-participants.patch): the longest lease honoured.
+// A participant announcing a longer (or infinite) one is still dropped after 5 minutes of
+// silence, so participants that announced themselves once cannot hold the places of
+// max_remote_participants for good. Live participants announce themselves much more often
+// (Fast DDS every 3 s by default, with a lease of 20 s).
+const MAX_HONOURED_LEASE_DURATION: Duration = Duration::from_secs(300);
+// How often, at most, the participants ignored for want of room are reported at warn level.
+const REFUSAL_WARNING_INTERVAL: std::time::Duration = std::time::Duration::from_secs(10);
+
 // TODO: Let DiscoveryDB itself become thread-safe and support smaller-scope
 // lock
 pub(crate) struct DiscoveryDB {
   my_guid: GUID,
   participant_proxies: BTreeMap<GuidPrefix, SpdpDiscoveredParticipantData>,
   participant_last_life_signs: BTreeMap<GuidPrefix, Instant>,
+  // Patched for grasp_orient (0016-bounded-remote-participants.patch): the most remote
+  // participants kept, how many new ones were ignored for want of room, and when that was last
+  // reported at warn level.
+  max_remote_participants: usize,
+  participants_ignored: u64,
+  ignored_reported_at: Option<Instant>,
 
   // Authentication statuses of participants
   #[cfg(feature = "security")]
@@ -129,6 +144,9 @@ impl DiscoveryDB {
       my_guid,
       participant_proxies: BTreeMap::new(),
       participant_last_life_signs: BTreeMap::new(),
+      max_remote_participants: crate::DomainParticipantBuilder::DEFAULT_MAX_REMOTE_PARTICIPANTS,
+      participants_ignored: 0,
+      ignored_reported_at: None,
       #[cfg(feature = "security")]
       authentication_statuses: BTreeMap::new(),
       local_topic_writers: BTreeMap::new(),
@@ -150,10 +168,55 @@ impl DiscoveryDB {
       .unwrap_or_else(|e| error!("Cannot report participant status: {e:?}"));
   }
 
-  // Returns if participant was previously unknown
+  /// The most remote participants this database keeps (participant-builder
+  /// `max_remote_participants`).
+  pub fn set_max_remote_participants(&mut self, count: usize) {
+    self.max_remote_participants = count;
+  }
+
+  fn remote_participant_count(&self) -> usize {
+    self.participant_proxies.len()
+      - usize::from(self.participant_proxies.contains_key(&self.my_guid.prefix))
+  }
+
+  /// Whether SPDP data of `guid_prefix` is taken in: a participant already known, this
+  /// participant itself, or a new one while fewer than max_remote_participants are known. A
+  /// new one beyond that is ignored and counted; the count is logged at warn level at most
+  /// every REFUSAL_WARNING_INTERVAL.
+  pub fn admits_participant(&mut self, guid_prefix: GuidPrefix) -> bool {
+    if guid_prefix == self.my_guid.prefix
+      || self.participant_proxies.contains_key(&guid_prefix)
+      || self.remote_participant_count() < self.max_remote_participants
+    {
+      return true;
+    }
+    self.participants_ignored += 1;
+    let now = Instant::now();
+    if self
+      .ignored_reported_at
+      .is_none_or(|at| now.duration_since(at) >= REFUSAL_WARNING_INTERVAL)
+    {
+      self.ignored_reported_at = Some(now);
+      warn!(
+        "Discovery keeps at most {} remote participants: {guid_prefix:?} ignored ({} new \
+         participants ignored so far)",
+        self.max_remote_participants, self.participants_ignored
+      );
+    } else {
+      debug!("Remote participant {guid_prefix:?} ignored: no room");
+    }
+    false
+  }
+
+  // Returns if participant was previously unknown. Patched for grasp_orient
+  // (0016-bounded-remote-participants.patch): a new participant the database has no room for
+  // (admits_participant) is not taken in, and false is returned.
   pub fn update_participant(&mut self, data: &SpdpDiscoveredParticipantData) -> bool {
     debug!("update_participant: {:?}", data);
     let guid = data.participant_guid;
+    if !self.admits_participant(guid.prefix) {
+      return false;
+    }
 
     // sanity check
     if guid.entity_id != EntityId::PARTICIPANT {
@@ -313,7 +376,8 @@ impl DiscoveryDB {
     for (&guid, sp) in &self.participant_proxies {
       let lease_duration = sp
         .lease_duration
-        .unwrap_or(DEFAULT_PARTICIPANT_LEASE_DURATION);
+        .unwrap_or(DEFAULT_PARTICIPANT_LEASE_DURATION)
+        .min(MAX_HONOURED_LEASE_DURATION);
       // let lease_duration = lease_duration + lease_duration; // double it
       match self.participant_last_life_signs.get(&guid) {
         Some(&last_life) => {
@@ -883,6 +947,42 @@ mod tests {
     assert!(discoverydb.participant_proxies.is_empty());
 
     // TODO: more operations tests
+  }
+
+  #[test]
+  fn remote_participants_beyond_the_bound_are_ignored() {
+    // 0016-bounded-remote-participants.patch.
+    let (discovery_db_event_sender, _discovery_db_event_receiver) =
+      std::sync::mpsc::sync_channel::<()>(4);
+    let (status_sender, _status_receiver) = sync_status_channel(16).unwrap();
+    let mut discoverydb = DiscoveryDB::new(
+      GUID::new_participant_guid(),
+      discovery_db_event_sender,
+      status_sender,
+    );
+    discoverydb.set_max_remote_participants(3);
+    let mut data = spdp_participant_data().unwrap();
+    for i in 0..10u8 {
+      data.participant_guid = GUID::new(GuidPrefix::new(&[i + 1; 12]), EntityId::PARTICIPANT);
+      discoverydb.update_participant(&data);
+    }
+    assert_eq!(
+      discoverydb.participant_proxies.len(),
+      3,
+      "the database took in more remote participants than its bound"
+    );
+    // A known one is still updated, and a lease too long to honour is cut to 5 minutes.
+    data.participant_guid = GUID::new(GuidPrefix::new(&[1; 12]), EntityId::PARTICIPANT);
+    data.lease_duration = Some(Duration::from(StdDuration::from_secs(100_000)));
+    assert!(discoverydb.admits_participant(data.participant_guid.prefix));
+    discoverydb.update_participant(&data);
+    let long_ago = Instant::now() - StdDuration::from_secs(301);
+    discoverydb
+      .participant_last_life_signs
+      .insert(data.participant_guid.prefix, long_ago);
+    let removed = discoverydb.participant_cleanup();
+    assert_eq!(removed.len(), 1, "a lease of 100,000 s was honoured past 5 minutes");
+    assert!(discoverydb.admits_participant(GuidPrefix::new(&[20; 12])));
   }
 
   #[test]

@@ -145,6 +145,10 @@ pub struct DPEventLoop {
   // Unicast SPDP destinations at the initial peers (participant-builder
   // `with_initial_peers`): the built-in SPDP writer announces to them too.
   initial_peer_locators: Vec<Locator>,
+
+  // The largest sample a user reader assembles from DATA_FRAGs (participant-builder
+  // `max_sample_size`; patched for grasp_orient, 0015-bounded-fragment-assembly.patch).
+  max_sample_size: usize,
 }
 
 impl DPEventLoop {
@@ -170,6 +174,7 @@ impl DPEventLoop {
     socket_send_buffer_size: usize,
     same_host_loopback: bool,
     initial_peer_locators: Vec<Locator>,
+    max_sample_size: usize,
     reader_ready: ReadyReceiver<EntityId>,
     writer_ready: ReadyReceiver<EntityId>,
     waker: LoopWaker,
@@ -264,6 +269,7 @@ impl DPEventLoop {
       discovery_command_sender,
       same_host_loopback,
       initial_peer_locators,
+      max_sample_size,
     })
   }
 
@@ -1076,6 +1082,9 @@ impl DPEventLoop {
     // Reader commands share the poll waker. The ready queue records the entity
     // id, so there is nothing to register under the reader token.
     new_reader.set_requested_deadline_check_timer();
+    if new_reader.guid().entity_id.entity_kind.is_user_defined() {
+      new_reader.set_max_sample_size(self.max_sample_size);
+    }
     trace!("Add reader: {new_reader:?}");
     self.message_receiver.add_reader(new_reader);
   }
@@ -1361,6 +1370,7 @@ mod tests {
         0,
         true,
         Vec::new(),
+        crate::rtps::fragment_assembler::DEFAULT_MAX_SAMPLE_SIZE,
         reader_ready,
         writer_ready,
         waker,

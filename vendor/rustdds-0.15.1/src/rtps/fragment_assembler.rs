@@ -5,7 +5,7 @@ use std::{
 
 use bit_vec::BitVec;
 use enumflags2::BitFlags;
-use bytes::BytesMut;
+use bytes::Bytes;
 #[allow(unused_imports)]
 use log::{debug, error, info, trace, warn};
 
@@ -22,9 +22,24 @@ use crate::{
   },
 };
 
+// Patched for grasp_orient (0015-bounded-fragment-assembly.patch): the largest sample a
+// built-in (discovery) reader assembles from DATA_FRAGs. SPDP and SEDP samples fit in one
+// datagram in practice (Fast DDS 2.14's SPDP data is about 400 bytes, its SEDP data with
+// TypeInformation under 1.5 kB; XTypes sends type objects through the TypeLookup service, not
+// SEDP); the bound is the largest UDP datagram, some 40 times that, and keeps a DATA_FRAG
+// from a participant nobody discovered (the SPDP reader takes those) from claiming more.
+pub(crate) const BUILTIN_MAX_SAMPLE_SIZE: usize = 64 * 1024;
+// The default largest sample a user reader assembles (DomainParticipantBuilder::max_sample_size).
+pub(crate) const DEFAULT_MAX_SAMPLE_SIZE: usize = 256 * 1024 * 1024;
+
 // This is for the assembly of a single object
 struct AssemblyBuffer {
-  buffer_bytes: BytesMut,
+  // Patched for grasp_orient (0015-bounded-fragment-assembly.patch): the bytes received so far,
+  // grown (fallibly, doubling, never past data_size) to the end of the highest fragment
+  // received, not allocated and zero-filled to the claimed sample size up front: a DATA_FRAG
+  // claiming 4 GiB made that allocation, and the process aborted.
+  buffer_bytes: Vec<u8>,
+  data_size: usize,
   fragment_count: usize,
   received_bitmap: BitVec,
 
@@ -45,9 +60,6 @@ impl AssemblyBuffer {
       return None;
     }
 
-    let mut buffer_bytes = BytesMut::with_capacity(data_size);
-    buffer_bytes.resize(data_size, 0);
-
     let fragment_count = usize::from(datafrag.total_number_of_fragments());
     if fragment_count == 0 {
       error!("Cannot create AssemblyBuffer: zero fragment count");
@@ -57,7 +69,8 @@ impl AssemblyBuffer {
     let now = Timestamp::now();
 
     Some(Self {
-      buffer_bytes,
+      buffer_bytes: Vec::new(),
+      data_size,
       fragment_count,
       received_bitmap: BitVec::from_elem(fragment_count, false),
       created_time: now,
@@ -65,8 +78,47 @@ impl AssemblyBuffer {
     })
   }
 
+  // The bytes this buffer holds: what was reserved for the sample, and the fragment bitmap.
+  fn held_bytes(&self) -> usize {
+    self.buffer_bytes.capacity() + self.fragment_count / 8
+  }
+
+  // The bytes a new buffer for `datafrag` holds before any fragment: its bitmap.
+  fn initial_bytes(datafrag: &DataFrag) -> usize {
+    usize::from(datafrag.total_number_of_fragments()) / 8
+  }
+
+  // Make room for bytes up to `end` (at most data_size): capacity doubles, capped at data_size,
+  // so a sample received in order is copied O(log n) times. `room` is how many more bytes the
+  // buffer may hold. Returns false, allocating nothing, when the growth exceeds `room` or the
+  // allocation fails.
+  fn grow_to(&mut self, end: usize, room: usize) -> bool {
+    if end <= self.buffer_bytes.len() {
+      return true;
+    }
+    let capacity = self.buffer_bytes.capacity();
+    if end > capacity {
+      let new_capacity = end.max(capacity.saturating_mul(2)).min(self.data_size);
+      if new_capacity - capacity > room {
+        return false;
+      }
+      if self
+        .buffer_bytes
+        .try_reserve_exact(new_capacity - self.buffer_bytes.len())
+        .is_err()
+      {
+        warn!("AssemblyBuffer: cannot allocate {new_capacity} bytes for a fragmented sample");
+        return false;
+      }
+    }
+    self.buffer_bytes.resize(end, 0);
+    true
+  }
+
   /// Returns `false` if the fragment run is invalid or out of bounds.
-  pub fn insert_frags(&mut self, datafrag: &DataFrag, frag_size: u16) -> bool {
+  /// Returns `false` too, changing nothing, if it would grow the buffer by more than `room`
+  /// bytes or the allocation fails.
+  pub fn insert_frags(&mut self, datafrag: &DataFrag, frag_size: u16, room: usize) -> bool {
     // TODO: Sanity checks? E.g. datafrag.fragment_size == frag_size
     // Or is this even guaranteed? Can Writer vary fragment size?
     // Answer: Writer must guarantee constant fragment size per SequenceNumber.
@@ -124,7 +176,7 @@ impl AssemblyBuffer {
           frags_in_submessage * frag_size,
           datafrag.serialized_payload.len(),
         ),
-      self.buffer_bytes.len(),
+      self.data_size,
     );
     if from_byte > to_before_byte {
       error!(
@@ -159,7 +211,11 @@ impl AssemblyBuffer {
       datafrag.serialized_payload.len()
     );
 
-    self.buffer_bytes.as_mut()[from_byte..to_before_byte]
+    if !self.grow_to(to_before_byte, room) {
+      debug!("insert_frags: no room for bytes up to {to_before_byte}: fragment dropped");
+      return false;
+    }
+    self.buffer_bytes[from_byte..to_before_byte]
       .copy_from_slice(&datafrag.serialized_payload[..payload_size]);
 
     for f in 0..frags_in_submessage {
@@ -214,42 +270,64 @@ impl FragmentAssembler {
   }
 
   // Returns completed DDSData, when complete, and disposes the assembly buffer.
+  //
+  // Patched for grasp_orient (0015-bounded-fragment-assembly.patch): `room` is how many more
+  // bytes this assembler's buffers may hold (the reader's budget less what all its assemblers
+  // hold). A fragment that needs more is dropped (a reliable writer repairs it later), and a
+  // buffer it would have opened is not kept.
   pub fn new_datafrag(
     &mut self,
     datafrag: &DataFrag,
     flags: BitFlags<DATAFRAG_Flags>,
+    room: usize,
   ) -> Option<DDSData> {
     let writer_sn = datafrag.writer_sn;
     let frag_size = self.fragment_size;
 
     let sn = datafrag.writer_sn;
-    match self.assembly_buffers.entry(sn) {
+    let mut room = room;
+    let opened = match self.assembly_buffers.entry(sn) {
       Entry::Vacant(v) => {
+        if AssemblyBuffer::initial_bytes(datafrag) > room {
+          debug!("new_datafrag: no room for a new AssemblyBuffer for {sn:?}");
+          return None;
+        }
         let Some(buf) = AssemblyBuffer::new(datafrag) else {
           error!("new_datafrag: failed to create AssemblyBuffer for {sn:?}");
           return None;
         };
+        room -= buf.held_bytes();
         v.insert(buf);
+        true
       }
-      Entry::Occupied(_) => {}
-    }
+      Entry::Occupied(_) => false,
+    };
 
     let Some(assembly_buffer) = self.assembly_buffers.get_mut(&sn) else {
       error!("new_datafrag: AssemblyBuffer missing for {sn:?}");
       return None;
     };
 
-    if !assembly_buffer.insert_frags(datafrag, frag_size) {
+    if !assembly_buffer.insert_frags(datafrag, frag_size, room) {
       error!("new_datafrag: rejected invalid DATAFRAG for {sn:?}");
+      if opened {
+        self.assembly_buffers.remove(&sn);
+      }
       return None;
     }
 
     if assembly_buffer.is_complete() {
       debug!("new_datafrag: COMPLETED FRAGMENT");
-      if let Some(assembly_buffer) = self.assembly_buffers.remove(&writer_sn) {
+      if let Some(mut assembly_buffer) = self.assembly_buffers.remove(&writer_sn) {
+        // A last fragment shorter than it should be leaves the tail unwritten: zeros, as
+        // before the buffer grew lazily.
+        let data_size = assembly_buffer.data_size;
+        if !assembly_buffer.grow_to(data_size, usize::MAX) {
+          return None;
+        }
         // Return what we have assembled.
         let serialized_data_or_key =
-          SerializedPayload::from_bytes(&assembly_buffer.buffer_bytes.freeze()).map_or_else(
+          SerializedPayload::from_bytes(&Bytes::from(assembly_buffer.buffer_bytes)).map_or_else(
             |e| {
               error!("Deserializing SerializedPayload from DATAFRAG: {:?}", e);
               None
@@ -295,6 +373,20 @@ impl FragmentAssembler {
       }
       None
     }
+  }
+
+  /// The bytes this assembler's incomplete buffers hold.
+  pub fn held_bytes(&self) -> usize {
+    self
+      .assembly_buffers
+      .values()
+      .map(AssemblyBuffer::held_bytes)
+      .sum()
+  }
+
+  /// Whether no sample is being assembled.
+  pub fn is_idle(&self) -> bool {
+    self.assembly_buffers.is_empty()
   }
 
   pub fn garbage_collect_before(&mut self, expire_before: Timestamp) {
@@ -376,12 +468,12 @@ mod tests {
     let first = datafrag(1, 2, frag_size, data_size, whole[0..2048].to_vec());
     let mut ab = AssemblyBuffer::new(&first).expect("valid first fragment");
     assert!(!ab.is_complete());
-    ab.insert_frags(&first, frag_size);
+    ab.insert_frags(&first, frag_size, usize::MAX);
     assert!(!ab.is_complete(), "still missing the tail fragment");
 
     // Trailing submessage carries the shorter final fragment 3 (552 bytes).
     let tail = datafrag(3, 1, frag_size, data_size, whole[2048..2600].to_vec());
-    ab.insert_frags(&tail, frag_size);
+    ab.insert_frags(&tail, frag_size, usize::MAX);
     assert!(ab.is_complete(), "all fragments received");
     assert_eq!(
       &ab.buffer_bytes[..],
@@ -399,7 +491,7 @@ mod tests {
 
     let all = datafrag(1, 3, frag_size, data_size, whole.clone());
     let mut ab = AssemblyBuffer::new(&all).expect("valid fragment set");
-    ab.insert_frags(&all, frag_size);
+    ab.insert_frags(&all, frag_size, usize::MAX);
     assert!(ab.is_complete());
     assert_eq!(&ab.buffer_bytes[..], &whole[..]);
   }
@@ -412,7 +504,7 @@ mod tests {
     let data_size = 512u32; // 2 fragments total
     let bad = datafrag(2, 2, frag_size, data_size, vec![0u8; 256]);
     let mut ab = AssemblyBuffer::new(&bad).expect("buffer for valid data_size");
-    assert!(!ab.insert_frags(&bad, frag_size));
+    assert!(!ab.insert_frags(&bad, frag_size, usize::MAX));
     assert!(!ab.is_complete());
   }
 
@@ -428,7 +520,7 @@ mod tests {
     let bad = datafrag(2, 2, frag_size, data_size, vec![0u8; 256]);
     let mut fa = FragmentAssembler::new(frag_size, true);
     assert!(fa
-      .new_datafrag(&bad, BitFlags::<DATAFRAG_Flags>::empty())
+      .new_datafrag(&bad, BitFlags::<DATAFRAG_Flags>::empty(), usize::MAX)
       .is_none());
   }
 }

@@ -46,7 +46,7 @@ use crate::{
       HEARTBEAT_RESPONSE_DELAY, HEARTBEAT_SUPPRESSION_DURATION, QUIET_POLL_DELAY, QUIET_POLL_MAX,
       QUIET_POLL_SPACING,
     },
-    fragment_assembler::FragmentAssembler,
+    fragment_assembler::{FragmentAssembler, BUILTIN_MAX_SAMPLE_SIZE, DEFAULT_MAX_SAMPLE_SIZE},
     message_receiver::MessageReceiverState,
     rtps_writer_proxy::RtpsWriterProxy,
     timed_event::DpTimerEvent,
@@ -79,6 +79,9 @@ pub(crate) enum TimedEvent {
   // Patched for grasp_orient (0011-quiet-writer-poll.patch): time to see whether this writer
   // has been quiet long enough after DATA to be polled.
   QuietPoll { writer_guid: GUID },
+  // Patched for grasp_orient (0015-bounded-fragment-assembly.patch): drop the incomplete
+  // fragment assemblies that received nothing for FRAGMENT_ASSEMBLY_TIMEOUT.
+  FragmentGc,
 }
 
 // Patched for grasp_orient (0011-quiet-writer-poll.patch): per writer, what the reader knows of
@@ -186,6 +189,15 @@ pub(crate) struct Reader {
 
   fragment_assemblers: BTreeMap<GUID, FragmentAssembler>,
   last_fragment_garbage_collect: Timestamp,
+  // Patched for grasp_orient (0015-bounded-fragment-assembly.patch): the largest sample this
+  // reader assembles from DATA_FRAGs (a larger claimed sampleSize is dropped unallocated), the
+  // most bytes all its incomplete assemblies may hold together, whether a FragmentGc timeout is
+  // pending, and when an oversized claim was last logged at warn level.
+  max_sample_size: usize,
+  assembly_budget: usize,
+  fragment_assembly_timeout: Duration,
+  fragment_gc_armed: bool,
+  oversize_warned_at: Option<Instant>,
   matched_writers: BTreeMap<GUID, RtpsWriterProxy>,
   writer_match_count_total: i32, // total count, never decreases
 
@@ -209,6 +221,12 @@ pub(crate) struct Reader {
 const FRAGMENT_ASSEMBLY_TIMEOUT: Duration = Duration::from_secs(10);
 // minimum interval (max frequency) of AssemblyBuffer GC
 const MIN_FRAGMENT_GC_INTERVAL: Duration = Duration::from_secs(2);
+// Patched for grasp_orient (0015-bounded-fragment-assembly.patch): what the incomplete
+// assemblies of a built-in reader may hold together, 16 samples of the largest size it takes
+// (the SPDP reader assembles from any participant, discovered or not); and how often an
+// oversized claim is logged at warn level (the others go to debug).
+const BUILTIN_ASSEMBLY_BUDGET: usize = 16 * BUILTIN_MAX_SAMPLE_SIZE;
+const OVERSIZE_WARNING_INTERVAL: StdDuration = StdDuration::from_secs(10);
 
 impl Reader {
   pub(crate) fn new(
@@ -256,6 +274,19 @@ impl Reader {
       received_heartbeat_count: 0,
       fragment_assemblers: BTreeMap::new(),
       last_fragment_garbage_collect: Timestamp::now(),
+      max_sample_size: if i.guid.entity_id.entity_kind.is_user_defined() {
+        DEFAULT_MAX_SAMPLE_SIZE
+      } else {
+        BUILTIN_MAX_SAMPLE_SIZE
+      },
+      assembly_budget: if i.guid.entity_id.entity_kind.is_user_defined() {
+        Self::user_assembly_budget(DEFAULT_MAX_SAMPLE_SIZE)
+      } else {
+        BUILTIN_ASSEMBLY_BUDGET
+      },
+      fragment_assembly_timeout: FRAGMENT_ASSEMBLY_TIMEOUT,
+      fragment_gc_armed: false,
+      oversize_warned_at: None,
       matched_writers: BTreeMap::new(),
       writer_match_count_total: 0,
       requested_deadline_missed_count: 0,
@@ -384,6 +415,12 @@ impl Reader {
         }
       }
       TimedEvent::QuietPoll { writer_guid } => self.quiet_poll_due(writer_guid),
+      TimedEvent::FragmentGc => {
+        self.fragment_gc_armed = false;
+        self.last_fragment_garbage_collect = Timestamp::now();
+        self.collect_expired_fragments();
+        self.arm_fragment_gc();
+      }
     }
   }
 
@@ -529,6 +566,7 @@ impl Reader {
     self.heartbeats_to_answer.remove(&writer_guid);
     self.heartbeats_answered.remove(&writer_guid);
     self.quiet_polls.remove(&writer_guid);
+    self.fragment_assemblers.remove(&writer_guid);
     if self.matched_writers.contains_key(&writer_guid) {
       self.matched_writers.remove(&writer_guid);
       self
@@ -995,11 +1033,17 @@ impl Reader {
       return;
     }
 
+    // Patched for grasp_orient (0015-bounded-fragment-assembly.patch): assembly only for a writer
+    // this reader matched, of a sample no larger than max_sample_size, within the budget.
+    let Some(room) = self.assembly_room(writer_guid, datafrag) else {
+      return;
+    };
+
     // Feed to fragment assembler ...
     let writer_seq_num = datafrag.writer_sn; // for borrow checker
     let completed_dds_data = self
       .fragment_assembler_mutable(writer_guid, datafrag.fragment_size)
-      .new_datafrag(datafrag, datafrag_flags);
+      .new_datafrag(datafrag, datafrag_flags, room);
 
     // ... and continue processing, if data was completed.
     if let Some(dds_data) = completed_dds_data {
@@ -1014,7 +1058,101 @@ impl Reader {
       );
     } else {
       self.garbage_collect_fragments();
+      self.arm_fragment_gc();
     }
+  }
+
+  /// The largest sample this reader assembles from DATA_FRAGs (built-in readers:
+  /// BUILTIN_MAX_SAMPLE_SIZE; user readers: DomainParticipantBuilder::max_sample_size).
+  pub(crate) fn set_max_sample_size(&mut self, max_sample_size: usize) {
+    self.max_sample_size = max_sample_size;
+    self.assembly_budget = Self::user_assembly_budget(max_sample_size);
+  }
+
+  // A user reader's incomplete assemblies may hold two samples of the largest size together:
+  // one being completed by repairs while the next one arrives.
+  const fn user_assembly_budget(max_sample_size: usize) -> usize {
+    max_sample_size.saturating_mul(2)
+  }
+
+  // How many bytes the assembly of this DATA_FRAG may still grow by, or None when it is
+  // dropped before any allocation:
+  // - it comes from a writer this reader has not matched. The SPDP reader, whose writers are
+  //   never matched (it takes SPDP from any participant), and a stateless reader are the
+  //   exceptions; both are built-in readers, bounded by BUILTIN_MAX_SAMPLE_SIZE and
+  //   BUILTIN_ASSEMBLY_BUDGET whoever sends.
+  // - its sampleSize is above max_sample_size (logged at warn level at most every
+  //   OVERSIZE_WARNING_INTERVAL).
+  // Otherwise the room is the budget less what all the reader's assemblies hold.
+  fn assembly_room(&mut self, writer_guid: GUID, datafrag: &DataFrag) -> Option<usize> {
+    let any_writer =
+      self.like_stateless || self.my_guid.entity_id == EntityId::SPDP_BUILTIN_PARTICIPANT_READER;
+    if !any_writer && !self.matched_writers.contains_key(&writer_guid) {
+      debug!(
+        "DATA_FRAG from {writer_guid:?}, a writer not matched by {:?}: dropped. topic={:?}",
+        self.my_guid, self.topic_name
+      );
+      return None;
+    }
+    let claimed = usize::try_from(datafrag.data_size).unwrap_or(usize::MAX);
+    if claimed > self.max_sample_size {
+      let now = Instant::now();
+      let quiet = self
+        .oversize_warned_at
+        .is_some_and(|at| now.duration_since(at) < OVERSIZE_WARNING_INTERVAL);
+      let message = format!(
+        "DATA_FRAG from {writer_guid:?} claims a sample of {claimed} bytes, more than the {} this \
+         reader assembles: dropped. topic={:?}",
+        self.max_sample_size, self.topic_name
+      );
+      if quiet {
+        debug!("{message}");
+      } else {
+        self.oversize_warned_at = Some(now);
+        warn!("{message}");
+      }
+      return None;
+    }
+    let held: usize = self
+      .fragment_assemblers
+      .values()
+      .map(FragmentAssembler::held_bytes)
+      .sum();
+    Some(self.assembly_budget.saturating_sub(held))
+  }
+
+  // One FragmentGc timeout pending while any assembly is incomplete: assemblies are dropped
+  // FRAGMENT_ASSEMBLY_TIMEOUT after their last fragment even when no other fragment comes (the
+  // garbage collection on the receive path runs only when one does).
+  fn arm_fragment_gc(&mut self) {
+    if self.fragment_gc_armed
+      || self
+        .fragment_assemblers
+        .values()
+        .all(FragmentAssembler::is_idle)
+    {
+      return;
+    }
+    self.fragment_gc_armed = true;
+    let after = std::cmp::min(MIN_FRAGMENT_GC_INTERVAL, self.fragment_assembly_timeout);
+    self.timed_event_timer.borrow_mut().set_timeout(
+      after.to_std(),
+      DpTimerEvent::Reader {
+        entity_id: self.my_guid.entity_id,
+        event: TimedEvent::FragmentGc,
+      },
+    );
+  }
+
+  // Drop the assemblies that received nothing for FRAGMENT_ASSEMBLY_TIMEOUT, and the assemblers
+  // left with none (a writer's assembler is made again by its next DATA_FRAG).
+  fn collect_expired_fragments(&mut self) {
+    let expire_before = Timestamp::now() - self.fragment_assembly_timeout;
+    for (writer, fa) in &mut self.fragment_assemblers {
+      debug!("AssemblyBuffer GC writer {writer:?}");
+      fa.garbage_collect_before(expire_before);
+    }
+    self.fragment_assemblers.retain(|_, fa| !fa.is_idle());
   }
 
   fn fragment_assembler_mutable(
@@ -1038,15 +1176,7 @@ impl Reader {
     if now - self.last_fragment_garbage_collect > MIN_FRAGMENT_GC_INTERVAL {
       self.last_fragment_garbage_collect = now;
 
-      let expire_before = now - FRAGMENT_ASSEMBLY_TIMEOUT;
-
-      self
-        .fragment_assemblers
-        .iter_mut()
-        .for_each(|(writer, fa)| {
-          debug!("AssemblyBuffer GC writer {writer:?}");
-          fa.garbage_collect_before(expire_before);
-        });
+      self.collect_expired_fragments();
     } else {
       trace!("Not yet AssemblyBuffer GC time.");
     }
@@ -2748,6 +2878,210 @@ mod tests {
     assert!(
       !reader.is_frag_partially_received(writer_guid, next),
       "the assembly of a sample that became irrelevant was kept"
+    );
+  }
+
+  // 0015-bounded-fragment-assembly.patch: one fragment of 1 KiB of a sample claiming
+  // `data_size` bytes, sequence number `sn`, fragment `number`.
+  fn claiming_fragment(
+    reader_id: EntityId,
+    writer: GUID,
+    sn: i64,
+    number: u32,
+    data_size: u32,
+  ) -> DataFrag {
+    DataFrag {
+      reader_id,
+      writer_id: writer.entity_id,
+      writer_sn: SequenceNumber::new(sn),
+      fragment_starting_num: FragmentNumber::new(number),
+      fragments_in_submessage: 1,
+      data_size,
+      fragment_size: 1024,
+      inline_qos: None,
+      serialized_payload: bytes::Bytes::from(vec![0u8; 1024]),
+    }
+  }
+
+  fn assembly_bytes(reader: &Reader) -> usize {
+    reader
+      .fragment_assemblers
+      .values()
+      .map(FragmentAssembler::held_bytes)
+      .sum()
+  }
+
+  #[test]
+  fn fragments_are_assembled_only_from_matched_writers_within_the_bound() {
+    // 0015-bounded-fragment-assembly.patch. A user reader with a matched writer.
+    let (mut reader, writer_guid, _socket, timer) = reader_answering_to_a_socket();
+    let reader_id = reader.my_guid.entity_id;
+    let flags = BitFlags::<DATAFRAG_Flags>::from_flag(DATAFRAG_Flags::Endianness);
+    let matched = MessageReceiverState {
+      source_guid_prefix: writer_guid.prefix,
+      ..Default::default()
+    };
+    let feed = |reader: &mut Reader, sn: i64, number: u32, claim: u32| {
+      let frag = claiming_fragment(reader_id, writer_guid, sn, number, claim);
+      reader.handle_datafrag_msg(&frag, flags, &matched);
+    };
+    assert_eq!(reader.max_sample_size, DEFAULT_MAX_SAMPLE_SIZE);
+    reader.set_max_sample_size(1 << 30);
+
+    // A writer the reader never matched (another participant, same writer entity id, so the
+    // message receiver's UNKNOWN-reader dispatch brings it here): nothing is assembled.
+    let stranger = GUID::new_with_prefix_and_id(GuidPrefix::new(&[7; 12]), writer_guid.entity_id);
+    let from_stranger = MessageReceiverState {
+      source_guid_prefix: stranger.prefix,
+      ..Default::default()
+    };
+    let frag = claiming_fragment(reader_id, stranger, 1, 1, 4096);
+    reader.handle_datafrag_msg(&frag, flags, &from_stranger);
+    assert!(
+      reader.fragment_assemblers.is_empty(),
+      "a DATA_FRAG from a writer the reader has not matched opened an assembly"
+    );
+
+    // A claim above the reader's max_sample_size: dropped, nothing held.
+    reader.set_max_sample_size(1 << 20);
+    feed(&mut reader, 1, 1, u32::MAX);
+    assert_eq!(
+      assembly_bytes(&reader),
+      0,
+      "a DATA_FRAG claiming 4 GiB - 1 against a bound of 1 MiB was assembled"
+    );
+
+    // A claim within the bound: what is held follows the fragments received, not the claim.
+    feed(&mut reader, 1, 1, 1 << 20);
+    assert!(reader.is_frag_partially_received(writer_guid, SequenceNumber::new(1)));
+    let held = assembly_bytes(&reader);
+    assert!(
+      held < 4096,
+      "one fragment of 1 KiB of a sample claiming 1 MiB holds {held} bytes"
+    );
+
+    // The assemblies of one reader hold at most twice its max_sample_size together: the last
+    // fragments of two samples fill it, a third sample gets no room.
+    feed(&mut reader, 2, 1024, 1 << 20);
+    feed(&mut reader, 3, 1024, 1 << 20);
+    assert!(reader.is_frag_partially_received(writer_guid, SequenceNumber::new(2)));
+    assert!(
+      !reader.is_frag_partially_received(writer_guid, SequenceNumber::new(3)),
+      "a third sample was taken beyond the assembly budget ({} bytes held)",
+      assembly_bytes(&reader)
+    );
+    assert!(assembly_bytes(&reader) <= 2 << 20);
+
+    // An incomplete assembly is dropped once it received nothing for the assembly timeout,
+    // by the reader's own timer: no later fragment is needed to trigger it.
+    reader.fragment_assembly_timeout = Duration::from_millis(50);
+    reader.fragment_gc_armed = false;
+    reader.arm_fragment_gc();
+    run_timers_after(&mut reader, &timer, StdDuration::from_millis(60));
+    assert!(
+      reader.fragment_assemblers.is_empty(),
+      "incomplete assemblies outlived the assembly timeout ({} bytes held)",
+      assembly_bytes(&reader)
+    );
+
+    // A sample within the bound still assembles, whatever order its fragments come in.
+    let payload: Vec<u8> = [0x00, 0x01, 0x00, 0x00]
+      .into_iter()
+      .chain((0..3000u32).map(|i| i as u8))
+      .collect();
+    for number in [3u32, 1, 2] {
+      let start = (number as usize - 1) * 1024;
+      let end = (start + 1024).min(payload.len());
+      let mut frag = claiming_fragment(reader_id, writer_guid, 4, number, payload.len() as u32);
+      frag.serialized_payload = bytes::Bytes::copy_from_slice(&payload[start..end]);
+      reader.handle_datafrag_msg(&frag, flags, &matched);
+    }
+    assert!(!reader.is_frag_partially_received(writer_guid, SequenceNumber::new(4)));
+    assert!(
+      reader
+        .history_cache_change_data(SequenceNumber::new(4))
+        .is_some(),
+      "the sample within the bound was not assembled"
+    );
+  }
+
+  #[test]
+  fn the_spdp_reader_assembles_small_samples_from_anyone() {
+    // 0015-bounded-fragment-assembly.patch. The SPDP reader matches no writer: it takes
+    // fragments from any participant, up to BUILTIN_MAX_SAMPLE_SIZE.
+    let dds_cache = Arc::new(RwLock::new(DDSCache::new()));
+    let qos_policy = QosPolicyBuilder::new()
+      .reliability(Reliability::BestEffort)
+      .build();
+    let topic_cache_handle = dds_cache.write().unwrap().add_new_topic(
+      "DCPSParticipant".to_string(),
+      TypeDesc::new("SPDPDiscoveredParticipantData".to_string()),
+      &qos_policy,
+    );
+    let (notification_sender, _notification_receiver) =
+      crate::mio_source::notification_channel(100);
+    let (_notification_event_source, notification_event_sender) =
+      mio_source::make_poll_channel().unwrap();
+    let (status_sender, _status_receiver) = sync_status_channel::<DataReaderStatus>(4).unwrap();
+    let (participant_status_sender, _participant_status_receiver) =
+      sync_status_channel(16).unwrap();
+    let (_reader_command_sender, reader_command_receiver) =
+      wake_channel::<ReaderCommand>(10, &LoopWaker::new());
+    let reader_guid = GUID::new_with_prefix_and_id(
+      GuidPrefix::new(&[1; 12]),
+      EntityId::SPDP_BUILTIN_PARTICIPANT_READER,
+    );
+    let mut reader = Reader::new(
+      ReaderIngredients {
+        guid: reader_guid,
+        notification_sender,
+        status_sender,
+        topic_name: "DCPSParticipant".to_string(),
+        topic_cache_handle,
+        like_stateless: false,
+        qos_policy,
+        data_reader_command_receiver: reader_command_receiver,
+        data_reader_waker: Arc::new(Mutex::new(None)),
+        poll_event_sender: notification_event_sender,
+        security_plugins: None,
+        discovery_notify: None,
+      },
+      Rc::new(UDPSender::new(0).unwrap()),
+      new_shared_timer(),
+      participant_status_sender,
+    );
+    let flags = BitFlags::<DATAFRAG_Flags>::from_flag(DATAFRAG_Flags::Endianness);
+    let reader_id = reader_guid.entity_id;
+    for (i, claim) in [(1u8, 1u32 << 30), (2, u32::MAX), (3, 1 << 17)] {
+      let writer = GUID::new_with_prefix_and_id(
+        GuidPrefix::new(&[i; 12]),
+        EntityId::SPDP_BUILTIN_PARTICIPANT_WRITER,
+      );
+      let mr_state = MessageReceiverState {
+        source_guid_prefix: writer.prefix,
+        ..Default::default()
+      };
+      let frag = claiming_fragment(reader_id, writer, 1, 1, claim);
+      reader.handle_datafrag_msg(&frag, flags, &mr_state);
+      assert_eq!(
+        assembly_bytes(&reader),
+        0,
+        "the SPDP reader took a fragment of a sample claiming {claim} bytes"
+      );
+    }
+    let writer = GUID::new_with_prefix_and_id(
+      GuidPrefix::new(&[4; 12]),
+      EntityId::SPDP_BUILTIN_PARTICIPANT_WRITER,
+    );
+    let mr_state = MessageReceiverState {
+      source_guid_prefix: writer.prefix,
+      ..Default::default()
+    };
+    let frag = claiming_fragment(reader_id, writer, 1, 1, 8192);
+    reader.handle_datafrag_msg(&frag, flags, &mr_state);
+    assert!(
+      reader.is_frag_partially_received(writer, SequenceNumber::new(1)),
+      "the SPDP reader did not take a fragment of an 8 kB sample from an undiscovered participant"
     );
   }
 
