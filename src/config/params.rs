@@ -86,7 +86,7 @@ parameters! {
     max_mesh_load_time: f64 = 3.0, "s", in Domain::Real { min: 0.001, max: 3600.0 };
     /// The most triangles an inline mesh (object.inline_mesh) may have, and a third of the most
     /// vertices; a larger one is refused (status 2) without being indexed. Indexing takes about
-    /// 0.4 kB a triangle while it runs, and up to MAX_LOADERS of them may run at once.
+    /// 0.4 kB a triangle while it runs, and up to 8 of them may run at once.
     max_inline_mesh_triangles: i64 = 250_000, "triangles",
         in Domain::Integer { min: 1, max: 100_000_000 };
 }
