@@ -117,7 +117,7 @@ def test_fifo_meshes_block_nothing(start_node, peer, tmp_path):
     fifo = tmp_path / "never.stl"
     os.mkfifo(fifo)
     ns = "/mesh_fifo"
-    node = start_node("--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false", "-p", "max_mesh_load_time:=2.0",
+    node = start_node("--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false",  # max_mesh_load_time 3 s
                       name="grasp_orient node (fifo)")
     single = GraspClient(peer, ns)
     single.ensure_roundtrip()
