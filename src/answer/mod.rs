@@ -27,7 +27,7 @@ mod sets;
 pub use candidate::{answer, answer_in_full, Answered, BEHIND_TANGENT_NOTE};
 pub use forces::Forces;
 pub use pose::{
-    pose_set_without_geometry, uncast, without_geometry, PoseAnswerer, PoseRefusal,
+    pose_set_without_geometry, uncast, without_geometry, PoseAnswerer, PoseRefusal, Refused,
     MESH_CACHE_BYTES,
 };
 pub use sets::{

@@ -217,15 +217,27 @@ impl PoseAnswerer {
         rules: &Rules,
         answer: impl FnOnce(&GraspCandidateSet) -> GripRecommendationSet,
     ) -> (PoseRecommendationSet, Option<Object>) {
+        // A set refused whole (too large) is not worth the geometry.
+        let object = (set.poses.len() <= rules.max_set_size)
+            .then(|| self.object(&set.object).map_err(Refused::from));
+        self.answer_set_on(set, object, answer)
+    }
+
+    /// [`PoseAnswerer::answer_set_with`] on `object`, the set's object made (or refused) by the
+    /// caller (the node's set thread makes it on a loader thread, within `max_set_time`); `None`
+    /// for a set refused whole as too large.
+    pub fn answer_set_on(
+        &self,
+        set: &PoseCandidateSet,
+        object: Option<Result<Object, Refused>>,
+        answer: impl FnOnce(&GraspCandidateSet) -> GripRecommendationSet,
+    ) -> (PoseRecommendationSet, Option<Object>) {
         let target = |id| Target {
             header: &set.header,
             id,
             object: &set.object,
             gravity: &set.gravity,
         };
-        // A set refused whole (too large) is not worth the geometry.
-        let object = (set.poses.len() <= rules.max_set_size)
-            .then(|| self.object(&set.object).map_err(Refused::from));
         let placed: Vec<Result<Grasp, Refused>> = match &object {
             None => Vec::new(),
             Some(object) => set
@@ -368,9 +380,11 @@ impl PoseAnswerer {
 /// A refusal as an answer gives it: its status and words (the geometry's errors hold an
 /// `io::Error`, which does not clone, and a set's object refused is every pose's refusal).
 #[derive(Debug, Clone)]
-struct Refused {
-    status: u8,
-    message: String,
+pub struct Refused {
+    /// The answer's status.
+    pub status: u8,
+    /// Its message.
+    pub message: String,
 }
 
 impl From<PoseRefusal> for Refused {

@@ -79,6 +79,16 @@ parameters! {
     /// The axis of the gripper's tool frame along which the fingers close, for pose candidates
     /// (x, y or z; docs/poses.md); solve, rank, replay and the node read it.
     closing_axis: ClosingAxis = ClosingAxis::Y, "";
+    /// The most time a pose candidate's answer waits for its mesh to be loaded (or its inline
+    /// mesh indexed) off the node's thread; then it gets status 2 and the load goes on in the
+    /// background, filling the cache for the next candidate. A set waits no longer than this
+    /// nor than its max_set_time.
+    max_mesh_load_time: f64 = 3.0, "s", in Domain::Real { min: 0.001, max: 3600.0 };
+    /// The most triangles an inline mesh (object.inline_mesh) may have, and a third of the most
+    /// vertices; a larger one is refused (status 2) without being indexed. Indexing takes about
+    /// 0.4 kB a triangle while it runs, and up to 8 of them may run at once.
+    max_inline_mesh_triangles: i64 = 250_000, "triangles",
+        in Domain::Integer { min: 1, max: 100_000_000 };
 }
 
 impl super::choices::Choice for ClosingAxis {

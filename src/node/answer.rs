@@ -91,6 +91,11 @@ pub struct PoseOutcome {
 /// answers (docs/node.md).
 pub const INLINE_OFF_THREAD_TRIANGLES: usize = 100;
 
+/// `max_mesh_load_time` (s, checked in (0, 3600]) as a duration.
+pub fn load_time(seconds: f64) -> std::time::Duration {
+    std::time::Duration::try_from_secs_f64(seconds).unwrap_or(std::time::Duration::from_secs(3))
+}
+
 /// Answering one pose candidate, apart from the node's counts and recording: the settings in
 /// force when it was received, whether its markers are wanted, and the node's meshes. It may run
 /// on another thread.
@@ -101,11 +106,56 @@ pub struct PoseWork {
     markers_on: bool,
     echo: bool,
     poses: PoseAnswerer,
+    /// `max_mesh_load_time`.
+    load_time: std::time::Duration,
+    /// `max_inline_mesh_triangles`.
+    max_inline: usize,
+}
+
+/// Why an inline mesh is refused before it is indexed: more than `max_triangles` triangles
+/// (parameter `max_inline_mesh_triangles`), or more than three vertices per triangle allowed
+/// (a triangle soup has three; more are vertices no triangle uses, held all the same).
+pub fn inline_mesh_too_large(
+    object: &crate::msg::GraspObject,
+    max_triangles: usize,
+) -> Option<String> {
+    let mesh = &object.inline_mesh;
+    if mesh.triangles.len() > max_triangles {
+        return Some(format!(
+            "object.inline_mesh has {} triangles, more than max_inline_mesh_triangles ({max_triangles}); send a coarser mesh",
+            mesh.triangles.len()
+        ));
+    }
+    let max_vertices = max_triangles.saturating_mul(3);
+    (mesh.vertices.len() > max_vertices).then(|| {
+        format!(
+            "object.inline_mesh has {} vertices, more than 3 x max_inline_mesh_triangles ({max_vertices})",
+            mesh.vertices.len()
+        )
+    })
 }
 
 impl PoseWork {
+    /// How long the answer waits for its mesh (`max_mesh_load_time`).
+    pub fn load_time(&self) -> std::time::Duration {
+        self.load_time
+    }
+
+    /// The answer at once, without a mesh loaded or indexed, when the candidate is refused
+    /// before: an inline mesh beyond `max_inline_mesh_triangles`.
+    pub fn refusal(&self, candidate: &PoseCandidate) -> Option<PoseRecommendation> {
+        if self.echo {
+            return None;
+        }
+        inline_mesh_too_large(&candidate.object, self.max_inline)
+            .map(|why| super::loads::refused(candidate, &why))
+    }
+
     /// The answer, and its markers when they are on and wanted and the answer has status 0.
     pub fn run(&self, candidate: &PoseCandidate) -> (PoseRecommendation, Option<MarkerArray>) {
+        if let Some(reply) = self.refusal(candidate) {
+            return (reply, None);
+        }
         if self.echo {
             let empty = GripRecommendation {
                 header: candidate.header.clone(),
@@ -510,7 +560,9 @@ impl Answerer {
 
     /// The answer to one pose candidate, received at `received` and sent at `sent` (ns since the
     /// epoch), with the settings in force when it was received (`closing_axis` among them), on
-    /// the calling thread: [`Answerer::pose_work`], run, then [`Answerer::account_pose`].
+    /// the calling thread: [`Answerer::pose_work`], run, then [`Answerer::account_pose`]
+    /// (tests; the node runs the work where [`Answerer::answers_off_thread`] says).
+    #[cfg(test)]
     pub fn handle_pose(
         &mut self,
         candidate: PoseCandidate,
@@ -535,6 +587,9 @@ impl Answerer {
             markers_on: self.draws(version.config.publish_markers, audience),
             echo: self.echo,
             poses: PoseAnswerer::sharing(version.config.closing_axis, self.meshes.clone()),
+            load_time: load_time(version.config.max_mesh_load_time),
+            max_inline: usize::try_from(version.config.max_inline_mesh_triangles)
+                .unwrap_or(usize::MAX),
         }
     }
 
@@ -798,7 +853,7 @@ fn note(change: &Change) -> Note {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::config::Config;
 
@@ -809,7 +864,7 @@ mod tests {
         serde_json::from_str(line.expect("a case")).expect("a GraspCandidate")
     }
 
-    fn answerer(config: Config, echo: bool) -> Answerer {
+    pub(crate) fn answerer(config: Config, echo: bool) -> Answerer {
         let settings = config.solver_settings().expect("valid");
         let topics = Topics {
             candidates: "/grasp_candidates".into(),
@@ -832,7 +887,7 @@ mod tests {
         )
     }
 
-    fn no_recording() -> Config {
+    pub(crate) fn no_recording() -> Config {
         Config {
             record: false,
             ..Config::default()
@@ -1067,7 +1122,7 @@ mod tests {
     }
 
     /// A pose candidate on a box (or with `shape` instead), the tool across it.
-    fn pose_on(id: &str, shape: &str) -> PoseCandidate {
+    pub(crate) fn pose_on(id: &str, shape: &str) -> PoseCandidate {
         let line = format!(
             r#"{{"header": {{"frame_id": "base_link"}}, "id": "{id}", "grasp_pose": {{"position": {{"x": 0.0, "y": 0.0, "z": 0.0}}, "orientation": {{"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}}}, "width": 0.09, "object": {{"pose": {{"position": {{"x": 0.0, "y": 0.0, "z": 0.0}}, "orientation": {{"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}}}, {shape}, "mass": 0.25, "friction": 0.5}}, "gravity": {{"x": 0.0, "y": 0.0, "z": -9.81}}}}"#
         );
@@ -1170,7 +1225,7 @@ mod tests {
     /// A closed inline mesh of `2 × rings × sides` triangles, in metres: a torus about an axis
     /// parallel to z through (0, -0.06, 0), its tube 25 mm in radius, whose centre line passes
     /// through the origin along x, so that [`pose_on`]'s fingers close across the tube.
-    fn torus_inline(rings: u32, sides: u32) -> String {
+    pub(crate) fn torus_inline(rings: u32, sides: u32) -> String {
         let mut vertices = Vec::new();
         for i in 0..rings {
             for j in 0..sides {

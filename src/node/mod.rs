@@ -14,6 +14,7 @@
 
 pub mod answer;
 pub mod demo;
+pub mod loads;
 
 mod markers_out;
 mod param_services;
@@ -33,6 +34,7 @@ use answer::{Answerer, Note, SetInput};
 use anyhow::Context as _;
 use demo::Demo;
 use futures::{FutureExt, StreamExt};
+use loads::{Loaded, Loaders, PoseLoads};
 use markers_out::MarkersOut;
 use param_services::ParameterServices;
 use params::Shared;
@@ -195,8 +197,15 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
         grasp_orient_geometry::AmentIndex::from_env(),
         crate::answer::MESH_CACHE_BYTES,
     ));
-    let mut worker = SetWorker::start(shared.clone(), options.echo, meshes.clone())
-        .context("cannot start the set thread")?;
+    // The loader threads, for the node's thread and the set thread together.
+    let loaders = Loaders::new(loads::MAX_LOADERS);
+    let mut worker = SetWorker::start(
+        shared.clone(),
+        options.echo,
+        meshes.clone(),
+        loaders.clone(),
+    )
+    .context("cannot start the set thread")?;
     let mut answerer = Answerer::new(
         shared,
         options.echo,
@@ -223,7 +232,7 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
         let local = smol::LocalExecutor::new();
         let _services = local.spawn(services.serve(node));
         let _markers_watch = local.spawn(endpoints.markers.watch(node));
-        let mut loading = Loading::new();
+        let mut loading = PoseLoads::new(loaders);
         let mut loop_state = Loop {
             answerer: &mut answerer,
             worker: &mut worker,
@@ -316,21 +325,8 @@ struct Loop<'a> {
 }
 
 /// Single pose candidates answered off the node's thread because their mesh was not loaded yet
-/// or is a large inline mesh (at most [`MAX_LOADING`] at a time).
-type Loading = futures::stream::FuturesUnordered<smol::Task<Loaded>>;
-
-/// How many single pose candidates may load or index their meshes off the node's thread at once;
-/// one more is answered on the node's thread.
-const MAX_LOADING: usize = 4;
-
-/// A single pose candidate answered off the node's thread, with its times.
-struct Loaded {
-    candidate: PoseCandidate,
-    reply: PoseRecommendation,
-    markers: Option<MarkerArray>,
-    received: u64,
-    sent: u64,
-}
+/// or is a large inline mesh ([`loads`]).
+type Loading = PoseLoads;
 
 /// Answers every candidate until a signal, or until the demo is done; acts on parameter sets
 /// and on a recording that stopped as soon as `woken` says so. Sets are handed to the set thread
@@ -381,7 +377,7 @@ async fn serve(
                 }
                 Err(e) => tell(node, vec![answerer.undecodable(&endpoints.topics.candidates, &e)]),
             },
-            loaded = loading.select_next_some() => send_loaded(node, endpoints, answerer, loaded).await,
+            loaded = loading.next().fuse() => send_loaded(node, endpoints, answerer, loaded).await,
             done = worker.done.select_next_some() => {
                 sets::answer_done(node, sets, markers, answerer, done).await;
             }
@@ -513,10 +509,13 @@ async fn answer_one(
 
 /// Takes one pose candidate: answered on the node's thread when its mesh is loaded already, or
 /// it names none and carries no inline mesh of [`answer::INLINE_OFF_THREAD_TRIANGLES`] triangles
-/// or more; otherwise off it ([`smol::unblock`]), its answer sent when it is back, so that a
-/// first load or a large inline mesh's index (a tenth of a second and more for 100,000
-/// triangles) holds up no other topic. Answers may then come back in another order than their
-/// candidates.
+/// or more, or it is refused before any load (an inline mesh beyond `max_inline_mesh_triangles`);
+/// otherwise on a loader thread ([`loads`]), its answer sent when it is back or when
+/// `max_mesh_load_time` has passed, so that a first load or a large inline mesh's index (a tenth
+/// of a second and more for 100,000 triangles) holds up no other topic, and a load that never
+/// ends holds up nothing. Never on the node's thread: with every loader busy the candidate
+/// waits, and with the queue full it is refused at once. Answers may then come back in another
+/// order than their candidates.
 async fn take_pose(
     node: &Node,
     endpoints: &Endpoints,
@@ -527,21 +526,15 @@ async fn take_pose(
 ) {
     let (received, sent) = message_times(info);
     let audience = endpoints.markers.heard(node);
-    if loading.len() < MAX_LOADING && answerer.answers_off_thread(&candidate) {
-        let work = answerer.pose_work(received, audience);
-        loading.push(smol::unblock(move || {
-            let (reply, markers) = work.run(&candidate);
-            Loaded {
-                candidate,
-                reply,
-                markers,
-                received,
-                sent,
-            }
-        }));
+    let work = answerer.pose_work(received, audience);
+    if work.refusal(&candidate).is_none() && answerer.answers_off_thread(&candidate) {
+        if let Err(refused) = loading.take(work, candidate, received, sent) {
+            send_loaded(node, endpoints, answerer, *refused).await;
+        }
         return;
     }
-    let outcome = answerer.handle_pose(candidate, received, sent, audience);
+    let (reply, markers) = work.run(&candidate);
+    let outcome = answerer.account_pose(candidate, reply, markers, received, sent);
     send_pose(node, endpoints, answerer, outcome).await;
 }
 
@@ -559,15 +552,13 @@ async fn finish_loads(
     answerer: &mut Answerer,
     loading: &mut Loading,
 ) {
+    for l in loading.drain_queued() {
+        send_loaded(node, endpoints, answerer, l).await;
+    }
     let mut grace = FutureExt::fuse(smol::Timer::after(STOP_GRACE));
-    // An empty `FuturesUnordered` that has said so once is terminated, and `select!` would skip
-    // it and wait out the whole grace: only a stream with loads in it is waited for.
-    while !loading.is_empty() {
+    while loading.running() {
         futures::select_biased! {
-            loaded = loading.next() => match loaded {
-                Some(l) => send_loaded(node, endpoints, answerer, l).await,
-                None => return,
-            },
+            l = loading.next().fuse() => send_loaded(node, endpoints, answerer, l).await,
             _ = grace => {
                 say(node, log::Level::Warn, "a pose candidate's mesh was still loading; leaving without its answer");
                 return;

@@ -13,13 +13,27 @@
 //! thread raises [`Interrupt`]) or when the node stops ([`SetWorker::stop`]): the candidates not
 //! solved get `STATUS_NOT_SOLVED` and the set `STATUS_INCOMPLETE` (`answer_set_within`). A set that
 //! arrives while `max_queued_sets` sets wait is answered at once with `STATUS_BUSY`.
+//!
+//! A pose set's object is made on a loader thread ([`Loaders`]) when its mesh must be loaded or
+//! a large inline mesh indexed, and waited for no longer than `max_mesh_load_time` nor than the
+//! set's `max_set_time`: a load that never ends costs the set thread that time, not the thread.
+//! A panic while a set is answered is contained to that set ([`std::panic::catch_unwind`]): the
+//! set gets status 2 "internal error", the panic is logged, and the set thread goes on with the
+//! next, so that the count of sets in hand stays true and `STATUS_BUSY` means sets really wait.
 
-use super::answer::{RecordedSet, SetInput, SetOutcome, SetReply};
+use super::answer::INLINE_OFF_THREAD_TRIANGLES;
+use super::answer::{
+    inline_mesh_too_large, load_time, RecordedSet, SetInput, SetOutcome, SetReply,
+};
+use super::loads::{too_slow, Loaders, LOAD_PANICKED};
 use super::params::Shared;
-use crate::answer::{answer_in_full, markers, Rules};
+use crate::answer::{answer_in_full, markers, Refused, Rules};
 use crate::answer::{answer_set_within, busy, echo_set, solver_pool, Halt, Interrupt};
 use crate::answer::{pose_set_without_geometry, uncast, PoseAnswerer, PARALLEL_FROM};
-use crate::msg::{GraspCandidate, GraspCandidateSet, MarkerArray, PoseCandidate, PoseCandidateSet};
+use crate::msg::{
+    GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet, MarkerArray,
+    PoseCandidate, PoseCandidateSet,
+};
 use crate::solver::Settings;
 use futures::channel::mpsc::{unbounded, UnboundedReceiver, UnboundedSender};
 use grasp_orient_geometry::{ClosingAxis, MeshCache};
@@ -93,8 +107,14 @@ pub struct SetWorker {
 impl SetWorker {
     /// Starts the set thread and its clock, answering with `shared`'s settings (with `echo`, an
     /// empty answer per candidate, nothing solved) and pose sets' meshes from `meshes` (the
-    /// node's cache: a mesh named by a set is loaded here, off the node's thread).
-    pub fn start(shared: Shared, echo: bool, meshes: Arc<MeshCache>) -> std::io::Result<Self> {
+    /// node's cache: a mesh named by a set is loaded off the node's thread, on one of
+    /// `loaders`' threads).
+    pub fn start(
+        shared: Shared,
+        echo: bool,
+        meshes: Arc<MeshCache>,
+        loaders: Arc<Loaders>,
+    ) -> std::io::Result<Self> {
         let interrupt = Arc::new(Interrupt::default());
         let clock = Clock::start(interrupt.clone())?;
         let (jobs, queue) = mpsc::channel::<(SetJob, Instant)>();
@@ -107,6 +127,7 @@ impl SetWorker {
             interrupt: interrupt.clone(),
             clock: clock.clone(),
             meshes,
+            loaders,
         };
         let counter = in_hand.clone();
         let thread = std::thread::Builder::new()
@@ -141,8 +162,12 @@ impl SetWorker {
                 match jobs.send((job, Instant::now())) {
                     Ok(()) => return Ok(()),
                     Err(mpsc::SendError((back, _))) => {
+                        // The set thread has ended (it never should: a set's panic is
+                        // contained); no set waits, so the answer says so rather than "busy".
                         self.in_hand.fetch_sub(1, Ordering::SeqCst);
-                        return Err(Box::new(refused(back, max_queued, &rules)));
+                        let why = "internal error: the set thread has ended; nothing was \
+                                   solved (logged)";
+                        return Err(Box::new(failed(back, &rules, why)));
                     }
                 }
             }
@@ -180,15 +205,56 @@ impl Drop for SetWorker {
     }
 }
 
-/// The answer to a set refused because the queue is full (or the set thread has ended).
+/// The answer to a set refused because the queue is full (or the node is stopping).
 fn refused(job: SetJob, max_queued: usize, rules: &crate::answer::Rules) -> SetDone {
-    let reply = match &job.set {
+    let reply = busy_reply(&job.set, rules, max_queued);
+    done_at_once(job, reply)
+}
+
+/// The answer to a set that cannot be answered: status 2 saying `why`, nothing solved.
+fn failed(job: SetJob, rules: &crate::answer::Rules, why: &str) -> SetDone {
+    let reply = failed_reply(&job.set, rules, why);
+    done_at_once(job, reply)
+}
+
+/// `STATUS_BUSY` (or the set's own refusal), nothing solved.
+fn busy_reply(set: &SetInput, rules: &crate::answer::Rules, max_queued: usize) -> SetReply {
+    match set {
         SetInput::Candidates(set) => SetReply::Candidates(busy(set, rules, max_queued)),
         SetInput::Poses(set) => {
             let reply = busy(&uncast(set), rules, max_queued);
             SetReply::Poses(pose_set_without_geometry(set, reply))
         }
-    };
+    }
+}
+
+/// Status 2 (`STATUS_INVALID_INPUT`) saying `why`, nothing solved, no recommendations.
+fn failed_reply(set: &SetInput, rules: &crate::answer::Rules, why: &str) -> SetReply {
+    let mut reply = busy_reply(set, rules, 0);
+    match &mut reply {
+        SetReply::Candidates(r) => {
+            r.status = GripRecommendationSet::STATUS_INVALID_INPUT;
+            r.message = why.into();
+            r.recommendations.clear();
+            r.ranking.clear();
+        }
+        SetReply::Poses(r) => {
+            r.status = GripRecommendationSet::STATUS_INVALID_INPUT;
+            r.message = why.into();
+            r.recommendations.clear();
+            r.ranking.clear();
+        }
+    }
+    reply
+}
+
+/// What an internal error while answering a set says.
+const SET_PANICKED: &str =
+    "internal error while answering the set; nothing was solved (logged): send it again, or \
+     report it with the set";
+
+/// A set's answer given at once (refused), nothing solved.
+fn done_at_once(job: SetJob, reply: SetReply) -> SetDone {
     SetDone {
         via: job.via,
         outcome: SetOutcome {
@@ -218,6 +284,8 @@ struct Solver {
     clock: Arc<Clock>,
     /// The node's meshes.
     meshes: Arc<MeshCache>,
+    /// The threads a pose set's mesh is loaded on.
+    loaders: Arc<Loaders>,
 }
 
 /// The settings a set is answered with: those in force when it was received.
@@ -228,6 +296,10 @@ struct InForce {
     threads: i64,
     budget: f64,
     closing_axis: ClosingAxis,
+    /// `max_mesh_load_time`.
+    load_time: Duration,
+    /// `max_inline_mesh_triangles`.
+    max_inline: usize,
 }
 
 impl Solver {
@@ -250,8 +322,20 @@ impl Solver {
     /// The answer to one set, by the same rules as a single candidate's: the settings in force
     /// when it was received, and markers for the best candidate. A large set is shared among
     /// `solver_threads` threads (`set_pool`); the solving stops when `max_set_time` runs out.
+    /// A panic while it is answered gives status 2 and is logged; the set thread goes on.
     fn solve(&self, job: SetJob, waited: Duration) -> SetDone {
         let started = Instant::now();
+        let now = self.in_force(&job);
+        let answered =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.answer(&job.set, &now)));
+        let (reply, markers) = answered.unwrap_or_else(|_| {
+            log::error!(
+                "a set panicked while it was answered (an internal error); it is refused with \
+                 status 2 and the set thread goes on"
+            );
+            // The solving's interrupt may be left raised for time: the next set lowers it.
+            (failed_reply(&job.set, &now.rules, SET_PANICKED), None)
+        });
         let SetJob {
             set,
             received,
@@ -259,24 +343,8 @@ impl Solver {
             via,
             record,
             record_markers,
-            audience,
+            ..
         } = job;
-        let now = {
-            let live = self.shared.lock();
-            let version = live.version_at(received);
-            InForce {
-                settings: version.settings,
-                markers_on: version.config.publish_markers && (audience || record_markers),
-                rules: version.config.rules(),
-                threads: version.config.solver_threads,
-                budget: version.config.max_set_time,
-                closing_axis: version.config.closing_axis,
-            }
-        };
-        let (reply, markers) = match &set {
-            SetInput::Candidates(set) => self.candidates(set, &now),
-            SetInput::Poses(set) => self.poses(set, &now),
-        };
         let recorded = RecordedSet::new(
             record.then(|| reply.clone()),
             markers.as_ref().filter(|_| record_markers).cloned(),
@@ -293,6 +361,101 @@ impl Solver {
             },
             waited,
             took: started.elapsed(),
+        }
+    }
+
+    /// The settings a set received at `job.received` is answered with.
+    fn in_force(&self, job: &SetJob) -> InForce {
+        let (received, record_markers, audience) = (job.received, job.record_markers, job.audience);
+        {
+            let live = self.shared.lock();
+            let version = live.version_at(received);
+            InForce {
+                settings: version.settings,
+                markers_on: version.config.publish_markers && (audience || record_markers),
+                rules: version.config.rules(),
+                threads: version.config.solver_threads,
+                budget: version.config.max_set_time,
+                closing_axis: version.config.closing_axis,
+                load_time: load_time(version.config.max_mesh_load_time),
+                max_inline: usize::try_from(version.config.max_inline_mesh_triangles)
+                    .unwrap_or(usize::MAX),
+            }
+        }
+    }
+
+    /// A set's answer and its best candidate's markers.
+    fn answer(&self, set: &SetInput, now: &InForce) -> (SetReply, Option<MarkerArray>) {
+        #[cfg(test)]
+        if set_id(set) == tests::PANICS {
+            panic!("a panic injected by a test");
+        }
+        match set {
+            SetInput::Candidates(set) => self.candidates(set, now),
+            SetInput::Poses(set) => self.poses(set, now),
+        }
+    }
+
+    /// A pose set's object, made on a loader thread when its mesh must be loaded or a large
+    /// inline mesh indexed, waited for no longer than `max_mesh_load_time` nor than the set's
+    /// `max_set_time` (whose clock is watching); refused at once when the inline mesh is beyond
+    /// `max_inline_mesh_triangles` or no loader thread is free. A load not waited for goes on
+    /// in the background and fills the cache.
+    fn object_within(
+        &self,
+        answerer: &PoseAnswerer,
+        set: &PoseCandidateSet,
+        now: &InForce,
+    ) -> Result<grasp_orient_geometry::Object, Refused> {
+        let o = &set.object;
+        if let Some(why) = inline_mesh_too_large(o, now.max_inline) {
+            return Err(refusal(why));
+        }
+        let scale = [o.scale.x, o.scale.y, o.scale.z];
+        let loads = !o.mesh.is_empty() && !self.meshes.holds(&o.mesh, scale);
+        let indexes = o.inline_mesh.triangles.len() >= INLINE_OFF_THREAD_TRIANGLES;
+        if !loads && !indexes {
+            return answerer.object(o).map_err(Refused::from);
+        }
+        let (made, wait) = mpsc::sync_channel(1);
+        let (on_thread, object) = (answerer.clone(), o.clone());
+        let started = self.loaders.spawn(move || {
+            made.send(on_thread.object(&object).map_err(Refused::from))
+                .ok();
+        });
+        if !started {
+            return Err(refusal(format!(
+                "object: too many meshes loading ({} loader threads busy); send the set again \
+                 later",
+                self.loaders.max()
+            )));
+        }
+        let deadline = Instant::now() + now.load_time;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match wait.recv_timeout(left.min(LOAD_POLL)) {
+                Ok(made) => return made,
+                Err(mpsc::RecvTimeoutError::Disconnected) => return Err(refusal(LOAD_PANICKED)),
+                Err(mpsc::RecvTimeoutError::Timeout) => {}
+            }
+            match self.interrupt.halt() {
+                Some(Halt::OutOfTime) => {
+                    return Err(refusal(format!(
+                        "object: its mesh was not loaded within max_set_time ({} s); the load \
+                         goes on in the background: send the set again later",
+                        now.budget
+                    )))
+                }
+                Some(Halt::Stopping) => {
+                    return Err(refusal(
+                        "object: its mesh was not loaded: the node is stopping",
+                    ))
+                }
+                None => {}
+            }
+            if Instant::now() >= deadline {
+                return Err(refusal(too_slow(now.load_time)));
+            }
         }
     }
 
@@ -359,7 +522,14 @@ impl Solver {
             let pool = self.pool_for(set.poses.len(), now.threads);
             self.interrupt.lower_time();
             let _watched = self.clock.watch(now.budget);
-            let (reply, object) = answerer.answer_set_with(set, &now.rules, |candidates| {
+            let object = (set.poses.len() <= now.rules.max_set_size)
+                .then(|| self.object_within(&answerer, set, now));
+            if object.as_ref().is_some_and(Result::is_err) {
+                // Refused, perhaps because max_set_time ran out while it loaded: each pose says
+                // why, and the set is answered whole (there is nothing left to solve).
+                self.interrupt.lower_time();
+            }
+            let (reply, object) = answerer.answer_set_on(set, object, |candidates| {
                 answer_set_within(
                     candidates,
                     &now.settings,
@@ -391,6 +561,27 @@ impl Solver {
             ))
         });
         (SetReply::Poses(reply), markers)
+    }
+}
+
+/// How often the set thread, waiting for a pose set's mesh, looks whether the set's time ran out
+/// or the node is stopping.
+const LOAD_POLL: Duration = Duration::from_millis(20);
+
+/// A pose set's object refused with status 2, saying `why`.
+fn refusal(why: impl Into<String>) -> Refused {
+    Refused {
+        status: GripRecommendation::STATUS_INVALID_INPUT,
+        message: why.into(),
+    }
+}
+
+/// The set's id (the test hook's trigger).
+#[cfg(test)]
+fn set_id(set: &SetInput) -> &str {
+    match set {
+        SetInput::Candidates(s) => &s.id,
+        SetInput::Poses(s) => &s.id,
     }
 }
 
@@ -503,9 +694,13 @@ mod tests {
     use crate::msg::{GripRecommendation, GripRecommendationSet};
     use futures::StreamExt;
 
+    /// The id of a set whose answering panics (`Solver::answer`).
+    pub(super) const PANICS: &str = "test: this set panics";
+
     fn worker(config: Config) -> SetWorker {
         let settings = config.solver_settings().expect("valid");
-        SetWorker::start(Shared::new(config, settings), false, meshes()).expect("threads")
+        let loaders = Loaders::new(crate::node::loads::MAX_LOADERS);
+        SetWorker::start(Shared::new(config, settings), false, meshes(), loaders).expect("threads")
     }
 
     fn meshes() -> Arc<MeshCache> {
@@ -775,6 +970,122 @@ mod tests {
             names.contains(&"object") && names.contains(&"fingers"),
             "{names:?}"
         );
+    }
+
+    /// `n` answers of the set thread, each within `within` (a set thread that died, or blocks,
+    /// fails here rather than hanging the test).
+    fn answers_within(w: &mut SetWorker, n: usize, within: Duration) -> Vec<SetDone> {
+        smol::block_on(async {
+            let mut out = Vec::new();
+            for _ in 0..n {
+                let next = futures::future::select(w.done.next(), smol::Timer::after(within)).await;
+                match next {
+                    futures::future::Either::Left((Some(done), _)) => out.push(done),
+                    futures::future::Either::Left((None, _)) => {
+                        panic!("the set thread ended after {} answers", out.len())
+                    }
+                    futures::future::Either::Right(_) => {
+                        panic!("no answer within {within:?} after {}", out.len())
+                    }
+                }
+            }
+            out
+        })
+    }
+
+    /// A set whose answering panics gets status 2 "internal error"; the set thread goes on, so
+    /// more such sets than max_queued_sets are each answered the same, and later sets of
+    /// candidates and of poses are answered as usual, none refused as busy.
+    #[test]
+    fn a_set_that_panics_is_refused_and_the_set_thread_goes_on() {
+        let mut w = worker(Config {
+            max_set_time: 0.0,
+            max_queued_sets: 2,
+            ..Config::default()
+        });
+        for round in 0..6 {
+            w.submit(job(PANICS, 3)).expect("taken");
+            let done = answers_within(&mut w, 1, Duration::from_secs(5)).remove(0);
+            let reply = done.outcome.reply.candidates();
+            assert_eq!(
+                reply.status,
+                GripRecommendationSet::STATUS_INVALID_INPUT,
+                "round {round}"
+            );
+            assert!(
+                reply.message.contains("internal error while answering"),
+                "{}",
+                reply.message
+            );
+        }
+        let mut pose = pose_job(PANICS, &["a"]);
+        pose.record = false;
+        w.submit(pose).expect("taken");
+        let SetReply::Poses(reply) = answers_within(&mut w, 1, Duration::from_secs(5))
+            .remove(0)
+            .outcome
+            .reply
+        else {
+            panic!("a pose set's answer")
+        };
+        assert_eq!(reply.status, GripRecommendationSet::STATUS_INVALID_INPUT);
+        w.submit(job("after", 3)).expect("not busy");
+        w.submit(pose_job("poses after", &["low", "mid"]))
+            .expect("not busy");
+        let after = answers_within(&mut w, 2, Duration::from_secs(5));
+        assert_eq!(
+            after[0].outcome.reply.status(),
+            0,
+            "{}",
+            after[0].outcome.reply.message()
+        );
+        assert_eq!(after[0].outcome.reply.candidates().ranking.len(), 3);
+        assert_eq!(
+            after[1].outcome.reply.status(),
+            0,
+            "{}",
+            after[1].outcome.reply.message()
+        );
+        assert_eq!(after[1].outcome.reply.ranked().0, 2);
+    }
+
+    /// A pose set whose mesh never loads (a FIFO nobody writes) is answered within its
+    /// max_set_time, each pose status 2; the set thread then answers the next set at once.
+    #[test]
+    fn a_pose_set_waits_for_its_mesh_no_longer_than_max_set_time() {
+        let dir = tempfile::tempdir().expect("a temp dir");
+        let fifo = crate::node::loads::tests::fifo(dir.path(), "never.stl");
+        let mut w = worker(Config {
+            max_set_time: 0.3,
+            max_mesh_load_time: 3.0,
+            ..Config::default()
+        });
+        let mut set = pose_job("never", &["a", "b"]);
+        if let SetInput::Poses(p) = &mut set.set {
+            p.object.primitive = Default::default();
+            p.object.mesh = fifo.display().to_string().into();
+        }
+        let since = Instant::now();
+        w.submit(set).expect("taken");
+        w.submit(pose_job("next", &["low"])).expect("taken");
+        let done = answers_within(&mut w, 2, Duration::from_secs(2));
+        let SetReply::Poses(never) = &done[0].outcome.reply else {
+            panic!("a pose set's answer")
+        };
+        assert_eq!(never.recommendations.len(), 2, "{never:?}");
+        for r in &never.recommendations {
+            assert_eq!(r.recommendation.status, 2, "{r:?}");
+            if r.recommendation.message.contains("max_set_time") {
+                assert!(since.elapsed() >= Duration::from_millis(290));
+            }
+        }
+        assert_eq!(done[1].outcome.reply.status(), 0);
+        assert!(
+            since.elapsed() < Duration::from_secs(1),
+            "{:?}",
+            since.elapsed()
+        );
+        crate::node::loads::tests::release(&fifo);
     }
 
     #[test]

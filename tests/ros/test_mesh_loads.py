@@ -1,0 +1,211 @@
+"""Mesh loads never hold up the node, from a real rclpy peer over Fast DDS (docs/node.md, docs/bad-input.md):
+
+- a pose set naming a COLLADA file whose index list points past its vertices (it panicked the parser) is
+  answered, and later sets on the topic, `~/recommend_poses` and `~/recommend` are answered, none as busy;
+- pose candidates naming a FIFO nobody writes (more than the loading slots) are each answered with status 2
+  within 5 s, while contact candidates and parameter requests are answered at once, and SIGINT is honoured
+  within a second;
+- an inline mesh beyond max_inline_mesh_triangles is refused at once, and several just under it at once leave
+  contact candidates answered within 300 ms and the node's RSS under 1.5 GB.
+
+Timed: run alone (tests/run.sh lists it among TIMED). See conftest.py for how to run.
+"""
+from __future__ import annotations
+
+import math
+import os
+import signal
+import time
+from pathlib import Path
+
+import pose_cases as pc
+import test_node as TN
+from conftest import GraspClient, load_paper_cases
+from test_sets import SetClient, set_msg
+
+from grasp_orient.msg import PoseCandidate, PoseCandidateSet  # noqa: E402
+from grasp_orient.srv import RecommendPoses  # noqa: E402
+
+BAD_DAE = """<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <library_geometries><geometry id="g"><mesh>
+    <source id="p"><float_array id="pa" count="9">0 0 0 1 0 0 0 1 0</float_array>
+      <technique_common><accessor source="#pa" count="3" stride="3">
+        <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+      </accessor></technique_common></source>
+    <vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
+    <triangles count="1"><input semantic="VERTEX" source="#v" offset="0"/><p>0 1 99</p></triangles>
+  </mesh></geometry></library_geometries>
+  <library_visual_scenes><visual_scene id="s"><node id="n"><instance_geometry url="#g"/></node></visual_scene>
+  </library_visual_scenes><scene><instance_visual_scene url="#s"/></scene>
+</COLLADA>
+"""
+
+
+def rss_mb(pid: int) -> tuple[float, float]:
+    """VmRSS and VmHWM (peak) of `pid`, MB."""
+    got = {}
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        k, _, v = line.partition(":")
+        if k in ("VmRSS", "VmHWM"):
+            got[k] = int(v.split()[0]) / 1024
+    return got["VmRSS"], got["VmHWM"]
+
+
+def on_mesh(mesh: str, cid: str) -> dict:
+    c = pc.singles()[0]
+    c["id"] = cid
+    c["object"] = {"pose": c["object"]["pose"], "mesh": mesh, "scale": pc.ONE, "mass": 0.25, "friction": 0.5}
+    return c
+
+
+def contact_and_params(single: GraspClient, params, tag: str, n: int = 3) -> float:
+    """`n` contact candidates and parameter gets; the longest round trip, s."""
+    case = load_paper_cases()[0]
+    longest = 0.0
+    for k in range(n):
+        case["id"] = f"{tag}-{k}"
+        t0 = time.monotonic()
+        assert single.send_one(case, timeout=10).status == 0
+        params.get("max_grip_force")
+        longest = max(longest, time.monotonic() - t0)
+    return longest
+
+
+def test_a_set_that_panicked_the_parser_leaves_later_sets_answered(start_node, peer, tmp_path):
+    dae = tmp_path / "past_vertices.dae"
+    dae.write_text(BAD_DAE)
+    ns = "/mesh_panic"
+    node = start_node("--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false", name="grasp_orient node (mesh panic)")
+    from conftest import reliable_qos
+    from grasp_orient.msg import PoseRecommendationSet
+    set_pub = peer.node.create_publisher(PoseCandidateSet, f"{ns}/pose_candidate_sets", reliable_qos(10))
+    answers: dict = {}
+    peer.node.create_subscription(PoseRecommendationSet, f"{ns}/pose_recommendation_sets",
+                                  lambda m: answers.setdefault(m.set_id, m), reliable_qos(10))
+    srv = peer.node.create_client(RecommendPoses, f"{ns}/grasp_orient/recommend_poses")
+    assert peer.spin_until(lambda: set_pub.get_subscription_count() > 0, 15.0)
+    peer.spin_for(0.5)
+    base = pc.sets()[2]  # on the cylinder
+    for k in range(20):  # more than max_queued_sets (16): a dead set thread would answer every later one busy
+        bad = dict(base, id=f"bad-{k}", object={**base["object"], "primitive": {"type": 0, "dimensions": []},
+                                                 "mesh": str(dae), "scale": pc.ONE})
+        set_pub.publish(pc.fill(PoseCandidateSet(), bad))
+        # One at a time: 20 at once would really find 16 waiting.
+        assert peer.spin_until(lambda: f"bad-{k}" in answers, 10.0), sorted(answers)
+    for k in range(20):
+        a = answers[f"bad-{k}"]
+        assert a.status != 4, a.message
+        assert all(r.recommendation.status == 2 for r in a.recommendations), a.recommendations[0].recommendation
+    good = dict(base, id="good-topic")
+    set_pub.publish(pc.fill(PoseCandidateSet(), good))
+    assert peer.spin_until(lambda: "good-topic" in answers, 15.0)
+    assert answers["good-topic"].status == 0, answers["good-topic"].message
+    req = RecommendPoses.Request()
+    req.pose_set = pc.fill(PoseCandidateSet(), dict(base, id="good-service"))
+    reply = peer.call(srv, req, timeout=15.0).recommendation_set
+    assert reply.status == 0, reply.message
+    sets = SetClient(peer, ns)
+    sets.wait_matched()
+    r = sets.call(set_msg(load_paper_cases()[:3], "good-recommend"))
+    assert r.status == 0, r.message
+    assert node.proc.poll() is None
+    node.stop_and_check()
+
+
+def test_fifo_meshes_block_nothing(start_node, peer, tmp_path):
+    fifo = tmp_path / "never.stl"
+    os.mkfifo(fifo)
+    ns = "/mesh_fifo"
+    node = start_node("--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false",  # max_mesh_load_time 3 s
+                      name="grasp_orient node (fifo)")
+    single = GraspClient(peer, ns)
+    single.ensure_roundtrip()
+    params = TN.Params(peer, f"{ns}/grasp_orient")
+    from conftest import reliable_qos
+    from grasp_orient.msg import PoseRecommendation
+    pub = peer.node.create_publisher(PoseCandidate, f"{ns}/pose_candidates", reliable_qos(100))
+    answers: dict = {}
+    peer.node.create_subscription(PoseRecommendation, f"{ns}/pose_recommendations",
+                                  lambda m: answers.setdefault(m.recommendation.candidate_id, (m, time.monotonic())),
+                                  reliable_qos(100))
+    assert peer.spin_until(lambda: pub.get_subscription_count() > 0, 15.0)
+    peer.spin_for(0.5)
+    ids = [f"fifo-{k}" for k in range(6)]  # more than the 4 loading slots
+    t0 = time.monotonic()
+    for i in ids:
+        pub.publish(pc.fill(PoseCandidate(), on_mesh(str(fifo), i)))
+    longest = contact_and_params(single, params, "during")
+    assert longest < 1.0, f"a contact candidate and a parameter request took {longest:.3f} s during the loads"
+    assert peer.spin_until(lambda: all(i in answers for i in ids), 10.0), sorted(answers)
+    for i in ids:
+        m, at = answers[i]
+        assert m.recommendation.status == 2, m.recommendation.message
+        assert at - t0 < 5.0, f"{i} answered after {at - t0:.1f} s"
+    t1 = time.monotonic()
+    node.proc.send_signal(signal.SIGINT)
+    node.proc.wait(5)
+    assert time.monotonic() - t1 < 1.0, f"SIGINT took {time.monotonic() - t1:.2f} s"
+    assert node.proc.returncode == 0, node.output()
+
+
+def inline_torus(triangles: int) -> dict:
+    """A closed inline torus of about `triangles` triangles, metres, across the fingers of pc.grasps()' first."""
+    rings = max(3, int(math.sqrt(triangles / 2)))
+    sides = max(3, triangles // (2 * rings))
+    vertices, tris = [], []
+    for i in range(rings):
+        for j in range(sides):
+            u, v = 2 * math.pi * i / rings, 2 * math.pi * j / sides
+            rho = 0.06 + 0.025 * math.cos(v)
+            vertices.append({"x": rho * math.sin(u), "y": rho * math.cos(u) - 0.06, "z": 0.025 * math.sin(v)})
+    at = lambda i, j: (i % rings) * sides + j % sides  # noqa: E731
+    for i in range(rings):
+        for j in range(sides):
+            a, b, c, d = at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)
+            tris += [{"vertex_indices": [a, b, c]}, {"vertex_indices": [a, c, d]}]
+    return {"vertices": vertices, "triangles": tris}
+
+
+def test_inline_meshes_are_bounded(start_node, peer):
+    ns = "/mesh_inline"
+    node = start_node("--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false",
+                      "-p", "max_inline_mesh_triangles:=50000", name="grasp_orient node (inline)")
+    single = GraspClient(peer, ns)
+    single.ensure_roundtrip()
+    from conftest import reliable_qos
+    from grasp_orient.msg import PoseRecommendation
+    pub = peer.node.create_publisher(PoseCandidate, f"{ns}/pose_candidates", reliable_qos(100))
+    answers: dict = {}
+    peer.node.create_subscription(PoseRecommendation, f"{ns}/pose_recommendations",
+                                  lambda m: answers.setdefault(m.recommendation.candidate_id, m), reliable_qos(100))
+    assert peer.spin_until(lambda: pub.get_subscription_count() > 0, 15.0)
+    peer.spin_for(0.5)
+    base = pc.singles()[0]
+    base["object"] = {"pose": pc.pose(0, 0, 0), "scale": pc.ONE, "mass": 0.25, "friction": 0.5}
+    base["grasp_pose"] = pc.pose(0, 0, 0)
+    big = pc.fill(PoseCandidate(), dict(base, id="big", object={**base["object"], "inline_mesh": inline_torus(60000)}))
+    under = inline_torus(49000)
+    t0 = time.monotonic()
+    pub.publish(big)
+    assert peer.spin_until(lambda: "big" in answers, 5.0)
+    assert time.monotonic() - t0 < 2.0
+    assert answers["big"].recommendation.status == 2
+    assert "max_inline_mesh_triangles (50000)" in answers["big"].recommendation.message
+    ids = [f"under-{k}" for k in range(5)]
+    for i in ids:
+        pub.publish(pc.fill(PoseCandidate(), dict(base, id=i, object={**base["object"], "inline_mesh": under})))
+    case = load_paper_cases()[0]
+    worst = 0.0
+    for k in range(5):
+        case["id"] = f"inline-{k}"
+        t = time.monotonic()
+        assert single.send_one(case, timeout=10).status == 0
+        worst = max(worst, time.monotonic() - t)
+    assert peer.spin_until(lambda: all(i in answers for i in ids), 30.0), sorted(answers)
+    rss, peak = rss_mb(node.proc.pid)
+    print(f"contact candidates during 5 inline meshes of 49k triangles: longest {1e3 * worst:.0f} ms; "
+          f"RSS {rss:.0f} MB, peak {peak:.0f} MB")
+    assert worst < 0.3, worst
+    assert peak < 1500, peak
+    node.stop_and_check()
