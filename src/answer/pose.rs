@@ -29,16 +29,78 @@ use crate::msg::{
     GripRecommendationSet, Header, Point, Pose, PoseCandidate, PoseCandidateSet,
     PoseRecommendation, PoseRecommendationSet, Vector3,
 };
-use crate::solver::Settings;
+use crate::solver::{
+    check_friction, check_mass, spatial::check_weight, InvalidInput, Readable, Settings,
+    MAX_COORDINATE, MAX_GRAVITY,
+};
 use grasp_orient_geometry::{
     grasp_from_pose, AmentIndex, ClosingAxis, Contact, Feature, GeometryError, Grasp, GripperPose,
     MeshCache, Object, Primitive, Shape,
 };
-use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion};
+use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3 as V3};
+use std::fmt::{self, Display};
 use std::sync::Arc;
 
 /// The most bytes of meshes a [`PoseAnswerer`] keeps loaded (least recently used dropped first).
 pub const MESH_CACHE_BYTES: usize = 512 << 20;
+
+/// The largest opening accepted, m: the solver's coordinate limit ([`MAX_COORDINATE`]), since
+/// the fingers start `width / 2` from the tool frame's origin. Beyond it the contacts, computed
+/// from finger starts `width / 2` away, would have lost every digit of the object's size (an
+/// opening of 1e300 m made both contacts the same point).
+pub const MAX_WIDTH: f64 = MAX_COORDINATE;
+/// The smallest scale factor accepted on a mesh's axis: from nanometres to metres. Below it the
+/// mesh shrinks towards a point, and its faces' normals are lost to underflow (a scale of 1e-100
+/// made the contact normals NaN).
+pub const MIN_SCALE: f64 = 1e-9;
+/// The largest scale factor accepted on a mesh's axis. Above it the vertices leave the solver's
+/// coordinate limit for any mesh unit in use, and reach infinity from single-precision files.
+pub const MAX_SCALE: f64 = 1e9;
+/// A finger starting inside a mesh that is, along the closing line, between these many times
+/// wider than the opening: the refusal adds a hint that the mesh may be in millimetres without a
+/// scale. A mesh in millimetres read as metres is 1000 times too large, so an object from 0.3 to
+/// 1000 times the opening in truth (a gripper rarely closes on one more than 300 times its
+/// opening) lands here; beyond the upper end it is the opening that is wrong, not the units.
+pub const UNITS_HINT_RATIO: std::ops::RangeInclusive<f64> = 300.0..=1e6;
+
+/// What is wrong with one number of a pose candidate (the solver's words for the same faults).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum NumberFault {
+    /// NaN or infinite.
+    NotFinite,
+    /// Larger in magnitude than `limit` (with its unit, leading space included).
+    Above {
+        /// The value.
+        value: f64,
+        /// The largest accepted magnitude.
+        limit: f64,
+        /// Its unit, with its leading space.
+        unit: &'static str,
+    },
+    /// Below `minimum`.
+    Below {
+        /// The value.
+        value: f64,
+        /// The smallest accepted value.
+        minimum: f64,
+    },
+}
+
+impl Display for NumberFault {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            NumberFault::NotFinite => f.write_str("is not a finite number"),
+            NumberFault::Above { value, limit, unit } => write!(
+                f,
+                "is out of range: {value:e} exceeds {limit:e}{unit} in magnitude"
+            ),
+            NumberFault::Below { value, minimum } => write!(
+                f,
+                "is out of range: {value:e} is below the smallest accepted {minimum:e}"
+            ),
+        }
+    }
+}
 
 /// Why a pose candidate cannot be turned into a grasp.
 #[derive(Debug, thiserror::Error)]
@@ -56,7 +118,7 @@ pub enum PoseRefusal {
     /// A primitive with a scale other than 1.
     #[error(
         "object.scale must be 1 on every axis for a primitive (its dimensions are metres), got \
-         [{}, {}, {}]", .scale[0], .scale[1], .scale[2]
+         [{}, {}, {}]", Readable(.scale[0]), Readable(.scale[1]), Readable(.scale[2])
     )]
     PrimitiveScale {
         /// The scale given.
@@ -70,12 +132,61 @@ pub enum PoseRefusal {
         /// Its norm.
         norm: f64,
     },
+    /// A number of the pose candidate out of its domain, named by its path in the message
+    /// (`grasp_pose.position.x`, `poses[2].width`, `object.scale.y`, …).
+    #[error("{field} {fault}")]
+    Number {
+        /// The field's path.
+        field: String,
+        /// What is wrong with it.
+        fault: NumberFault,
+    },
+    /// A number the solver refuses, named by the pose candidate's field it comes from
+    /// (`object.friction`, which is both contacts' friction; `object.mass`).
+    #[error(transparent)]
+    Solver(#[from] InvalidInput),
+    /// A finger starts inside a mesh that is many times wider than the opening along the closing
+    /// line: the geometry's refusal, with a hint about the mesh's units.
+    #[error(
+        "{source}: the mesh is {} times wider than the opening along the closing line: is it in \
+         millimetres? {}",
+        Rounded(*.ratio),
+        if *.unit_scale { "set object.scale to 0.001" } else { "check object.scale" }
+    )]
+    StartsInsideUnits {
+        /// The geometry's refusal ([`GeometryError::StartsInside`]).
+        source: GeometryError,
+        /// The mesh's extent along the closing line over the opening.
+        ratio: f64,
+        /// Whether `object.scale` is 1 on every axis.
+        unit_scale: bool,
+    },
     /// `center_of_mass` given without `has_center_of_mass`.
     #[error(
         "object.center_of_mass is given but object.has_center_of_mass is false: set it true, or \
          leave center_of_mass at zero for the shape's centroid"
     )]
     CenterOfMassFlag,
+}
+
+/// A ratio to about three significant digits, as a plain number (`1000`, `2500`, `15000`).
+struct Rounded(f64);
+
+impl Display for Rounded {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let r = self.0;
+        if !(r.is_finite() && r >= 1.0) {
+            return write!(f, "{r:e}");
+        }
+        let digits = r.log10().floor() as i32;
+        let step = 10f64.powi((digits - 2).max(0));
+        let rounded = (r / step).round() * step;
+        if rounded < 1e16 {
+            write!(f, "{rounded:.0}")
+        } else {
+            write!(f, "{rounded:e}")
+        }
+    }
 }
 
 impl PoseRefusal {
@@ -152,7 +263,7 @@ impl PoseAnswerer {
             Ok(object) => object,
             Err(why) => return (target.refused(&why.into()), None),
         };
-        let answer = match self.grasp(&m.grasp_pose, &"grasp_pose", m.width, &object, &m.object) {
+        let answer = match self.grasp(&m.grasp_pose, &"", m.width, &object, &m.object, &m.gravity) {
             Ok(grasp) => finish(
                 answer_one(&target.candidate(&grasp), settings, rules),
                 &grasp,
@@ -188,7 +299,7 @@ impl PoseAnswerer {
     /// The candidate and the grasp of a pose candidate.
     fn place(&self, m: &PoseCandidate) -> Result<(GraspCandidate, Grasp), Refused> {
         let object = self.object(&m.object)?;
-        let grasp = self.grasp(&m.grasp_pose, &"grasp_pose", m.width, &object, &m.object)?;
+        let grasp = self.grasp(&m.grasp_pose, &"", m.width, &object, &m.object, &m.gravity)?;
         Ok((target_of(m).candidate(&grasp), grasp))
     }
 
@@ -246,10 +357,17 @@ impl PoseAnswerer {
                 .enumerate()
                 .map(|(i, p)| {
                     let object = object.as_ref().map_err(Refused::clone)?;
-                    // The field's name is written out only for a refusal, not for every pose.
-                    let field = &format_args!("poses[{i}].grasp_pose");
-                    self.grasp(&p.grasp_pose, field, p.width, object, &set.object)
-                        .map_err(Refused::from)
+                    // The fields' names are written out only for a refusal, not for every pose.
+                    let prefix = &format_args!("poses[{i}].");
+                    self.grasp(
+                        &p.grasp_pose,
+                        prefix,
+                        p.width,
+                        object,
+                        &set.object,
+                        &set.gravity,
+                    )
+                    .map_err(Refused::from)
                 })
                 .collect(),
         };
@@ -303,6 +421,12 @@ impl PoseAnswerer {
     pub fn object(&self, o: &GraspObject) -> Result<Object, PoseRefusal> {
         let pose = isometry(&o.pose, &"object.pose")?;
         let scale = [o.scale.x, o.scale.y, o.scale.z];
+        let mesh_given = !o.mesh.is_empty()
+            || !o.inline_mesh.triangles.is_empty()
+            || !o.inline_mesh.vertices.is_empty();
+        if mesh_given {
+            check_scale(scale)?;
+        }
         let mut given = Vec::new();
         if !o.mesh.is_empty() {
             given.push("mesh");
@@ -351,29 +475,51 @@ impl PoseAnswerer {
         Ok(Object { pose, shape })
     }
 
-    /// The contacts and centre of mass of one gripper pose on the object.
+    /// The contacts and centre of mass of one gripper pose on the object; `prefix` is what the
+    /// pose's own fields' paths start with (empty, or `poses[i].` in a set).
     fn grasp(
         &self,
         tool: &Pose,
-        field: &dyn std::fmt::Display,
+        prefix: &dyn Display,
         width: f64,
         object: &Object,
         o: &GraspObject,
+        gravity: &Vector3,
     ) -> Result<Grasp, PoseRefusal> {
         let c = &o.center_of_mass;
         let given = if o.has_center_of_mass {
+            for (axis, v) in [("x", c.x), ("y", c.y), ("z", c.z)] {
+                coordinate(&format_args!("object.center_of_mass.{axis}"), v)?;
+            }
             Some(Point3::new(c.x, c.y, c.z))
         } else if (c.x, c.y, c.z) != (0.0, 0.0, 0.0) {
             return Err(PoseRefusal::CenterOfMassFlag);
         } else {
             None
         };
+        let tool_pose = isometry(tool, &format_args!("{prefix}grasp_pose"))?;
+        // A width not finite or not positive is the geometry's to refuse (it names `width`).
+        if width.is_finite() && width > MAX_WIDTH {
+            return Err(PoseRefusal::Number {
+                field: format!("{prefix}width"),
+                fault: NumberFault::Above {
+                    value: width,
+                    limit: MAX_WIDTH,
+                    unit: " m",
+                },
+            });
+        }
         let gripper = GripperPose {
-            tool_pose: isometry(tool, field)?,
+            tool_pose,
             width,
             closing_axis: self.closing_axis,
         };
-        Ok(grasp_from_pose(&gripper, object, given)?)
+        let grasp = grasp_from_pose(&gripper, object, given).map_err(|e| match e {
+            GeometryError::StartsInside { .. } => units_hint(e, &gripper, object, o),
+            e => e.into(),
+        })?;
+        check_object_numbers(o, gravity)?;
+        Ok(grasp)
     }
 }
 
@@ -566,23 +712,157 @@ fn feature_note(name: &str, c: &Contact) -> Option<String> {
     ))
 }
 
-/// A pose as an isometry, its quaternion normalised; `field` names it when the quaternion is no
-/// rotation. A translation not finite is left to the geometry, which names it.
-fn isometry(p: &Pose, field: &dyn std::fmt::Display) -> Result<Isometry3<f64>, PoseRefusal> {
+/// A pose as an isometry, its quaternion normalised. `field` names the pose: each coordinate of
+/// its position must be finite and within the solver's coordinate limit, each component of its
+/// quaternion finite, and the quaternion not zero.
+///
+/// # Normalisation
+/// A quaternion is a rotation at any length: it is divided by its norm. The norm of one whose
+/// largest component `m` lies outside `1e-150..=1e150` is first brought near 1 by an exact power
+/// of two (`2^-floor(log2 m)`), since squaring its components would overflow (norm 1e200: inf)
+/// or underflow (norm 1e-200: 0); one inside is divided by its norm as it is, bit for bit as
+/// before.
+fn isometry(p: &Pose, field: &dyn Display) -> Result<Isometry3<f64>, PoseRefusal> {
+    let t = &p.position;
+    for (axis, v) in [("x", t.x), ("y", t.y), ("z", t.z)] {
+        coordinate(&format_args!("{field}.position.{axis}"), v)?;
+    }
     let o = &p.orientation;
+    for (axis, v) in [("x", o.x), ("y", o.y), ("z", o.z), ("w", o.w)] {
+        if !v.is_finite() {
+            return Err(PoseRefusal::Number {
+                field: format!("{field}.orientation.{axis}"),
+                fault: NumberFault::NotFinite,
+            });
+        }
+    }
     let q = Quaternion::new(o.w, o.x, o.y, o.z);
-    let norm = q.norm();
-    if !(norm.is_finite() && norm > 0.0) {
+    let largest = q.coords.amax();
+    if largest == 0.0 {
         return Err(PoseRefusal::Orientation {
             field: format!("{field}.orientation"),
-            norm,
+            norm: 0.0,
         });
     }
-    let t = &p.position;
+    let q = if (1e-150..=1e150).contains(&largest) {
+        q
+    } else {
+        let k = -(largest.log2().floor() as i32);
+        Quaternion::from(q.coords.map(|c| times_pow2(c, k)))
+    };
     Ok(Isometry3::from_parts(
         Translation3::new(t.x, t.y, t.z),
         UnitQuaternion::from_quaternion(q),
     ))
+}
+
+/// `x · 2^k`, exact but for results below the normal range (in steps: one power of two covers
+/// only `2^-1022 ..= 2^1023`).
+fn times_pow2(x: f64, mut k: i32) -> f64 {
+    let mut out = x;
+    while k != 0 {
+        let step = k.clamp(-1000, 1000);
+        out *= f64::from_bits(((step + 1023) as u64) << 52);
+        k -= step;
+    }
+    out
+}
+
+/// A coordinate of a pose candidate, m: finite and within the solver's coordinate limit.
+fn coordinate(field: &dyn Display, v: f64) -> Result<(), PoseRefusal> {
+    let fault = if !v.is_finite() {
+        NumberFault::NotFinite
+    } else if v.abs() > MAX_COORDINATE {
+        NumberFault::Above {
+            value: v,
+            limit: MAX_COORDINATE,
+            unit: " m",
+        }
+    } else {
+        return Ok(());
+    };
+    Err(PoseRefusal::Number {
+        field: field.to_string(),
+        fault,
+    })
+}
+
+/// A mesh's scale: each axis's factor within `[MIN_SCALE, MAX_SCALE]`. A factor that is zero or
+/// negative is left to the geometry, which names the resource and the scale.
+fn check_scale(scale: [f64; 3]) -> Result<(), PoseRefusal> {
+    for (axis, v) in ["x", "y", "z"].into_iter().zip(scale) {
+        let fault = if !v.is_finite() {
+            NumberFault::NotFinite
+        } else if v > MAX_SCALE {
+            NumberFault::Above {
+                value: v,
+                limit: MAX_SCALE,
+                unit: "",
+            }
+        } else if v > 0.0 && v < MIN_SCALE {
+            NumberFault::Below {
+                value: v,
+                minimum: MIN_SCALE,
+            }
+        } else {
+            continue;
+        };
+        return Err(PoseRefusal::Number {
+            field: format!("object.scale.{axis}"),
+            fault,
+        });
+    }
+    Ok(())
+}
+
+/// The object's friction and mass as the solver checks them, named as the pose candidate's
+/// fields (the spatial candidate gives `object.friction` to both contacts, and would name
+/// `friction_1`), and the weight they make with `gravity` once gravity is within the solver's
+/// limits (otherwise the solver names the gravity field at fault, `gravity.z`, the same path).
+fn check_object_numbers(o: &GraspObject, gravity: &Vector3) -> Result<(), PoseRefusal> {
+    check_friction("object.friction", o.friction)?;
+    let mass = check_mass("object.mass", o.mass)?;
+    let g = V3::new(gravity.x, gravity.y, gravity.z);
+    let gravity_checked = g.iter().all(|c| c.abs() <= MAX_GRAVITY) && g != V3::zeros();
+    if gravity_checked {
+        check_weight("object.mass", mass, &g)?;
+    }
+    Ok(())
+}
+
+/// A finger's refusal for starting inside the object, with a hint about units when the object is
+/// a mesh [`UNITS_HINT_RATIO`] times wider along the closing line than the opening.
+///
+/// The extent is the spread of the mesh's vertices along the closing axis `b` in the object
+/// frame, `max(v·b) − min(v·b)`: the object's own length along the line the fingers close on.
+fn units_hint(
+    e: GeometryError,
+    gripper: &GripperPose,
+    object: &Object,
+    o: &GraspObject,
+) -> PoseRefusal {
+    let Shape::Mesh(mesh) = &object.shape else {
+        return e.into();
+    };
+    let b_header = gripper.tool_pose.rotation * gripper.closing_axis.unit().into_inner();
+    let b = object.pose.rotation.inverse() * b_header;
+    let (lo, hi) = mesh
+        .corners()
+        .flatten()
+        .map(|v| V3::from(v).dot(&b))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+            (lo.min(x), hi.max(x))
+        });
+    let ratio = (hi - lo) / gripper.width;
+    if UNITS_HINT_RATIO.contains(&ratio) {
+        PoseRefusal::StartsInsideUnits {
+            source: e,
+            ratio,
+            unit_scale: [o.scale.x, o.scale.y, o.scale.z] == [1.0; 3],
+        }
+    } else {
+        e.into()
+    }
 }
 
 fn point(p: &Point3<f64>) -> Point {

@@ -6,6 +6,7 @@
 mod util;
 
 mod cli;
+mod extremes;
 mod finger_force;
 mod golden_bags;
 mod invariants;

@@ -51,7 +51,10 @@ pub mod table_1;
 #[doc = include_str!("../README.md")]
 struct ReadmeExample;
 
-pub use planar::frame::{BEHIND_TANGENT, MAX_COORDINATE, MAX_SAFETY_FACTOR};
+pub use planar::frame::{
+    check_friction, check_mass, BEHIND_TANGENT, MAX_COORDINATE, MAX_FRICTION, MAX_GRAVITY,
+    MAX_MASS, MAX_SAFETY_FACTOR, MIN_FRICTION, MIN_WEIGHT,
+};
 
 use std::fmt;
 
@@ -194,7 +197,7 @@ pub enum InvalidInput {
         field: &'static str,
     },
     /// A field must be strictly positive.
-    #[error("{field} must be greater than zero, got {value}")]
+    #[error("{field} must be greater than zero, got {}", Readable(*.value))]
     NotPositive {
         /// The field.
         field: &'static str,
@@ -224,8 +227,10 @@ pub enum InvalidInput {
         minimum: f64,
     },
     /// The weight `mass × |gravity|` (in-plane gravity) is too small to compute forces with.
-    #[error("mass and gravity give a weight of {weight:e} N, below the smallest the forces can be computed for ({:e} N)", planar::frame::MIN_WEIGHT)]
+    #[error("{mass} and gravity give a weight of {weight:e} N, below the smallest the forces can be computed for ({:e} N)", planar::frame::MIN_WEIGHT)]
     WeightTooSmall {
+        /// The field of the mass (`mass`; `object.mass` for a pose candidate).
+        mass: &'static str,
         /// `mass × |gravity|`, N.
         weight: f64,
     },
@@ -314,6 +319,22 @@ pub enum InvalidInput {
          use norm2 or internal_force"
     )]
     Norm1SpatialTolerance,
+}
+
+/// A value as a refusal states it: plainly from 1e-5 up to 1e16 (`-1`, `0.25`, as before), in
+/// scientific notation outside (`-1e-300`, not three hundred zeros).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Readable(pub f64);
+
+impl fmt::Display for Readable {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let magnitude = self.0.abs();
+        if magnitude == 0.0 || !magnitude.is_finite() || (1e-5..1e16).contains(&magnitude) {
+            write!(f, "{}", self.0)
+        } else {
+            write!(f, "{:e}", self.0)
+        }
+    }
 }
 
 fn contact_number(c: Contact) -> u8 {

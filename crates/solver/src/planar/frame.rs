@@ -259,7 +259,10 @@ fn validate(c: &Candidate) -> Result<Measured, InvalidInput> {
     let gravity = unit_in_plane("gravity", &c.gravity)?;
     let weight = c.mass * length(&c.gravity);
     if weight < MIN_WEIGHT {
-        return Err(InvalidInput::WeightTooSmall { weight });
+        return Err(InvalidInput::WeightTooSmall {
+            mass: "mass",
+            weight,
+        });
     }
     let d = length(&(c.contact_1 - c.contact_2));
     let reach =
@@ -292,6 +295,18 @@ fn validate(c: &Candidate) -> Result<Measured, InvalidInput> {
         d,
         e_x: to_first.unwrap_or_else(Vector2::zeros),
     })
+}
+
+/// A friction coefficient as the solver takes it ([`friction`]), the error naming `field` (a
+/// pose candidate's `object.friction`, which becomes both `friction_1` and `friction_2`).
+pub fn check_friction(field: &'static str, v: f64) -> Result<f64, InvalidInput> {
+    friction(field, v)
+}
+
+/// A mass (kg) as the solver takes it: finite, positive and at most [`MAX_MASS`], the error
+/// naming `field` (a pose candidate's `object.mass`).
+pub fn check_mass(field: &'static str, v: f64) -> Result<f64, InvalidInput> {
+    positive(field, v, MAX_MASS, " kg")
 }
 
 /// A friction coefficient in `[MIN_FRICTION, MAX_FRICTION]` (the spatial model's too).

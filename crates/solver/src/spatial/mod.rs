@@ -127,7 +127,7 @@ use nalgebra::{Vector2, Vector3};
 use plane::{Basis, Geometry, PlaneSolve};
 use std::fmt;
 
-pub use plane::sliced_friction;
+pub use plane::{check_weight, sliced_friction};
 
 /// The centre of mass counts as on the contact axis when its distance from the axis is at most
 /// this fraction of the contact distance. It is the fraction below which the planar model calls

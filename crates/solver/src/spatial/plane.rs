@@ -68,6 +68,26 @@ pub(super) fn length(v: &Vector3<f64>) -> f64 {
     times_pow2(times_pow2_3(v, k).norm(), -k)
 }
 
+/// The weight `mass × |gravity|` (N) of a spatial candidate, refused as
+/// [`InvalidInput::WeightTooSmall`] naming `mass_field` where the solver refuses it: for a
+/// caller whose mass reaches the solver under another name (a pose candidate's `object.mass`).
+/// `mass` and `gravity` are taken as checked (finite, within their limits).
+pub fn check_weight(
+    mass_field: &'static str,
+    mass: f64,
+    gravity: &Vector3<f64>,
+) -> Result<f64, InvalidInput> {
+    let weight = mass * length(gravity);
+    if weight < MIN_WEIGHT {
+        Err(InvalidInput::WeightTooSmall {
+            mass: mass_field,
+            weight,
+        })
+    } else {
+        Ok(weight)
+    }
+}
+
 /// The unit vector along `v`, scale-free; the zero vector is refused naming `field`.
 fn direction(field: &'static str, v: &Vector3<f64>) -> Result<Vector3<f64>, InvalidInput> {
     let w = times_pow2_3(v, scale_exponent(v.amax()));
@@ -190,7 +210,10 @@ impl Geometry {
         // precision, and the forces (in units of it) cannot be given in newtons.
         let weight = c.mass * length(&c.gravity);
         if weight < MIN_WEIGHT {
-            return Err(InvalidInput::WeightTooSmall { weight });
+            return Err(InvalidInput::WeightTooSmall {
+                mass: "mass",
+                weight,
+            });
         }
         // Lengths do not change the answer: a scene of tiny coordinates is brought to about 1 by
         // an exact power of two (see `scale_exponent`).
