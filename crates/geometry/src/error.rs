@@ -81,13 +81,19 @@ impl fmt::Display for MeshDefect {
 #[non_exhaustive]
 pub enum GeometryError {
     /// The resource names a scheme other than `package://`, `file://` or none.
-    #[error("mesh resource {resource:?}: unsupported scheme (use package://, file:// or a path)")]
+    #[error(
+        "mesh resource {}: unsupported scheme (use package://, file:// or a path)",
+        abbreviate(resource)
+    )]
     UnsupportedScheme {
         /// The resource as given.
         resource: String,
     },
     /// `package://` with an invalid package name (ament's rule: `[a-zA-Z0-9][a-zA-Z0-9_-]+`).
-    #[error("mesh resource {resource:?}: {package:?} is not a valid package name")]
+    #[error(
+        "mesh resource {}: {package:?} is not a valid package name",
+        abbreviate(resource)
+    )]
     InvalidPackageName {
         /// The resource as given.
         resource: String,
@@ -95,7 +101,10 @@ pub enum GeometryError {
         package: String,
     },
     /// No prefix of `AMENT_PREFIX_PATH` has the package in its ament index.
-    #[error("mesh resource {resource:?}: package {package:?} not found in the ament index of {searched:?}")]
+    #[error(
+        "mesh resource {}: package {package:?} not found in the ament index of {searched:?}",
+        abbreviate(resource)
+    )]
     PackageNotFound {
         /// The resource as given.
         resource: String,
@@ -105,7 +114,10 @@ pub enum GeometryError {
         searched: Vec<PathBuf>,
     },
     /// The file could not be read.
-    #[error("mesh resource {resource:?}: cannot read {path:?}: {source}")]
+    #[error(
+        "mesh resource {}: cannot read {path:?}: {source}",
+        abbreviate(resource)
+    )]
     Unreadable {
         /// The resource as given.
         resource: String,
@@ -114,14 +126,62 @@ pub enum GeometryError {
         /// Why.
         source: std::io::Error,
     },
+    /// The resource string is longer than [`MAX_RESOURCE_BYTES`]; refused before anything
+    /// else, and printed abbreviated.
+    #[error(
+        "mesh resource {}: longer than {MAX_RESOURCE_BYTES} bytes",
+        abbreviate(resource)
+    )]
+    ResourceTooLong {
+        /// The resource as given.
+        resource: String,
+    },
+    /// Under a confined access ([`crate::load::Access::confined`], the node's): the file is not
+    /// under the mesh roots (nor, for `package://`, inside its package's share directory), or
+    /// cannot be opened, or is not a regular file, or its package is not found. One message for
+    /// every cause, so that a refusal tells nothing of the host's files.
+    #[error(
+        "mesh resource {}: not under mesh_roots or not readable",
+        abbreviate(resource)
+    )]
+    NotReadable {
+        /// The resource as given.
+        resource: String,
+    },
+    /// Under a local access (the command line's): the file is a FIFO, a device, a directory or a
+    /// socket, which is refused at once rather than read.
+    #[error(
+        "mesh resource {}: {path:?} is not a regular file",
+        abbreviate(resource)
+    )]
+    NotRegularFile {
+        /// The resource as given.
+        resource: String,
+        /// Where it resolved to.
+        path: PathBuf,
+    },
+    /// The file holds more than the most bytes a mesh file may have.
+    #[error("mesh resource {}: the file holds more than {max} bytes, the most a mesh file may hold (max_mesh_file_bytes)", abbreviate(resource))]
+    FileTooLarge {
+        /// The resource as given.
+        resource: String,
+        /// The bound, bytes.
+        max: u64,
+    },
     /// The file name does not end in `.stl`, `.obj` or `.dae`.
-    #[error("mesh resource {resource:?}: unknown mesh format (expected .stl, .obj or .dae)")]
+    #[error(
+        "mesh resource {}: unknown mesh format (expected .stl, .obj or .dae)",
+        abbreviate(resource)
+    )]
     UnknownFormat {
         /// The resource as given.
         resource: String,
     },
     /// The file could not be parsed as its format.
-    #[error("mesh resource {resource:?}: cannot parse {path:?}: {source}")]
+    #[error(
+        "mesh resource {}: cannot parse {path:?}: {source}",
+        abbreviate(resource)
+    )]
     Unparsable {
         /// The resource as given.
         resource: String,
@@ -131,13 +191,16 @@ pub enum GeometryError {
         source: std::io::Error,
     },
     /// The mesh has no triangle (or only degenerate ones, after merging identical vertices).
-    #[error("mesh {resource:?}: has no triangle")]
+    #[error("mesh {}: has no triangle", abbreviate(resource))]
     EmptyMesh {
         /// The resource, or the name of an inline mesh.
         resource: String,
     },
     /// A triangle refers to a vertex that does not exist.
-    #[error("mesh {resource:?}: triangle {triangle} refers to vertex {index}, but there are {vertices} vertices")]
+    #[error(
+        "mesh {}: triangle {triangle} refers to vertex {index}, but there are {vertices} vertices",
+        abbreviate(resource)
+    )]
     VertexIndex {
         /// The resource, or the name of an inline mesh.
         resource: String,
@@ -149,7 +212,7 @@ pub enum GeometryError {
         vertices: usize,
     },
     /// A vertex coordinate is NaN or infinite (after scaling).
-    #[error("mesh {resource:?}: vertex {vertex} is not finite")]
+    #[error("mesh {}: vertex {vertex} is not finite", abbreviate(resource))]
     NonFiniteVertex {
         /// The resource, or the name of an inline mesh.
         resource: String,
@@ -158,7 +221,8 @@ pub enum GeometryError {
     },
     /// A scale factor is zero, negative or not finite.
     #[error(
-        "mesh {resource:?}: scale {scale:?} must be finite and greater than zero on every axis"
+        "mesh {}: scale {scale:?} must be finite and greater than zero on every axis",
+        abbreviate(resource)
     )]
     BadScale {
         /// The resource, or the name of an inline mesh.
@@ -169,7 +233,8 @@ pub enum GeometryError {
     /// A centre of mass was needed from an open, non-manifold, inconsistently oriented or flat
     /// mesh, and none was given.
     #[error(
-        "mesh {resource:?}: no centre of mass given and none can be computed, because {defect}"
+        "mesh {}: no centre of mass given and none can be computed, because {defect}",
+        abbreviate(resource)
     )]
     NotClosed {
         /// The resource, or the name of an inline mesh.
@@ -209,7 +274,7 @@ pub enum GeometryError {
     },
     /// The finger starts inside the object: the opening is narrower than the object along the
     /// closing line.
-    #[error("finger {finger} starts inside the object {resource:?}: the opening is narrower than the object along the closing line")]
+    #[error("finger {finger} starts inside the object {}: the opening is narrower than the object along the closing line", abbreviate(resource))]
     StartsInside {
         /// Which finger.
         finger: Finger,
@@ -245,4 +310,24 @@ impl GeometryError {
             _ => 2,
         }
     }
+}
+
+/// The longest mesh resource string accepted, bytes: far above any real path or URI (Linux's
+/// `PATH_MAX` is 4096), far below a message-sized string echoed back.
+pub const MAX_RESOURCE_BYTES: usize = 4096;
+
+/// How much of a resource an error prints, bytes: all of one this long or shorter.
+const SHOWN_RESOURCE_BYTES: usize = 200;
+
+/// A resource as errors print it: quoted (`{:?}`) whole when it has at most 200 bytes, else its
+/// first 200 bytes (cut at a character's boundary), quoted, then `…(N bytes)`.
+pub fn abbreviate(resource: &str) -> String {
+    if resource.len() <= SHOWN_RESOURCE_BYTES {
+        return format!("{resource:?}");
+    }
+    let mut end = SHOWN_RESOURCE_BYTES;
+    while !resource.is_char_boundary(end) {
+        end -= 1;
+    }
+    format!("{:?}…({} bytes)", &resource[..end], resource.len())
 }

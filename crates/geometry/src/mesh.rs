@@ -222,6 +222,74 @@ impl Mesh {
             .map(|t| unit_normal(self.trimesh.triangle(t)))
             .sum()
     }
+
+    /// This mesh scaled uniformly by `factor`, without merging its vertices, checking its
+    /// closedness or building its BVH again: the vertices are multiplied by `factor` (the same
+    /// products, bit for bit, as [`Mesh::from_triangles`] takes of vertices at this mesh's
+    /// scale), the BVH's boxes too (a product is monotone in its factor, so each scaled box still
+    /// holds its scaled triangles), the volume and centroid are summed again over the scaled
+    /// triangles, and the topology (merged vertices, closedness, triangles at each vertex) is
+    /// the same. Where scaling would change what merging finds (a coordinate that underflows to
+    /// a subnormal number or zero, two corners of a triangle that round to one point), the mesh
+    /// is indexed again from its vertices ([`Mesh::rescaled`]).
+    pub fn scaled(&self, factor: f64) -> Result<Mesh, GeometryError> {
+        check_scale(&self.resource, [factor; 3])?;
+        let points = self.trimesh.vertices();
+        let keeps_topology = points.iter().all(|p| {
+            let q = *p * factor;
+            [(p.x, q.x), (p.y, q.y), (p.z, q.z)]
+                .iter()
+                .all(|&(a, b)| b.is_finite() && (a == 0.0 || b.is_normal()))
+        }) && self.trimesh.indices().iter().all(|t| {
+            let [a, b, c] = t.map(|k| points[k as usize] * factor);
+            a != b && b != c && c != a
+        });
+        if !keeps_topology {
+            return self.rescaled([factor; 3]);
+        }
+        let trimesh = self.trimesh.clone().scaled(Vector::splat(factor));
+        let closed = self.closed.and_then(|_| {
+            let (volume, centroid) =
+                trimesh_signed_volume_and_center_of_mass(trimesh.vertices(), trimesh.indices());
+            if volume == 0.0 || !volume.is_finite() {
+                Err(MeshDefect::ZeroVolume)
+            } else {
+                Ok(Closed {
+                    volume: volume.abs(),
+                    centroid,
+                })
+            }
+        });
+        let compact = CompactBvh::new(&trimesh);
+        let aabb = trimesh.local_aabb();
+        Ok(Mesh {
+            resource: self.resource.clone(),
+            size: (aabb.maxs - aabb.mins).length(),
+            trimesh,
+            compact,
+            first: self.first.clone(),
+            at_vertex: self.at_vertex.clone(),
+            closed,
+            bytes: self.bytes,
+        })
+    }
+
+    /// This mesh scaled per axis by `scale`, indexed again from its (merged) vertices and
+    /// triangles: what [`Mesh::from_triangles`] makes of them, without the file they came from.
+    pub fn rescaled(&self, scale: [f64; 3]) -> Result<Mesh, GeometryError> {
+        let vertices: Vec<[f64; 3]> = self
+            .trimesh
+            .vertices()
+            .iter()
+            .map(|p| [p.x, p.y, p.z])
+            .collect();
+        Mesh::from_triangles(
+            self.resource.clone(),
+            &vertices,
+            self.trimesh.indices(),
+            scale,
+        )
+    }
 }
 
 fn unit_normal(t: parry3d_f64::shape::Triangle) -> Vector {

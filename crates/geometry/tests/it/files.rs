@@ -230,11 +230,15 @@ fn the_cache_loads_a_resource_once_and_keeps_within_its_bound() {
     let first = cache.get(&a, [0.001; 3]).expect("loads");
     let again = cache.get(&format!("file://{a}"), [0.001; 3]).expect("kept");
     assert!(std::sync::Arc::ptr_eq(&first, &again));
-    assert_eq!(cache.loads(), 1);
+    // Kept: the file's mesh at scale 1, and at 0.001.
+    assert_eq!((cache.loads(), cache.len()), (1, 2));
     cache
         .get(&a, [0.002; 3])
-        .expect("another scale is another mesh");
-    assert_eq!((cache.loads(), cache.len()), (2, 2));
+        .expect("another scale is another mesh, made without a load");
+    cache
+        .get(&a, [0.001, 0.002, 0.001])
+        .expect("a scale per axis too");
+    assert_eq!((cache.loads(), cache.len()), (1, 4));
 
     // Room for one: the least recently used goes.
     let small = MeshCache::new(AmentIndex::default(), one + one / 2);
@@ -289,7 +293,8 @@ fn the_cache_reloads_a_file_whose_time_or_size_changed() {
     let changed = cache.get(&resource, [0.001; 3]).expect("loaded again");
     assert_eq!(cache.loads(), 2);
     assert!((volume(&changed) - volume(&first) / 4.0).abs() < 1e-12 * volume(&first));
-    assert_eq!((cache.len(), cache.bytes()), (1, changed.bytes()));
+    // The former content's meshes are gone; the new one's at scales 1 and 0.001 are kept.
+    assert_eq!((cache.len(), cache.bytes()), (2, 2 * changed.bytes()));
 
     // Another size, the same time.
     write_ascii_stl(&path, &large);
@@ -302,58 +307,7 @@ fn the_cache_reloads_a_file_whose_time_or_size_changed() {
 
     fs::remove_file(&path).expect("remove");
     assert!(cache.get(&resource, [0.001; 3]).is_err());
-    assert_eq!((cache.len(), cache.bytes()), (0, 0));
-}
-
-/// A named pipe as a mesh file: reading it waits until the test writes the mesh, so a load is
-/// held in the middle for as long as the test likes.
-#[cfg(unix)]
-fn fifo(path: &Path) {
-    let made = std::process::Command::new("mkfifo")
-        .arg(path)
-        .status()
-        .expect("mkfifo runs");
-    assert!(made.success());
-}
-
-/// While a file loads (a named pipe that the test writes only later), a kept mesh is still served
-/// at once: the cache's lock is not held while a file is read.
-#[cfg(unix)]
-#[test]
-fn the_cache_serves_a_kept_mesh_while_another_loads() {
-    use std::sync::mpsc;
-    use std::time::Duration;
-
-    let dir = tempfile::tempdir().expect("a temporary folder");
-    let kept = dir.path().join("kept.stl");
-    write_binary_stl(&kept, &l_mm());
-    let slow = dir.path().join("slow.stl");
-    fifo(&slow);
-    let (kept, slow) = (kept.display().to_string(), slow.display().to_string());
-    let cache = MeshCache::new(AmentIndex::default(), 1 << 30);
-    cache.get(&kept, [0.001; 3]).expect("loads");
-
-    std::thread::scope(|s| {
-        let (cache, slow_ref, kept) = (&cache, &slow, &kept);
-        let loading = s.spawn(move || cache.get(slow_ref, [0.001; 3]).map(|m| m.triangle_count()));
-        // The load is waiting in the pipe's open or read now.
-        std::thread::sleep(Duration::from_millis(200));
-        let (lookup, looked_up) = mpsc::channel();
-        s.spawn(move || {
-            let mesh = cache.get(kept, [0.001; 3]).map(|m| m.triangle_count());
-            lookup.send(mesh.is_ok()).expect("the test waits");
-        });
-        let served = looked_up.recv_timeout(Duration::from_secs(10));
-        // Unblock the load whatever happened, so that the scope ends.
-        write_binary_stl(Path::new(&slow), &l_mm());
-        assert_eq!(
-            served,
-            Ok(true),
-            "a kept mesh waited for another file's load"
-        );
-        assert_eq!(loading.join().expect("no panic").ok(), Some(20));
-    });
-    assert_eq!(cache.loads(), 2);
+    assert!(!cache.holds(&resource, [0.001; 3]));
 }
 
 /// Callers asking at once for a resource not kept yet load it once: the others wait for that
@@ -395,44 +349,34 @@ fn meshes_and_the_cache_can_be_shared_across_threads() {
     shared::<grasp_orient_geometry::Object>();
 }
 
-/// A thread loading a mesh holds up no other thread's kept meshes: the load here reads a FIFO
-/// that nothing writes to until the kept mesh has been served (before, `get` held the cache's
-/// lock while it parsed, and the second `get` waited for the load).
+/// A thread loading a mesh holds up no other thread's kept meshes: while a file of 400,000
+/// triangles loads (parsed and indexed for a good part of a second), a kept mesh is served at
+/// once (before, `get` held the cache's lock while it parsed, and the second `get` waited).
 #[test]
 fn a_load_does_not_hold_up_the_meshes_kept() {
+    use std::sync::atomic::{AtomicBool, Ordering};
     let dir = tempfile::tempdir().expect("a temporary folder");
-    let m = l_mm();
     let kept = dir.path().join("kept.stl");
-    write_binary_stl(&kept, &m);
+    write_binary_stl(&kept, &l_mm());
     let slow = dir.path().join("slow.stl");
-    let made = std::process::Command::new("mkfifo")
-        .arg(&slow)
-        .status()
-        .expect("mkfifo runs");
-    assert!(made.success());
-    let cache = std::sync::Arc::new(MeshCache::new(AmentIndex::default(), usize::MAX));
-    let kept = kept.display().to_string();
+    write_binary_stl(&slow, &faceted_cylinder(30.0, 100.0, 100_000));
+    let (kept, slow) = (kept.display().to_string(), slow.display().to_string());
+    let cache = MeshCache::new(AmentIndex::default(), usize::MAX);
     cache.get(&kept, [0.001; 3]).expect("loads");
-    let loading = {
-        let (cache, slow) = (cache.clone(), slow.display().to_string());
-        std::thread::spawn(move || cache.get(&slow, [0.001; 3]).map(|_| ()))
-    };
-    std::thread::sleep(std::time::Duration::from_millis(100)); // the load is waiting on the FIFO
-    let (tx, rx) = std::sync::mpsc::channel();
-    {
-        let cache = cache.clone();
-        std::thread::spawn(move || tx.send(cache.get(&kept, [0.001; 3]).is_ok()));
-    }
-    let served = rx.recv_timeout(std::time::Duration::from_secs(5));
-    // Release the load whatever happened, so that no thread is left waiting.
-    let mut bytes = Vec::new();
-    let tmp = dir.path().join("data.stl");
-    write_binary_stl(&tmp, &m);
-    bytes.extend(fs::read(&tmp).expect("read"));
-    fs::write(&slow, bytes).expect("write into the FIFO");
-    assert_eq!(served, Ok(true), "the kept mesh waited for another's load");
-    loading
-        .join()
-        .expect("no panic")
-        .expect("the FIFO's mesh loads");
+    let loaded = AtomicBool::new(false);
+    std::thread::scope(|s| {
+        s.spawn(|| {
+            cache.get(&slow, [0.001; 3]).expect("loads");
+            loaded.store(true, Ordering::SeqCst);
+        });
+        std::thread::sleep(std::time::Duration::from_millis(20)); // the load is under way
+        let started = std::time::Instant::now();
+        cache.get(&kept, [0.001; 3]).expect("kept");
+        let waited = started.elapsed();
+        assert!(
+            !loaded.load(Ordering::SeqCst),
+            "the kept mesh was served only after the other load ({waited:?})"
+        );
+    });
+    assert_eq!(cache.loads(), 2);
 }

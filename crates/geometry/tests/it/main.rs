@@ -2,6 +2,7 @@
 //! (`reference.rs`, sharing no code with the crate), the test objects (`objects.rs`), and the
 //! checks.
 
+mod access;
 mod agreement;
 mod bad_input;
 mod edges;
