@@ -20,6 +20,8 @@ pub enum RosType {
     String,
     /// `PARAMETER_DOUBLE_ARRAY` (of a fixed length; the domain bounds each element).
     DoubleArray,
+    /// `PARAMETER_STRING_ARRAY`.
+    StringArray,
 }
 
 impl RosType {
@@ -31,6 +33,7 @@ impl RosType {
             RosType::Double => "double",
             RosType::String => "string",
             RosType::DoubleArray => "double_array",
+            RosType::StringArray => "string_array",
         }
     }
 }
@@ -291,6 +294,17 @@ impl Setting for [f64; 3] {
             })?;
         }
         Ok(())
+    }
+}
+
+/// A list of strings (`mesh_roots`' directories).
+impl Setting for Vec<String> {
+    const ROS_TYPE: RosType = RosType::StringArray;
+    fn from_yaml(value: Value) -> Result<Self, ValueError> {
+        from_serde(value)
+    }
+    fn to_yaml(&self) -> Value {
+        Value::Sequence(self.iter().cloned().map(Value::String).collect())
     }
 }
 

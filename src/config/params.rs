@@ -89,6 +89,16 @@ parameters! {
     /// 0.4 kB a triangle while it runs, and up to 8 of them may run at once.
     max_inline_mesh_triangles: i64 = 250_000, "triangles",
         in Domain::Integer { min: 1, max: 100_000_000 };
+    /// The directories under which the node reads file:// and plain-path mesh resources,
+    /// relative ones from the working directory; package:// resources are read only inside
+    /// their package's share directory. Empty (the default): package:// resources only. Any
+    /// other file a candidate names is refused with one message, whatever the reason
+    /// (docs/bad-input.md); solve, rank, plot and replay, run by a local user, read any path.
+    mesh_roots (fixed): Vec<String> = Vec::new(), "";
+    /// The largest mesh file the node reads; a larger one is refused before it is read
+    /// (status 2).
+    max_mesh_file_bytes (fixed): i64 = 256 << 20, "bytes",
+        in Domain::Integer { min: 1, max: 1 << 40 };
 }
 
 impl super::choices::Choice for ClosingAxis {

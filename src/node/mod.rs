@@ -193,10 +193,7 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
     announce(&session, topics);
     let (on_stop, mut woken) = wake_on_change(&shared);
     // One mesh cache for the node: its thread (single pose candidates) and the set thread.
-    let meshes = std::sync::Arc::new(grasp_orient_geometry::MeshCache::new(
-        grasp_orient_geometry::AmentIndex::from_env(),
-        crate::answer::MESH_CACHE_BYTES,
-    ));
+    let meshes = std::sync::Arc::new(node_meshes(&config));
     // The loader threads, for the node's thread and the set thread together.
     let loaders = Loaders::new(loads::MAX_LOADERS);
     let mut worker = SetWorker::start(
@@ -613,4 +610,21 @@ fn tell(node: &Node, notes: Vec<Note>) {
     for (level, text) in notes {
         say(node, level, &text);
     }
+}
+
+/// The node's mesh cache: files read only under `mesh_roots` and inside packages' share
+/// directories, of at most `max_mesh_file_bytes` (a peer on the domain names them).
+fn node_meshes(config: &Config) -> grasp_orient_geometry::MeshCache {
+    let max_file_bytes = u64::try_from(config.max_mesh_file_bytes).unwrap_or(u64::MAX);
+    for root in &config.mesh_roots {
+        if !std::path::Path::new(root).is_dir() {
+            log::warn!("mesh_roots: {root:?} is not a directory; no mesh is read under it");
+        }
+    }
+    grasp_orient_geometry::MeshCache::with_access(
+        grasp_orient_geometry::AmentIndex::from_env(),
+        grasp_orient_geometry::load::Access::confined(&config.mesh_roots)
+            .with_max_file_bytes(max_file_bytes),
+        crate::answer::MESH_CACHE_BYTES,
+    )
 }

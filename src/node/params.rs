@@ -237,8 +237,11 @@ impl Shared {
         let mut options = options
             .parameter_validator(self.validator())
             .parameter_set_action(self.set_action());
-        for (name, value) in self.lock().config.parameters() {
-            if let Some(v) = from_yaml(&value) {
+        for (p, (name, value)) in crate::config::PARAMETERS
+            .iter()
+            .zip(self.lock().config.parameters())
+        {
+            if let Some(v) = from_yaml_as(&value, p.ros_type) {
                 options = options.declare_parameter(name, v);
             }
         }
@@ -295,6 +298,9 @@ pub fn to_yaml(value: &ParameterValue) -> Option<Value> {
         ParameterValue::DoubleArray(a) => {
             Value::Sequence(a.iter().map(|d| Value::Number((*d).into())).collect())
         }
+        ParameterValue::StringArray(a) => {
+            Value::Sequence(a.iter().cloned().map(Value::String).collect())
+        }
         _ => return None,
     })
 }
@@ -306,6 +312,15 @@ pub fn from_yaml(value: &Value) -> Option<ParameterValue> {
         Value::Number(n) if n.is_i64() => ParameterValue::Integer(n.as_i64()?),
         Value::Number(n) => ParameterValue::Double(n.as_f64()?),
         Value::String(s) => ParameterValue::String(s.clone()),
+        // A list of strings is a string array; any other list (an empty one too) a double array.
+        Value::Sequence(items) if !items.is_empty() && items.iter().all(Value::is_string) => {
+            ParameterValue::StringArray(
+                items
+                    .iter()
+                    .map(|v| v.as_str().map(str::to_owned))
+                    .collect::<Option<Vec<String>>>()?,
+            )
+        }
         Value::Sequence(items) => ParameterValue::DoubleArray(
             items
                 .iter()
@@ -314,6 +329,20 @@ pub fn from_yaml(value: &Value) -> Option<ParameterValue> {
         ),
         _ => return None,
     })
+}
+
+/// A YAML value as a parameter value of a declared type: as [`from_yaml`], but a list (an
+/// empty one too) of a string array parameter is a string array.
+pub fn from_yaml_as(value: &Value, ros_type: RosType) -> Option<ParameterValue> {
+    match (ros_type, value) {
+        (RosType::StringArray, Value::Sequence(items)) => Some(ParameterValue::StringArray(
+            items
+                .iter()
+                .map(|v| v.as_str().map(str::to_owned))
+                .collect::<Option<Vec<String>>>()?,
+        )),
+        _ => from_yaml(value),
+    }
 }
 
 /// The ROS descriptor of a declared parameter: its type, doc and unit, its range, its other
@@ -358,6 +387,7 @@ pub fn descriptor(p: &Parameter) -> raw::ParameterDescriptor {
             RosType::Double => ParameterType::Double,
             RosType::String => ParameterType::String,
             RosType::DoubleArray => ParameterType::DoubleArray,
+            RosType::StringArray => ParameterType::StringArray,
         },
         description,
         additional_constraints: constraints.join("; "),
@@ -434,8 +464,12 @@ mod tests {
 
     #[test]
     fn every_parameter_has_a_ros_type() {
-        for (name, value) in Config::default().parameters() {
-            let p = from_yaml(&value).unwrap_or_else(|| panic!("{name} has no ROS type"));
+        for (declared, (name, value)) in crate::config::PARAMETERS
+            .iter()
+            .zip(Config::default().parameters())
+        {
+            let p = from_yaml_as(&value, declared.ros_type)
+                .unwrap_or_else(|| panic!("{name} has no ROS type"));
             assert_eq!(to_yaml(&p).as_ref(), Some(&value), "{name}");
         }
     }
@@ -448,7 +482,7 @@ mod tests {
         {
             let d = descriptor(p);
             assert_eq!(d.name, name);
-            let declared = from_yaml(&value).expect("a ROS value");
+            let declared = from_yaml_as(&value, p.ros_type).expect("a ROS value");
             assert_eq!(
                 d.r#type,
                 ParameterValue::to_parameter_type_raw(&declared),

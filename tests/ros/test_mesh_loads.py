@@ -76,7 +76,8 @@ def test_a_set_that_panicked_the_parser_leaves_later_sets_answered(start_node, p
     dae = tmp_path / "past_vertices.dae"
     dae.write_text(BAD_DAE)
     ns = "/mesh_panic"
-    node = start_node("--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false", name="grasp_orient node (mesh panic)")
+    node = start_node("--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false", "-p", f"mesh_roots:=[{tmp_path}]",
+                      name="grasp_orient node (mesh panic)")
     from conftest import reliable_qos
     from grasp_orient.msg import PoseRecommendationSet
     set_pub = peer.node.create_publisher(PoseCandidateSet, f"{ns}/pose_candidate_sets", reliable_qos(10))
@@ -118,7 +119,7 @@ def test_fifo_meshes_block_nothing(start_node, peer, tmp_path):
     os.mkfifo(fifo)
     ns = "/mesh_fifo"
     node = start_node("--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false",  # max_mesh_load_time 3 s
-                      name="grasp_orient node (fifo)")
+                      "-p", f"mesh_roots:=[{tmp_path}]", name="grasp_orient node (fifo)")
     single = GraspClient(peer, ns)
     single.ensure_roundtrip()
     params = TN.Params(peer, f"{ns}/grasp_orient")
