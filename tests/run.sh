@@ -83,7 +83,7 @@ STOP_TEST=tests/ros/test_adversarial.py::test_stop_request_honoured_within_a_sec
 LOSSY_TEST=tests/ros/test_hosts.py::test_every_answer_arrives_over_a_lossy_link
 WIRE_TEST=tests/ros/test_hosts.py::test_a_large_set_crosses_the_wire_once
 PLAY_TEST=tests/ros/test_hosts.py::test_a_recording_played_over_a_lossy_link_arrives_whole
-TIMED=(tests/ros/test_responsive.py tests/ros/test_mesh_loads.py "$LOSSY_TEST" "$WIRE_TEST" "$PLAY_TEST" tests/ros/test_slow_reader.py "$STOP_TEST")
+TIMED=(tests/ros/test_responsive.py tests/ros/test_mesh_loads.py tests/ros/test_hostile_network.py "$LOSSY_TEST" "$WIRE_TEST" "$PLAY_TEST" tests/ros/test_slow_reader.py "$STOP_TEST")
 # test_colcon.py last: its cargo build waits for the target folder while `cargo test` holds it.
 FIRST=(tests/ros/test_adversarial.py tests/ros/test_foxglove.py tests/ros/test_large_services.py
     tests/ros/test_mcap.py tests/ros/test_colcon.py)

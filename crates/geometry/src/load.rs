@@ -17,8 +17,9 @@
 //!   say why (the OS error, the ament prefixes searched).
 //! - [`Access::confined`] (the node's: resources come from any peer on the ROS domain): a
 //!   `file://` or plain path only when its canonical path (symbolic links and `..` resolved)
-//!   lies under one of the canonical mesh roots; a `package://` resource only when its canonical
-//!   path lies inside the canonical share directory of its package. Every refusal of the file
+//!   lies under one of the canonical mesh roots; a `package://` resource only when its path,
+//!   taken by its text, stays inside the share directory of its package (links installed there
+//!   are followed). Every refusal of the file
 //!   itself (outside the roots, missing, not permitted, not a regular file, the package not
 //!   found) is one message, [`GeometryError::NotReadable`], so that a peer learns nothing of the
 //!   host's files; what is wrong with the resource's text (its scheme, its package name, its
@@ -319,10 +320,12 @@ fn open_confined(
     let canonical = match resource.strip_prefix("package://") {
         Some(rest) => {
             let (package, inside) = rest.split_once('/').unwrap_or((rest, ""));
-            let share = std::fs::canonicalize(index.package_share(package)?).ok()?;
-            let canonical = std::fs::canonicalize(share.join(inside)).ok()?;
-            // `..` and links resolved: the file must still lie inside the package.
-            canonical.starts_with(&share).then_some(canonical)?
+            // The path is taken inside the share directory by its text (a `..` that would leave
+            // it is refused); the links found there are followed, since the package's install
+            // put them there (colcon's `--symlink-install` links each file to the source tree).
+            let inside = inside_lexically(inside)?;
+            let share = index.package_share(package)?;
+            std::fs::canonicalize(share.join(inside)).ok()?
         }
         None => {
             let canonical = std::fs::canonicalize(path).ok()?;
@@ -337,6 +340,23 @@ fn open_confined(
     metadata
         .is_file()
         .then(|| (file, path.to_owned(), metadata))
+}
+
+/// A relative path with its `.` and `..` taken away by its text alone, or `None` when a `..`
+/// would climb above its start or a component is absolute.
+fn inside_lexically(path: &str) -> Option<PathBuf> {
+    let mut kept: Vec<&std::ffi::OsStr> = Vec::new();
+    for component in Path::new(path).components() {
+        match component {
+            std::path::Component::Normal(name) => kept.push(name),
+            std::path::Component::CurDir => {}
+            std::path::Component::ParentDir => {
+                kept.pop()?;
+            }
+            std::path::Component::RootDir | std::path::Component::Prefix(_) => return None,
+        }
+    }
+    Some(kept.iter().collect())
 }
 
 /// The bytes of an opened file: at most `max`, the read stopping one byte past it (a file that

@@ -179,9 +179,10 @@ fn ament_prefix(prefix: &Path) -> PathBuf {
     share
 }
 
-/// `package://` stays inside the package's share directory: `..` and links that leave it are
-/// refused, with the message of any refusal, which names neither the prefix nor the
-/// environment; a package not found says the same.
+/// `package://` stays inside the package's share directory: a `..` that leaves it is refused,
+/// with the message of any refusal, which names neither the prefix nor the environment; a
+/// package not found says the same. A link the package's install put in its share directory is
+/// followed (colcon's `--symlink-install` links every file to the source tree).
 #[test]
 fn package_resources_stay_inside_their_package() {
     let dir = tempfile::tempdir().expect("a temporary folder");
@@ -198,11 +199,15 @@ fn package_resources_stay_inside_their_package() {
     cache
         .get("package://grasp_objects/meshes/../meshes/l.stl", [0.001; 3])
         .expect("`..` that stays inside");
+    cache
+        .get("package://grasp_objects/meshes/out.stl", [0.001; 3])
+        .expect("a link installed in the package");
     let escape = "package://grasp_objects/../../../secret.stl";
     local_escape_reads(&index, escape);
     let refusals: Vec<String> = [
         escape,
-        "package://grasp_objects/meshes/out.stl",
+        "package://grasp_objects/meshes/../../../../secret.stl",
+        "package://grasp_objects//etc/passwd.stl",
         "package://grasp_objects/meshes/missing.stl",
         "package://no_such_package/meshes/l.stl",
     ]
