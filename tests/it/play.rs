@@ -376,9 +376,10 @@ fn played_poses_are_answered_as_recorded_and_replay_unchanged() {
     );
 }
 
-/// A single pose candidate with a large inline mesh (300,000 triangles: a few hundred ms to
-/// index) is answered off the node's thread: a contact candidate played 150 ms after it, received
-/// while the mesh is being indexed, is answered before it. Before, the node indexed the mesh on
+/// A single pose candidate with a large inline mesh (250,000 triangles, the default
+/// `max_inline_mesh_triangles`: a few hundred ms to index) is answered off the node's thread: a
+/// contact candidate played 150 ms after it, received while the mesh is being indexed, is
+/// answered before it. Before, the node indexed the mesh on
 /// its thread and answered the candidate only after the pose.
 ///
 /// It holds the node to a time (the pose must reach the node before the candidate, and its
@@ -401,7 +402,7 @@ fn timed_a_large_inline_mesh_holds_up_no_candidate_sent_after_it() {
         id: "large-inline".into(),
         width: 0.09,
         object: GraspObject {
-            inline_mesh: crate::util::torus::torus(600, 250),
+            inline_mesh: crate::util::torus::torus(500, 250),
             scale: Vector3 {
                 x: 1.0,
                 y: 1.0,
