@@ -30,8 +30,8 @@ use crate::msg::{
     PoseRecommendation, PoseRecommendationSet, Vector3,
 };
 use crate::solver::{
-    check_friction, check_mass, spatial::check_weight, InvalidInput, Readable, Settings,
-    MAX_COORDINATE, MAX_GRAVITY,
+    check_friction, check_mass, spatial::check_weight, times_pow2, InvalidInput, Readable,
+    Settings, MAX_COORDINATE, MAX_GRAVITY, SQUARE_SAFE,
 };
 use grasp_orient_geometry::{
     grasp_from_pose, AmentIndex, ClosingAxis, Contact, Feature, GeometryError, Grasp, GripperPose,
@@ -744,7 +744,7 @@ fn isometry(p: &Pose, field: &dyn Display) -> Result<Isometry3<f64>, PoseRefusal
             norm: 0.0,
         });
     }
-    let q = if (1e-150..=1e150).contains(&largest) {
+    let q = if SQUARE_SAFE.contains(&largest) {
         q
     } else {
         let k = -(largest.log2().floor() as i32);
@@ -754,18 +754,6 @@ fn isometry(p: &Pose, field: &dyn Display) -> Result<Isometry3<f64>, PoseRefusal
         Translation3::new(t.x, t.y, t.z),
         UnitQuaternion::from_quaternion(q),
     ))
-}
-
-/// `x · 2^k`, exact but for results below the normal range (in steps: one power of two covers
-/// only `2^-1022 ..= 2^1023`).
-fn times_pow2(x: f64, mut k: i32) -> f64 {
-    let mut out = x;
-    while k != 0 {
-        let step = k.clamp(-1000, 1000);
-        out *= f64::from_bits(((step + 1023) as u64) << 52);
-        k -= step;
-    }
-    out
 }
 
 /// A coordinate of a pose candidate, m: finite and within the solver's coordinate limit.

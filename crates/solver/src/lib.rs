@@ -51,9 +51,11 @@ pub mod table_1;
 #[doc = include_str!("../README.md")]
 struct ReadmeExample;
 
+/// Scaling by a power of two, exact: what the checks use to take lengths scale-free.
+pub use planar::frame::times_pow2;
 pub use planar::frame::{
     check_friction, check_mass, BEHIND_TANGENT, MAX_COORDINATE, MAX_FRICTION, MAX_GRAVITY,
-    MAX_MASS, MAX_SAFETY_FACTOR, MIN_FRICTION, MIN_WEIGHT,
+    MAX_MASS, MAX_SAFETY_FACTOR, MIN_FRICTION, MIN_WEIGHT, SQUARE_SAFE,
 };
 
 use std::fmt;

@@ -134,10 +134,10 @@ pub(crate) fn vector<const N: usize>(
 
 /// Vectors whose largest component lies in this range are squared as they are: no square of
 /// theirs can underflow or overflow.
-const SQUARE_SAFE: std::ops::RangeInclusive<f64> = 1e-150..=1e150;
+pub const SQUARE_SAFE: std::ops::RangeInclusive<f64> = 1e-150..=1e150;
 
 /// `x · 2^k`, exact (in steps, since one power of two covers only `2^-1022 ..= 2^1023`).
-pub(crate) fn times_pow2(x: f64, mut k: i32) -> f64 {
+pub fn times_pow2(x: f64, mut k: i32) -> f64 {
     let mut out = x;
     while k != 0 {
         let step = k.clamp(-1000, 1000);
