@@ -20,13 +20,7 @@ use std::hint::black_box;
 use std::time::Instant;
 
 fn topics() -> Topics {
-    Topics {
-        candidates: "/grasp_candidates".into(),
-        recommendations: "/grip_recommendations".into(),
-        markers: None,
-        sets: None,
-        poses: None,
-    }
+    Topics::new("/grasp_candidates", "/grip_recommendations")
 }
 
 fn message(i: usize, c: &grasp_orient::solver::planar::Candidate) -> GraspCandidate {
@@ -105,12 +99,12 @@ fn recording_cost(pool: &[GraspCandidate], settings: &Settings, dir: &std::path:
             let a = answer(c, settings);
             let now = i as u64;
             recorder.record(Entry {
-                payload: Payload::Candidate(Box::new(c.clone())),
+                payload: Payload::request::<grasp_orient::kind::Candidates>(c.clone()),
                 log_time: now,
                 publish_time: now,
             });
             recorder.record(Entry {
-                payload: Payload::Recommendation(Box::new(black_box(a))),
+                payload: Payload::answer::<grasp_orient::kind::Candidates>(black_box(a)),
                 log_time: now,
                 publish_time: now,
             });
@@ -142,14 +136,14 @@ fn bag_and_replay(pool: &[GraspCandidate], settings: &Settings, dir: &std::path:
         let time = 1_000_000_000 + i as u64 * 1000;
         writer
             .write(&Entry {
-                payload: Payload::Candidate(Box::new(c)),
+                payload: Payload::request::<grasp_orient::kind::Candidates>(c),
                 log_time: time,
                 publish_time: time,
             })
             .expect("write");
         writer
             .write(&Entry {
-                payload: Payload::Recommendation(Box::new(a)),
+                payload: Payload::answer::<grasp_orient::kind::Candidates>(a),
                 log_time: time,
                 publish_time: time,
             })

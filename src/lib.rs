@@ -16,6 +16,7 @@
 pub mod answer;
 pub mod config;
 pub mod jsonl;
+pub mod kind;
 pub mod msg;
 pub mod record;
 pub mod replay;

@@ -5,7 +5,7 @@ mod cli;
 mod node;
 
 // The library's layers, under the names the node and the commands use (`crate::msg`, ...).
-use grasp_orient::{answer, config, msg, record, solver};
+use grasp_orient::{answer, config, kind, msg, record, solver};
 
 use clap::{Parser, Subcommand};
 use log::LevelFilter;

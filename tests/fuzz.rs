@@ -47,7 +47,7 @@ use grasp_orient::msg::{
     cdr, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet, MarkerArray,
 };
 use grasp_orient::record::scan::decompressed_limit;
-use grasp_orient::record::{bag, recover, BagWriter, Entry, Payload, SetTopics, Topics};
+use grasp_orient::record::{bag, recover, BagWriter, Entry, Payload, Topics};
 use grasp_orient::solver::Settings;
 use proptest::prelude::*;
 use proptest::sample::Index;
@@ -336,13 +336,8 @@ fn mcap_seeds() -> Vec<Vec<u8>> {
         .tempdir()
         .expect("a temporary folder");
     let dir = scratch.path();
-    let topics = Topics {
-        candidates: "/grasp_candidates".into(),
-        recommendations: "/grip_recommendations".into(),
-        markers: None,
-        sets: Some(SetTopics::default_names()),
-        poses: None,
-    };
+    let topics = Topics::new("/grasp_candidates", "/grip_recommendations")
+        .with::<grasp_orient::kind::Sets>("/grasp_candidate_sets", "/grip_recommendation_sets");
     let mut seeds = Vec::new();
     for n in [1usize, 2, 4, 9] {
         let path = dir.join(format!("seed_{n}.mcap"));
@@ -355,9 +350,11 @@ fn mcap_seeds() -> Vec<Vec<u8>> {
                 log_time: t,
                 publish_time: t,
             };
-            w.write(&entry(Payload::Candidate(Box::new(c))))
-                .expect("write");
-            w.write(&entry(Payload::Recommendation(Box::new(a))))
+            w.write(&entry(Payload::request::<grasp_orient::kind::Candidates>(
+                c,
+            )))
+            .expect("write");
+            w.write(&entry(Payload::answer::<grasp_orient::kind::Candidates>(a)))
                 .expect("write");
         }
         let (sets, answers) = sets();
@@ -367,9 +364,9 @@ fn mcap_seeds() -> Vec<Vec<u8>> {
                 log_time: 2_000,
                 publish_time: 2_000,
             };
-            w.write(&entry(Payload::CandidateSet(Box::new(set))))
+            w.write(&entry(Payload::request::<grasp_orient::kind::Sets>(set)))
                 .expect("write");
-            w.write(&entry(Payload::RecommendationSet(Box::new(reply))))
+            w.write(&entry(Payload::answer::<grasp_orient::kind::Sets>(reply)))
                 .expect("write");
         }
         w.finish().expect("finish");
@@ -482,10 +479,10 @@ fn mcap_recover_target() -> Target {
             let again = bag::read_bytes(fixed.get_ref());
             prop_assert!(again.is_ok(), "{:?}", again.err());
             let b = again.expect("checked");
-            let read = b.candidates.len() as u64
-                + b.recommendations.len() as u64
-                + b.candidate_sets.len() as u64
-                + b.recommendation_sets.len() as u64
+            let read = b.streams.candidates.requests.len() as u64
+                + b.streams.candidates.answers.len() as u64
+                + b.streams.sets.requests.len() as u64
+                + b.streams.sets.answers.len() as u64
                 + b.other
                 + b.undecodable_count;
             prop_assert_eq!(read, got.kept_total());

@@ -44,10 +44,10 @@ fn rate(text: &str) -> Result<f64, super::BadValue> {
 pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
     let start = Start::new(ros_argv)?;
     let recorded = bag::read(&args.bag)?;
-    if recorded.candidates.is_empty()
-        && recorded.candidate_sets.is_empty()
-        && recorded.pose_candidates.is_empty()
-        && recorded.pose_sets.is_empty()
+    if recorded.streams.candidates.requests.is_empty()
+        && recorded.streams.sets.requests.is_empty()
+        && recorded.streams.poses.requests.is_empty()
+        && recorded.streams.pose_sets.requests.is_empty()
     {
         bail!(
             "{}: no grasp_orient/msg/GraspCandidate, GraspCandidateSet, PoseCandidate or \
@@ -69,33 +69,33 @@ pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
         std::io::stdout(),
         "published {} of {} candidates on {}",
         played.candidates,
-        recorded.candidates.len(),
+        recorded.streams.candidates.requests.len(),
         played.candidates_topic
     )?;
-    if !recorded.candidate_sets.is_empty() {
+    if !recorded.streams.sets.requests.is_empty() {
         writeln!(
             std::io::stdout(),
             "published {} of {} candidate sets on {}",
             played.sets,
-            recorded.candidate_sets.len(),
+            recorded.streams.sets.requests.len(),
             played.sets_topic
         )?;
     }
-    if !recorded.pose_candidates.is_empty() {
+    if !recorded.streams.poses.requests.is_empty() {
         writeln!(
             std::io::stdout(),
             "published {} of {} pose candidates on {}",
             played.poses,
-            recorded.pose_candidates.len(),
+            recorded.streams.poses.requests.len(),
             played.poses_topic
         )?;
     }
-    if !recorded.pose_sets.is_empty() {
+    if !recorded.streams.pose_sets.requests.is_empty() {
         writeln!(
             std::io::stdout(),
             "published {} of {} pose sets on {}",
             played.pose_sets,
-            recorded.pose_sets.len(),
+            recorded.streams.pose_sets.requests.len(),
             played.pose_sets_topic
         )?;
     }

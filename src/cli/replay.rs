@@ -8,16 +8,15 @@
 use super::{Negative, SolveOptions};
 use anyhow::{bail, Context};
 use grasp_orient::config::Config;
+use grasp_orient::kind::{self, Kind, Streams, Visit};
 use grasp_orient::msg::{
     GraspCandidate, GraspCandidateSet, GripRecommendation, PoseCandidate, PoseCandidateSet,
     RosMessage,
 };
 use grasp_orient::record::bag::{self, Bag, Recorded};
 use grasp_orient::record::output::{Pending, Replacement};
-use grasp_orient::record::{BagWriter, Entry, Payload, PoseTopics, SetTopics, Topics};
-use grasp_orient::replay::{
-    replay, replay_with_answers, Answers, Override, Plan, Summary, TOLERANCE,
-};
+use grasp_orient::record::{BagWriter, Entry, Payload, Topics};
+use grasp_orient::replay::{replay, replay_with_answers, Override, Plan, Summary, TOLERANCE};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -84,13 +83,7 @@ impl Output {
         let replacement = Replacement::create(path, &inputs)?;
         let temp = replacement.temporary_path().to_path_buf();
         let (file, pending) = replacement.into_parts();
-        let topics = Topics {
-            candidates: "/grasp_candidates".into(),
-            recommendations: "/grip_recommendations".into(),
-            markers: None,
-            sets: Some(SetTopics::default_names()),
-            poses: Some(PoseTopics::default_names()),
-        };
+        let topics = Topics::default_names();
         let writer = BagWriter::on_file(file, &temp, &topics, 100)
             .with_context(|| format!("cannot write {}", path.display()))?;
         Ok(Self {
@@ -108,21 +101,24 @@ impl Output {
         writeln!(
             std::io::stdout(),
             "wrote {} candidates, {} recommendations, {} candidate sets and {} set answers to {}",
-            written.candidates,
-            written.recommendations,
-            written.candidate_sets,
-            written.recommendation_sets,
+            written.requests::<grasp_orient::kind::Candidates>(),
+            written.answers::<grasp_orient::kind::Candidates>(),
+            written.requests::<grasp_orient::kind::Sets>(),
+            written.answers::<grasp_orient::kind::Sets>(),
             self.path.display()
         )?;
-        if written.pose_candidates + written.pose_sets > 0 {
+        if written.requests::<grasp_orient::kind::Poses>()
+            + written.requests::<grasp_orient::kind::PoseSets>()
+            > 0
+        {
             writeln!(
                 std::io::stdout(),
                 "wrote {} pose candidates, {} pose answers, {} pose sets and {} pose set answers \
                  to {}",
-                written.pose_candidates,
-                written.pose_recommendations,
-                written.pose_sets,
-                written.pose_recommendation_sets,
+                written.requests::<grasp_orient::kind::Poses>(),
+                written.answers::<grasp_orient::kind::Poses>(),
+                written.requests::<grasp_orient::kind::PoseSets>(),
+                written.answers::<grasp_orient::kind::PoseSets>(),
                 self.path.display()
             )?;
         }
@@ -141,8 +137,11 @@ fn replay_file(
     trouble: &mut Vec<String>,
 ) -> anyhow::Result<Summary> {
     let mut bag = bag::read(path)?;
-    let poses = bag.pose_candidates.len() + bag.pose_sets.len();
-    if bag.candidates.is_empty() && bag.candidate_sets.is_empty() && poses == 0 {
+    let poses = bag.streams.poses.requests.len() + bag.streams.pose_sets.requests.len();
+    if bag.streams.candidates.requests.is_empty()
+        && bag.streams.sets.requests.is_empty()
+        && poses == 0
+    {
         bail!(
             "{}: no {}, {}, {} or {} messages (cdr) in it",
             path.display(),
@@ -172,19 +171,16 @@ fn replay_file(
     }
     let plan = Plan::for_bag(&bag, base, overrides)
         .with_context(|| format!("{}: cannot replay", path.display()))?;
-    let recorded = bag.recommendations.len();
-    let recorded_sets = bag.recommendation_sets.len();
+    let recorded = bag.streams.candidates.answers.len();
+    let recorded_sets = bag.streams.sets.answers.len();
     if args.no_compare {
         bag = Bag {
-            candidates: std::mem::take(&mut bag.candidates),
-            candidate_sets: std::mem::take(&mut bag.candidate_sets),
-            pose_candidates: std::mem::take(&mut bag.pose_candidates),
-            pose_sets: std::mem::take(&mut bag.pose_sets),
+            streams: std::mem::take(&mut bag.streams).requests_only(),
             ..Bag::default()
         };
     }
-    let bar = indicatif::ProgressBar::new(bag.candidates.len() as u64);
-    if bag.candidates.len() < 100_000 {
+    let bar = indicatif::ProgressBar::new(bag.streams.candidates.requests.len() as u64);
+    if bag.streams.candidates.requests.len() < 100_000 {
         bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
     let progress = |n| bar.inc(n);
@@ -201,27 +197,27 @@ fn replay_file(
         std::io::stdout(),
         "{}: {} candidates, {recorded} recorded recommendations; {}",
         path.display(),
-        bag.candidates.len(),
+        bag.streams.candidates.requests.len(),
         settings_words(&plan)
     )?;
-    if !bag.candidate_sets.is_empty() || recorded_sets > 0 {
+    if !bag.streams.sets.requests.is_empty() || recorded_sets > 0 {
         writeln!(
             std::io::stdout(),
             "{}: {} candidate sets, {recorded_sets} recorded set answers",
             path.display(),
-            bag.candidate_sets.len(),
+            bag.streams.sets.requests.len(),
         )?;
     }
-    if !bag.pose_candidates.is_empty() || !bag.pose_sets.is_empty() {
+    if !bag.streams.poses.requests.is_empty() || !bag.streams.pose_sets.requests.is_empty() {
         writeln!(
             std::io::stdout(),
             "{}: {} pose candidates, {} recorded pose answers, {} pose sets, {} recorded pose set \
              answers",
             path.display(),
-            bag.pose_candidates.len(),
-            bag.pose_recommendations.len(),
-            bag.pose_sets.len(),
-            bag.pose_recommendation_sets.len(),
+            bag.streams.poses.requests.len(),
+            bag.streams.poses.answers.len(),
+            bag.streams.pose_sets.requests.len(),
+            bag.streams.pose_sets.answers.len(),
         )?;
     }
     Ok(summary)
@@ -250,9 +246,9 @@ fn settings_words(plan: &Plan) -> String {
     }
 }
 
-/// Writes the settings used, every set and its new answer, every candidate and its new answer,
-/// then the same for pose sets and pose candidates.
-fn write_replay(w: &mut BagWriter, bag: &Bag, plan: &Plan, answers: Answers) -> anyhow::Result<()> {
+/// Writes the settings used, then, kind by kind, every recorded request followed by its new
+/// answer, each at its own times.
+fn write_replay(w: &mut BagWriter, bag: &Bag, plan: &Plan, answers: Streams) -> anyhow::Result<()> {
     for record in &plan.recorded {
         w.write(&Entry {
             payload: Payload::Settings(Box::new(record.clone())),
@@ -260,44 +256,47 @@ fn write_replay(w: &mut BagWriter, bag: &Bag, plan: &Plan, answers: Answers) -> 
             publish_time: record.since,
         })?;
     }
-    for (s, a) in bag.candidate_sets.iter().zip(answers.sets) {
-        write_pair(w, s, Payload::CandidateSet, a, Payload::RecommendationSet)?;
+    struct Pairs<'a> {
+        w: &'a mut BagWriter,
+        bag: &'a Bag,
+        answers: Streams,
+        result: anyhow::Result<()>,
     }
-    for (c, a) in bag.candidates.iter().zip(answers.recommendations) {
-        write_pair(w, c, Payload::Candidate, a, Payload::Recommendation)?;
+    impl Visit for Pairs<'_> {
+        fn kind<K: Kind>(&mut self) {
+            let asked = &self.bag.streams.of::<K>().requests;
+            let answers = std::mem::take(&mut K::stream_mut(&mut self.answers).answers);
+            for (q, a) in asked.iter().zip(answers) {
+                if self.result.is_err() {
+                    return;
+                }
+                self.result = write_pair::<K>(self.w, q, a);
+            }
+        }
     }
-    let poses = answers.poses;
-    for (s, a) in bag.pose_sets.iter().zip(poses.sets) {
-        write_pair(
-            w,
-            s,
-            Payload::PoseCandidateSet,
-            a,
-            Payload::PoseRecommendationSet,
-        )?;
-    }
-    for (c, a) in bag.pose_candidates.iter().zip(poses.recommendations) {
-        write_pair(w, c, Payload::PoseCandidate, a, Payload::PoseRecommendation)?;
-    }
-    Ok(())
+    let mut pairs = Pairs {
+        w,
+        bag,
+        answers,
+        result: Ok(()),
+    };
+    kind::each(&mut pairs);
+    pairs.result
 }
 
-/// Writes a recorded message (`asked`, as `ask` makes it a payload) and then its new answer, each
-/// at its own times.
-fn write_pair<Q: Clone, A>(
+/// Writes a recorded request and then its new answer, each at its own times.
+fn write_pair<K: Kind>(
     w: &mut BagWriter,
-    asked: &Recorded<Q>,
-    ask: fn(Box<Q>) -> Payload,
-    answer: Recorded<A>,
-    reply: fn(Box<A>) -> Payload,
+    asked: &Recorded<K::Request>,
+    answer: Recorded<K::Answer>,
 ) -> anyhow::Result<()> {
     w.write(&Entry {
-        payload: ask(Box::new(asked.message.clone())),
+        payload: Payload::request::<K>(asked.message.clone()),
         log_time: asked.log_time,
         publish_time: asked.publish_time,
     })?;
     w.write(&Entry {
-        payload: reply(Box::new(answer.message)),
+        payload: Payload::answer::<K>(answer.message),
         log_time: answer.log_time,
         publish_time: answer.publish_time,
     })?;

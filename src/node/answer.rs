@@ -9,6 +9,7 @@ use super::params::Shared;
 use super::params::Version;
 use crate::answer::markers;
 use crate::answer::{answer_one_in_full, Answered, PoseAnswerer};
+use crate::kind::{Candidates, PoseSets, Poses, Sets};
 use crate::msg::{
     short_id, CompactString, GraspCandidate, GraspCandidateSet, GripRecommendation,
     GripRecommendationSet, MarkerArray, PoseCandidate, PoseCandidateSet, PoseRecommendation,
@@ -201,8 +202,8 @@ impl SetInput {
     /// The message for the recording.
     fn payload(self) -> Payload {
         match self {
-            SetInput::Candidates(set) => Payload::CandidateSet(Box::new(set)),
-            SetInput::Poses(set) => Payload::PoseCandidateSet(set),
+            SetInput::Candidates(set) => Payload::request::<Sets>(set),
+            SetInput::Poses(set) => Payload::request::<PoseSets>(*set),
         }
     }
 }
@@ -264,8 +265,8 @@ impl SetReply {
     /// The message for the recording.
     fn payload(self) -> Payload {
         match self {
-            SetReply::Candidates(r) => Payload::RecommendationSet(Box::new(r)),
-            SetReply::Poses(r) => Payload::PoseRecommendationSet(Box::new(r)),
+            SetReply::Candidates(r) => Payload::answer::<Sets>(r),
+            SetReply::Poses(r) => Payload::answer::<PoseSets>(r),
         }
     }
 
@@ -359,11 +360,11 @@ impl Answerer {
             echo,
             node: node.to_string(),
             candidates_topics: [
-                topics.candidates.clone(),
                 topics
-                    .poses
-                    .as_ref()
-                    .map_or(String::new(), |p| p.candidates.clone()),
+                    .requests::<Candidates>()
+                    .unwrap_or_default()
+                    .to_string(),
+                topics.requests::<Poses>().unwrap_or_default().to_string(),
             ],
             meshes,
             counts: Counts::default(),
@@ -522,8 +523,8 @@ impl Answerer {
             )
         });
         let recorded = self.readied(
-            Payload::Candidate(Box::new(candidate)),
-            || Payload::Recommendation(Box::new(reply.clone())),
+            Payload::request::<Candidates>(candidate),
+            || Payload::answer::<Candidates>(reply.clone()),
             markers.as_ref(),
             received,
             sent,
@@ -624,8 +625,8 @@ impl Answerer {
         let mut notes = Vec::new();
         self.count_one(&reply.recommendation, &mut notes);
         let recorded = self.readied(
-            Payload::PoseCandidate(Box::new(candidate)),
-            || Payload::PoseRecommendation(Box::new(reply.clone())),
+            Payload::request::<Poses>(candidate),
+            || Payload::answer::<Poses>(reply.clone()),
             markers.as_ref(),
             received,
             sent,
@@ -866,13 +867,7 @@ pub(crate) mod tests {
 
     pub(crate) fn answerer(config: Config, echo: bool) -> Answerer {
         let settings = config.solver_settings().expect("valid");
-        let topics = Topics {
-            candidates: "/grasp_candidates".into(),
-            recommendations: "/grip_recommendations".into(),
-            markers: Some("/grip_markers".into()),
-            sets: Some(crate::record::SetTopics::default_names()),
-            poses: Some(crate::record::PoseTopics::default_names()),
-        };
+        let topics = Topics::default_names().with_markers("/grip_markers");
         Answerer::new(
             Shared::new(config, settings),
             echo,

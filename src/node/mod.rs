@@ -26,10 +26,11 @@ pub mod set_worker;
 pub mod sets;
 
 use crate::config::Config;
+use crate::kind::{Candidates, PoseSets, Poses, Sets};
 use crate::msg::{
     short_id, GraspCandidate, GripRecommendation, MarkerArray, PoseCandidate, PoseRecommendation,
 };
-use crate::record::{now_ns, OnStop, PoseTopics, Topics};
+use crate::record::{now_ns, OnStop, Topics};
 use answer::{Answerer, Note, SetInput};
 use anyhow::Context as _;
 use demo::Demo;
@@ -127,29 +128,32 @@ struct Endpoints {
 impl Endpoints {
     fn create(session: &mut Session, qos_depth: i64) -> anyhow::Result<Self> {
         let qos = qos(qos_depth);
-        let set_topics = SetEndpoints::topics(session);
-        let pose_topics = PoseTopics {
-            candidates: session.topic_name("pose_candidates"),
-            recommendations: session.topic_name("pose_recommendations"),
-            sets: session.topic_name("pose_candidate_sets"),
-            set_recommendations: session.topic_name("pose_recommendation_sets"),
-        };
-        let topics = Topics {
-            candidates: session.topic_name("grasp_candidates"),
-            recommendations: session.topic_name("grip_recommendations"),
-            markers: Some(session.topic_name("grip_markers")),
-            sets: Some(set_topics.clone()),
-            poses: Some(pose_topics.clone()),
-        };
+        let topics = Topics::named(|base| session.topic_name(base))
+            .with_markers(session.topic_name("grip_markers"));
         let markers_name = topics.markers.clone().unwrap_or_default();
         let node = session.node_mut();
-        let candidates = create_topic::<GraspCandidate>(node, &topics.candidates, &qos)?;
-        let answers = create_topic::<GripRecommendation>(node, &topics.recommendations, &qos)?;
+        let candidates = create_topic::<GraspCandidate>(
+            node,
+            topics.requests::<Candidates>().unwrap_or_default(),
+            &qos,
+        )?;
+        let answers = create_topic::<GripRecommendation>(
+            node,
+            topics.answers::<Candidates>().unwrap_or_default(),
+            &qos,
+        )?;
         let markers = create_topic::<MarkerArray>(node, &markers_name, &qos)?;
-        let sets = SetEndpoints::create(node, &set_topics, &pose_topics, qos_depth)?;
-        let pose_candidates = create_topic::<PoseCandidate>(node, &pose_topics.candidates, &qos)?;
-        let pose_answers =
-            create_topic::<PoseRecommendation>(node, &pose_topics.recommendations, &qos)?;
+        let sets = SetEndpoints::create(node, &topics, qos_depth)?;
+        let pose_candidates = create_topic::<PoseCandidate>(
+            node,
+            topics.requests::<Poses>().unwrap_or_default(),
+            &qos,
+        )?;
+        let pose_answers = create_topic::<PoseRecommendation>(
+            node,
+            topics.answers::<Poses>().unwrap_or_default(),
+            &qos,
+        )?;
         Ok(Self {
             sets,
             pose_candidates: node
@@ -219,8 +223,14 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
     let demo = options.demo.then(|| {
         Demo::start(
             session.graph,
-            topics.candidates.clone(),
-            topics.recommendations.clone(),
+            topics
+                .requests::<Candidates>()
+                .unwrap_or_default()
+                .to_string(),
+            topics
+                .answers::<Candidates>()
+                .unwrap_or_default()
+                .to_string(),
         )
     });
     let outcome = session.run(async |node, shutdown| {
@@ -264,7 +274,6 @@ pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
 
 /// The first line a user reads: where the node listens and answers, and how to try it.
 fn announce(session: &Session, topics: &Topics) {
-    let poses = topics.poses.as_ref();
     say(
         session.node(),
         log::Level::Info,
@@ -276,20 +285,17 @@ fn announce(session: &Session, topics: &Topics) {
             session.node().fully_qualified_name(),
             session.graph.domain_id,
             session.graph.scope(),
-            topics.candidates,
-            topics.recommendations,
+            topics.requests::<Candidates>().unwrap_or_default(),
+            topics.answers::<Candidates>().unwrap_or_default(),
             topics.markers.as_deref().unwrap_or_default(),
-            topics.sets.as_ref().map_or("", |s| s.candidates.as_str()),
-            topics
-                .sets
-                .as_ref()
-                .map_or("", |s| s.recommendations.as_str()),
+            topics.requests::<Sets>().unwrap_or_default(),
+            topics.answers::<Sets>().unwrap_or_default(),
             session.node().fully_qualified_name(),
             sets::SERVICE,
-            poses.map_or("", |p| p.candidates.as_str()),
-            poses.map_or("", |p| p.recommendations.as_str()),
-            poses.map_or("", |p| p.sets.as_str()),
-            poses.map_or("", |p| p.set_recommendations.as_str()),
+            topics.requests::<Poses>().unwrap_or_default(),
+            topics.answers::<Poses>().unwrap_or_default(),
+            topics.requests::<PoseSets>().unwrap_or_default(),
+            topics.answers::<PoseSets>().unwrap_or_default(),
             session.node().fully_qualified_name(),
             sets::POSE_SERVICE,
         ),
@@ -354,7 +360,7 @@ async fn serve(
         }
     }
     .fuse());
-    let (sets, markers) = (&endpoints.sets, &endpoints.markers);
+    let (sets, markers, topics) = (&endpoints.sets, &endpoints.markers, &endpoints.topics);
     loop {
         // Biased, in this order: a stop request wins over whatever is queued, then the demo's
         // end, then a parameter set or a stopped writer (so that it applies to every candidate
@@ -372,7 +378,7 @@ async fn serve(
                 Ok((candidate, info)) => {
                     answer_one(node, endpoints, answerer, candidate, &info).await;
                 }
-                Err(e) => tell(node, vec![answerer.undecodable(&endpoints.topics.candidates, &e)]),
+                Err(e) => tell(node, vec![answerer.undecodable(topics.requests::<Candidates>().unwrap_or_default(), &e)]),
             },
             loaded = loading.next().fuse() => send_loaded(node, endpoints, answerer, loaded).await,
             done = worker.done.select_next_some() => {
@@ -384,7 +390,7 @@ async fn serve(
                     sets::take_topic(node, sets, markers, answerer, worker, set, &info).await;
                 }
                 Err(e) => {
-                    let topic = endpoints.topics.sets.as_ref().map_or("", |s| &s.candidates);
+                    let topic = topics.requests::<Sets>().unwrap_or_default();
                     let note = answerer.undecodable(topic, &e);
                     tell(node, vec![note]);
                 }
@@ -401,7 +407,7 @@ async fn serve(
                     take_pose(node, endpoints, answerer, loading, candidate, &info).await;
                 }
                 Err(e) => {
-                    let topic = endpoints.topics.poses.as_ref().map_or("", |p| &p.candidates);
+                    let topic = topics.requests::<Poses>().unwrap_or_default();
                     let note = answerer.undecodable(topic, &e);
                     tell(node, vec![note]);
                 }
@@ -412,7 +418,7 @@ async fn serve(
                     sets::take_topic(node, sets, markers, answerer, worker, set, &info).await;
                 }
                 Err(e) => {
-                    let topic = endpoints.topics.poses.as_ref().map_or("", |p| &p.sets);
+                    let topic = topics.requests::<PoseSets>().unwrap_or_default();
                     let note = answerer.undecodable(topic, &e);
                     tell(node, vec![note]);
                 }

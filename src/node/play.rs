@@ -61,10 +61,10 @@ fn merged(bag: &Bag) -> Vec<(u64, Item<'_>)> {
     ) -> impl Iterator<Item = (u64, Item<'a>)> + 'a {
         recorded.iter().map(move |r| (r.log_time, item(&r.message)))
     }
-    let mut all: Vec<(u64, Item<'_>)> = timed(&bag.candidates, Item::Candidate)
-        .chain(timed(&bag.candidate_sets, Item::Set))
-        .chain(timed(&bag.pose_candidates, Item::Pose))
-        .chain(timed(&bag.pose_sets, Item::PoseSet))
+    let mut all: Vec<(u64, Item<'_>)> = timed(&bag.streams.candidates.requests, Item::Candidate)
+        .chain(timed(&bag.streams.sets.requests, Item::Set))
+        .chain(timed(&bag.streams.poses.requests, Item::Pose))
+        .chain(timed(&bag.streams.pose_sets.requests, Item::PoseSet))
         .collect();
     // Stable: the chained order is kept among equal times.
     all.sort_by_key(|(t, _)| *t);
@@ -136,19 +136,19 @@ impl Publishers {
         names: &'a Played,
     ) -> Vec<(BoxFuture<'a, ()>, &'a str)> {
         let mut waits = Vec::new();
-        if !bag.candidates.is_empty() {
+        if !bag.streams.candidates.requests.is_empty() {
             let found = self.candidates.wait_for_subscription(node).boxed();
             waits.push((found, names.candidates_topic.as_str()));
         }
-        if !bag.candidate_sets.is_empty() {
+        if !bag.streams.sets.requests.is_empty() {
             let found = self.sets.wait_for_subscription(node).boxed();
             waits.push((found, names.sets_topic.as_str()));
         }
-        if !bag.pose_candidates.is_empty() {
+        if !bag.streams.poses.requests.is_empty() {
             let found = self.poses.wait_for_subscription(node).boxed();
             waits.push((found, names.poses_topic.as_str()));
         }
-        if !bag.pose_sets.is_empty() {
+        if !bag.streams.pose_sets.requests.is_empty() {
             let found = self.pose_sets.wait_for_subscription(node).boxed();
             waits.push((found, names.pose_sets_topic.as_str()));
         }
@@ -221,10 +221,10 @@ pub fn publish(
         log::info!(
             "playing {} candidates, {} sets, {} pose candidates and {} pose sets from {} on {}, \
              {}, {} and {}",
-            bag.candidates.len(),
-            bag.candidate_sets.len(),
-            bag.pose_candidates.len(),
-            bag.pose_sets.len(),
+            bag.streams.candidates.requests.len(),
+            bag.streams.sets.requests.len(),
+            bag.streams.poses.requests.len(),
+            bag.streams.pose_sets.requests.len(),
             source.display(),
             names.candidates_topic,
             names.sets_topic,

@@ -9,13 +9,14 @@
 
 use super::answer::{Answerer, SetInput, SetOutcome, SetReply};
 use super::markers_out::MarkersOut;
-use super::session::{create_topic, qos, say, Session};
+use super::session::{create_topic, qos, say};
 use super::set_worker::{SetDone, SetJob, SetWorker, Via};
+use crate::kind::{PoseSets, Sets};
 use crate::msg::{
     short_id, GraspCandidateSet, GripRecommendationSet, PoseCandidateSet, PoseRecommendationSet,
     RecommendPosesRequest, RecommendPosesResponse, RecommendRequest, RecommendResponse,
 };
-use crate::record::{now_ns, PoseTopics, SetTopics};
+use crate::record::{now_ns, Topics};
 use anyhow::Context as _;
 use ros2_client::{
     MessageInfo, Name, Node, Publisher, RmwRequestId, Server, ServiceMapping, ServiceTypeName,
@@ -52,27 +53,29 @@ impl std::fmt::Debug for SetEndpoints {
 }
 
 impl SetEndpoints {
-    /// The topic names (after namespace and remapping).
-    pub fn topics(session: &Session) -> SetTopics {
-        SetTopics {
-            candidates: session.topic_name("grasp_candidate_sets"),
-            recommendations: session.topic_name("grip_recommendation_sets"),
-        }
-    }
-
-    /// Creates the endpoints on `topics` and `poses` with QoS depth `qos_depth`.
-    pub fn create(
-        node: &mut Node,
-        topics: &SetTopics,
-        poses: &PoseTopics,
-        qos_depth: i64,
-    ) -> anyhow::Result<Self> {
+    /// Creates the endpoints of the set kinds on `topics` with QoS depth `qos_depth`.
+    pub fn create(node: &mut Node, topics: &Topics, qos_depth: i64) -> anyhow::Result<Self> {
         let qos = qos(qos_depth);
-        let sets = create_topic::<GraspCandidateSet>(node, &topics.candidates, &qos)?;
-        let answers = create_topic::<GripRecommendationSet>(node, &topics.recommendations, &qos)?;
-        let pose_sets = create_topic::<PoseCandidateSet>(node, &poses.sets, &qos)?;
-        let pose_answers =
-            create_topic::<PoseRecommendationSet>(node, &poses.set_recommendations, &qos)?;
+        let sets = create_topic::<GraspCandidateSet>(
+            node,
+            topics.requests::<Sets>().unwrap_or_default(),
+            &qos,
+        )?;
+        let answers = create_topic::<GripRecommendationSet>(
+            node,
+            topics.answers::<Sets>().unwrap_or_default(),
+            &qos,
+        )?;
+        let pose_sets = create_topic::<PoseCandidateSet>(
+            node,
+            topics.requests::<PoseSets>().unwrap_or_default(),
+            &qos,
+        )?;
+        let pose_answers = create_topic::<PoseRecommendationSet>(
+            node,
+            topics.answers::<PoseSets>().unwrap_or_default(),
+            &qos,
+        )?;
         let service = serve(node, SERVICE, "Recommend", &qos)?;
         let pose_service = serve(node, POSE_SERVICE, "RecommendPoses", &qos)?;
         Ok(Self {

@@ -7,12 +7,10 @@
 //! checks every length against the file before anything is allocated; chunks are decompressed
 //! and decoded on all cores.
 
-use super::channels::{Carried, Channels, RecordedFields};
+use super::channels::{ChannelReader, Channels, RecordedFields};
 use super::scan::{self, Damage, Parsed, Table};
-use crate::msg::{
-    cdr, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
-    PoseCandidate, PoseCandidateSet, PoseRecommendation, PoseRecommendationSet,
-};
+use crate::kind::{self, Kind, Streams, Visit};
+use crate::msg::cdr;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -94,36 +92,13 @@ pub fn keep_example(examples: &mut Vec<String>, example: impl FnOnce() -> String
     }
 }
 
-/// A message with the times it was recorded at, ns since the epoch.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Recorded<T> {
-    /// The message.
-    pub message: T,
-    /// Receive time.
-    pub log_time: u64,
-    /// Send time.
-    pub publish_time: u64,
-}
+pub use crate::kind::Recorded;
 
 /// The grasp_orient messages of one bag, in file order.
 #[derive(Debug, Default, PartialEq)]
 pub struct Bag {
-    /// Every candidate.
-    pub candidates: Vec<Recorded<GraspCandidate>>,
-    /// Every recommendation.
-    pub recommendations: Vec<Recorded<GripRecommendation>>,
-    /// Every candidate set.
-    pub candidate_sets: Vec<Recorded<GraspCandidateSet>>,
-    /// Every answer to a set.
-    pub recommendation_sets: Vec<Recorded<GripRecommendationSet>>,
-    /// Every pose candidate.
-    pub pose_candidates: Vec<Recorded<PoseCandidate>>,
-    /// Every answer to a pose candidate.
-    pub pose_recommendations: Vec<Recorded<PoseRecommendation>>,
-    /// Every pose set.
-    pub pose_sets: Vec<Recorded<PoseCandidateSet>>,
-    /// Every answer to a pose set.
-    pub pose_recommendation_sets: Vec<Recorded<PoseRecommendationSet>>,
+    /// The requests and answers of every kind.
+    pub streams: Streams,
     /// Which fields of our types the recording has (recordings made before a type grew lack its
     /// trailing fields, which decode at their defaults).
     pub fields: RecordedFields,
@@ -143,15 +118,7 @@ pub struct Bag {
 impl Bag {
     /// Appends `next`, which follows `self` in the file.
     fn append(&mut self, next: Bag) {
-        self.candidates.extend(next.candidates);
-        self.recommendations.extend(next.recommendations);
-        self.candidate_sets.extend(next.candidate_sets);
-        self.recommendation_sets.extend(next.recommendation_sets);
-        self.pose_candidates.extend(next.pose_candidates);
-        self.pose_recommendations.extend(next.pose_recommendations);
-        self.pose_sets.extend(next.pose_sets);
-        self.pose_recommendation_sets
-            .extend(next.pose_recommendation_sets);
+        self.streams.append(next.streams);
         self.fields.merge(&next.fields);
         for why in next.incompatible {
             if !self.incompatible.contains(&why) {
@@ -168,16 +135,7 @@ impl Bag {
 
     /// Messages of every kind it holds.
     fn messages(&self) -> u64 {
-        self.candidates.len() as u64
-            + self.recommendations.len() as u64
-            + self.candidate_sets.len() as u64
-            + self.recommendation_sets.len() as u64
-            + self.pose_candidates.len() as u64
-            + self.pose_recommendations.len() as u64
-            + self.pose_sets.len() as u64
-            + self.pose_recommendation_sets.len() as u64
-            + self.other
-            + self.undecodable_count
+        self.streams.len() + self.other + self.undecodable_count
     }
 }
 
@@ -443,31 +401,61 @@ fn take(
             format!("{topic} #{} (log time {log_time}): {e}", message.sequence)
         });
     };
-    macro_rules! push {
-        ($list:ident) => {
-            match reader.decode(message.data) {
-                Ok(m) => out.$list.push(Recorded {
-                    message: m,
-                    log_time,
-                    publish_time,
-                }),
-                Err(e) => failed(out, e),
-            }
-        };
-    }
-    match reader.carried {
-        Carried::Candidate => push!(candidates),
-        Carried::Recommendation => push!(recommendations),
-        Carried::CandidateSet => push!(candidate_sets),
-        Carried::RecommendationSet => push!(recommendation_sets),
-        Carried::PoseCandidate => push!(pose_candidates),
-        Carried::PoseRecommendation => push!(pose_recommendations),
-        Carried::PoseCandidateSet => push!(pose_sets),
-        Carried::PoseRecommendationSet => push!(pose_recommendation_sets),
-        Carried::Other => out.other += 1,
+    let Some(channel) = reader.carried else {
+        out.other += 1;
+        return Ok(());
+    };
+    let times = (log_time, publish_time);
+    if let Err(e) = PUSH[channel.slot()](&reader, message.data, &mut out.streams, times) {
+        failed(out, e);
     }
     Ok(())
 }
+
+/// Decodes one message of a channel into its stream.
+type Push = fn(&ChannelReader, &[u8], &mut Streams, (u64, u64)) -> Result<(), cdr::CdrError>;
+
+/// [`Push`] of each channel, by [`kind::Channel::slot`].
+static PUSH: std::sync::LazyLock<[Push; kind::Channel::COUNT]> = std::sync::LazyLock::new(|| {
+    fn request<K: Kind>(
+        r: &ChannelReader,
+        bytes: &[u8],
+        streams: &mut Streams,
+        (log_time, publish_time): (u64, u64),
+    ) -> Result<(), cdr::CdrError> {
+        let message = r.decode(bytes)?;
+        K::stream_mut(streams).requests.push(Recorded {
+            message,
+            log_time,
+            publish_time,
+        });
+        Ok(())
+    }
+    fn answer<K: Kind>(
+        r: &ChannelReader,
+        bytes: &[u8],
+        streams: &mut Streams,
+        (log_time, publish_time): (u64, u64),
+    ) -> Result<(), cdr::CdrError> {
+        let message = r.decode(bytes)?;
+        K::stream_mut(streams).answers.push(Recorded {
+            message,
+            log_time,
+            publish_time,
+        });
+        Ok(())
+    }
+    struct Table([Push; kind::Channel::COUNT]);
+    impl Visit for Table {
+        fn kind<K: Kind>(&mut self) {
+            self.0[kind::Channel::request::<K>().slot()] = request::<K>;
+            self.0[kind::Channel::answer::<K>().slot()] = answer::<K>;
+        }
+    }
+    let mut table = Table([request::<kind::Candidates>; kind::Channel::COUNT]);
+    kind::each(&mut table);
+    table.0
+});
 
 #[cfg(test)]
 mod tests {
@@ -475,13 +463,8 @@ mod tests {
     use crate::record::{BagWriter, Entry, Payload, Topics};
 
     fn topics() -> Topics {
-        Topics {
-            candidates: "/grasp_candidates".into(),
-            recommendations: "/grip_recommendations".into(),
-            markers: None,
-            sets: Some(crate::record::SetTopics::default_names()),
-            poses: None,
-        }
+        Topics::new("/grasp_candidates", "/grip_recommendations")
+            .with::<crate::kind::Sets>("/grasp_candidate_sets", "/grip_recommendation_sets")
     }
 
     /// The paper's cases and their answers, written by [`BagWriter`] into `path`.
@@ -492,19 +475,24 @@ mod tests {
             let a = crate::answer::answer(&c, &settings);
             let t = 1_000 + i as u64;
             w.write(&Entry {
-                payload: Payload::Candidate(Box::new(c)),
+                payload: Payload::request::<crate::kind::Candidates>(c),
                 log_time: t,
                 publish_time: t - 1,
             })
             .expect("write");
             w.write(&Entry {
-                payload: Payload::Recommendation(Box::new(a)),
+                payload: Payload::answer::<crate::kind::Candidates>(a),
                 log_time: t,
                 publish_time: t,
             })
             .expect("write");
         }
-        assert_eq!(w.finish().expect("finish").candidates, 4);
+        assert_eq!(
+            w.finish()
+                .expect("finish")
+                .requests::<crate::kind::Candidates>(),
+            4
+        );
     }
 
     #[test]
@@ -513,12 +501,77 @@ mod tests {
         let path = dir.path().join("round_trip.mcap");
         write_paper_cases(&path);
         let bag = read(&path).expect("read");
-        assert_eq!(bag.candidates.len(), 4);
-        assert_eq!(bag.recommendations.len(), 4);
-        for (got, want) in bag.candidates.iter().zip(&crate::msg::paper_cases()) {
+        assert_eq!(bag.streams.candidates.requests.len(), 4);
+        assert_eq!(bag.streams.candidates.answers.len(), 4);
+        for (got, want) in bag
+            .streams
+            .candidates
+            .requests
+            .iter()
+            .zip(&crate::msg::paper_cases())
+        {
             assert_eq!(&got.message, want);
         }
-        assert_eq!(bag.candidates[1].publish_time, 1_000);
+        assert_eq!(bag.streams.candidates.requests[1].publish_time, 1_000);
+    }
+
+    /// Every kind, through its one path: written as `Payload::request::<K>` and
+    /// `Payload::answer::<K>` on the channels `Topics::default_names` gives it, read back into its
+    /// own stream, in order, with its times; the writer's counts name the same channels.
+    #[test]
+    fn every_kind_is_written_and_read_back_through_its_stream() {
+        struct Write<'a>(&'a mut BagWriter, u64);
+        impl Visit for Write<'_> {
+            fn kind<K: Kind>(&mut self) {
+                for (i, payload) in [
+                    Payload::request::<K>(K::Request::default()),
+                    Payload::answer::<K>(K::Answer::default()),
+                    Payload::request::<K>(K::Request::default()),
+                ]
+                .into_iter()
+                .enumerate()
+                {
+                    let t = 1_000 * (K::INDEX as u64 + 1) + i as u64;
+                    let entry = Entry {
+                        payload,
+                        log_time: t,
+                        publish_time: t - 1,
+                    };
+                    self.0.write(&entry).expect("write");
+                    self.1 += 1;
+                }
+            }
+        }
+        struct Check<'a>(&'a Bag, &'a crate::record::Written);
+        impl Visit for Check<'_> {
+            fn kind<K: Kind>(&mut self) {
+                let stream = self.0.streams.of::<K>();
+                let what = std::any::type_name::<K>();
+                assert_eq!(stream.requests.len(), 2, "{what}");
+                assert_eq!(stream.answers.len(), 1, "{what}");
+                assert_eq!(stream.requests[0].message, K::Request::default(), "{what}");
+                let base = 1_000 * (K::INDEX as u64 + 1);
+                let times: Vec<u64> = stream.requests.iter().map(|r| r.log_time).collect();
+                assert_eq!(times, [base, base + 2], "{what}");
+                assert_eq!(stream.answers[0].publish_time, base, "{what}");
+                assert_eq!(
+                    (self.1.requests::<K>(), self.1.answers::<K>()),
+                    (2, 1),
+                    "{what}"
+                );
+            }
+        }
+        let dir = tempfile::tempdir().expect("a temporary folder");
+        let path = dir.path().join("kinds.mcap");
+        let mut w = BagWriter::create(&path, &Topics::default_names(), 100).expect("create");
+        let mut write = Write(&mut w, 0);
+        kind::each(&mut write);
+        let count = write.1;
+        let written = w.finish().expect("finish");
+        let bag = read(&path).expect("read");
+        assert_eq!(bag.streams.len(), count);
+        assert_eq!(bag.other + bag.undecodable_count, 0);
+        kind::each(&mut Check(&bag, &written));
     }
 
     #[test]

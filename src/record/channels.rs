@@ -5,82 +5,38 @@
 //! fields were recorded, so that `replay` compares only those.
 
 use super::scan::{Channel, KnownSchema, Table};
+use crate::kind;
 use crate::msg::definitions::split_type_name;
 use crate::msg::schema::RecordedType;
 use crate::msg::{
-    cdr, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
-    PoseCandidate, PoseCandidateSet, PoseRecommendation, PoseRecommendationSet, RosMessage,
+    cdr, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet, RosMessage,
 };
 use serde::de::DeserializeOwned;
 use std::collections::hash_map::Entry;
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
-/// Which of our types a channel carries.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Carried {
-    /// `GraspCandidate`.
-    Candidate,
-    /// `GripRecommendation`.
-    Recommendation,
-    /// `GraspCandidateSet`.
-    CandidateSet,
-    /// `GripRecommendationSet`.
-    RecommendationSet,
-    /// `PoseCandidate`.
-    PoseCandidate,
-    /// `PoseRecommendation`.
-    PoseRecommendation,
-    /// `PoseCandidateSet`.
-    PoseCandidateSet,
-    /// `PoseRecommendationSet`.
-    PoseRecommendationSet,
-    /// Anything else.
-    Other,
-}
-
-impl Carried {
-    fn of(channel: &Channel, schema: Option<&KnownSchema>) -> (Self, &'static str) {
-        let Some(schema) = schema else {
-            return (Carried::Other, "");
-        };
-        if channel.message_encoding != "cdr" {
-            return (Carried::Other, "");
-        }
-        let Some(name) = split_type_name(&schema.name) else {
-            return (Carried::Other, "");
-        };
-        let is = |package: &str, n: &str| name == (package, n);
-        if is(GraspCandidate::PACKAGE, GraspCandidate::NAME) {
-            (Carried::Candidate, GraspCandidate::TYPE_NAME)
-        } else if is(GripRecommendation::PACKAGE, GripRecommendation::NAME) {
-            (Carried::Recommendation, GripRecommendation::TYPE_NAME)
-        } else if is(GraspCandidateSet::PACKAGE, GraspCandidateSet::NAME) {
-            (Carried::CandidateSet, GraspCandidateSet::TYPE_NAME)
-        } else if is(GripRecommendationSet::PACKAGE, GripRecommendationSet::NAME) {
-            (Carried::RecommendationSet, GripRecommendationSet::TYPE_NAME)
-        } else if is(PoseCandidate::PACKAGE, PoseCandidate::NAME) {
-            (Carried::PoseCandidate, PoseCandidate::TYPE_NAME)
-        } else if is(PoseRecommendation::PACKAGE, PoseRecommendation::NAME) {
-            (Carried::PoseRecommendation, PoseRecommendation::TYPE_NAME)
-        } else if is(PoseCandidateSet::PACKAGE, PoseCandidateSet::NAME) {
-            (Carried::PoseCandidateSet, PoseCandidateSet::TYPE_NAME)
-        } else if is(PoseRecommendationSet::PACKAGE, PoseRecommendationSet::NAME) {
-            (
-                Carried::PoseRecommendationSet,
-                PoseRecommendationSet::TYPE_NAME,
-            )
-        } else {
-            (Carried::Other, "")
-        }
+/// Which of our channels (a kind's requests or answers, [`crate::kind`]) a recording's channel
+/// carries, with the type's name as this crate knows it; `None` for anything else.
+fn carried(
+    channel: &Channel,
+    schema: Option<&KnownSchema>,
+) -> Option<(kind::Channel, &'static str)> {
+    let schema = schema?;
+    if channel.message_encoding != "cdr" {
+        return None;
     }
+    let (package, name) = split_type_name(&schema.name)?;
+    let ours = kind::Channel::of_type(package, name)?;
+    let (_, type_name, _) = kind::Channel::all()[ours.slot()];
+    Some((ours, type_name))
 }
 
 /// How one channel decodes.
 #[derive(Debug, Clone)]
 pub(crate) struct ChannelReader {
-    /// What it carries.
-    pub(crate) carried: Carried,
+    /// Which of our channels it carries; `None`: not one of ours.
+    pub(crate) carried: Option<kind::Channel>,
     /// The recorded version of its type when it differs from ours; `None` decodes as it is (our
     /// own version, or a schema in a form this crate does not read, e.g. `ros2idl`).
     recorded: Option<Arc<RecordedType>>,
@@ -127,12 +83,12 @@ fn make(
     schema: Option<&KnownSchema>,
     fields: &mut RecordedFields,
 ) -> Result<ChannelReader, IncompatibleChannel> {
-    let (carried, type_name) = Carried::of(channel, schema);
+    let ours = carried(channel, schema);
     let as_it_is = Ok(ChannelReader {
-        carried,
+        carried: ours.map(|(c, _)| c),
         recorded: None,
     });
-    let Some(schema) = schema.filter(|_| carried != Carried::Other) else {
+    let (Some((carried, type_name)), Some(schema)) = (ours, schema) else {
         return as_it_is;
     };
     if schema.encoding != "ros2msg" || schema.data.is_empty() {
@@ -143,7 +99,7 @@ fn make(
         Ok(t) => {
             fields.note(&t);
             Ok(ChannelReader {
-                carried,
+                carried: Some(carried),
                 recorded: (!t.is_ours()).then(|| Arc::new(t)),
             })
         }

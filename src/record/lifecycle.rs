@@ -51,26 +51,34 @@ impl fmt::Display for Change {
                     f,
                     "recording {} closed: {} candidates, {} recommendations, {} marker arrays",
                     path.display(),
-                    written.candidates,
-                    written.recommendations,
+                    written.requests::<crate::kind::Candidates>(),
+                    written.answers::<crate::kind::Candidates>(),
                     written.markers
                 )?;
-                if written.candidate_sets + written.recommendation_sets > 0 {
+                if written.requests::<crate::kind::Sets>() + written.answers::<crate::kind::Sets>()
+                    > 0
+                {
                     write!(
                         f,
                         ", {} candidate sets, {} set answers",
-                        written.candidate_sets, written.recommendation_sets
+                        written.requests::<crate::kind::Sets>(),
+                        written.answers::<crate::kind::Sets>()
                     )?;
                 }
-                let poses = written.pose_candidates + written.pose_sets;
-                if poses + written.pose_recommendations + written.pose_recommendation_sets > 0 {
+                let poses = written.requests::<crate::kind::Poses>()
+                    + written.requests::<crate::kind::PoseSets>();
+                if poses
+                    + written.answers::<crate::kind::Poses>()
+                    + written.answers::<crate::kind::PoseSets>()
+                    > 0
+                {
                     write!(
                         f,
                         ", {} pose candidates, {} pose answers, {} pose sets, {} pose set answers",
-                        written.pose_candidates,
-                        written.pose_recommendations,
-                        written.pose_sets,
-                        written.pose_recommendation_sets
+                        written.requests::<crate::kind::Poses>(),
+                        written.answers::<crate::kind::Poses>(),
+                        written.requests::<crate::kind::PoseSets>(),
+                        written.answers::<crate::kind::PoseSets>()
                     )?;
                 }
                 Ok(())
@@ -219,13 +227,7 @@ mod tests {
     use std::sync::Arc;
 
     fn topics() -> Topics {
-        Topics {
-            candidates: "/grasp_candidates".into(),
-            recommendations: "/grip_recommendations".into(),
-            markers: Some("/grip_markers".into()),
-            sets: None,
-            poses: None,
-        }
+        Topics::new("/grasp_candidates", "/grip_recommendations").with_markers("/grip_markers")
     }
 
     fn recording(node: &str) -> Recording {
@@ -251,10 +253,14 @@ mod tests {
         let first = started(&rec.follow(wanted(true)));
         assert!(rec.is_on() && !rec.records_markers());
         assert!(rec.follow(wanted(true)).is_empty(), "already recording");
-        rec.record(Payload::Candidate(Box::default()), 1, 1);
+        rec.record(
+            Payload::request::<crate::kind::Candidates>(Default::default()),
+            1,
+            1,
+        );
         match &rec.follow(wanted(false))[..] {
             [Change::Closed { written, path }] => {
-                assert_eq!(written.candidates, 1);
+                assert_eq!(written.requests::<crate::kind::Candidates>(), 1);
                 assert_eq!(path, &first);
             }
             other => panic!("expected a closed file, got {other:?}"),
@@ -306,26 +312,38 @@ mod tests {
         };
         assert!(name(&a).starts_with("left__grasp_orient_"), "{a:?}");
         assert!(name(&b).starts_with("right__grasp_orient_"), "{b:?}");
-        left.record(Payload::Candidate(Box::default()), 1, 1);
+        left.record(
+            Payload::request::<crate::kind::Candidates>(Default::default()),
+            1,
+            1,
+        );
         for _ in 0..2 {
-            right.record(Payload::Candidate(Box::default()), 1, 1);
+            right.record(
+                Payload::request::<crate::kind::Candidates>(Default::default()),
+                1,
+                1,
+            );
         }
         let closed = |c: Option<Change>| match c {
-            Some(Change::Closed { written, .. }) => written.candidates,
+            Some(Change::Closed { written, .. }) => written.requests::<crate::kind::Candidates>(),
             other => panic!("{other:?}"),
         };
         assert_eq!((closed(left.stop()), closed(right.stop())), (1, 2));
         assert_eq!(
             crate::record::bag::read(&a)
                 .expect("whole")
+                .streams
                 .candidates
+                .requests
                 .len(),
             1
         );
         assert_eq!(
             crate::record::bag::read(&b)
                 .expect("whole")
+                .streams
                 .candidates
+                .requests
                 .len(),
             2
         );

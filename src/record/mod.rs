@@ -32,11 +32,8 @@ pub mod settings;
 mod sink;
 pub(crate) mod summary;
 
-use crate::msg::{
-    cdr, definitions, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
-    MarkerArray, PoseCandidate, PoseCandidateSet, PoseRecommendation, PoseRecommendationSet,
-    RosMessage,
-};
+use crate::kind::{self, Kind, Visit};
+use crate::msg::{cdr, definitions, MarkerArray, RosMessage};
 use settings::{SettingsRecord, METADATA_NAME};
 use std::collections::BTreeMap;
 use std::fs::{File, OpenOptions};
@@ -124,13 +121,17 @@ fn closed_words(kept: &Written, closed: &Result<(), std::io::Error>) -> String {
         Ok(()) => format!(
             "the file was closed at its last complete flush and holds {} candidates, {} \
              recommendations, {} marker arrays",
-            kept.candidates, kept.recommendations, kept.markers
+            kept.requests::<crate::kind::Candidates>(),
+            kept.answers::<crate::kind::Candidates>(),
+            kept.markers
         ),
         Err(why) => format!(
             "the file could not be closed ({why}); up to its last complete flush it holds {} \
              candidates, {} recommendations, {} marker arrays, which `grasp_orient recover` \
              copies into a closed file",
-            kept.candidates, kept.recommendations, kept.markers
+            kept.requests::<crate::kind::Candidates>(),
+            kept.answers::<crate::kind::Candidates>(),
+            kept.markers
         ),
     }
 }
@@ -138,27 +139,37 @@ fn closed_words(kept: &Written, closed: &Result<(), std::io::Error>) -> String {
 /// One message for the recording.
 #[derive(Debug, Clone)]
 pub enum Payload {
-    /// On the candidates topic.
-    Candidate(Box<GraspCandidate>),
-    /// On the recommendations topic.
-    Recommendation(Box<GripRecommendation>),
+    /// A request or an answer of one kind ([`crate::kind`]), on that kind's channel.
+    Message(kind::Channel, Arc<dyn Encode>),
     /// On the markers topic.
     Markers(Box<MarkerArray>),
-    /// On the candidate sets topic.
-    CandidateSet(Box<GraspCandidateSet>),
-    /// On the set answers topic.
-    RecommendationSet(Box<GripRecommendationSet>),
-    /// On the pose candidates topic.
-    PoseCandidate(Box<PoseCandidate>),
-    /// On the pose answers topic.
-    PoseRecommendation(Box<PoseRecommendation>),
-    /// On the pose sets topic (or a call of `~/recommend_poses`).
-    PoseCandidateSet(Box<PoseCandidateSet>),
-    /// On the pose set answers topic (or the response to a call).
-    PoseRecommendationSet(Box<PoseRecommendationSet>),
     /// The settings in force from a time on, written as a metadata record (the entry's times
     /// are not used).
     Settings(Box<SettingsRecord>),
+}
+
+impl Payload {
+    /// A request of kind `K`.
+    pub fn request<K: Kind>(message: K::Request) -> Self {
+        Payload::Message(kind::Channel::request::<K>(), Arc::new(message))
+    }
+
+    /// An answer of kind `K`.
+    pub fn answer<K: Kind>(message: K::Answer) -> Self {
+        Payload::Message(kind::Channel::answer::<K>(), Arc::new(message))
+    }
+}
+
+/// A message the recording's writer thread encodes as CDR.
+pub trait Encode: std::fmt::Debug + Send + Sync {
+    /// The message as encapsulated CDR.
+    fn encode(&self) -> Result<Vec<u8>, cdr::CdrError>;
+}
+
+impl<T: serde::Serialize + std::fmt::Debug + Send + Sync> Encode for T {
+    fn encode(&self) -> Result<Vec<u8>, cdr::CdrError> {
+        cdr::encode(self)
+    }
 }
 
 /// A message with its times, ns since the Unix epoch.
@@ -172,88 +183,108 @@ pub struct Entry {
     pub publish_time: u64,
 }
 
-/// Topic names of the channels.
-#[derive(Debug, Clone)]
+/// Topic names of a recording's channels: each kind's requests and answers, and the markers; a
+/// channel without a name is left out.
+#[derive(Debug, Clone, Default)]
 pub struct Topics {
-    /// Candidates, e.g. `/grasp_candidates`.
-    pub candidates: String,
-    /// Recommendations.
-    pub recommendations: String,
+    /// By [`kind::Channel::slot`].
+    names: [Option<String>; kind::Channel::COUNT],
     /// Markers; `None` leaves them out.
     pub markers: Option<String>,
-    /// Candidate sets and their answers; `None` leaves them out.
-    pub sets: Option<SetTopics>,
-    /// Pose candidates, pose sets and their answers; `None` leaves them out.
-    pub poses: Option<PoseTopics>,
 }
 
-/// Topic names of the four pose channels (docs/poses.md).
-#[derive(Debug, Clone)]
-pub struct PoseTopics {
-    /// Pose candidates, e.g. `/pose_candidates`.
-    pub candidates: String,
-    /// Their answers, e.g. `/pose_recommendations`.
-    pub recommendations: String,
-    /// Pose sets, e.g. `/pose_candidate_sets`.
-    pub sets: String,
-    /// Their answers, e.g. `/pose_recommendation_sets`.
-    pub set_recommendations: String,
-}
-
-impl PoseTopics {
-    /// The node's default names.
-    pub fn default_names() -> Self {
-        Self {
-            candidates: "/pose_candidates".into(),
-            recommendations: "/pose_recommendations".into(),
-            sets: "/pose_candidate_sets".into(),
-            set_recommendations: "/pose_recommendation_sets".into(),
-        }
+impl Topics {
+    /// Candidates and their recommendations on these topics, and no other channel.
+    pub fn new(candidates: impl Into<String>, recommendations: impl Into<String>) -> Self {
+        Self::default().with::<kind::Candidates>(candidates, recommendations)
     }
-}
 
-/// Topic names of the two set channels.
-#[derive(Debug, Clone)]
-pub struct SetTopics {
-    /// Candidate sets, e.g. `/grasp_candidate_sets`.
-    pub candidates: String,
-    /// Their answers, e.g. `/grip_recommendation_sets`.
-    pub recommendations: String,
-}
-
-impl SetTopics {
-    /// The node's default names, `/grasp_candidate_sets` and `/grip_recommendation_sets`.
+    /// Every kind on the node's default topics (`/grasp_candidates`, ...), markers left out.
     pub fn default_names() -> Self {
-        Self {
-            candidates: "/grasp_candidate_sets".into(),
-            recommendations: "/grip_recommendation_sets".into(),
+        Self::named(|base| format!("/{base}"))
+    }
+
+    /// Every kind on the topics `name` gives each base name of [`Kind::TOPICS`] (the node's
+    /// namespace and remappings), markers left out.
+    pub fn named(name: impl Fn(&str) -> String) -> Self {
+        struct All<F>(Topics, F);
+        impl<F: Fn(&str) -> String> Visit for All<F> {
+            fn kind<K: Kind>(&mut self) {
+                let [request, answer] = K::TOPICS.map(|t| (self.1)(t));
+                self.0 = std::mem::take(&mut self.0).with::<K>(request, answer);
+            }
         }
+        let mut all = All(Self::default(), name);
+        kind::each(&mut all);
+        all.0
+    }
+
+    /// With kind `K`'s requests and answers on these topics.
+    pub fn with<K: Kind>(
+        mut self,
+        requests: impl Into<String>,
+        answers: impl Into<String>,
+    ) -> Self {
+        self.names[kind::Channel::request::<K>().slot()] = Some(requests.into());
+        self.names[kind::Channel::answer::<K>().slot()] = Some(answers.into());
+        self
+    }
+
+    /// Without kind `K`'s channels.
+    pub fn without<K: Kind>(mut self) -> Self {
+        self.names[kind::Channel::request::<K>().slot()] = None;
+        self.names[kind::Channel::answer::<K>().slot()] = None;
+        self
+    }
+
+    /// With the markers on `topic`.
+    pub fn with_markers(mut self, topic: impl Into<String>) -> Self {
+        self.markers = Some(topic.into());
+        self
+    }
+
+    /// The topic of `channel`, if the recording has it.
+    pub fn of(&self, channel: kind::Channel) -> Option<&str> {
+        self.names[channel.slot()].as_deref()
+    }
+
+    /// The topic of kind `K`'s requests, if the recording has it.
+    pub fn requests<K: Kind>(&self) -> Option<&str> {
+        self.of(kind::Channel::request::<K>())
+    }
+
+    /// The topic of kind `K`'s answers, if the recording has it.
+    pub fn answers<K: Kind>(&self) -> Option<&str> {
+        self.of(kind::Channel::answer::<K>())
     }
 }
 
 /// Messages written per channel, and settings records.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Written {
-    /// Candidates.
-    pub candidates: u64,
-    /// Recommendations.
-    pub recommendations: u64,
+    /// By [`kind::Channel::slot`].
+    messages: [u64; kind::Channel::COUNT],
     /// Marker arrays.
     pub markers: u64,
-    /// Candidate sets.
-    pub candidate_sets: u64,
-    /// Answers to sets.
-    pub recommendation_sets: u64,
-    /// Pose candidates.
-    pub pose_candidates: u64,
-    /// Answers to pose candidates.
-    pub pose_recommendations: u64,
-    /// Pose sets.
-    pub pose_sets: u64,
-    /// Answers to pose sets.
-    pub pose_recommendation_sets: u64,
     /// Settings metadata records.
     pub settings: u64,
+}
+
+impl Written {
+    /// Messages written on `channel`.
+    pub fn of(&self, channel: kind::Channel) -> u64 {
+        self.messages[channel.slot()]
+    }
+
+    /// Requests of kind `K` written.
+    pub fn requests<K: Kind>(&self) -> u64 {
+        self.of(kind::Channel::request::<K>())
+    }
+
+    /// Answers of kind `K` written.
+    pub fn answers<K: Kind>(&self) -> u64 {
+        self.of(kind::Channel::answer::<K>())
+    }
 }
 
 /// Nanoseconds since the Unix epoch, now.
@@ -307,9 +338,11 @@ pub fn qos_yaml(depth: i64) -> String {
     )
 }
 
-/// Channels of a recording: candidates, recommendations, markers, candidate sets, set answers,
-/// pose candidates, their answers, pose sets, their answers.
-const CHANNELS: usize = 9;
+/// Channels of a recording: each kind's requests and answers ([`kind::Channel::slot`]), then the
+/// markers.
+const CHANNELS: usize = kind::Channel::COUNT + 1;
+/// The markers' place among the channels.
+const MARKERS: usize = kind::Channel::COUNT;
 
 /// An MCAP writer with the channels of a grasp_orient recording. It never truncates a file:
 /// [`BagWriter::create`] makes a new one, [`BagWriter::on_file`] takes an open one (a temporary
@@ -319,10 +352,8 @@ pub struct BagWriter {
     path: PathBuf,
     writer: Option<mcap::Writer<BufWriter<sink::Sink>>>,
     sink: Arc<sink::State>,
-    /// The set channels' topics, until their channels are made.
-    sets: Option<SetTopics>,
-    /// The pose channels' topics, until their channels are made.
-    poses: Option<PoseTopics>,
+    /// The topics of the channels made by their first message.
+    topics: Topics,
     /// Channel metadata (`offered_qos_profiles`).
     metadata: BTreeMap<String, String>,
     channels: [Option<u16>; CHANNELS],
@@ -415,25 +446,18 @@ impl BagWriter {
             });
             Ok(id)
         };
-        let channels = [
-            Some(channel(&topics.candidates, GraspCandidate::TYPE_NAME)?),
-            Some(channel(
-                &topics.recommendations,
-                GripRecommendation::TYPE_NAME,
-            )?),
-            match &topics.markers {
-                Some(t) => Some(channel(t, MarkerArray::TYPE_NAME)?),
-                None => None,
-            },
-            // The set and pose channels are made by their first message, as rosbag2 adds a topic
-            // when it first sees a publisher: a run without sets records no set channels.
-            None,
-            None,
-            None,
-            None,
-            None,
-            None,
-        ];
+        // The channels of the kinds the node always has, then the markers, are made now; the
+        // others by their first message, as rosbag2 adds a topic when it first sees a
+        // publisher: a run without sets records no set channels.
+        let mut channels = [None; CHANNELS];
+        for (c, type_name, at_start) in kind::Channel::all() {
+            if let Some(topic) = topics.of(c).filter(|_| at_start) {
+                channels[c.slot()] = Some(channel(topic, type_name)?);
+            }
+        }
+        if let Some(t) = &topics.markers {
+            channels[MARKERS] = Some(channel(t, MarkerArray::TYPE_NAME)?);
+        }
         // The file on disk is at once a readable start of a recording.
         writer.flush().map_err(mcap_error)?;
         Ok(Self {
@@ -441,8 +465,7 @@ impl BagWriter {
             committed: (state.position(), Written::default()),
             writer: Some(writer),
             sink: state,
-            sets: topics.sets.clone(),
-            poses: topics.poses.clone(),
+            topics: topics.clone(),
             metadata,
             channels,
             sequence: [0; CHANNELS],
@@ -492,23 +515,16 @@ impl BagWriter {
             .ok_or_else(|| RecordError::AlreadyStopped { path: path.clone() })
     }
 
-    /// Writes one message (markers and sets are dropped when the recording has no channel for
-    /// them), or a settings record (after which the file is flushed).
+    /// Writes one message (dropped when the recording has no channel for it), or a settings
+    /// record (after which the file is flushed).
     pub fn write(&mut self, entry: &Entry) -> Result<(), RecordError> {
         let (index, bytes) = match &entry.payload {
-            Payload::Candidate(m) => (0, cdr::encode(m.as_ref())?),
-            Payload::Recommendation(m) => (1, cdr::encode(m.as_ref())?),
-            Payload::Markers(m) => (2, cdr::encode(m.as_ref())?),
-            Payload::CandidateSet(m) => (3, cdr::encode(m.as_ref())?),
-            Payload::RecommendationSet(m) => (4, cdr::encode(m.as_ref())?),
-            Payload::PoseCandidate(m) => (5, cdr::encode(m.as_ref())?),
-            Payload::PoseRecommendation(m) => (6, cdr::encode(m.as_ref())?),
-            Payload::PoseCandidateSet(m) => (7, cdr::encode(m.as_ref())?),
-            Payload::PoseRecommendationSet(m) => (8, cdr::encode(m.as_ref())?),
+            Payload::Message(channel, m) => (channel.slot(), m.encode()?),
+            Payload::Markers(m) => (MARKERS, cdr::encode(m.as_ref())?),
             Payload::Settings(s) => return self.write_settings(s),
         };
-        if index >= 3 && self.channels[index].is_none() {
-            self.add_set_channel(index)?;
+        if index != MARKERS && self.channels[index].is_none() {
+            self.add_lazy_channel(index)?;
         }
         let Some(channel_id) = self.channels[index] else {
             return Ok(());
@@ -523,46 +539,20 @@ impl BagWriter {
         if let Err(e) = self.writer()?.write_to_known_channel(&header, &bytes) {
             return Err(self.mcap_failed(e));
         }
-        match index {
-            0 => self.written.candidates += 1,
-            1 => self.written.recommendations += 1,
-            2 => self.written.markers += 1,
-            3 => self.written.candidate_sets += 1,
-            4 => self.written.recommendation_sets += 1,
-            5 => self.written.pose_candidates += 1,
-            6 => self.written.pose_recommendations += 1,
-            7 => self.written.pose_sets += 1,
-            _ => self.written.pose_recommendation_sets += 1,
+        match self.written.messages.get_mut(index) {
+            Some(n) => *n += 1,
+            None => self.written.markers += 1,
         }
         Ok(())
     }
 
-    /// The topic and type of channel `index` made by its first message (3 and 4: candidate sets
-    /// and their answers; 5 to 8: pose candidates, their answers, pose sets, their answers), if
-    /// the recording has them.
-    fn lazy_channel(&self, index: usize) -> Option<(String, &'static str)> {
-        let sets = self.sets.as_ref();
-        let poses = self.poses.as_ref();
-        match index {
-            3 => sets.map(|t| (t.candidates.clone(), GraspCandidateSet::TYPE_NAME)),
-            4 => sets.map(|t| (t.recommendations.clone(), GripRecommendationSet::TYPE_NAME)),
-            5 => poses.map(|t| (t.candidates.clone(), PoseCandidate::TYPE_NAME)),
-            6 => poses.map(|t| (t.recommendations.clone(), PoseRecommendation::TYPE_NAME)),
-            7 => poses.map(|t| (t.sets.clone(), PoseCandidateSet::TYPE_NAME)),
-            8 => poses.map(|t| {
-                (
-                    t.set_recommendations.clone(),
-                    PoseRecommendationSet::TYPE_NAME,
-                )
-            }),
-            _ => None,
-        }
-    }
-
-    /// Makes channel `index` on its first message ([`Self::lazy_channel`]), if the recording has
-    /// it; it joins the definitions a file closed after a failure is summarised with.
-    fn add_set_channel(&mut self, index: usize) -> Result<(), RecordError> {
-        let Some((topic, type_name)) = self.lazy_channel(index) else {
+    /// Makes the channel of slot `index` on its first message, if the recording has it; it
+    /// joins the definitions a file closed after a failure is summarised with.
+    fn add_lazy_channel(&mut self, index: usize) -> Result<(), RecordError> {
+        let Some((c, type_name, _)) = kind::Channel::all().get(index).copied() else {
+            return Ok(());
+        };
+        let Some(topic) = self.topics.of(c).map(str::to_string) else {
             return Ok(());
         };
         let text = definitions::full_text(type_name).ok_or(RecordError::UnknownType(type_name))?;
@@ -776,20 +766,14 @@ mod tests {
 
     /// The candidate and answer channels only (for the record module's tests).
     pub(super) fn topics() -> Topics {
-        Topics {
-            candidates: "/grasp_candidates".into(),
-            recommendations: "/grip_recommendations".into(),
-            markers: None,
-            sets: None,
-            poses: None,
-        }
+        Topics::new("/grasp_candidates", "/grip_recommendations")
     }
 
     /// Paper case `i % 4` as a candidate received at `i` ns.
     pub(super) fn candidate(i: usize) -> Entry {
         let c = crate::msg::paper_cases().swap_remove(i % 4);
         Entry {
-            payload: Payload::Candidate(Box::new(c)),
+            payload: Payload::request::<kind::Candidates>(c),
             log_time: i as u64,
             publish_time: i as u64,
         }
@@ -832,11 +816,15 @@ mod tests {
         );
         assert!(closed.is_ok(), "{closed:?}");
         assert!(
-            kept.candidates >= 100 && kept.candidates % 100 == 0,
+            kept.requests::<crate::kind::Candidates>() >= 100
+                && kept.requests::<crate::kind::Candidates>() % 100 == 0,
             "{kept:?}"
         );
         let back = bag::read(&path).expect("the closed file reads as it is");
-        assert_eq!(back.candidates.len() as u64, kept.candidates);
+        assert_eq!(
+            back.streams.candidates.requests.len() as u64,
+            kept.requests::<crate::kind::Candidates>()
+        );
         // Closed as the MCAP writer would have: both CRCs, and a summary that counts it all.
         let bytes = std::fs::read(&path).expect("read");
         let closed = scan::scan(&bytes).expect("an MCAP file");
@@ -846,13 +834,21 @@ mod tests {
         );
         assert_eq!(closed.summary_channels.len(), 2);
         let (count, per_channel) = closed.statistics.expect("statistics");
-        assert_eq!(count, kept.candidates);
-        assert_eq!(per_channel.values().sum::<u64>(), kept.candidates);
+        assert_eq!(count, kept.requests::<crate::kind::Candidates>());
+        assert_eq!(
+            per_channel.values().sum::<u64>(),
+            kept.requests::<crate::kind::Candidates>()
+        );
         assert!(bag.write(&candidate(0)).is_err(), "nothing more is written");
         drop(bag);
         assert_eq!(
-            bag::read(&path).expect("still whole").candidates.len() as u64,
-            kept.candidates,
+            bag::read(&path)
+                .expect("still whole")
+                .streams
+                .candidates
+                .requests
+                .len() as u64,
+            kept.requests::<crate::kind::Candidates>(),
             "dropping the writer after the failure writes nothing"
         );
     }
@@ -911,7 +907,7 @@ mod tests {
             }
         }
         let (length, kept) = bag.committed;
-        assert_eq!(kept.candidates, 300);
+        assert_eq!(kept.requests::<crate::kind::Candidates>(), 300);
         let at_flush = std::fs::read(&path).expect("read")[..length as usize].to_vec();
         let defs = bag.definitions.clone();
         drop(bag);

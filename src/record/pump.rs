@@ -448,9 +448,9 @@ mod tests {
             assert!(w.hand_over(vec![candidate(i)]));
         }
         let written = w.finish().expect("finish");
-        assert_eq!(written.candidates, 55);
+        assert_eq!(written.requests::<crate::kind::Candidates>(), 55);
         let bag = crate::record::bag::read(&path).expect("readable");
-        assert_eq!(bag.candidates.len(), 55);
+        assert_eq!(bag.streams.candidates.requests.len(), 55);
         assert!(!w.hand_over(vec![candidate(55)]), "taken after the end");
     }
 
@@ -472,7 +472,12 @@ mod tests {
         let size = || std::fs::metadata(&path).map_or(0, |m| m.len());
         assert!(wait_until(|| size() > before), "nothing flushed");
         assert_eq!(w.shared.taken.load(Ordering::Relaxed), 5);
-        assert_eq!(w.finish().expect("finish").candidates, 5);
+        assert_eq!(
+            w.finish()
+                .expect("finish")
+                .requests::<crate::kind::Candidates>(),
+            5
+        );
     }
 
     /// The writer threads run at `SCHED_IDLE` (policy 5), the rescuers at `SCHED_OTHER` (0).

@@ -828,8 +828,8 @@ mod tests {
             let a = crate::answer::answer(&c, &crate::solver::Settings::default());
             let t = 1_000 + i as u64;
             for payload in [
-                Payload::Candidate(Box::new(c.clone())),
-                Payload::Recommendation(Box::new(a)),
+                Payload::request::<crate::kind::Candidates>(c.clone()),
+                Payload::answer::<crate::kind::Candidates>(a),
             ] {
                 w.write(&Entry {
                     payload,
@@ -861,8 +861,8 @@ mod tests {
     /// What a reader sees of a bag: the messages and the metadata.
     fn content(bag: &Bag) -> impl PartialEq + std::fmt::Debug + '_ {
         (
-            &bag.candidates,
-            &bag.recommendations,
+            &bag.streams.candidates.requests,
+            &bag.streams.candidates.answers,
             bag.other,
             &bag.metadata,
         )
@@ -980,7 +980,14 @@ mod tests {
                 Err(e) => panic!("at {end}: {e}"),
                 Ok((got, out)) => {
                     let back = read_bytes(&out).expect("the output is whole");
-                    assert!(whole.candidates.starts_with(&back.candidates), "at {end}");
+                    assert!(
+                        whole
+                            .streams
+                            .candidates
+                            .requests
+                            .starts_with(&back.streams.candidates.requests),
+                        "at {end}"
+                    );
                     let in_a_chunk = chunks.iter().any(|(s, e)| *s < end && end < *e);
                     let in_metadata = (metadata.0 < end) && (end < metadata.1);
                     assert_eq!(
@@ -1018,7 +1025,15 @@ mod tests {
             Some(&2),
             "{got:?}"
         );
-        assert_eq!(read_bytes(&out).expect("whole").candidates.len(), 2);
+        assert_eq!(
+            read_bytes(&out)
+                .expect("whole")
+                .streams
+                .candidates
+                .requests
+                .len(),
+            2
+        );
         // The same chunk with a flipped bit in its compressed records.
         let mut bytes = node_bag();
         bytes[chunk as usize + 100] ^= 0x10;

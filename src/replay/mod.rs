@@ -11,7 +11,8 @@ pub use poses::PoseAnswers;
 
 use crate::answer::{answer_one, Rules, BEHIND_TANGENT_NOTE};
 use crate::config::{Config, ConfigError};
-use crate::msg::{clip, short_id, GraspCandidate, GripRecommendation, GripRecommendationSet};
+use crate::kind::{Key, Kind, Stream, Streams};
+use crate::msg::{short_id, GraspCandidate, GripRecommendation};
 use crate::record::bag::{keep_example, Bag, Recorded};
 use crate::record::channels::RecordedFields;
 use crate::record::settings::{SettingsError, SettingsRecord, METADATA_NAME};
@@ -210,43 +211,32 @@ pub fn differences_in(
         .collect()
 }
 
-/// The key that pairs a recommendation with its candidate: id and header, cut to the length an
-/// answer carries them at.
-type Key<'a> = (&'a str, i32, u32, &'a str);
-
-fn key<'a>(id: &'a str, header: &'a crate::msg::Header) -> Key<'a> {
-    (
-        clip(id),
-        header.stamp.sec,
-        header.stamp.nanosec,
-        clip(&header.frame_id),
-    )
-}
-
-/// For each candidate, the index of its recorded recommendation. A node's recording answers
-/// candidates in order, so that is tried first; otherwise answers are matched by key, in order.
-fn pair(bag: &Bag) -> (Vec<Option<usize>>, u64) {
-    let cands = &bag.candidates;
-    let recs = &bag.recommendations;
-    let aligned = cands.len() == recs.len()
-        && cands.iter().zip(recs).all(|(c, r)| {
-            key(&c.message.id, &c.message.header) == key(&r.message.candidate_id, &r.message.header)
-        });
+/// For each recorded request of kind `K`, the index of its recorded answer, and how many answers
+/// matched no request. A node's recording answers in order, so that is tried first; otherwise
+/// answers are matched by [`Kind::answer_key`], in order (which gives the same pairs when the
+/// order holds).
+fn pair<K: Kind>(stream: &Stream<K>) -> (Vec<Option<usize>>, u64) {
+    let (asked, answers) = (&stream.requests, &stream.answers);
+    let aligned = asked.len() == answers.len()
+        && asked
+            .iter()
+            .zip(answers)
+            .all(|(q, a)| K::request_key(&q.message) == K::answer_key(&a.message));
     if aligned {
-        return ((0..cands.len()).map(Some).collect(), 0);
+        return ((0..asked.len()).map(Some).collect(), 0);
     }
-    let mut by_key: HashMap<Key<'_>, VecDeque<usize>> = HashMap::with_capacity(recs.len());
-    for (i, r) in recs.iter().enumerate() {
+    let mut by_key: HashMap<Key<'_>, VecDeque<usize>> = HashMap::with_capacity(answers.len());
+    for (i, a) in answers.iter().enumerate() {
         by_key
-            .entry(key(&r.message.candidate_id, &r.message.header))
+            .entry(K::answer_key(&a.message))
             .or_default()
             .push_back(i);
     }
-    let pairs: Vec<Option<usize>> = cands
+    let pairs: Vec<Option<usize>> = asked
         .iter()
-        .map(|c| {
+        .map(|q| {
             by_key
-                .get_mut(&key(&c.message.id, &c.message.header))
+                .get_mut(&K::request_key(&q.message))
                 .and_then(VecDeque::pop_front)
         })
         .collect();
@@ -429,36 +419,24 @@ fn pose_meshes() -> std::sync::Arc<grasp_orient_geometry::MeshCache> {
     ))
 }
 
-/// The new answers of a replay, each with its candidate's (or set's) times.
-#[derive(Debug, Default)]
-pub struct Answers {
-    /// One per recorded candidate, in the candidates' order.
-    pub recommendations: Vec<Recorded<GripRecommendation>>,
-    /// One per recorded set, in the sets' order.
-    pub sets: Vec<Recorded<GripRecommendationSet>>,
-    /// The pose candidates' and pose sets' answers.
-    pub poses: PoseAnswers,
-}
-
-/// [`replay`], also returning the new answers.
+/// [`replay`], also returning the new answers: each kind's in its stream's `answers`, one per
+/// recorded request in the requests' order, each with its request's times.
 pub fn replay_with_answers(
     bag: &Bag,
     plan: &Plan,
     progress: impl Fn(u64) + Sync,
-) -> Result<(Summary, Answers), ReplayError> {
+) -> Result<(Summary, Streams), ReplayError> {
     let (mut summary, recommendations) = replay_on_cores(bag, plan, true, &progress)?;
     let (of_sets, sets) = sets::replay_sets(bag, plan, true);
     summary.merge(of_sets);
     let (of_poses, poses) = poses::replay_poses(bag, plan, &pose_meshes(), true)?;
     summary.merge(of_poses);
-    Ok((
-        summary,
-        Answers {
-            recommendations,
-            sets,
-            poses,
-        },
-    ))
+    let mut answers = Streams::default();
+    answers.candidates.answers = recommendations;
+    answers.sets.answers = sets;
+    answers.poses.answers = poses.recommendations;
+    answers.pose_sets.answers = poses.sets;
+    Ok((summary, answers))
 }
 
 /// One share of the candidates per core; the answers are kept only when asked for, since a
@@ -470,13 +448,21 @@ fn replay_on_cores(
     keep: bool,
     progress: &(impl Fn(u64) + Sync),
 ) -> Result<(Summary, Vec<Recorded<GripRecommendation>>), ReplayError> {
-    let (pairs, unmatched) = pair(bag);
+    let (pairs, unmatched) = pair(&bag.streams.candidates);
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let chunk = bag.candidates.len().div_ceil(threads).max(1);
+    let chunk = bag
+        .streams
+        .candidates
+        .requests
+        .len()
+        .div_ceil(threads)
+        .max(1);
     type Part = (Vec<Recorded<GripRecommendation>>, Summary);
     let parts: Result<Vec<Part>, ReplayError> = std::thread::scope(|scope| {
         let handles: Vec<_> = bag
+            .streams
             .candidates
+            .requests
             .chunks(chunk)
             .zip(pairs.chunks(chunk))
             .map(|(cands, pairs)| {
@@ -484,7 +470,7 @@ fn replay_on_cores(
                     let mut part = Summary::default();
                     let mut answers = Vec::with_capacity(if keep { cands.len() } else { 0 });
                     for (k, (c, p)) in cands.iter().zip(pairs).enumerate() {
-                        let theirs = p.map(|i| &bag.recommendations[i].message);
+                        let theirs = p.map(|i| &bag.streams.candidates.answers[i].message);
                         let settings = plan.settings_at(c.log_time);
                         let rules = plan.rules_at(c.log_time);
                         let from_answer = plan.objective_from_answer;
@@ -525,7 +511,11 @@ fn replay_on_cores(
         unmatched_recommendations: unmatched,
         ..Summary::default()
     };
-    let mut answers = Vec::with_capacity(if keep { bag.candidates.len() } else { 0 });
+    let mut answers = Vec::with_capacity(if keep {
+        bag.streams.candidates.requests.len()
+    } else {
+        0
+    });
     for (a, part) in parts {
         answers.extend(a);
         summary.merge(part);
@@ -744,16 +734,14 @@ mod tests {
     #[test]
     fn a_failing_worker_fails_the_replay() {
         let cases = crate::msg::paper_cases();
-        let bag = Bag {
-            candidates: (0..8192)
-                .map(|i| Recorded {
-                    message: cases[i % 4].clone(),
-                    log_time: i as u64,
-                    publish_time: i as u64,
-                })
-                .collect(),
-            ..Bag::default()
-        };
+        let mut bag = Bag::default();
+        bag.streams.candidates.requests = (0..8192)
+            .map(|i| Recorded {
+                message: cases[i % 4].clone(),
+                log_time: i as u64,
+                publish_time: i as u64,
+            })
+            .collect();
         let plan = Plan::fixed(Settings::default());
         let calls = std::sync::atomic::AtomicU64::new(0);
         let result = replay_with_answers(&bag, &plan, |_| {
@@ -767,12 +755,12 @@ mod tests {
             Ok((summary, answers)) => panic!(
                 "a failed worker went unnoticed: {} candidates, {} answers",
                 summary.candidates,
-                answers.recommendations.len()
+                answers.candidates.answers.len()
             ),
         }
         let (summary, answers) = replay_with_answers(&bag, &plan, |_| {}).expect("replays");
         assert_eq!(
-            (summary.candidates, answers.recommendations.len()),
+            (summary.candidates, answers.candidates.answers.len()),
             (8192, 8192)
         );
     }

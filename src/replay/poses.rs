@@ -11,7 +11,7 @@
 //! error ([`ReplayError::Mesh`]), not a difference.
 
 use super::sets::{compare_set, rules_like};
-use super::{compare_one, key, number_gap, Key, Plan, ReplayError, Summary, TOLERANCE};
+use super::{compare_one, number_gap, pair, Plan, ReplayError, Summary, TOLERANCE};
 use crate::answer::{cut_like, uncast, PoseAnswerer};
 use crate::msg::{
     short_id, GraspObject, GripRecommendation, GripRecommendationSet, Point, PoseCandidateSet,
@@ -19,25 +19,8 @@ use crate::msg::{
 };
 use crate::record::bag::{keep_example, Bag, Recorded};
 use grasp_orient_geometry::MeshCache;
-use std::collections::{HashMap, VecDeque};
-use std::sync::Arc;
 
-/// For each recorded item, the index of its recorded answer (matched by key, in order), and how
-/// many answers matched none.
-fn pair<'a>(
-    items: impl Iterator<Item = Key<'a>>,
-    answers: impl Iterator<Item = Key<'a>>,
-) -> (Vec<Option<usize>>, u64) {
-    let mut by_key: HashMap<Key<'a>, VecDeque<usize>> = HashMap::new();
-    for (i, k) in answers.enumerate() {
-        by_key.entry(k).or_default().push_back(i);
-    }
-    let pairs = items
-        .map(|k| by_key.get_mut(&k).and_then(VecDeque::pop_front))
-        .collect();
-    let unmatched = by_key.values().map(|q| q.len() as u64).sum();
-    (pairs, unmatched)
-}
+use std::sync::Arc;
 
 /// The new answers of a replay's pose candidates and pose sets, each with its candidate's (or
 /// set's) times, in the recording's order; empty unless asked for.
@@ -59,18 +42,10 @@ pub(super) fn replay_poses(
 ) -> Result<(Summary, PoseAnswers), ReplayError> {
     let mut summary = Summary::default();
     let mut kept = PoseAnswers::default();
-    let (pairs, unmatched) = pair(
-        bag.pose_candidates
-            .iter()
-            .map(|c| key(&c.message.id, &c.message.header)),
-        bag.pose_recommendations.iter().map(|r| {
-            let r = &r.message.recommendation;
-            key(&r.candidate_id, &r.header)
-        }),
-    );
+    let (pairs, unmatched) = pair(&bag.streams.poses);
     summary.unmatched_recommendations += unmatched;
-    for (c, p) in bag.pose_candidates.iter().zip(pairs) {
-        let theirs = p.map(|i| &bag.pose_recommendations[i].message);
+    for (c, p) in bag.streams.poses.requests.iter().zip(pairs) {
+        let theirs = p.map(|i| &bag.streams.poses.answers[i].message);
         let answered = theirs.is_some_and(|t| answered(&t.recommendation));
         check_mesh(&c.message.object, answered, meshes)?;
         let poses = PoseAnswerer::sharing(plan.closing_axis_at(c.log_time), meshes.clone());
@@ -107,17 +82,10 @@ fn replay_pose_sets(
     keep: bool,
 ) -> Result<Vec<Recorded<PoseRecommendationSet>>, ReplayError> {
     let mut kept = Vec::new();
-    let (pairs, unmatched) = pair(
-        bag.pose_sets
-            .iter()
-            .map(|s| key(&s.message.id, &s.message.header)),
-        bag.pose_recommendation_sets
-            .iter()
-            .map(|r| key(&r.message.set_id, &r.message.header)),
-    );
+    let (pairs, unmatched) = pair(&bag.streams.pose_sets);
     summary.unmatched_set_answers += unmatched;
-    for (set, p) in bag.pose_sets.iter().zip(pairs) {
-        let theirs = p.map(|i| &bag.pose_recommendation_sets[i].message);
+    for (set, p) in bag.streams.pose_sets.requests.iter().zip(pairs) {
+        let theirs = p.map(|i| &bag.streams.pose_sets.answers[i].message);
         let answered = theirs.is_some_and(|t| {
             t.recommendations
                 .iter()

@@ -12,34 +12,10 @@
 //! new answers' values within [`TOLERANCE`] (ties by `|wrist_rotation|`): candidates whose force
 //! agrees to rounding may swap places.
 
-use super::{compare_one, key, objective_like, Key, Plan, Summary, TOLERANCE};
+use super::{compare_one, objective_like, pair, Plan, Summary, TOLERANCE};
 use crate::answer::{answer_set, is_sorted_by, GripperDrive, RankBy, Rules};
 use crate::msg::{short_id, GraspCandidateSet, GripRecommendation, GripRecommendationSet};
 use crate::record::bag::{keep_example, Bag, Recorded};
-use std::collections::{HashMap, VecDeque};
-
-/// For each recorded set, the index of its recorded answer (matched by id and header, in order),
-/// and how many answers matched no set.
-fn pair(bag: &Bag) -> (Vec<Option<usize>>, u64) {
-    let mut by_key: HashMap<Key<'_>, VecDeque<usize>> = HashMap::new();
-    for (i, r) in bag.recommendation_sets.iter().enumerate() {
-        by_key
-            .entry(key(&r.message.set_id, &r.message.header))
-            .or_default()
-            .push_back(i);
-    }
-    let pairs = bag
-        .candidate_sets
-        .iter()
-        .map(|s| {
-            by_key
-                .get_mut(&key(&s.message.id, &s.message.header))
-                .and_then(VecDeque::pop_front)
-        })
-        .collect();
-    let unmatched = by_key.values().map(|q| q.len() as u64).sum();
-    (pairs, unmatched)
-}
 
 /// `rules` with the drive and ranking a recorded answer's `ranked_by` names.
 pub(super) fn rules_like(rules: &Rules, recorded: Option<&GripRecommendationSet>) -> Rules {
@@ -63,14 +39,18 @@ pub(super) fn replay_sets(
     plan: &Plan,
     keep: bool,
 ) -> (Summary, Vec<Recorded<GripRecommendationSet>>) {
-    let (pairs, unmatched) = pair(bag);
+    let (pairs, unmatched) = pair(&bag.streams.sets);
     let mut summary = Summary {
         unmatched_set_answers: unmatched,
         ..Summary::default()
     };
-    let mut answers = Vec::with_capacity(if keep { bag.candidate_sets.len() } else { 0 });
-    for (set, p) in bag.candidate_sets.iter().zip(pairs) {
-        let theirs = p.map(|i| &bag.recommendation_sets[i].message);
+    let mut answers = Vec::with_capacity(if keep {
+        bag.streams.sets.requests.len()
+    } else {
+        0
+    });
+    for (set, p) in bag.streams.sets.requests.iter().zip(pairs) {
+        let theirs = p.map(|i| &bag.streams.sets.answers[i].message);
         let (settings, rules) = (plan.settings_at(set.log_time), plan.rules_at(set.log_time));
         let ours = if plan.objective_from_answer {
             let first =

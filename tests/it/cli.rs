@@ -822,8 +822,8 @@ fn replay_of_malformed_collada_files_finishes() {
             serde_json::from_str(&pose_on(name, &path.display().to_string())).expect("a pose");
         let a = poses.answer(&c, &settings, &rules);
         assert_eq!(a.recommendation.status, 2, "{a:?}");
-        entries.push(Payload::PoseCandidate(Box::new(c)));
-        entries.push(Payload::PoseRecommendation(Box::new(a)));
+        entries.push(Payload::request::<grasp_orient::kind::Poses>(c));
+        entries.push(Payload::answer::<grasp_orient::kind::Poses>(a));
     }
     let bag = dir.path().join("malformed.mcap");
     let mut w = BagWriter::create(&bag, &crate::util::pose_bag_topics(), 100).expect("create");

@@ -71,7 +71,7 @@ fn bags_recorded_before_the_grip_force_and_spatial_fields_decode_and_replay() {
             "{name}"
         );
         assert_eq!(recorded.undecodable_count, 0, "{:?}", recorded.undecodable);
-        assert!(recorded.recommendations.iter().all(|r| {
+        assert!(recorded.streams.candidates.answers.iter().all(|r| {
             let axis = &r.message.rotation_axis;
             r.message.finger_force == 0.0
                 && r.message.finger_force_current == 0.0
@@ -79,7 +79,9 @@ fn bags_recorded_before_the_grip_force_and_spatial_fields_decode_and_replay() {
                 && (axis.x, axis.y, axis.z) == (0.0, 0.0, 0.0)
         }));
         assert!(recorded
+            .streams
             .candidates
+            .requests
             .iter()
             .all(|c| c.message.model == GraspCandidate::MODEL_PLANAR
                 && c.message.mass_tolerance == 0.0));
@@ -185,27 +187,21 @@ fn replay_edited(
     let recorded = bag::read(std::path::Path::new(&src)).expect("golden bag reads");
     let dir = temp_dir("golden");
     let out = dir.path().join("tampered.mcap");
-    let topics = Topics {
-        candidates: "/grasp_candidates".into(),
-        recommendations: "/grip_recommendations".into(),
-        markers: None,
-        sets: None,
-        poses: None,
-    };
+    let topics = Topics::new("/grasp_candidates", "/grip_recommendations");
     let mut w = BagWriter::create(&out, &topics, 100).expect("create");
-    for c in &recorded.candidates {
+    for c in &recorded.streams.candidates.requests {
         w.write(&Entry {
-            payload: Payload::Candidate(Box::new(c.message.clone())),
+            payload: Payload::request::<grasp_orient::kind::Candidates>(c.message.clone()),
             log_time: c.log_time,
             publish_time: c.publish_time,
         })
         .expect("write");
     }
-    for (i, r) in recorded.recommendations.iter().enumerate() {
+    for (i, r) in recorded.streams.candidates.answers.iter().enumerate() {
         let mut m = r.message.clone();
         edit(i, &mut m);
         w.write(&Entry {
-            payload: Payload::Recommendation(Box::new(m)),
+            payload: Payload::answer::<grasp_orient::kind::Candidates>(m),
             log_time: r.log_time,
             publish_time: r.publish_time,
         })
@@ -249,7 +245,9 @@ fn a_behind_tangent_refusal_edited_otherwise_fails_the_replay() {
     let recorded =
         grasp_orient::record::bag::read(std::path::Path::new(&src)).expect("golden bag reads");
     let first = recorded
-        .recommendations
+        .streams
+        .candidates
+        .answers
         .iter()
         .position(|r| r.message.message.starts_with(RECORDED_BEHIND_TANGENT))
         .expect("random_grasps.mcap records such a refusal");

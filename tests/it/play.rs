@@ -45,20 +45,15 @@ fn test_domain() -> String {
 fn write_candidates_and_sets(path: &std::path::Path) {
     use grasp_orient::answer::{answer_set, Rules};
     use grasp_orient::msg::{GraspCandidate, GraspCandidateSet};
-    use grasp_orient::record::{BagWriter, Entry, Payload, SetTopics, Topics};
+    use grasp_orient::record::{BagWriter, Entry, Payload, Topics};
     use grasp_orient::solver::Settings;
 
     let cases: Vec<GraspCandidate> = include_str!("../../examples/paper_cases.jsonl")
         .lines()
         .map(|l| serde_json::from_str(l).expect("a candidate"))
         .collect();
-    let topics = Topics {
-        candidates: "/grasp_candidates".into(),
-        recommendations: "/grip_recommendations".into(),
-        markers: None,
-        sets: Some(SetTopics::default_names()),
-        poses: None,
-    };
+    let topics = Topics::new("/grasp_candidates", "/grip_recommendations")
+        .with::<grasp_orient::kind::Sets>("/grasp_candidate_sets", "/grip_recommendation_sets");
     let mut w = BagWriter::create(path, &topics, 100).expect("create");
     for k in 0..3usize {
         let set = GraspCandidateSet {
@@ -74,12 +69,18 @@ fn write_candidates_and_sets(path: &std::path::Path) {
             log_time: at,
             publish_time: at,
         };
-        let candidate = Payload::Candidate(Box::new(cases[k].clone()));
+        let candidate = Payload::request::<grasp_orient::kind::Candidates>(cases[k].clone());
         w.write(&entry(candidate, t)).expect("write");
-        w.write(&entry(Payload::CandidateSet(Box::new(set)), t + 10))
-            .expect("write");
-        w.write(&entry(Payload::RecommendationSet(Box::new(answer)), t + 20))
-            .expect("write");
+        w.write(&entry(
+            Payload::request::<grasp_orient::kind::Sets>(set),
+            t + 10,
+        ))
+        .expect("write");
+        w.write(&entry(
+            Payload::answer::<grasp_orient::kind::Sets>(answer),
+            t + 20,
+        ))
+        .expect("write");
     }
     w.finish().expect("finish");
 }
@@ -233,20 +234,15 @@ fn spatial_cases() -> Vec<grasp_orient::msg::GraspCandidate> {
 fn played_spatial_candidates_are_answered_in_3d_and_replay_unchanged() {
     use grasp_orient::answer::answer;
     use grasp_orient::msg::{GraspCandidateSet, GripRecommendation};
-    use grasp_orient::record::{BagWriter, Entry, Payload, SetTopics, Topics};
+    use grasp_orient::record::{BagWriter, Entry, Payload, Topics};
     use grasp_orient::solver::Settings;
 
     let _turn = TEST_DOMAIN.lock().unwrap_or_else(|e| e.into_inner());
     let dir = temp_dir("play_spatial");
     let source = dir.path().join("source.mcap");
     let cases = spatial_cases();
-    let topics = Topics {
-        candidates: "/grasp_candidates".into(),
-        recommendations: "/grip_recommendations".into(),
-        markers: None,
-        sets: Some(SetTopics::default_names()),
-        poses: None,
-    };
+    let topics = Topics::new("/grasp_candidates", "/grip_recommendations")
+        .with::<grasp_orient::kind::Sets>("/grasp_candidate_sets", "/grip_recommendation_sets");
     let mut w = BagWriter::create(&source, &topics, 100).expect("create");
     let entry = |payload, at| Entry {
         payload,
@@ -254,16 +250,22 @@ fn played_spatial_candidates_are_answered_in_3d_and_replay_unchanged() {
         publish_time: at,
     };
     for (k, c) in (1u64..).zip(&cases) {
-        w.write(&entry(Payload::Candidate(Box::new(c.clone())), k * 1_000))
-            .expect("write");
+        w.write(&entry(
+            Payload::request::<grasp_orient::kind::Candidates>(c.clone()),
+            k * 1_000,
+        ))
+        .expect("write");
     }
     let set = GraspCandidateSet {
         id: "spatial-set".into(),
         candidates: cases.clone(),
         ..GraspCandidateSet::default()
     };
-    w.write(&entry(Payload::CandidateSet(Box::new(set)), 10_000))
-        .expect("write");
+    w.write(&entry(
+        Payload::request::<grasp_orient::kind::Sets>(set),
+        10_000,
+    ))
+    .expect("write");
     w.finish().expect("finish");
 
     let domain = test_domain();
@@ -273,10 +275,19 @@ fn played_spatial_candidates_are_answered_in_3d_and_replay_unchanged() {
     assert!(text.contains("published 1 of 1 candidate sets"), "{text}");
 
     let bag = grasp_orient::record::bag::read(&recording).expect("the node's recording reads");
-    assert_eq!(bag.candidates.len(), 4, "every played candidate recorded");
-    assert!(bag.candidates.iter().all(|c| c.message.model == 1));
+    assert_eq!(
+        bag.streams.candidates.requests.len(),
+        4,
+        "every played candidate recorded"
+    );
+    assert!(bag
+        .streams
+        .candidates
+        .requests
+        .iter()
+        .all(|c| c.message.model == 1));
     let settings = Settings::default();
-    for r in &bag.recommendations {
+    for r in &bag.streams.candidates.answers {
         let c = cases
             .iter()
             .find(|c| c.id == r.message.candidate_id)
@@ -289,9 +300,9 @@ fn played_spatial_candidates_are_answered_in_3d_and_replay_unchanged() {
         assert!((r.message.rotation_axis.x.abs() - 1.0).abs() < 1e-12 || c.gravity.x != 0.0);
         assert!(r.message.rotation_axis.z.abs() < 1e-12 || c.gravity.x != 0.0);
     }
-    let swings = &bag.recommendations[3].message;
+    let swings = &bag.streams.candidates.answers[3].message;
     assert!(swings.gripping_power_current.is_infinite() && swings.message.contains("swings"));
-    let set_answer = &bag.recommendation_sets[0].message;
+    let set_answer = &bag.streams.sets.answers[0].message;
     assert_eq!(set_answer.recommendations.len(), 4);
 
     let out = bin()
@@ -311,12 +322,16 @@ fn played_spatial_candidates_are_answered_in_3d_and_replay_unchanged() {
 /// node's thread may be recorded in another order than their candidates.
 fn pose_answers(bag: &grasp_orient::record::bag::Bag) -> (Vec<String>, Vec<String>) {
     let mut singles: Vec<String> = bag
-        .pose_recommendations
+        .streams
+        .poses
+        .answers
         .iter()
         .map(|r| format!("{:?}", r.message))
         .collect();
     let mut sets: Vec<String> = bag
-        .pose_recommendation_sets
+        .streams
+        .pose_sets
+        .answers
         .iter()
         .map(|r| format!("{:?}", r.message))
         .collect();
@@ -352,11 +367,15 @@ fn played_poses_are_answered_as_recorded_and_replay_unchanged() {
     let golden = grasp_orient::record::bag::read(source).expect("the golden bag reads");
     let bag = grasp_orient::record::bag::read(&recording).expect("the node's recording reads");
     assert_eq!(
-        bag.pose_candidates.len(),
+        bag.streams.poses.requests.len(),
         29,
         "every played pose candidate recorded"
     );
-    assert_eq!(bag.pose_sets.len(), 5, "every played pose set recorded");
+    assert_eq!(
+        bag.streams.pose_sets.requests.len(),
+        5,
+        "every played pose set recorded"
+    );
     let (singles, sets) = pose_answers(&bag);
     let (want_singles, want_sets) = pose_answers(&golden);
     assert_eq!(singles, want_singles);
@@ -436,10 +455,13 @@ fn timed_a_large_inline_mesh_holds_up_no_candidate_sent_after_it() {
         publish_time: t,
     };
     let t0 = 1_000_000_000;
-    w.write(&at(Payload::PoseCandidate(Box::new(pose)), t0))
+    w.write(&at(Payload::request::<grasp_orient::kind::Poses>(pose), t0))
         .expect("write");
-    w.write(&at(Payload::Candidate(Box::new(contact)), t0 + 150_000_000))
-        .expect("write");
+    w.write(&at(
+        Payload::request::<grasp_orient::kind::Candidates>(contact),
+        t0 + 150_000_000,
+    ))
+    .expect("write");
     w.finish().expect("finish");
 
     let domain = test_domain();
@@ -448,8 +470,14 @@ fn timed_a_large_inline_mesh_holds_up_no_candidate_sent_after_it() {
     assert!(text.contains("published 1 of 1 candidates"), "{text}");
     assert!(text.contains("published 1 of 1 pose candidates"), "{text}");
     let bag = grasp_orient::record::bag::read(&recording).expect("the node's recording reads");
-    let (pose_in, contact_in) = (&bag.pose_candidates[0], &bag.candidates[0]);
-    let (pose_out, contact_out) = (&bag.pose_recommendations[0], &bag.recommendations[0]);
+    let (pose_in, contact_in) = (
+        &bag.streams.poses.requests[0],
+        &bag.streams.candidates.requests[0],
+    );
+    let (pose_out, contact_out) = (
+        &bag.streams.poses.answers[0],
+        &bag.streams.candidates.answers[0],
+    );
     assert_eq!(
         pose_out.message.recommendation.status, 0,
         "{:?}",

@@ -90,14 +90,14 @@ fn write_bag(path: &Path, change: impl Fn(&mut PoseRecommendation)) {
     for c in singles {
         let mut a = poses.answer(&c, &settings, &rules);
         change(&mut a);
-        entries.push(Payload::PoseCandidate(Box::new(c)));
-        entries.push(Payload::PoseRecommendation(Box::new(a)));
+        entries.push(Payload::request::<grasp_orient::kind::Poses>(c));
+        entries.push(Payload::answer::<grasp_orient::kind::Poses>(a));
     }
     for s in [set("block", BLOCK), set("cylinder", CYLINDER)] {
         let a = poses.answer_set(&s, &settings, &rules);
         assert!(!a.ranking.is_empty(), "{a:?}");
-        entries.push(Payload::PoseCandidateSet(Box::new(s)));
-        entries.push(Payload::PoseRecommendationSet(Box::new(a)));
+        entries.push(Payload::request::<grasp_orient::kind::PoseSets>(s));
+        entries.push(Payload::answer::<grasp_orient::kind::PoseSets>(a));
     }
     for (k, payload) in entries.into_iter().enumerate() {
         let t = 1_000_000_000 + k as u64 * 1000;

@@ -15,13 +15,7 @@ use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 fn topics() -> Topics {
-    Topics {
-        candidates: "/grasp_candidates".into(),
-        recommendations: "/grip_recommendations".into(),
-        markers: None,
-        sets: None,
-        poses: None,
-    }
+    Topics::new("/grasp_candidates", "/grip_recommendations")
 }
 
 /// A recording of `n` paper cases (ids made unique) with their answers under `config`,
@@ -49,8 +43,8 @@ fn write_bag(path: &Path, n: usize, config: &Config, with_settings: bool) {
         let a = answer(&c, &settings);
         let t = 1_000_000_000 + i as u64 * 1000;
         for payload in [
-            Payload::Candidate(Box::new(c)),
-            Payload::Recommendation(Box::new(a)),
+            Payload::request::<grasp_orient::kind::Candidates>(c),
+            Payload::answer::<grasp_orient::kind::Candidates>(a),
         ] {
             w.write(&Entry {
                 payload,
@@ -568,8 +562,8 @@ fn a_recording_of_spatial_candidates_replays_and_a_turned_axis_differs() {
             }
             let t = 1_000 + i as u64;
             for payload in [
-                Payload::Candidate(Box::new(c.clone())),
-                Payload::Recommendation(Box::new(a)),
+                Payload::request::<grasp_orient::kind::Candidates>(c.clone()),
+                Payload::answer::<grasp_orient::kind::Candidates>(a),
             ] {
                 w.write(&Entry {
                     payload,

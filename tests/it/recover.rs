@@ -65,7 +65,9 @@ fn recover(bytes: &[u8]) -> (Recovered, Vec<u8>) {
 /// Messages of every kind in a file that the strict reader reads.
 fn messages_read(bytes: &[u8]) -> u64 {
     let b = read_bytes(bytes).expect("the output is a whole recording");
-    (b.candidates.len() + b.recommendations.len()) as u64 + b.other + b.undecodable_count
+    (b.streams.candidates.requests.len() + b.streams.candidates.answers.len()) as u64
+        + b.other
+        + b.undecodable_count
 }
 
 /// `got` kept every message but those of `lost` (a chunk, or none), counted all of them, and

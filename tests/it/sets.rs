@@ -4,7 +4,7 @@
 use crate::util::run::{bin, json_lines, paper_lines, paper_messages, run_fed, temp_dir};
 use grasp_orient::answer::{answer_set, Rules};
 use grasp_orient::msg::{GraspCandidateSet, GripRecommendation, GripRecommendationSet};
-use grasp_orient::record::{bag, BagWriter, Entry, Payload, SetTopics, Topics};
+use grasp_orient::record::{bag, BagWriter, Entry, Payload, Topics};
 use grasp_orient::solver::Settings;
 use std::path::Path;
 use std::process::Output;
@@ -171,13 +171,8 @@ fn json_without_the_new_fields_reads_with_defaults() {
 }
 
 fn topics() -> Topics {
-    Topics {
-        candidates: "/grasp_candidates".into(),
-        recommendations: "/grip_recommendations".into(),
-        markers: None,
-        sets: Some(SetTopics::default_names()),
-        poses: None,
-    }
+    Topics::new("/grasp_candidates", "/grip_recommendations")
+        .with::<grasp_orient::kind::Sets>("/grasp_candidate_sets", "/grip_recommendation_sets")
 }
 
 /// A recording of three sets and their answers, `edit` applied to the answers first.
@@ -222,13 +217,13 @@ fn write_these_sets(
         edit(k, &mut answer);
         let t = 1_000 * (k as u64 + 1);
         w.write(&Entry {
-            payload: Payload::CandidateSet(Box::new(set)),
+            payload: Payload::request::<grasp_orient::kind::Sets>(set),
             log_time: t,
             publish_time: t - 1,
         })
         .expect("write");
         w.write(&Entry {
-            payload: Payload::RecommendationSet(Box::new(answer)),
+            payload: Payload::answer::<grasp_orient::kind::Sets>(answer),
             log_time: t + 1,
             publish_time: t + 1,
         })
@@ -236,7 +231,10 @@ fn write_these_sets(
     }
     let written = w.finish().expect("finish");
     assert_eq!(
-        (written.candidate_sets, written.recommendation_sets),
+        (
+            written.requests::<grasp_orient::kind::Sets>(),
+            written.answers::<grasp_orient::kind::Sets>()
+        ),
         (n, n)
     );
 }
@@ -259,7 +257,7 @@ fn recorded_sets_read_back_and_replay_unchanged() {
     write_sets(&path, |_, _| {});
     let b = bag::read(&path).expect("reads");
     assert_eq!(
-        (b.candidate_sets.len(), b.recommendation_sets.len()),
+        (b.streams.sets.requests.len(), b.streams.sets.answers.len()),
         (3, 3)
     );
     assert!(b.fields.missing::<GripRecommendation>().is_empty());
@@ -360,7 +358,7 @@ fn sets_refused_as_a_whole_replay_and_their_refusal_is_compared() {
     let path = dir.path().join("refused.mcap");
     write_these_sets(&path, with_refused_sets(), |_, _| {});
     let recorded = bag::read(&path).expect("reads");
-    let refused = recorded.recommendation_sets[3..]
+    let refused = recorded.streams.sets.answers[3..]
         .iter()
         .filter(|s| s.message.status != GripRecommendationSet::STATUS_OK)
         .count();
@@ -447,7 +445,9 @@ fn busy_and_cut_sets_replay_as_recorded() {
     });
     let recorded = bag::read(&path).expect("reads");
     let statuses: Vec<u8> = recorded
-        .recommendation_sets
+        .streams
+        .sets
+        .answers
         .iter()
         .map(|s| s.message.status)
         .collect();

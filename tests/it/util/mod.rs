@@ -19,13 +19,9 @@ pub mod zstd_bomb;
 /// The channels of a recording of contact and pose candidates under the node's default names,
 /// with no markers and no sets.
 pub fn pose_bag_topics() -> grasp_orient::record::Topics {
-    grasp_orient::record::Topics {
-        candidates: "/grasp_candidates".into(),
-        recommendations: "/grip_recommendations".into(),
-        markers: None,
-        sets: None,
-        poses: Some(grasp_orient::record::PoseTopics::default_names()),
-    }
+    grasp_orient::record::Topics::new("/grasp_candidates", "/grip_recommendations")
+        .with::<grasp_orient::kind::Poses>("/pose_candidates", "/pose_recommendations")
+        .with::<grasp_orient::kind::PoseSets>("/pose_candidate_sets", "/pose_recommendation_sets")
 }
 
 use grasp_orient::solver::planar::Candidate;
