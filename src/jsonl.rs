@@ -12,7 +12,7 @@ use std::io::{BufRead, Read, Write};
 /// Longest line read, bytes (a candidate with a 1 MiB id is about 1 MiB); a longer line is
 /// answered with status 2 and skipped, so memory stays bounded even by an input without line
 /// breaks.
-pub const MAX_LINE_BYTES: usize = 16 << 20;
+pub(crate) const MAX_LINE_BYTES: usize = 16 << 20;
 
 /// What a run of [`answer_lines`] did.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -44,7 +44,7 @@ pub enum LinesError {
 /// takes and what it was given, with where in the text.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
-pub enum JsonError {
+pub(crate) enum JsonError {
     /// The text is not JSON.
     #[error("not JSON: {why} {at}")]
     Syntax {
@@ -88,7 +88,7 @@ fn field_prefix(path: &str) -> String {
 
 /// Reads a value of type `T` (a `GraspCandidate`, a set) from JSON `text`, naming the field at
 /// fault when it is not one.
-pub fn parse<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, JsonError> {
+pub(crate) fn parse<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, JsonError> {
     let mut reader = serde_json::Deserializer::from_str(text);
     let value = serde_path_to_error::deserialize(&mut reader)
         .map_err(|e| describe(&e.path().to_string(), e.inner(), text))?;
@@ -180,7 +180,7 @@ fn number_before(text: &str, line: usize, column: usize) -> String {
 
 /// The answer to line `number` (from 1) holding `line` (without its line break), with the
 /// gripper's limit of `rules` applied.
-pub fn answer_line(
+pub(crate) fn answer_line(
     line: &[u8],
     number: usize,
     settings: &Settings,
@@ -204,7 +204,7 @@ pub fn answer_line(
 
 /// The answer to one line: to a `GraspCandidate`, or to a `PoseCandidate`.
 #[derive(Debug, Clone, PartialEq)]
-pub enum LineAnswer {
+pub(crate) enum LineAnswer {
     /// A `GraspCandidate`'s (or a line that is none).
     Grasp(GripRecommendation),
     /// A `PoseCandidate`'s.
@@ -213,7 +213,7 @@ pub enum LineAnswer {
 
 impl LineAnswer {
     /// The recommendation: the answer itself, or the pose's inner one.
-    pub fn recommendation(&self) -> &GripRecommendation {
+    pub(crate) fn recommendation(&self) -> &GripRecommendation {
         match self {
             LineAnswer::Grasp(r) => r,
             LineAnswer::Pose(p) => &p.recommendation,
@@ -246,18 +246,18 @@ struct Kind {
 /// against 0.50 s before pose candidates; 0.53 s with this check, the test profile's build).
 /// A key written with escapes (`"grasp\u005fpose"`) is not seen, and its line is refused as a
 /// `GraspCandidate` with an unknown field `grasp_pose`.
-pub fn is_pose_candidate(text: &str) -> bool {
+pub(crate) fn is_pose_candidate(text: &str) -> bool {
     text.contains("\"grasp_pose\"")
         && serde_json::from_str::<Kind>(text).is_ok_and(|k| k.grasp_pose.is_some())
 }
 
 /// Whether a JSON text is an object with a `poses` field (a `PoseCandidateSet`).
-pub fn is_pose_set(text: &str) -> bool {
+pub(crate) fn is_pose_set(text: &str) -> bool {
     serde_json::from_str::<Kind>(text).is_ok_and(|k| k.poses.is_some())
 }
 
 /// [`answer_line`], with a `PoseCandidate` line answered by `poses`.
-pub fn answer_any_line(
+pub(crate) fn answer_any_line(
     line: &[u8],
     number: usize,
     settings: &Settings,
@@ -297,7 +297,7 @@ pub fn answer_lines(
 }
 
 /// [`answer_lines`], with pose candidates answered by `poses`.
-pub fn answer_lines_with(
+pub(crate) fn answer_lines_with(
     mut input: impl BufRead,
     mut output: impl Write,
     settings: &Settings,
@@ -378,7 +378,7 @@ fn skip_line(input: &mut impl BufRead) -> std::io::Result<()> {
 
 /// What can be salvaged from a line that is not a valid candidate: its `id` and `header`, so the
 /// answer can still be matched to it.
-pub fn partial(line: &str) -> GraspCandidate {
+pub(crate) fn partial(line: &str) -> GraspCandidate {
     let mut out = GraspCandidate::default();
     if let Ok(value) = serde_json::from_str::<serde_json::Value>(line) {
         if let Some(id) = value.get("id").and_then(|v| v.as_str()) {

@@ -42,7 +42,7 @@ impl<T> Wire for T where
 pub type Key<'a> = (&'a str, i32, u32, &'a str);
 
 /// [`Key`] of an id and a header.
-pub fn key<'a>(id: &'a str, header: &'a Header) -> Key<'a> {
+pub(crate) fn key<'a>(id: &'a str, header: &'a Header) -> Key<'a> {
     (
         clip(id),
         header.stamp.sec,
@@ -175,7 +175,7 @@ impl Kind for PoseSets {
 }
 
 /// How many kinds there are.
-pub const COUNT: usize = 4;
+pub(crate) const COUNT: usize = 4;
 
 /// Something done once for every kind ([`each`]).
 pub trait Visit {
@@ -184,7 +184,7 @@ pub trait Visit {
 }
 
 /// Calls `visit` for every kind, in [`Kind::INDEX`] order. The one list of the kinds.
-pub fn each(visit: &mut impl Visit) {
+pub(crate) fn each(visit: &mut impl Visit) {
     visit.kind::<Candidates>();
     visit.kind::<Sets>();
     visit.kind::<Poses>();
@@ -236,19 +236,14 @@ impl<K: Kind> PartialEq for Stream<K> {
 
 impl<K: Kind> Stream<K> {
     /// Appends `next`, which follows `self`.
-    pub fn append(&mut self, next: Self) {
+    pub(crate) fn append(&mut self, next: Self) {
         self.requests.extend(next.requests);
         self.answers.extend(next.answers);
     }
 
     /// How many messages it holds.
-    pub fn len(&self) -> u64 {
+    pub(crate) fn len(&self) -> u64 {
         (self.requests.len() + self.answers.len()) as u64
-    }
-
-    /// Whether it holds none.
-    pub fn is_empty(&self) -> bool {
-        self.requests.is_empty() && self.answers.is_empty()
     }
 }
 
@@ -267,12 +262,12 @@ pub struct Streams {
 
 impl Streams {
     /// The stream of kind `K`.
-    pub fn of<K: Kind>(&self) -> &Stream<K> {
+    pub(crate) fn of<K: Kind>(&self) -> &Stream<K> {
         K::stream(self)
     }
 
     /// Appends `next`, which follows `self`.
-    pub fn append(&mut self, mut next: Streams) {
+    pub(crate) fn append(&mut self, mut next: Streams) {
         struct Append<'a>(&'a mut Streams, &'a mut Streams);
         impl Visit for Append<'_> {
             fn kind<K: Kind>(&mut self) {
@@ -283,7 +278,7 @@ impl Streams {
     }
 
     /// How many messages they hold.
-    pub fn len(&self) -> u64 {
+    pub(crate) fn len(&self) -> u64 {
         struct Count<'a>(&'a Streams, u64);
         impl Visit for Count<'_> {
             fn kind<K: Kind>(&mut self) {
@@ -295,13 +290,8 @@ impl Streams {
         count.1
     }
 
-    /// Whether they hold none.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
     /// The requests alone.
-    pub fn requests_only(mut self) -> Streams {
+    pub(crate) fn requests_only(mut self) -> Streams {
         struct Drop<'a>(&'a mut Streams);
         impl Visit for Drop<'_> {
             fn kind<K: Kind>(&mut self) {
@@ -333,10 +323,10 @@ pub struct Channel {
 
 impl Channel {
     /// How many there are.
-    pub const COUNT: usize = 2 * COUNT;
+    pub(crate) const COUNT: usize = 2 * COUNT;
 
     /// The requests of `K`.
-    pub fn request<K: Kind>() -> Self {
+    pub(crate) fn request<K: Kind>() -> Self {
         Self {
             kind: K::INDEX,
             side: Side::Request,
@@ -344,7 +334,7 @@ impl Channel {
     }
 
     /// The answers of `K`.
-    pub fn answer<K: Kind>() -> Self {
+    pub(crate) fn answer<K: Kind>() -> Self {
         Self {
             kind: K::INDEX,
             side: Side::Answer,
@@ -352,13 +342,13 @@ impl Channel {
     }
 
     /// Its place among the [`Channel::COUNT`] channels: a kind's request, then its answer.
-    pub fn slot(self) -> usize {
+    pub(crate) fn slot(self) -> usize {
         2 * self.kind + usize::from(self.side == Side::Answer)
     }
 
     /// Every channel, in [`Channel::slot`] order, with its type name and whether it is made at
     /// the start of a recording ([`Kind::AT_START`]).
-    pub fn all() -> [(Channel, &'static str, bool); Channel::COUNT] {
+    pub(crate) fn all() -> [(Channel, &'static str, bool); Channel::COUNT] {
         struct Table([(Channel, &'static str, bool); Channel::COUNT]);
         impl Visit for Table {
             fn kind<K: Kind>(&mut self) {
@@ -375,7 +365,7 @@ impl Channel {
     }
 
     /// The channel whose type is `package`/`name`, if one is.
-    pub fn of_type(package: &str, name: &str) -> Option<Channel> {
+    pub(crate) fn of_type(package: &str, name: &str) -> Option<Channel> {
         Channel::all()
             .into_iter()
             .find_map(|(channel, type_name, _)| {

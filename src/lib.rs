@@ -10,8 +10,23 @@
 //!    [`jsonl`]: JSON lines in and out, for `solve`; [`config`]: every parameter declared once,
 //!    typed, read from params files and checked.
 //!
-//! The ROS 2 node (`src/node/`, on ros2-client) and the command line (`src/cli/`, one `run` per
-//! subcommand) belong to the binary.
+//! Above them, private to the crate: the ROS 2 node (`src/node/`, on ros2-client) and the
+//! command line (`src/cli/`, one `run` per subcommand), which the binary starts through [`run`].
+//!
+//! # The front door
+//! What is public is what a program or a test that uses the library needs: the mathematics
+//! ([`solver`], [`geometry`]), the message types ([`msg`]) and their kinds ([`kind`]), the
+//! answers ([`answer`]: one candidate, a set, a pose, a pose set), the recording's writer and
+//! reader ([`record`]: `BagWriter`, `Recorder`, `bag::read`, `recover`), [`replay`], the
+//! parameters ([`config::Config`]) and `solve`'s JSON lines ([`jsonl`]). Everything else is
+//! `pub(crate)`, and the `unreachable_pub` lint keeps it so.
+
+#![warn(unreachable_pub)]
+
+mod app;
+mod cli;
+mod node;
+pub use app::main as run;
 
 pub mod answer;
 pub mod config;

@@ -46,7 +46,7 @@ use grasp_orient::jsonl::answer_lines;
 use grasp_orient::msg::{
     cdr, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet, MarkerArray,
 };
-use grasp_orient::record::scan::decompressed_limit;
+use grasp_orient::record::decompressed_limit;
 use grasp_orient::record::{bag, recover, BagWriter, Entry, Payload, Topics};
 use grasp_orient::solver::Settings;
 use proptest::prelude::*;

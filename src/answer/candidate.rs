@@ -122,7 +122,7 @@ fn planar_reply(m: &GraspCandidate, settings: &Settings) -> GripRecommendation {
 
 /// The start of the note in `message` for a centre of mass behind the surface tangent at a
 /// contact; the contacts follow (`contact_1`, `contact_2`, or both joined by " and ").
-pub const BEHIND_TANGENT_NOTE: &str = "center_of_mass lies behind the surface tangent at ";
+pub(crate) const BEHIND_TANGENT_NOTE: &str = "center_of_mass lies behind the surface tangent at ";
 
 /// Adds [`BEHIND_TANGENT_NOTE`] to the `message` of an answered candidate (status not 2) whose
 /// centre of mass lies behind the surface tangent at a contact: an object that is not convex

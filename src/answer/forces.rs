@@ -9,7 +9,7 @@ use crate::solver::{planar, spatial};
 
 /// The forces of one answer, N.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Forces {
+pub(crate) struct Forces {
     /// The objective at the recommendation (for a robust answer, its worst case), N.
     pub gripping_power: f64,
     /// The squeeze each finger adds along the contact line there (robust: worst case), N.
@@ -31,7 +31,7 @@ pub struct Forces {
 
 impl Forces {
     /// No answer: every force NaN.
-    pub const NONE: Forces = Forces {
+    pub(crate) const NONE: Forces = Forces {
         gripping_power: f64::NAN,
         internal_force: f64::NAN,
         contact_forces: [f64::NAN; 4],
@@ -43,7 +43,7 @@ impl Forces {
     };
 
     /// No orientation holds the grasp: no forces, and the current pose needs infinite ones.
-    pub const NO_CLOSURE: Forces = Forces {
+    pub(crate) const NO_CLOSURE: Forces = Forces {
         gripping_power_current: f64::INFINITY,
         internal_force_current: f64::INFINITY,
         finger_force_current: f64::INFINITY,
@@ -52,7 +52,7 @@ impl Forces {
 
     /// Every force but the nominal object's (`contact_forces`, `gripping_power_nominal`) times
     /// `k`: a heavier object at the same pose (every force is proportional to the mass).
-    pub fn scaled(self, k: f64) -> Forces {
+    pub(crate) fn scaled(self, k: f64) -> Forces {
         Forces {
             gripping_power: self.gripping_power * k,
             internal_force: self.internal_force * k,
@@ -65,7 +65,7 @@ impl Forces {
     }
 
     /// The wire fields of `reply` that carry forces, set from these.
-    pub fn write(&self, reply: &mut GripRecommendation) {
+    pub(crate) fn write(&self, reply: &mut GripRecommendation) {
         reply.gripping_power = self.gripping_power;
         reply.internal_force = self.internal_force;
         reply.contact_forces = self.contact_forces;

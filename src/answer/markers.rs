@@ -24,8 +24,9 @@ use crate::solver::{spatial, Settings};
 use grasp_orient_geometry::{ClosingAxis, Object, Primitive, Shape};
 use nalgebra::{UnitQuaternion, Vector3 as V3};
 
+#[cfg(test)]
 /// Namespaces of the markers, one marker id each.
-pub const NAMESPACES: [&str; 7] = [
+pub(crate) const NAMESPACES: [&str; 7] = [
     "contacts",
     "friction_cones",
     "contact_forces",
@@ -257,8 +258,9 @@ fn draw(candidate: &GraspCandidate, s: &Scene) -> MarkerArray {
     }
 }
 
+#[cfg(test)]
 /// Namespaces of the markers a pose answer adds, one marker id each.
-pub const POSE_NAMESPACES: [&str; 2] = ["object", "fingers"];
+pub(crate) const POSE_NAMESPACES: [&str; 2] = ["object", "fingers"];
 
 /// How many sides a cone is drawn with.
 const CONE_SIDES: usize = 32;
@@ -269,7 +271,7 @@ const CONE_SIDES: usize = 32;
 /// cone; CUBE, SPHERE or CYLINDER for those primitives; none when `object` is `None`) and the
 /// fingers' closing line (a LINE_LIST from finger 1's start to finger 2's, the tool frame's
 /// `closing_axis` at the opening `width`). The contacts are the `contacts` marker of [`build`].
-pub fn build_pose(
+pub(crate) fn build_pose(
     pose: &PoseCandidate,
     object: Option<&Object>,
     closing_axis: ClosingAxis,

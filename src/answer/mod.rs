@@ -24,14 +24,14 @@ mod pose;
 mod reply;
 mod sets;
 
-pub use candidate::{answer, answer_in_full, Answered, BEHIND_TANGENT_NOTE};
-pub use forces::Forces;
-pub use pose::{
-    pose_set_without_geometry, uncast, without_geometry, PoseAnswerer, PoseRefusal, Refused,
-    MESH_CACHE_BYTES,
-};
+pub use candidate::{answer, answer_in_full};
+pub(crate) use candidate::{Answered, BEHIND_TANGENT_NOTE};
+pub(crate) use pose::{pose_set_without_geometry, uncast, without_geometry, Refused};
+pub use pose::{PoseAnswerer, MESH_CACHE_BYTES};
 pub use sets::{
-    answer_one, answer_one_in_full, answer_set, answer_set_on, answer_set_within, apply_limit,
-    busy, cut_like, echo_set, is_sorted_by, not_solved, rank, solver_pool, DefaultTolerances,
-    GripperDrive, Halt, Interrupt, PoolRefused, RankBy, Rules, DEFAULT_MAX_SET_SIZE, PARALLEL_FROM,
+    answer_one, answer_set, answer_set_on, answer_set_within, busy, rank, solver_pool,
+    DefaultTolerances, GripperDrive, Halt, Interrupt, RankBy, Rules,
+};
+pub(crate) use sets::{
+    answer_one_in_full, cut_like, echo_set, is_sorted_by, DEFAULT_MAX_SET_SIZE, PARALLEL_FROM,
 };

@@ -48,24 +48,24 @@ pub const MESH_CACHE_BYTES: usize = 512 << 20;
 /// the fingers start `width / 2` from the tool frame's origin. Beyond it the contacts, computed
 /// from finger starts `width / 2` away, would have lost every digit of the object's size (an
 /// opening of 1e300 m made both contacts the same point).
-pub const MAX_WIDTH: f64 = MAX_COORDINATE;
+pub(super) const MAX_WIDTH: f64 = MAX_COORDINATE;
 /// The smallest scale factor accepted on a mesh's axis: from nanometres to metres. Below it the
 /// mesh shrinks towards a point, and its faces' normals are lost to underflow (a scale of 1e-100
 /// made the contact normals NaN).
-pub const MIN_SCALE: f64 = 1e-9;
+pub(super) const MIN_SCALE: f64 = 1e-9;
 /// The largest scale factor accepted on a mesh's axis. Above it the vertices leave the solver's
 /// coordinate limit for any mesh unit in use, and reach infinity from single-precision files.
-pub const MAX_SCALE: f64 = 1e9;
+pub(super) const MAX_SCALE: f64 = 1e9;
 /// A finger starting inside a mesh that is, along the closing line, between these many times
 /// wider than the opening: the refusal adds a hint that the mesh may be in millimetres without a
 /// scale. A mesh in millimetres read as metres is 1000 times too large, so an object from 0.3 to
 /// 1000 times the opening in truth (a gripper rarely closes on one more than 300 times its
 /// opening) lands here; beyond the upper end it is the opening that is wrong, not the units.
-pub const UNITS_HINT_RATIO: std::ops::RangeInclusive<f64> = 300.0..=1e6;
+pub(super) const UNITS_HINT_RATIO: std::ops::RangeInclusive<f64> = 300.0..=1e6;
 
 /// What is wrong with one number of a pose candidate (the solver's words for the same faults).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum NumberFault {
+pub(crate) enum NumberFault {
     /// NaN or infinite.
     NotFinite,
     /// Larger in magnitude than `limit` (with its unit, leading space included).
@@ -105,7 +105,7 @@ impl Display for NumberFault {
 /// Why a pose candidate cannot be turned into a grasp.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
-pub enum PoseRefusal {
+pub(crate) enum PoseRefusal {
     /// The geometry's refusal: status 1 for a finger that closes on nothing, 2 otherwise.
     #[error(transparent)]
     Geometry(#[from] GeometryError),
@@ -191,7 +191,7 @@ impl Display for Rounded {
 
 impl PoseRefusal {
     /// The status of the answer: 1 when a finger closes on nothing, 2 otherwise.
-    pub fn status(&self) -> u8 {
+    pub(crate) fn status(&self) -> u8 {
         match self {
             PoseRefusal::Geometry(e) => e.status(),
             _ => GripRecommendation::STATUS_INVALID_INPUT,
@@ -218,7 +218,7 @@ impl PoseAnswerer {
 
     /// Closing along `closing_axis`, with the meshes of `meshes` (shared: the node keeps one
     /// cache for its thread and its set thread, whatever the closing axis in force).
-    pub fn sharing(closing_axis: ClosingAxis, meshes: Arc<MeshCache>) -> Self {
+    pub(crate) fn sharing(closing_axis: ClosingAxis, meshes: Arc<MeshCache>) -> Self {
         Self {
             closing_axis,
             meshes,
@@ -226,12 +226,12 @@ impl PoseAnswerer {
     }
 
     /// Closing along `closing_axis`, `package://` through `AMENT_PREFIX_PATH`.
-    pub fn from_env(closing_axis: ClosingAxis) -> Self {
+    pub(crate) fn from_env(closing_axis: ClosingAxis) -> Self {
         Self::new(closing_axis, AmentIndex::from_env())
     }
 
     /// The axis the fingers close along.
-    pub fn closing_axis(&self) -> ClosingAxis {
+    pub(crate) fn closing_axis(&self) -> ClosingAxis {
         self.closing_axis
     }
 
@@ -252,7 +252,7 @@ impl PoseAnswerer {
 
     /// [`PoseAnswerer::answer`], and the object with its shape when it could be made (for the
     /// markers that draw it, without making it twice).
-    pub fn answer_with_object(
+    pub(crate) fn answer_with_object(
         &self,
         m: &PoseCandidate,
         settings: &Settings,
@@ -286,7 +286,7 @@ impl PoseAnswerer {
 
     /// [`Self::spatial_candidate`], with what the answer's `message` would say of a contact on
     /// an edge or a vertex (none for faces): for a caller that shows the candidate (`plot`).
-    pub fn spatial_candidate_noted(
+    pub(crate) fn spatial_candidate_noted(
         &self,
         m: &PoseCandidate,
     ) -> Result<(GraspCandidate, Vec<String>), Box<GripRecommendation>> {
@@ -322,7 +322,7 @@ impl PoseAnswerer {
     /// `answer_set_within`). `answer` gets a candidate per pose, a pose the geometry refused as
     /// an empty candidate (refused by the solver, and then answered with the geometry's
     /// refusal). The object comes back too when it could be made, for the markers.
-    pub fn answer_set_with(
+    pub(crate) fn answer_set_with(
         &self,
         set: &PoseCandidateSet,
         rules: &Rules,
@@ -337,7 +337,7 @@ impl PoseAnswerer {
     /// [`PoseAnswerer::answer_set_with`] on `object`, the set's object made (or refused) by the
     /// caller (the node's set thread makes it on a loader thread, within `max_set_time`); `None`
     /// for a set refused whole as too large.
-    pub fn answer_set_on(
+    pub(crate) fn answer_set_on(
         &self,
         set: &PoseCandidateSet,
         object: Option<Result<Object, Refused>>,
@@ -418,7 +418,7 @@ impl PoseAnswerer {
     }
 
     /// The object's pose and shape, checked: for the markers that draw it.
-    pub fn object(&self, o: &GraspObject) -> Result<Object, PoseRefusal> {
+    pub(crate) fn object(&self, o: &GraspObject) -> Result<Object, PoseRefusal> {
         let pose = isometry(&o.pose, &"object.pose")?;
         let scale = [o.scale.x, o.scale.y, o.scale.z];
         let mesh_given = !o.mesh.is_empty()
@@ -526,7 +526,7 @@ impl PoseAnswerer {
 /// A refusal as an answer gives it: its status and words (the geometry's errors hold an
 /// `io::Error`, which does not clone, and a set's object refused is every pose's refusal).
 #[derive(Debug, Clone)]
-pub struct Refused {
+pub(crate) struct Refused {
     /// The answer's status.
     pub status: u8,
     /// Its message.
@@ -600,7 +600,7 @@ impl Target<'_> {
 
 /// The answer to a pose set whose members were not cast (refused whole, busy, or echoed): `reply`,
 /// an answer to as many empty candidates as `set` has poses, with the poses' ids and no geometry.
-pub fn pose_set_without_geometry(
+pub(crate) fn pose_set_without_geometry(
     set: &PoseCandidateSet,
     reply: GripRecommendationSet,
 ) -> PoseRecommendationSet {
@@ -626,7 +626,7 @@ pub fn pose_set_without_geometry(
 
 /// The set of empty candidates, one per pose, that stands for `set` where its poses are not cast
 /// (see [`pose_set_without_geometry`]).
-pub fn uncast(set: &PoseCandidateSet) -> GraspCandidateSet {
+pub(crate) fn uncast(set: &PoseCandidateSet) -> GraspCandidateSet {
     GraspCandidateSet {
         header: set.header.clone(),
         id: set.id.clone(),
@@ -645,7 +645,7 @@ pub fn uncast(set: &PoseCandidateSet) -> GraspCandidateSet {
 
 /// The answer to a pose candidate refused before it had contacts: the refusal, and NaN for the
 /// geometry.
-pub fn without_geometry(recommendation: GripRecommendation) -> PoseRecommendation {
+pub(crate) fn without_geometry(recommendation: GripRecommendation) -> PoseRecommendation {
     let nan = Point {
         x: f64::NAN,
         y: f64::NAN,

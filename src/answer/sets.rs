@@ -48,7 +48,7 @@ pub enum GripperDrive {
 
 impl GripperDrive {
     /// The name in params files and on the command line.
-    pub const fn name(&self) -> &'static str {
+    pub(crate) const fn name(&self) -> &'static str {
         match self {
             GripperDrive::Coupled => "coupled",
             GripperDrive::Independent => "independent",
@@ -56,7 +56,7 @@ impl GripperDrive {
     }
 
     /// The [`GripRecommendation`] field that holds the grip force.
-    pub fn field(&self) -> &'static str {
+    pub(crate) fn field(&self) -> &'static str {
         match self {
             GripperDrive::Coupled => "internal_force",
             GripperDrive::Independent => "finger_force",
@@ -64,7 +64,7 @@ impl GripperDrive {
     }
 
     /// The grip force of an answer, N.
-    pub fn grip_force(&self, r: &GripRecommendation) -> f64 {
+    pub(crate) fn grip_force(&self, r: &GripRecommendation) -> f64 {
         match self {
             GripperDrive::Coupled => r.internal_force,
             GripperDrive::Independent => r.finger_force,
@@ -84,7 +84,7 @@ pub enum RankBy {
 
 impl RankBy {
     /// The name in params files and on the command line.
-    pub const fn name(&self) -> &'static str {
+    pub(crate) const fn name(&self) -> &'static str {
         match self {
             RankBy::GripForce => "grip_force",
             RankBy::Objective => "objective",
@@ -109,7 +109,7 @@ pub struct DefaultTolerances {
 
 impl DefaultTolerances {
     /// `m` with the node's tolerances where its own are zero (borrowed when nothing changes).
-    pub fn apply<'a>(&self, m: &'a GraspCandidate) -> Cow<'a, GraspCandidate> {
+    pub(crate) fn apply<'a>(&self, m: &'a GraspCandidate) -> Cow<'a, GraspCandidate> {
         let t = &m.center_of_mass_tolerance;
         let own_box = t.x != 0.0 || t.y != 0.0 || t.z != 0.0;
         let fill_box = !own_box && self.center_of_mass != [0.0; 3];
@@ -158,11 +158,11 @@ impl Default for Rules {
 }
 
 /// The default of `max_set_size`: about 2.5 MB of candidates, solved in a few milliseconds.
-pub const DEFAULT_MAX_SET_SIZE: usize = 10_000;
+pub(crate) const DEFAULT_MAX_SET_SIZE: usize = 10_000;
 
 impl Rules {
     /// The [`GripRecommendation`] field the ranking sorts by, as `ranked_by` names it.
-    pub fn ranked_by(&self) -> &'static str {
+    pub(crate) fn ranked_by(&self) -> &'static str {
         match self.rank_by {
             RankBy::GripForce => self.drive.field(),
             RankBy::Objective => "gripping_power",
@@ -180,7 +180,7 @@ impl Rules {
 
 /// Gives status 3 to an answer with status 0 whose grip force exceeds `max_grip_force` (N; 0 for
 /// no limit). Every other field is kept.
-pub fn apply_limit(r: &mut GripRecommendation, drive: GripperDrive, max_grip_force: f64) {
+pub(crate) fn apply_limit(r: &mut GripRecommendation, drive: GripperDrive, max_grip_force: f64) {
     if r.status != GripRecommendation::STATUS_OK || max_grip_force <= 0.0 {
         return;
     }
@@ -205,7 +205,11 @@ pub fn answer_one(m: &GraspCandidate, settings: &Settings, rules: &Rules) -> Gri
 }
 
 /// [`answer_one`], with the 3D solution of a spatial grasp (for its markers).
-pub fn answer_one_in_full(m: &GraspCandidate, settings: &Settings, rules: &Rules) -> Answered {
+pub(crate) fn answer_one_in_full(
+    m: &GraspCandidate,
+    settings: &Settings,
+    rules: &Rules,
+) -> Answered {
     let mut out = answer_in_full(&rules.tolerances.apply(m), settings);
     apply_limit(&mut out.reply, rules.drive, rules.max_grip_force);
     out
@@ -307,7 +311,7 @@ pub fn answer_set(
 
 /// Sets smaller than this are answered in the calling thread whatever the pool: handing work to
 /// another thread and waking it costs about what solving a few dozen candidates does.
-pub const PARALLEL_FROM: usize = 128;
+pub(crate) const PARALLEL_FROM: usize = 128;
 
 /// [`answer_set`] with the candidates shared among the threads of `pool` when there is one: the
 /// same answer, sooner on a machine with idle cores. The node keeps one pool for its life
@@ -454,12 +458,12 @@ impl Interrupt {
     }
 
     /// Lowers [`Halt::OutOfTime`] (a stop stays raised).
-    pub fn lower_time(&self) {
+    pub(crate) fn lower_time(&self) {
         self.0.fetch_and(!Self::OUT_OF_TIME, AtomicOrdering::SeqCst);
     }
 
     /// What is raised: [`Halt::Stopping`] before [`Halt::OutOfTime`].
-    pub fn halt(&self) -> Option<Halt> {
+    pub(crate) fn halt(&self) -> Option<Halt> {
         let bits = self.0.load(AtomicOrdering::Relaxed);
         if bits & Self::STOPPING != 0 {
             Some(Halt::Stopping)
@@ -473,7 +477,7 @@ impl Interrupt {
 
 /// The answer to a member of a set that was not solved: its header and id, status 4
 /// (`STATUS_NOT_SOLVED`), and why.
-pub fn not_solved(c: &GraspCandidate, halt: Halt) -> GripRecommendation {
+pub(crate) fn not_solved(c: &GraspCandidate, halt: Halt) -> GripRecommendation {
     let mut header = c.header.clone();
     header.frame_id = clip(&header.frame_id).into();
     GripRecommendation {
@@ -513,7 +517,7 @@ pub fn busy(set: &GraspCandidateSet, rules: &Rules, max_queued: usize) -> GripRe
 /// and the ranking keeps, in our order, the members `recorded` solved; when it was refused as
 /// busy (`STATUS_BUSY`: nothing solved, nothing to compare), `recorded` itself. Borrowed as it is
 /// otherwise, or when `recorded` holds another number of members.
-pub fn cut_like<'a>(
+pub(crate) fn cut_like<'a>(
     ours: &'a GripRecommendationSet,
     recorded: &GripRecommendationSet,
 ) -> Cow<'a, GripRecommendationSet> {
@@ -576,7 +580,7 @@ pub struct PoolRefused {
 
 /// The benchmark floor's answer to a set: as many empty recommendations as candidates (each with
 /// its candidate's header and id), nothing solved, nothing ranked.
-pub fn echo_set(set: &GraspCandidateSet) -> GripRecommendationSet {
+pub(crate) fn echo_set(set: &GraspCandidateSet) -> GripRecommendationSet {
     GripRecommendationSet {
         header: set.header.clone(),
         set_id: set.id.clone(),
@@ -597,7 +601,7 @@ pub fn echo_set(set: &GraspCandidateSet) -> GripRecommendationSet {
 /// (`internal_force`, `finger_force` or `gripping_power`), within `tolerance` relative to the
 /// larger magnitude (and 1), and with equal values in wrist rotation order; `None` when
 /// `ranked_by` names no such field.
-pub fn is_sorted_by(
+pub(crate) fn is_sorted_by(
     ranking: &[u32],
     recommendations: &[GripRecommendation],
     ranked_by: &str,

@@ -1,21 +1,21 @@
 //! The command line: one `run` per subcommand. It lives in the binary, not in the library's API.
 
-pub mod node;
-pub mod play;
-pub mod plot;
-pub mod rank;
-pub mod recover;
-pub mod replay;
-pub mod solve;
+pub(crate) mod node;
+pub(crate) mod play;
+pub(crate) mod plot;
+pub(crate) mod rank;
+pub(crate) mod recover;
+pub(crate) mod replay;
+pub(crate) mod solve;
 
-use anyhow::bail;
-use grasp_orient::answer::{GripperDrive, Rules};
-use grasp_orient::config::declare::{Real, Setting};
-use grasp_orient::config::{
+use crate::answer::{GripperDrive, Rules};
+use crate::config::declare::{Real, Setting};
+use crate::config::{
     bounds, params_in_file, Config, Domain, InvalidBounds, Parameter, RangeKind, ValueError,
 };
-use grasp_orient::replay::Override;
-use grasp_orient::solver::{AllowedRange, Objective, Settings, UnknownObjective};
+use crate::replay::Override;
+use crate::solver::{AllowedRange, Objective, Settings, UnknownObjective};
+use anyhow::bail;
 use serde_yaml_ng::Value;
 use std::path::PathBuf;
 
@@ -23,17 +23,18 @@ use std::path::PathBuf;
 /// it, and 2 for every other error, as `diff` and `cmp` do.
 #[derive(Debug, thiserror::Error)]
 #[error("{0}")]
-pub struct Negative(pub String);
+pub(crate) struct Negative(pub String);
 
 /// The exit codes, for the `--help` of the commands that answer yes or no.
-pub const EXIT_CODES: &str = "Exit codes (as diff and cmp): 0 same / nothing lost; 1 differences \
+pub(crate) const EXIT_CODES: &str =
+    "Exit codes (as diff and cmp): 0 same / nothing lost; 1 differences \
 found (replay) or messages lost (recover); 2 trouble: bad arguments, an unreadable, damaged or \
 cut-short input, an output that cannot be written.";
 
 /// Options shared by the commands that solve: the config file and overrides of its settings.
 /// Each value is checked by clap against its domain (exit code 2 with a one-line error).
 #[derive(Debug, Clone, Default, clap::Args)]
-pub struct SolveOptions {
+pub(crate) struct SolveOptions {
     /// ROS 2 params file to read settings from (`grasp_orient: ros__parameters:`, or `/**:`);
     /// the built-in config/grasp_orient.yaml otherwise.
     #[arg(long, value_name = "FILE")]
@@ -74,7 +75,7 @@ pub struct SolveOptions {
 impl SolveOptions {
     /// The parameters these options set, in the order they apply: the `--config` file's, then
     /// each flag's. Each name is one of the parameter table's.
-    pub fn overrides(&self) -> anyhow::Result<Vec<Override>> {
+    pub(crate) fn overrides(&self) -> anyhow::Result<Vec<Override>> {
         let mut out: Vec<Override> = Vec::new();
         if let Some(path) = &self.config {
             for (name, value) in params_in_file(path, "grasp_orient")? {
@@ -114,7 +115,7 @@ impl SolveOptions {
     }
 
     /// The built-in config with [`SolveOptions::overrides`] applied, checked.
-    pub fn config(&self) -> anyhow::Result<Config> {
+    pub(crate) fn config(&self) -> anyhow::Result<Config> {
         let mut config = Config::load(None, "grasp_orient")?;
         for (name, value) in self.overrides()? {
             config.set_value(&name, value)?;
@@ -124,7 +125,7 @@ impl SolveOptions {
     }
 
     /// [`SolveOptions::config`], its solver settings and its gripper rules.
-    pub fn configured(&self) -> anyhow::Result<(Config, Settings, Rules)> {
+    pub(crate) fn configured(&self) -> anyhow::Result<(Config, Settings, Rules)> {
         let config = self.config()?;
         let settings = config.solver_settings()?;
         let rules = config.rules();
@@ -135,7 +136,7 @@ impl SolveOptions {
 /// Why a value on the command line is refused; clap prints its words after the option.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
-pub enum BadValue {
+pub(crate) enum BadValue {
     /// Not a number.
     #[error("{text:?} is not a number")]
     NotANumber {
@@ -192,7 +193,7 @@ fn parse_objective(text: &str) -> Result<Objective, UnknownObjective> {
 }
 
 /// A clap parser for a setting that is one of a few names.
-pub fn parse_name<T>(text: &str) -> Result<T, T::Err>
+pub(crate) fn parse_name<T>(text: &str) -> Result<T, T::Err>
 where
     T: std::str::FromStr,
 {
@@ -226,7 +227,7 @@ fn parse_range(text: &str) -> Result<AllowedRange, BadValue> {
 
 /// A clap parser for a value of parameter `name`, checked against the domain the parameter
 /// table declares for it (so the option and the parameter agree).
-pub fn parameter<T>(
+pub(crate) fn parameter<T>(
     name: &'static str,
 ) -> impl Fn(&str) -> Result<T, BadValue> + Clone + Send + Sync
 where
@@ -244,7 +245,10 @@ where
 }
 
 /// A clap parser for a real number in `[min, max]` (never NaN or infinite).
-pub fn real_in(min: f64, max: f64) -> impl Fn(&str) -> Result<f64, BadValue> + Clone + Send + Sync {
+pub(crate) fn real_in(
+    min: f64,
+    max: f64,
+) -> impl Fn(&str) -> Result<f64, BadValue> + Clone + Send + Sync {
     move |text| {
         let value = number(text)?;
         value.check(&Domain::Real { min, max })?;
@@ -253,7 +257,7 @@ pub fn real_in(min: f64, max: f64) -> impl Fn(&str) -> Result<f64, BadValue> + C
 }
 
 /// A clap parser for an integer in `min..=max`.
-pub fn integer_in(
+pub(crate) fn integer_in(
     min: i64,
     max: i64,
 ) -> impl Fn(&str) -> Result<i64, BadValue> + Clone + Send + Sync {

@@ -1,11 +1,11 @@
 //! `grasp_orient node [--demo] [--echo] [--ros-args ...]`: the ROS 2 node.
 
+use crate::config::render;
 use crate::node::{self, Options};
-use grasp_orient::config::render;
 
 /// Arguments of `node` (ROS arguments come separately, after `--ros-args`).
 #[derive(Debug, Clone, Default, clap::Args)]
-pub struct Args {
+pub(crate) struct Args {
     /// Also send the paper's four case studies to the node over DDS, print the answers, and exit.
     #[arg(long)]
     pub demo: bool,
@@ -16,12 +16,12 @@ pub struct Args {
 }
 
 /// The parameters, for `node --help`.
-pub fn parameters_help() -> String {
+pub(crate) fn parameters_help() -> String {
     render::help()
 }
 
 /// Runs the node until Ctrl-C or SIGTERM (or until the demo is done).
-pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
+pub(crate) fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
     node::run(
         Options {
             demo: args.demo,

@@ -3,15 +3,15 @@
 
 use crate::node::play::{publish, Pace};
 use crate::node::session::Start;
+use crate::record::bag;
 use anyhow::bail;
-use grasp_orient::record::bag;
 use ros2_client::NodeOptions;
 use std::io::Write;
 use std::path::PathBuf;
 
 /// Arguments of `play`.
 #[derive(Debug, Clone, clap::Args)]
-pub struct Args {
+pub(crate) struct Args {
     /// A recording with grasp_orient/msg/GraspCandidate, GraspCandidateSet, PoseCandidate or
     /// PoseCandidateSet messages.
     pub bag: PathBuf,
@@ -41,7 +41,7 @@ fn rate(text: &str) -> Result<f64, super::BadValue> {
 /// `grasp_candidate_sets`, every pose candidate on `pose_candidates` and every pose set on
 /// `pose_candidate_sets` (remappable with `--ros-args`); one summary line per kind the bag holds
 /// (candidates always).
-pub fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
+pub(crate) fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
     let start = Start::new(ros_argv)?;
     let recorded = bag::read(&args.bag)?;
     if recorded.streams.candidates.requests.is_empty()

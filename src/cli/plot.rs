@@ -17,23 +17,23 @@
 //! a candidate is, with the answer's message.
 
 use super::SolveOptions;
-use anyhow::{anyhow, Context};
-use grasp_orient::answer::PoseAnswerer;
-use grasp_orient::geometry::ClosingAxis;
-use grasp_orient::msg::{GraspCandidate, GripRecommendation, MessageLimits, PoseCandidate};
-use grasp_orient::record::output::Replacement;
-use grasp_orient::solver::{
+use crate::answer::PoseAnswerer;
+use crate::geometry::ClosingAxis;
+use crate::msg::{GraspCandidate, GripRecommendation, MessageLimits, PoseCandidate};
+use crate::record::output::Replacement;
+use crate::solver::{
     planar::{self, analyse, robust::Uncertainty, Analysis, Candidate, Recommendation},
     spatial::{self, AxisRelation, CurrentPose, IN_PLANE_TOLERANCE},
     Settings,
 };
+use anyhow::{anyhow, Context};
 use plotters::prelude::*;
 use std::io::Write;
 use std::path::PathBuf;
 
 /// Arguments of `plot`.
 #[derive(Debug, Clone, clap::Args)]
-pub struct Args {
+pub(crate) struct Args {
     /// One GraspCandidate as JSON (a single object; the fields of msg/GraspCandidate.msg), or one
     /// PoseCandidate (msg/PoseCandidate.msg: an object with grasp_pose; docs/poses.md), drawn as
     /// the spatial candidate its fingers make.
@@ -88,17 +88,16 @@ struct Robust {
 }
 
 /// Draws the figure.
-pub fn run(args: &Args) -> anyhow::Result<()> {
+pub(crate) fn run(args: &Args) -> anyhow::Result<()> {
     let (config, settings, rules) = args.options.configured()?;
-    let text =
-        grasp_orient::config::read_text(&args.candidate, grasp_orient::config::MAX_FILE_BYTES)
-            .with_context(|| format!("cannot read {}", args.candidate.display()))?;
-    let (message, pose) = if grasp_orient::jsonl::is_pose_candidate(&text) {
+    let text = crate::config::read_text(&args.candidate, crate::config::MAX_FILE_BYTES)
+        .with_context(|| format!("cannot read {}", args.candidate.display()))?;
+    let (message, pose) = if crate::jsonl::is_pose_candidate(&text) {
         let closing_axis = args.closing_axis.unwrap_or(config.closing_axis);
         let (message, pose) = cast_pose(&text, args, closing_axis)?;
         (message, Some(pose))
     } else {
-        let message: GraspCandidate = grasp_orient::jsonl::parse(&text)
+        let message: GraspCandidate = crate::jsonl::parse(&text)
             .with_context(|| format!("{} is not a GraspCandidate", args.candidate.display()))?;
         (message, None)
     };
@@ -144,7 +143,7 @@ fn cast_pose(
     args: &Args,
     closing_axis: ClosingAxis,
 ) -> anyhow::Result<(GraspCandidate, PoseNote)> {
-    let pose: PoseCandidate = grasp_orient::jsonl::parse(text)
+    let pose: PoseCandidate = crate::jsonl::parse(text)
         .with_context(|| format!("{} is not a PoseCandidate", args.candidate.display()))?;
     let answerer = PoseAnswerer::from_env(closing_axis);
     let (candidate, notes) = answerer

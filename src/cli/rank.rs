@@ -3,21 +3,21 @@
 //! GraspCandidates and PoseCandidates, or one PoseCandidateSet (`docs/poses.md`).
 
 use super::SolveOptions;
-use anyhow::{bail, Context};
-use grasp_orient::answer::{answer_set, PoseAnswerer, RankBy, Rules};
-use grasp_orient::geometry::ClosingAxis;
-use grasp_orient::jsonl::{is_pose_candidate, is_pose_set};
-use grasp_orient::msg::{
+use crate::answer::{answer_set, PoseAnswerer, RankBy, Rules};
+use crate::geometry::ClosingAxis;
+use crate::jsonl::{is_pose_candidate, is_pose_set};
+use crate::msg::{
     invalid, short_id, GraspCandidate, GraspCandidateSet, GripRecommendation,
     GripRecommendationSet, PoseCandidate, PoseCandidateSet,
 };
+use anyhow::{bail, Context};
 use std::fmt::Write as _;
 use std::io::{BufRead, BufReader, Write};
 use std::path::PathBuf;
 
 /// Arguments of `rank`.
 #[derive(Debug, Clone, clap::Args)]
-pub struct Args {
+pub(crate) struct Args {
     /// File of JSON lines, one GraspCandidate or PoseCandidate per line (as `solve` reads them),
     /// taken as one set; or a single line holding a PoseCandidateSet (msg/PoseCandidateSet.msg),
     /// whose --json answer is a PoseRecommendationSet. Standard input when absent or "-".
@@ -47,7 +47,7 @@ const ID_CHARS: usize = 32;
 /// Reads the lines into a set (a line that is no candidate is kept as an empty one and answered
 /// with status 2 and its line number; a pose candidate the geometry refuses, with its refusal),
 /// answers it, and prints the table or the JSON answer.
-pub fn run(args: &Args) -> anyhow::Result<()> {
+pub(crate) fn run(args: &Args) -> anyhow::Result<()> {
     let (config, settings, mut rules) = args.options.configured()?;
     if let Some(r) = args.rank_by {
         rules.rank_by = r;
@@ -154,7 +154,7 @@ fn read_input(args: &Args, poses: &PoseAnswerer) -> anyhow::Result<Input> {
                  candidate lines"
             );
         }
-        let set = grasp_orient::jsonl::parse::<PoseCandidateSet>(&lines[0].1)
+        let set = crate::jsonl::parse::<PoseCandidateSet>(&lines[0].1)
             .with_context(|| format!("line {number}: not a PoseCandidateSet"))?;
         return Ok(Input::PoseSet(Box::new(set)));
     }
@@ -166,9 +166,9 @@ fn read_input(args: &Args, poses: &PoseAnswerer) -> anyhow::Result<Input> {
     for (number, line) in lines {
         let index = set.candidates.len();
         let read = if is_pose_candidate(&line) {
-            grasp_orient::jsonl::parse::<PoseCandidate>(&line).map(|p| poses.spatial_candidate(&p))
+            crate::jsonl::parse::<PoseCandidate>(&line).map(|p| poses.spatial_candidate(&p))
         } else {
-            grasp_orient::jsonl::parse::<GraspCandidate>(&line).map(Ok)
+            crate::jsonl::parse::<GraspCandidate>(&line).map(Ok)
         };
         let refusal = match read {
             Ok(Ok(c)) => {
@@ -176,7 +176,7 @@ fn read_input(args: &Args, poses: &PoseAnswerer) -> anyhow::Result<Input> {
                 continue;
             }
             // As `solve` answers a line that is no candidate.
-            Err(e) => invalid(&grasp_orient::jsonl::partial(&line), &e),
+            Err(e) => invalid(&crate::jsonl::partial(&line), &e),
             Ok(Err(refused)) => *refused,
         };
         let mut refusal = refusal;
@@ -309,7 +309,7 @@ fn short(id: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use grasp_orient::solver::Settings;
+    use crate::solver::Settings;
 
     #[test]
     fn the_table_lists_ranked_candidates_first_then_the_rest() {

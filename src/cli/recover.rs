@@ -6,13 +6,13 @@
 //! not an MCAP recording, the output cannot be written).
 
 use super::Negative;
-use grasp_orient::record::recover;
+use crate::record::recover;
 use std::io::Write;
 use std::path::PathBuf;
 
 /// Arguments of `recover`.
 #[derive(Debug, Clone, clap::Args)]
-pub struct Args {
+pub(crate) struct Args {
     /// A recording that was cut short (killed process, full disk) or damaged.
     pub broken: PathBuf,
     /// Where to write the recovered recording: written beside it and renamed into place when
@@ -22,7 +22,7 @@ pub struct Args {
 }
 
 /// Recovers and says what was saved and what was lost.
-pub fn run(args: &Args) -> anyhow::Result<()> {
+pub(crate) fn run(args: &Args) -> anyhow::Result<()> {
     let got = recover::recover(&args.broken, &args.output)?;
     let mut out = std::io::stdout().lock();
     let topics: std::collections::BTreeSet<&String> =

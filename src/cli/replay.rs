@@ -6,23 +6,23 @@
 //! any other error (a damaged bag, messages that do not decode, bad options) is trouble.
 
 use super::{Negative, SolveOptions};
-use anyhow::{bail, Context};
-use grasp_orient::config::Config;
-use grasp_orient::kind::{self, Kind, Streams, Visit};
-use grasp_orient::msg::{
+use crate::config::Config;
+use crate::kind::{self, Kind, Streams, Visit};
+use crate::msg::{
     GraspCandidate, GraspCandidateSet, GripRecommendation, PoseCandidate, PoseCandidateSet,
     RosMessage,
 };
-use grasp_orient::record::bag::{self, Bag, Recorded};
-use grasp_orient::record::output::{Pending, Replacement};
-use grasp_orient::record::{BagWriter, Entry, Payload, Topics};
-use grasp_orient::replay::{replay, replay_with_answers, Override, Plan, Summary, TOLERANCE};
+use crate::record::bag::{self, Bag, Recorded};
+use crate::record::output::{Pending, Replacement};
+use crate::record::{BagWriter, Entry, Payload, Topics};
+use crate::replay::{replay, replay_with_answers, Override, Plan, Summary, TOLERANCE};
+use anyhow::{bail, Context};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `replay`.
 #[derive(Debug, Clone, clap::Args)]
-pub struct Args {
+pub(crate) struct Args {
     /// MCAP files (ours, or any rosbag2 MCAP with a grasp_orient/msg/GraspCandidate or
     /// GraspCandidateSet topic).
     #[arg(required = true)]
@@ -43,7 +43,7 @@ pub struct Args {
 }
 
 /// Replays every bag and prints a summary.
-pub fn run(args: &Args) -> anyhow::Result<()> {
+pub(crate) fn run(args: &Args) -> anyhow::Result<()> {
     let base = Config::load(None, "grasp_orient")?;
     let overrides = args.options.overrides()?;
     // Bad options are refused before any bag is read.
@@ -101,24 +101,23 @@ impl Output {
         writeln!(
             std::io::stdout(),
             "wrote {} candidates, {} recommendations, {} candidate sets and {} set answers to {}",
-            written.requests::<grasp_orient::kind::Candidates>(),
-            written.answers::<grasp_orient::kind::Candidates>(),
-            written.requests::<grasp_orient::kind::Sets>(),
-            written.answers::<grasp_orient::kind::Sets>(),
+            written.requests::<crate::kind::Candidates>(),
+            written.answers::<crate::kind::Candidates>(),
+            written.requests::<crate::kind::Sets>(),
+            written.answers::<crate::kind::Sets>(),
             self.path.display()
         )?;
-        if written.requests::<grasp_orient::kind::Poses>()
-            + written.requests::<grasp_orient::kind::PoseSets>()
+        if written.requests::<crate::kind::Poses>() + written.requests::<crate::kind::PoseSets>()
             > 0
         {
             writeln!(
                 std::io::stdout(),
                 "wrote {} pose candidates, {} pose answers, {} pose sets and {} pose set answers \
                  to {}",
-                written.requests::<grasp_orient::kind::Poses>(),
-                written.answers::<grasp_orient::kind::Poses>(),
-                written.requests::<grasp_orient::kind::PoseSets>(),
-                written.answers::<grasp_orient::kind::PoseSets>(),
+                written.requests::<crate::kind::Poses>(),
+                written.answers::<crate::kind::Poses>(),
+                written.requests::<crate::kind::PoseSets>(),
+                written.answers::<crate::kind::PoseSets>(),
                 self.path.display()
             )?;
         }
@@ -225,7 +224,7 @@ fn replay_file(
 
 /// Where the settings came from, for the summary.
 fn settings_words(plan: &Plan) -> String {
-    let source = if plan.from_recording() {
+    let source = if plan.settings_recorded() {
         let n = plan.recorded.len();
         format!(
             "solved with the settings it recorded ({n} settings record{})",

@@ -1,16 +1,16 @@
 //! `grasp_orient solve [FILE]`: JSON lines in, one JSON line out per candidate.
 
 use super::SolveOptions;
+use crate::answer::PoseAnswerer;
+use crate::geometry::ClosingAxis;
+use crate::jsonl::answer_lines_with;
 use anyhow::Context;
-use grasp_orient::answer::PoseAnswerer;
-use grasp_orient::geometry::ClosingAxis;
-use grasp_orient::jsonl::answer_lines_with;
 use std::io::BufReader;
 use std::path::PathBuf;
 
 /// Arguments of `solve`.
 #[derive(Debug, Clone, clap::Args)]
-pub struct Args {
+pub(crate) struct Args {
     /// File of JSON lines, one GraspCandidate per line (fields as in msg/GraspCandidate.msg,
     /// snake_case; header and z optional), or one PoseCandidate (msg/PoseCandidate.msg: a line
     /// with grasp_pose; docs/poses.md). Standard input when absent or "-".
@@ -24,7 +24,7 @@ pub struct Args {
 }
 
 /// Solves every line; a bad line gets status 2 with its line number and the run goes on.
-pub fn run(args: &Args) -> anyhow::Result<()> {
+pub(crate) fn run(args: &Args) -> anyhow::Result<()> {
     let (config, settings, rules) = args.options.configured()?;
     let poses = PoseAnswerer::from_env(args.closing_axis.unwrap_or(config.closing_axis));
     let stdout = std::io::stdout();

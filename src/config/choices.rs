@@ -8,7 +8,7 @@ use std::fmt::{self, Display};
 use std::str::FromStr;
 
 /// A setting whose value is one of a fixed list of names.
-pub trait Choice: Copy + FromStr<Err: Display> + Display + 'static {
+pub(crate) trait Choice: Copy + FromStr<Err: Display> + Display + 'static {
     /// Every name, in the order the documentation lists them.
     const NAMES: &'static [&'static str];
 }
@@ -52,7 +52,7 @@ pub enum RangeKind {
 
 impl RangeKind {
     /// The kind of an allowed range (its bounds aside).
-    pub fn of(range: &AllowedRange) -> Self {
+    pub(crate) fn of(range: &AllowedRange) -> Self {
         match range {
             AllowedRange::FromAbove => RangeKind::FromAbove,
             AllowedRange::Graspable => RangeKind::Graspable,
@@ -61,7 +61,7 @@ impl RangeKind {
     }
 
     /// The name in params files and on the command line.
-    pub fn name(&self) -> &'static str {
+    pub(crate) fn name(&self) -> &'static str {
         match self {
             RangeKind::FromAbove => "from_above",
             RangeKind::Graspable => "graspable",
@@ -70,7 +70,7 @@ impl RangeKind {
     }
 
     /// The allowed range of this kind; `lo` and `hi` count for `Bounds` only.
-    pub fn allowed(self, lo: f64, hi: f64) -> Result<AllowedRange, InvalidBounds> {
+    pub(crate) fn allowed(self, lo: f64, hi: f64) -> Result<AllowedRange, InvalidBounds> {
         match self {
             RangeKind::FromAbove => Ok(AllowedRange::FromAbove),
             RangeKind::Graspable => Ok(AllowedRange::Graspable),
@@ -140,7 +140,7 @@ named_choice!(RankBy, [RankBy::GripForce, RankBy::Objective]);
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 #[error("bounds must be finite with lower < upper, got {lo} and {hi}")]
 #[non_exhaustive]
-pub struct InvalidBounds {
+pub(crate) struct InvalidBounds {
     /// Lower bound given, rad.
     pub lo: f64,
     /// Upper bound given, rad.
@@ -148,7 +148,7 @@ pub struct InvalidBounds {
 }
 
 /// The one place where gravity-angle bounds (rad, paper frame) become an [`AllowedRange`].
-pub fn bounds(lo: f64, hi: f64) -> Result<AllowedRange, InvalidBounds> {
+pub(crate) fn bounds(lo: f64, hi: f64) -> Result<AllowedRange, InvalidBounds> {
     if lo.is_finite() && hi.is_finite() && lo < hi {
         Ok(AllowedRange::Bounds { lo, hi })
     } else {

@@ -9,7 +9,7 @@ use std::fmt;
 
 /// The ROS type of a parameter (`rcl_interfaces/msg/ParameterType`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum RosType {
+pub(crate) enum RosType {
     /// `PARAMETER_BOOL`.
     Bool,
     /// `PARAMETER_INTEGER`.
@@ -26,7 +26,7 @@ pub enum RosType {
 
 impl RosType {
     /// The name `ros2 param describe` prints.
-    pub fn name(&self) -> &'static str {
+    pub(crate) fn name(&self) -> &'static str {
         match self {
             RosType::Bool => "bool",
             RosType::Integer => "integer",
@@ -40,7 +40,7 @@ impl RosType {
 
 /// The values a parameter may take, enforced on every set and stated by its ROS descriptor.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Domain {
+pub(crate) enum Domain {
     /// Every value of the type.
     Any,
     /// One of these names.
@@ -72,18 +72,18 @@ pub enum Domain {
 
 impl Domain {
     /// Every finite real number (no NaN, no infinity).
-    pub const FINITE: Domain = Domain::Real {
+    pub(crate) const FINITE: Domain = Domain::Real {
         min: f64::MIN,
         max: f64::MAX,
     };
 
     /// Real numbers `>= min`, finite.
-    pub const fn at_least(min: f64) -> Self {
+    pub(crate) const fn at_least(min: f64) -> Self {
         Domain::Real { min, max: f64::MAX }
     }
 
     /// Integers `>= min`.
-    pub const fn at_least_integer(min: i64) -> Self {
+    pub(crate) const fn at_least_integer(min: i64) -> Self {
         Domain::Integer { min, max: i64::MAX }
     }
 }
@@ -108,7 +108,7 @@ impl fmt::Display for Domain {
 /// A double as people write it: plain when moderate, with an exponent when very large or small
 /// (`1e300`, not three hundred digits).
 #[derive(Debug, Clone, Copy)]
-pub struct Real(pub f64);
+pub(crate) struct Real(pub f64);
 
 impl fmt::Display for Real {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -123,7 +123,7 @@ impl fmt::Display for Real {
 
 /// One declared parameter. The table of them is [`PARAMETERS`](super::PARAMETERS).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Parameter {
+pub(crate) struct Parameter {
     /// The ROS parameter name, and the field of [`Config`](super::Config).
     pub name: &'static str,
     /// The ROS type.
@@ -141,7 +141,7 @@ pub struct Parameter {
 
 impl Parameter {
     /// The one line on what it does.
-    pub fn summary(&self) -> &'static str {
+    pub(crate) fn summary(&self) -> &'static str {
         self.doc.trim()
     }
 }
@@ -188,7 +188,7 @@ pub enum ValueError {
 
 /// A type a parameter can have: how it reads from and writes to YAML and ROS, and how it is
 /// checked against a [`Domain`].
-pub trait Setting: Sized {
+pub(crate) trait Setting: Sized {
     /// The ROS type of its parameter.
     const ROS_TYPE: RosType;
     /// The domain every value of the type has, unless the declaration narrows it.
@@ -351,7 +351,7 @@ macro_rules! parameters {
         }
 
         /// Every parameter, in declaration order.
-        pub const PARAMETERS: &[$crate::config::Parameter] = &[$(
+        pub(crate) const PARAMETERS: &[$crate::config::Parameter] = &[$(
             $crate::config::Parameter {
                 name: stringify!($name),
                 ros_type: <$ty as $crate::config::declare::Setting>::ROS_TYPE,
@@ -366,7 +366,7 @@ macro_rules! parameters {
 
         impl Config {
             /// Sets parameter `name` from a YAML value, checking its type but not its domain.
-            pub fn set_value(
+            pub(crate) fn set_value(
                 &mut self,
                 name: &str,
                 value: ::serde_yaml_ng::Value,
@@ -386,7 +386,7 @@ macro_rules! parameters {
             }
 
             /// Every parameter as `(name, YAML value)`, in declaration order.
-            pub fn parameters(&self) -> Vec<(&'static str, ::serde_yaml_ng::Value)> {
+            pub(crate) fn parameters(&self) -> Vec<(&'static str, ::serde_yaml_ng::Value)> {
                 use $crate::config::declare::Setting;
                 vec![$( (stringify!($name), Setting::to_yaml(&self.$name)), )*]
             }

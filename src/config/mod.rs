@@ -3,14 +3,16 @@
 //! once ([`Config::solver_settings`]). `config/grasp_orient.yaml` is generated from the
 //! declarations and compiled in as the default.
 
-pub mod choices;
-pub mod declare;
+pub(crate) mod choices;
+pub(crate) mod declare;
 mod params;
-pub mod render;
+pub(crate) mod render;
 
-pub use choices::{bounds, Choice, InvalidBounds, RangeKind, UnknownName};
-pub use declare::{Domain, Parameter, RosType, ValueError};
-pub use params::{Config, PARAMETERS};
+pub use choices::RangeKind;
+pub(crate) use choices::{bounds, InvalidBounds};
+pub(crate) use declare::{Domain, Parameter, RosType, ValueError};
+pub use params::Config;
+pub(crate) use params::PARAMETERS;
 
 use crate::answer::Rules;
 use crate::solver::Settings;
@@ -18,11 +20,11 @@ use std::path::Path;
 
 /// Largest settings file read, bytes: far above any params file, far below a device that never
 /// ends (`--config /dev/zero`).
-pub const MAX_FILE_BYTES: u64 = 16 << 20;
+pub(crate) const MAX_FILE_BYTES: u64 = 16 << 20;
 
 /// The text of a file of at most `max` bytes (any kind of file: a pipe, `/dev/stdin`); longer is
 /// an error, not a read that never ends.
-pub fn read_text(path: &Path, max: u64) -> std::io::Result<String> {
+pub(crate) fn read_text(path: &Path, max: u64) -> std::io::Result<String> {
     use std::io::Read;
     let mut text = String::new();
     std::fs::File::open(path)?
@@ -38,7 +40,7 @@ pub fn read_text(path: &Path, max: u64) -> std::io::Result<String> {
 }
 
 /// The params file shipped with the package, compiled in.
-pub const DEFAULT_YAML: &str = include_str!("../../config/grasp_orient.yaml");
+pub(crate) const DEFAULT_YAML: &str = include_str!("../../config/grasp_orient.yaml");
 
 /// Why settings were refused.
 #[derive(Debug, thiserror::Error)]
@@ -103,20 +105,11 @@ pub struct Sections {
     pub applied: Vec<String>,
 }
 
-/// The parameters a params file sets for `node` (under `/**`, `**`, `node` or `/node`), in
-/// file order, as names and YAML values (not checked against the table).
-pub fn params_in_yaml(
-    text: &str,
-    origin: &str,
-    node: &str,
-) -> Result<Vec<(String, serde_yaml_ng::Value)>, ConfigError> {
-    Ok(read_sections(text, origin, node)?.1)
-}
-
-/// The parameters the params file `path` sets for `node`, as [`params_in_yaml`], for a file
+/// The parameters the params file `path` sets for `node` (under `/**`, `**`, `node` or `/node`), in
+/// file order, as names and YAML values (not checked against the table), for a file
 /// that is all settings (`--config`): it is read up to [`MAX_FILE_BYTES`], and a file with no
 /// section for the node is an error ([`ConfigError::NoSection`]) rather than nothing to apply.
-pub fn params_in_file(
+pub(crate) fn params_in_file(
     path: &Path,
     node: &str,
 ) -> Result<Vec<(String, serde_yaml_ng::Value)>, ConfigError> {
@@ -136,7 +129,7 @@ pub fn params_in_file(
     Ok(params)
 }
 
-/// The sections of a params file and the parameters it sets for `node`, as [`params_in_yaml`].
+/// The sections of a params file and the parameters it sets for `node`, as [`params_in_file`].
 fn read_sections(
     text: &str,
     origin: &str,
@@ -178,7 +171,7 @@ fn read_sections(
 
 impl Parameter {
     /// The declaration of `name`.
-    pub fn find(name: &str) -> Option<&'static Parameter> {
+    pub(crate) fn find(name: &str) -> Option<&'static Parameter> {
         PARAMETERS.iter().find(|p| p.name == name)
     }
 }
@@ -187,7 +180,7 @@ impl Config {
     /// Reads a params file: the `ros__parameters` of `node` (or of `/**`) are applied over `self`.
     /// Like rcl, sections for other nodes are left alone; what applied is returned, for the
     /// callers that must not ignore a file with nothing for them ([`Config::load`]).
-    pub fn merge_yaml(
+    pub(crate) fn merge_yaml(
         &mut self,
         text: &str,
         origin: &str,
@@ -205,7 +198,7 @@ impl Config {
     }
 
     /// Sets one parameter from its YAML text (as in `-p name:=value`), checking its type only.
-    pub fn set_from_yaml(&mut self, name: &str, value: &str) -> Result<(), ConfigError> {
+    pub(crate) fn set_from_yaml(&mut self, name: &str, value: &str) -> Result<(), ConfigError> {
         let parsed: serde_yaml_ng::Value =
             serde_yaml_ng::from_str(value).map_err(|source| ConfigError::Yaml {
                 origin: format!("parameter {name}"),
@@ -215,7 +208,7 @@ impl Config {
     }
 
     /// The compiled-in defaults, then `file` if given (see [`params_in_file`]), checked.
-    pub fn load(file: Option<&Path>, node: &str) -> Result<Self, ConfigError> {
+    pub(crate) fn load(file: Option<&Path>, node: &str) -> Result<Self, ConfigError> {
         let mut config = Config::default();
         config.merge_yaml(DEFAULT_YAML, "built-in config/grasp_orient.yaml", node)?;
         if let Some(path) = file {
@@ -252,7 +245,7 @@ impl Config {
     /// What these settings refuse though each of them is valid, one line each, to log when they
     /// are set: objective norm1 with a centre-of-mass box refuses every spatial candidate
     /// (`docs/uncertainty.md`), while planar candidates are answered.
-    pub fn caveats(&self) -> Vec<String> {
+    pub(crate) fn caveats(&self) -> Vec<String> {
         let mut out = Vec::new();
         if self.objective == crate::solver::Objective::Norm1
             && self.center_of_mass_tolerance != [0.0; 3]

@@ -29,9 +29,10 @@ fn with_defaults() -> impl Iterator<Item = (&'static Parameter, String)> {
         .map(|(p, (_, value))| (p, yaml(&value)))
 }
 
+#[cfg(test)]
 /// Unit, domain and fixedness as sentences ("Unit: rad. Domain: >= 1. Fixed while the node
 /// runs."); empty when there is nothing to say.
-pub fn facts(p: &Parameter) -> String {
+pub(crate) fn facts(p: &Parameter) -> String {
     let mut facts = Vec::new();
     if !p.unit.is_empty() {
         facts.push(format!("Unit: {}.", p.unit));
@@ -65,8 +66,9 @@ fn wrap(text: &str, prefix: &str) -> String {
     out
 }
 
+#[cfg(test)]
 /// The params file: every parameter with its default, each under its doc line.
-pub fn params_file() -> String {
+pub(crate) fn params_file() -> String {
     let mut out = String::from(
         "# grasp_orient parameters, in the ROS 2 params-file form (ros2 run ... --ros-args \
          --params-file).\n# This file is also compiled into the binary as its default. It is \
@@ -82,7 +84,7 @@ pub fn params_file() -> String {
 }
 
 /// The parameter list for `node --help`.
-pub fn help() -> String {
+pub(crate) fn help() -> String {
     let mut out = String::from(
         "Parameters (--ros-args -p NAME:=VALUE or --params-file FILE; ros2 param set while it \
          runs):\n",
@@ -106,8 +108,9 @@ pub fn help() -> String {
     out
 }
 
+#[cfg(test)]
 /// The parameter table of `docs/node.md`, in Markdown.
-pub fn markdown_table() -> String {
+pub(crate) fn markdown_table() -> String {
     let mut out = String::from(
         "| parameter | type | default | unit | domain | what it does |\n|---|---|---|---|---|---|\n",
     );

@@ -4,7 +4,7 @@
 use serde::{de::DeserializeOwned, Serialize};
 
 /// Encapsulation header of little-endian plain CDR.
-pub const HEADER_LE: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
+pub(crate) const HEADER_LE: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
 
 /// Why bytes are not a message.
 #[derive(Debug, thiserror::Error)]

@@ -13,7 +13,7 @@ use crate::solver::{
 use nalgebra::Vector2;
 
 /// Longest accepted `id` and `header.frame_id`, bytes.
-pub const MAX_TEXT_BYTES: usize = 1024;
+pub(crate) const MAX_TEXT_BYTES: usize = 1024;
 
 /// What makes a candidate message unusable: its own limits (text lengths, `model`), checked before
 /// the solver sees it, and the solver's refusal of its values ([`InvalidInput`]).
@@ -142,7 +142,7 @@ impl TryFrom<&GraspCandidate> for spatial::Candidate {
 }
 
 /// `text` cut to at most [`MAX_TEXT_BYTES`] at a character boundary, as answers carry it.
-pub fn clip(text: &str) -> &str {
+pub(crate) fn clip(text: &str) -> &str {
     let mut end = text.len().min(MAX_TEXT_BYTES);
     while !text.is_char_boundary(end) {
         end -= 1;
@@ -151,10 +151,10 @@ pub fn clip(text: &str) -> &str {
 }
 
 /// Characters of an id that logs and reports show.
-pub const SHORT_ID_CHARS: usize = 64;
+pub(crate) const SHORT_ID_CHARS: usize = 64;
 
 /// An id cut to its first [`SHORT_ID_CHARS`] characters, for logs and reports.
-pub fn short_id(id: &str) -> &str {
+pub(crate) fn short_id(id: &str) -> &str {
     id.char_indices()
         .nth(SHORT_ID_CHARS)
         .map_or(id, |(end, _)| &id[..end])
@@ -211,7 +211,7 @@ pub(crate) fn refused(
 }
 
 /// The answer to a candidate whose input is bad.
-pub fn invalid(m: &GraspCandidate, why: &dyn std::fmt::Display) -> GripRecommendation {
+pub(crate) fn invalid(m: &GraspCandidate, why: &dyn std::fmt::Display) -> GripRecommendation {
     refused(
         m,
         GripRecommendation::STATUS_INVALID_INPUT,

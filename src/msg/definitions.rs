@@ -184,7 +184,7 @@ pub fn split_type_name(name: &str) -> Option<(&str, &str)> {
 
 /// The `.msg` text of a type (`pkg/Name` or `pkg/msg/Name`), or `None` for a type this crate
 /// does not know.
-pub fn definition(type_name: &str) -> Option<&'static str> {
+pub(crate) fn definition(type_name: &str) -> Option<&'static str> {
     let wanted = split_type_name(type_name)?;
     DEFINITIONS
         .iter()
@@ -194,7 +194,7 @@ pub fn definition(type_name: &str) -> Option<&'static str> {
 
 /// The complete `ros2msg` definition of `type_name` exactly as rosbag2 (Jazzy) writes it (see
 /// the module doc), or `None` when it or one of its dependencies is not in [`DEFINITIONS`].
-pub fn full_text(type_name: &str) -> Option<String> {
+pub(crate) fn full_text(type_name: &str) -> Option<String> {
     full_text_from(type_name, &definition)
 }
 

@@ -10,10 +10,11 @@ pub mod cdr;
 mod contract;
 pub(crate) mod convert;
 pub mod definitions;
-pub mod schema;
+pub(crate) mod schema;
 
 pub use contract::{message_type_name, RosMessage, RosType};
-pub use convert::{clip, invalid, short_id, MessageLimits, MAX_TEXT_BYTES, SHORT_ID_CHARS};
+pub use convert::MessageLimits;
+pub(crate) use convert::{clip, invalid, short_id, MAX_TEXT_BYTES};
 
 pub use compact_str::CompactString;
 use serde::{Deserialize, Serialize};

@@ -78,7 +78,7 @@ enum Repeat {
 /// One field of a message: its name, its type as written (package made explicit) and how it is
 /// laid out.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Field {
+pub(crate) struct Field {
     /// The field name.
     pub name: String,
     /// The type as the `.msg` writes it, with `pkg/` in front of a message type written without
@@ -90,7 +90,7 @@ pub struct Field {
 
 /// The field lists of a type and of every type it uses, by `pkg/Name`.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
-pub struct Layout {
+pub(crate) struct Layout {
     /// `pkg/Name` of the type the definition is for.
     pub root: String,
     /// Fields of each type, in order.
@@ -220,7 +220,7 @@ const SEPARATOR: &str =
 
 impl Layout {
     /// Reads a complete `ros2msg` definition of `root` (`pkg/Name` or `pkg/msg/Name`).
-    pub fn parse(text: &str, root: &str) -> Result<Self, SchemaError> {
+    pub(crate) fn parse(text: &str, root: &str) -> Result<Self, SchemaError> {
         let root = qualified(root, "")?;
         let (root_package, _) =
             split_type_name(&root).ok_or_else(|| SchemaError::TypeName(root.clone()))?;
@@ -252,7 +252,7 @@ impl Layout {
     }
 
     /// The fields of `type_name` (`pkg/Name`), if the definition has it.
-    pub fn fields(&self, type_name: &str) -> Option<&[Field]> {
+    pub(crate) fn fields(&self, type_name: &str) -> Option<&[Field]> {
         self.types.get(type_name).map(Vec::as_slice)
     }
 }
@@ -272,7 +272,7 @@ fn ours(type_name: &str) -> Option<Arc<Layout>> {
 
 /// A type as a recording has it, next to ours.
 #[derive(Debug, Clone)]
-pub struct RecordedType {
+pub(crate) struct RecordedType {
     recorded: Layout,
     ours: Arc<Layout>,
     /// Whether every type has all our fields (then CDR decodes as it is).
@@ -282,7 +282,7 @@ pub struct RecordedType {
 impl RecordedType {
     /// Compares the recorded definition `text` of `type_name` with ours. `type_name` must be one
     /// of [`super::definitions::DEFINITIONS`].
-    pub fn new(text: &str, type_name: &str) -> Result<Self, Incompatible> {
+    pub(crate) fn new(text: &str, type_name: &str) -> Result<Self, Incompatible> {
         let root = qualified(type_name, "")?;
         let ours = ours(&root).ok_or_else(|| Incompatible::Missing(root.clone()))?;
         let recorded = Layout::parse(text, &root)?;
@@ -296,13 +296,14 @@ impl RecordedType {
     }
 
     /// The recorded type when it is exactly ours (no field missing anywhere).
-    pub fn is_ours(&self) -> bool {
+    pub(crate) fn is_ours(&self) -> bool {
         self.same
     }
 
+    #[cfg(test)]
     /// Whether the recording has field `field` of type `type_name` (`pkg/Name`); true for a type
     /// it does not use.
-    pub fn has_field(&self, type_name: &str, field: &str) -> bool {
+    pub(crate) fn has_field(&self, type_name: &str, field: &str) -> bool {
         self.recorded
             .fields(type_name)
             .is_none_or(|fields| fields.iter().any(|f| f.name == field))
@@ -310,13 +311,13 @@ impl RecordedType {
 
     /// How many fields of `type_name` (`pkg/Name`) the recording has; `None` for a type it does
     /// not use.
-    pub fn field_count(&self, type_name: &str) -> Option<usize> {
+    pub(crate) fn field_count(&self, type_name: &str) -> Option<usize> {
         self.recorded.fields(type_name).map(<[Field]>::len)
     }
 
     /// Decodes encapsulated CDR of the recorded type as ours, with the missing trailing fields at
     /// their defaults.
-    pub fn decode<T: DeserializeOwned>(&self, bytes: &[u8]) -> Result<T, CdrError> {
+    pub(crate) fn decode<T: DeserializeOwned>(&self, bytes: &[u8]) -> Result<T, CdrError> {
         if self.same {
             super::cdr::decode(bytes)
         } else {
@@ -325,7 +326,7 @@ impl RecordedType {
     }
 
     /// Rewrites encapsulated CDR of the recorded type into CDR of ours.
-    pub fn upgrade(&self, bytes: &[u8]) -> Result<Vec<u8>, CdrError> {
+    pub(crate) fn upgrade(&self, bytes: &[u8]) -> Result<Vec<u8>, CdrError> {
         let (header, payload) = bytes
             .split_at_checked(4)
             .ok_or_else(|| CdrError::Encapsulation(bytes.to_vec()))?;

@@ -24,11 +24,11 @@ use std::path::Path;
 use std::sync::Arc;
 
 /// A line for the log (stderr and `/rosout`).
-pub type Note = (Level, String);
+pub(crate) type Note = (Level, String);
 
 /// What the node has done, for its last words.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
-pub struct Counts {
+pub(crate) struct Counts {
     /// Candidates answered.
     pub answered: u64,
     /// Answered with status 2 (invalid input).
@@ -58,7 +58,7 @@ pub struct Counts {
 
 /// The answer to one candidate, to publish in this order: `reply`, then `markers`.
 #[derive(Debug)]
-pub struct Outcome {
+pub(crate) struct Outcome {
     /// The recommendation.
     pub reply: GripRecommendation,
     /// The markers, when they are on, wanted ([`Answerer::draws`]) and the answer has status 0.
@@ -71,7 +71,7 @@ pub struct Outcome {
 
 /// The answer to one pose candidate, to publish in this order: `reply`, then `markers`.
 #[derive(Debug)]
-pub struct PoseOutcome {
+pub(crate) struct PoseOutcome {
     /// The answer.
     pub reply: PoseRecommendation,
     /// The markers, when they are on, wanted ([`Answerer::draws`]) and the answer has status 0.
@@ -90,10 +90,10 @@ pub struct PoseOutcome {
 /// 100-triangle one at 64 to 66 µs, on a 1,000-triangle one at 0.55 to 0.64 ms: below 100
 /// triangles the index costs about a hop or less, and the answer keeps its place among the pose
 /// answers (docs/node.md).
-pub const INLINE_OFF_THREAD_TRIANGLES: usize = 100;
+pub(crate) const INLINE_OFF_THREAD_TRIANGLES: usize = 100;
 
 /// `max_mesh_load_time` (s, checked in (0, 3600]) as a duration.
-pub fn load_time(seconds: f64) -> std::time::Duration {
+pub(crate) fn load_time(seconds: f64) -> std::time::Duration {
     std::time::Duration::try_from_secs_f64(seconds).unwrap_or(std::time::Duration::from_secs(3))
 }
 
@@ -101,7 +101,7 @@ pub fn load_time(seconds: f64) -> std::time::Duration {
 /// force when it was received, whether its markers are wanted, and the node's meshes. It may run
 /// on another thread.
 #[derive(Debug, Clone)]
-pub struct PoseWork {
+pub(crate) struct PoseWork {
     settings: crate::solver::Settings,
     rules: crate::answer::Rules,
     markers_on: bool,
@@ -116,7 +116,7 @@ pub struct PoseWork {
 /// Why an inline mesh is refused before it is indexed: more than `max_triangles` triangles
 /// (parameter `max_inline_mesh_triangles`), or more than three vertices per triangle allowed
 /// (a triangle soup has three; more are vertices no triangle uses, held all the same).
-pub fn inline_mesh_too_large(
+pub(crate) fn inline_mesh_too_large(
     object: &crate::msg::GraspObject,
     max_triangles: usize,
 ) -> Option<String> {
@@ -138,13 +138,13 @@ pub fn inline_mesh_too_large(
 
 impl PoseWork {
     /// How long the answer waits for its mesh (`max_mesh_load_time`).
-    pub fn load_time(&self) -> std::time::Duration {
+    pub(crate) fn load_time(&self) -> std::time::Duration {
         self.load_time
     }
 
     /// The answer at once, without a mesh loaded or indexed, when the candidate is refused
     /// before: an inline mesh beyond `max_inline_mesh_triangles`.
-    pub fn refusal(&self, candidate: &PoseCandidate) -> Option<PoseRecommendation> {
+    pub(crate) fn refusal(&self, candidate: &PoseCandidate) -> Option<PoseRecommendation> {
         if self.echo {
             return None;
         }
@@ -153,7 +153,10 @@ impl PoseWork {
     }
 
     /// The answer, and its markers when they are on and wanted and the answer has status 0.
-    pub fn run(&self, candidate: &PoseCandidate) -> (PoseRecommendation, Option<MarkerArray>) {
+    pub(crate) fn run(
+        &self,
+        candidate: &PoseCandidate,
+    ) -> (PoseRecommendation, Option<MarkerArray>) {
         if let Some(reply) = self.refusal(candidate) {
             return (reply, None);
         }
@@ -180,7 +183,7 @@ impl PoseWork {
 /// The messages of one answer for the recording (a candidate or a pose candidate, and its
 /// answer), with the candidate's times.
 #[derive(Debug)]
-pub struct Recorded {
+pub(crate) struct Recorded {
     candidate: Payload,
     received: u64,
     sent: u64,
@@ -191,7 +194,7 @@ pub struct Recorded {
 /// A set as it came: of candidates (`grasp_candidate_sets`, `~/recommend`) or of gripper poses
 /// (`pose_candidate_sets`, `~/recommend_poses`).
 #[derive(Debug, Clone)]
-pub enum SetInput {
+pub(crate) enum SetInput {
     /// A `GraspCandidateSet`.
     Candidates(GraspCandidateSet),
     /// A `PoseCandidateSet` (boxed: its object is large).
@@ -210,7 +213,7 @@ impl SetInput {
 
 /// A set's answer, of the kind of its set.
 #[derive(Debug, Clone)]
-pub enum SetReply {
+pub(crate) enum SetReply {
     /// To a `GraspCandidateSet`.
     Candidates(GripRecommendationSet),
     /// To a `PoseCandidateSet`.
@@ -219,7 +222,7 @@ pub enum SetReply {
 
 impl SetReply {
     /// The set's id.
-    pub fn set_id(&self) -> &CompactString {
+    pub(crate) fn set_id(&self) -> &CompactString {
         match self {
             SetReply::Candidates(r) => &r.set_id,
             SetReply::Poses(r) => &r.set_id,
@@ -227,7 +230,7 @@ impl SetReply {
     }
 
     /// The set's status.
-    pub fn status(&self) -> u8 {
+    pub(crate) fn status(&self) -> u8 {
         match self {
             SetReply::Candidates(r) => r.status,
             SetReply::Poses(r) => r.status,
@@ -235,7 +238,7 @@ impl SetReply {
     }
 
     /// Why, when the status is not OK.
-    pub fn message(&self) -> &str {
+    pub(crate) fn message(&self) -> &str {
         match self {
             SetReply::Candidates(r) => &r.message,
             SetReply::Poses(r) => &r.message,
@@ -243,7 +246,7 @@ impl SetReply {
     }
 
     /// The members' recommendations, in order.
-    pub fn members(&self) -> Vec<&GripRecommendation> {
+    pub(crate) fn members(&self) -> Vec<&GripRecommendation> {
         match self {
             SetReply::Candidates(r) => r.recommendations.iter().collect(),
             SetReply::Poses(r) => r
@@ -255,7 +258,7 @@ impl SetReply {
     }
 
     /// How many members are ranked, and by which field.
-    pub fn ranked(&self) -> (usize, &str) {
+    pub(crate) fn ranked(&self) -> (usize, &str) {
         match self {
             SetReply::Candidates(r) => (r.ranking.len(), &r.ranked_by),
             SetReply::Poses(r) => (r.ranking.len(), &r.ranked_by),
@@ -272,7 +275,7 @@ impl SetReply {
 
     /// The answer to a candidate set (tests).
     #[cfg(test)]
-    pub fn candidates(&self) -> &GripRecommendationSet {
+    pub(crate) fn candidates(&self) -> &GripRecommendationSet {
         match self {
             SetReply::Candidates(r) => r,
             SetReply::Poses(_) => panic!("a pose set's answer"),
@@ -283,7 +286,7 @@ impl SetReply {
 /// The answer to one set, to publish (or send as the service's response) in this order:
 /// `reply`, then `markers`.
 #[derive(Debug)]
-pub struct SetOutcome {
+pub(crate) struct SetOutcome {
     /// The answer to the set.
     pub reply: SetReply,
     /// The markers of the best candidate, when they are on and one can be held.
@@ -294,7 +297,7 @@ pub struct SetOutcome {
 
 /// The messages of one set's answer for the recording, with the set's times.
 #[derive(Debug)]
-pub struct RecordedSet {
+pub(crate) struct RecordedSet {
     set: SetInput,
     received: u64,
     sent: u64,
@@ -305,7 +308,7 @@ pub struct RecordedSet {
 impl RecordedSet {
     /// What to record of a set received at `received` and sent at `sent` (ns since the epoch):
     /// the set, and its answer and markers when they are recorded.
-    pub fn new(
+    pub(crate) fn new(
         reply: Option<SetReply>,
         markers: Option<MarkerArray>,
         set: SetInput,
@@ -324,7 +327,7 @@ impl RecordedSet {
 
 /// Answers candidates with the settings in force when each was received; counts; records.
 #[derive(Debug)]
-pub struct Answerer {
+pub(crate) struct Answerer {
     shared: Shared,
     echo: bool,
     node: String,
@@ -346,7 +349,7 @@ impl Answerer {
     /// and id) as node `node` (its full name), recording on `topics` with QoS depth
     /// `qos_depth` in the recording's metadata. `on_stop` hears from the recording's writer
     /// thread when it stops on a failure (then [`Answerer::refresh`] reports it).
-    pub fn new(
+    pub(crate) fn new(
         shared: Shared,
         echo: bool,
         node: &str,
@@ -376,14 +379,14 @@ impl Answerer {
 
     /// What has been done so far.
     #[cfg(test)]
-    pub fn counts(&self) -> Counts {
+    pub(crate) fn counts(&self) -> Counts {
         self.counts
     }
 
     /// Starts recording if `record` says so (never in echo mode); a failure here is an error.
     /// What the parameters were set to before (ros2-client sets every declared parameter once
     /// when the node is made) is taken as the start.
-    pub fn start(&mut self) -> Result<Vec<Note>, RecordError> {
+    pub(crate) fn start(&mut self) -> Result<Vec<Note>, RecordError> {
         {
             let live = self.shared.lock();
             self.seen_recording_sets = live.recording_sets();
@@ -409,7 +412,7 @@ impl Answerer {
     /// follows the `record` parameters when one was set (a start that failed is retried), and
     /// reports a recording whose writer stopped on a failure. Called when a parameter is set
     /// and when the writer stops, so that each takes effect at once.
-    pub fn refresh(&mut self) -> Vec<Note> {
+    pub(crate) fn refresh(&mut self) -> Vec<Note> {
         let mut notes = Vec::new();
         if let Some(change) = self.recording.check() {
             notes.push(note(&change));
@@ -477,14 +480,14 @@ impl Answerer {
     /// answer) or the recording (`record_markers`); never in echo mode. Building, serializing
     /// and publishing a marker array per candidate costs about as much as the answer itself, and
     /// nobody sees markers published to no subscriber (the topic keeps no history for late ones).
-    pub fn draws(&self, markers_on: bool, audience: bool) -> bool {
+    pub(crate) fn draws(&self, markers_on: bool, audience: bool) -> bool {
         markers_on && !self.echo && (audience || self.recording.records_markers())
     }
 
     /// The answer to one candidate, received at `received` and sent at `sent` (ns since the
     /// epoch), with the settings in force when it was received; its markers if [`Self::draws`]
     /// says so (`audience`: whether `grip_markers` has a subscriber now).
-    pub fn handle(
+    pub(crate) fn handle(
         &mut self,
         candidate: GraspCandidate,
         received: u64,
@@ -564,7 +567,7 @@ impl Answerer {
     /// the calling thread: [`Answerer::pose_work`], run, then [`Answerer::account_pose`]
     /// (tests; the node runs the work where [`Answerer::answers_off_thread`] says).
     #[cfg(test)]
-    pub fn handle_pose(
+    pub(crate) fn handle_pose(
         &mut self,
         candidate: PoseCandidate,
         received: u64,
@@ -579,7 +582,7 @@ impl Answerer {
     /// What answering a pose candidate received at `received` needs (the settings then in force,
     /// whether its markers are wanted ([`Self::draws`]) and the node's meshes), to run on any
     /// thread ([`PoseWork::run`]).
-    pub fn pose_work(&self, received: u64, audience: bool) -> PoseWork {
+    pub(crate) fn pose_work(&self, received: u64, audience: bool) -> PoseWork {
         let live = self.shared.lock();
         let version = live.version_at(received);
         PoseWork {
@@ -597,14 +600,14 @@ impl Answerer {
     /// Whether answering `candidate` is worth a hop to another thread: it would load a mesh file
     /// first ([`Answerer::loads_a_mesh`]), or index an inline mesh of at least
     /// [`INLINE_OFF_THREAD_TRIANGLES`] triangles.
-    pub fn answers_off_thread(&self, candidate: &PoseCandidate) -> bool {
+    pub(crate) fn answers_off_thread(&self, candidate: &PoseCandidate) -> bool {
         let inline = candidate.object.inline_mesh.triangles.len();
         self.loads_a_mesh(candidate) || (!self.echo && inline >= INLINE_OFF_THREAD_TRIANGLES)
     }
 
     /// Whether answering `candidate` would load a mesh file first (one named by resource and not
     /// in the node's cache yet).
-    pub fn loads_a_mesh(&self, candidate: &PoseCandidate) -> bool {
+    pub(crate) fn loads_a_mesh(&self, candidate: &PoseCandidate) -> bool {
         let o = &candidate.object;
         !self.echo
             && !o.mesh.is_empty()
@@ -614,7 +617,7 @@ impl Answerer {
     }
 
     /// Counts a pose candidate's answer and readies what is recorded of it.
-    pub fn account_pose(
+    pub(crate) fn account_pose(
         &mut self,
         candidate: PoseCandidate,
         reply: PoseRecommendation,
@@ -665,7 +668,7 @@ impl Answerer {
     /// Records an answer that went out at `answered` (ns since the epoch): its markers, the
     /// candidate with its own times, and the recommendation. Says so if the recording's writer
     /// has stopped on a failure.
-    pub fn record(&mut self, recorded: Recorded, answered: u64) -> Vec<Note> {
+    pub(crate) fn record(&mut self, recorded: Recorded, answered: u64) -> Vec<Note> {
         let Recorded {
             candidate,
             received,
@@ -694,18 +697,18 @@ impl Answerer {
 
     /// Whether a set's answer is to be recorded, and its markers: asked when the set is taken,
     /// so that the set thread clones only what the recording takes.
-    pub fn records_sets(&self) -> (bool, bool) {
+    pub(crate) fn records_sets(&self) -> (bool, bool) {
         (self.recording.is_on(), self.recording.records_markers())
     }
 
     /// Counts a marker array published on `grip_markers`.
-    pub fn count_published_markers(&mut self) {
+    pub(crate) fn count_published_markers(&mut self) {
         self.counts.markers_published += 1;
     }
 
     /// Counts a set's answer (`drawn`: with markers of its best candidate); the lines that say
     /// what was refused or left unsolved in it.
-    pub fn count_set(&mut self, reply: &SetReply, drawn: bool) -> Vec<Note> {
+    pub(crate) fn count_set(&mut self, reply: &SetReply, drawn: bool) -> Vec<Note> {
         let mut notes = Vec::new();
         self.counts.sets += 1;
         self.counts.markers_built += u64::from(drawn);
@@ -764,7 +767,7 @@ impl Answerer {
     /// Records a set's answer that went out at `answered` (ns since the epoch): its markers, the
     /// set with its own times, and the answer, together. Says so if the recording's writer has
     /// stopped on a failure.
-    pub fn record_set(&mut self, recorded: RecordedSet, answered: u64) -> Vec<Note> {
+    pub(crate) fn record_set(&mut self, recorded: RecordedSet, answered: u64) -> Vec<Note> {
         let RecordedSet {
             set,
             received,
@@ -791,7 +794,7 @@ impl Answerer {
 
     /// Counts a message on `topic` that did not decode (a candidate on the candidates topic, a
     /// set on any other topic or the service); the line to log.
-    pub fn undecodable(&mut self, topic: &str, error: &dyn std::fmt::Debug) -> Note {
+    pub(crate) fn undecodable(&mut self, topic: &str, error: &dyn std::fmt::Debug) -> Note {
         let (count, what) = if self.candidates_topics.iter().any(|t| t == topic) {
             (&mut self.counts.undecodable, "")
         } else {
@@ -805,7 +808,7 @@ impl Answerer {
     }
 
     /// The last words: the counts, and the recording closed.
-    pub fn finish(&mut self) -> Vec<Note> {
+    pub(crate) fn finish(&mut self) -> Vec<Note> {
         let c = self.counts;
         let mut notes = vec![(
             Level::Info,

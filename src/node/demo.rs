@@ -17,7 +17,7 @@ const PAPER_CASES: &str = include_str!("../../examples/paper_cases.jsonl");
 
 /// The demo participant, running.
 #[derive(Debug)]
-pub struct Demo {
+pub(crate) struct Demo {
     stop: Sender<()>,
     done: Receiver<anyhow::Result<()>>,
     thread: JoinHandle<()>,
@@ -25,7 +25,7 @@ pub struct Demo {
 
 impl Demo {
     /// Starts sending on `candidates` and listening on `answers` (absolute topic names).
-    pub fn start(graph: Graph, candidates: String, answers: String) -> Self {
+    pub(crate) fn start(graph: Graph, candidates: String, answers: String) -> Self {
         let (stop, stopped) = smol::channel::bounded(1);
         let (finished, done) = smol::channel::bounded(1);
         let thread = std::thread::spawn(move || {
@@ -37,7 +37,7 @@ impl Demo {
     }
 
     /// Waits until every case has been answered and printed (or the demo failed).
-    pub async fn finished(&self) -> anyhow::Result<()> {
+    pub(crate) async fn finished(&self) -> anyhow::Result<()> {
         match self.done.recv().await {
             Ok(result) => result,
             Err(_) => Err(anyhow!("the demo ended without a result")),
@@ -45,7 +45,7 @@ impl Demo {
     }
 
     /// Stops the demo if it still runs, and waits until its participant has left the graph.
-    pub fn stop(self) {
+    pub(crate) fn stop(self) {
         self.stop.close();
         if self.thread.join().is_err() {
             log::error!("the demo thread panicked");

@@ -36,15 +36,15 @@ use std::time::{Duration, Instant};
 /// those whose candidate was answered at its deadline and which still run among them. Each
 /// indexes at most one mesh: with `max_inline_mesh_triangles` 250,000 at about 0.4 kB a
 /// triangle while it is indexed (`docs/node.md`), eight at once hold under 1 GB.
-pub const MAX_LOADERS: usize = 8;
+pub(crate) const MAX_LOADERS: usize = 8;
 
 /// How many single pose candidates the node's thread has loading at once (each on a loader
 /// thread), not counting those answered at their deadline whose thread still runs.
-pub const MAX_LOADING: usize = 4;
+pub(crate) const MAX_LOADING: usize = 4;
 
 /// How many single pose candidates wait for a loader thread; one more is answered at once with
 /// status 2 "too many meshes loading".
-pub const MAX_QUEUED_LOADS: usize = 16;
+pub(crate) const MAX_QUEUED_LOADS: usize = 16;
 
 /// While candidates wait and no loader thread is free, how often the node's thread looks again
 /// (a thread left behind at a deadline tells nobody when it ends).
@@ -52,7 +52,7 @@ const RETRY: Duration = Duration::from_millis(50);
 
 /// The loader threads: how many live, and the bound.
 #[derive(Debug)]
-pub struct Loaders {
+pub(crate) struct Loaders {
     alive: Arc<AtomicUsize>,
     max: usize,
 }
@@ -69,7 +69,7 @@ impl Drop for Alive {
 
 impl Loaders {
     /// At most `max` loader threads at once.
-    pub fn new(max: usize) -> Arc<Self> {
+    pub(crate) fn new(max: usize) -> Arc<Self> {
         Arc::new(Self {
             alive: Arc::new(AtomicUsize::new(0)),
             max,
@@ -77,19 +77,19 @@ impl Loaders {
     }
 
     /// How many loader threads live.
-    pub fn alive(&self) -> usize {
+    pub(crate) fn alive(&self) -> usize {
         self.alive.load(Ordering::SeqCst)
     }
 
     /// The bound.
-    pub fn max(&self) -> usize {
+    pub(crate) fn max(&self) -> usize {
         self.max
     }
 
     /// Runs `work` on a loader thread of its own, a panic in it contained there (logged, and
     /// what `work` would have sent is never sent: its receiver hears the sender dropped);
     /// false, `work` not run, when [`Loaders::max`] threads live already or no thread starts.
-    pub fn spawn(&self, work: impl FnOnce() + Send + 'static) -> bool {
+    pub(crate) fn spawn(&self, work: impl FnOnce() + Send + 'static) -> bool {
         let reserved = self
             .alive
             .fetch_update(Ordering::SeqCst, Ordering::SeqCst, |n| {
@@ -117,7 +117,7 @@ impl Loaders {
 /// A single pose candidate answered off the node's thread (or refused there at its deadline),
 /// with its times.
 #[derive(Debug)]
-pub struct Loaded {
+pub(crate) struct Loaded {
     /// The candidate.
     pub candidate: PoseCandidate,
     /// Its answer.
@@ -141,7 +141,7 @@ struct Queued {
 }
 
 /// The status-2 answer to a pose candidate, saying `why`.
-pub fn refused(candidate: &PoseCandidate, why: &str) -> PoseRecommendation {
+pub(crate) fn refused(candidate: &PoseCandidate, why: &str) -> PoseRecommendation {
     let stub = GraspCandidate {
         header: candidate.header.clone(),
         id: candidate.id.clone(),
@@ -151,7 +151,7 @@ pub fn refused(candidate: &PoseCandidate, why: &str) -> PoseRecommendation {
 }
 
 /// What a candidate answered at its deadline is told.
-pub fn too_slow(limit: Duration) -> String {
+pub(crate) fn too_slow(limit: Duration) -> String {
     format!(
         "object: its mesh was not loaded within max_mesh_load_time ({} s); the load goes on \
          in the background: send the candidate again later",
@@ -160,11 +160,11 @@ pub fn too_slow(limit: Duration) -> String {
 }
 
 /// What a candidate whose load panicked is told.
-pub const LOAD_PANICKED: &str = "object: internal error while loading its mesh (logged)";
+pub(crate) const LOAD_PANICKED: &str = "object: internal error while loading its mesh (logged)";
 
 /// The single pose candidates of the node's thread whose meshes load off it: those loading and
 /// those waiting for a loader thread.
-pub struct PoseLoads {
+pub(crate) struct PoseLoads {
     loaders: Arc<Loaders>,
     running: FuturesUnordered<Pin<Box<dyn Future<Output = Loaded>>>>,
     queue: VecDeque<Box<Queued>>,
@@ -181,7 +181,7 @@ impl std::fmt::Debug for PoseLoads {
 
 impl PoseLoads {
     /// Loads on `loaders`' threads.
-    pub fn new(loaders: Arc<Loaders>) -> Self {
+    pub(crate) fn new(loaders: Arc<Loaders>) -> Self {
         Self {
             loaders,
             running: FuturesUnordered::new(),
@@ -192,7 +192,7 @@ impl PoseLoads {
     /// Takes `candidate` (received at `received`, sent at `sent`, ns since the epoch) to be
     /// answered by `work` on a loader thread: started now, or queued; its answer at once
     /// instead (status 2) when the queue is full.
-    pub fn take(
+    pub(crate) fn take(
         &mut self,
         work: PoseWork,
         candidate: PoseCandidate,
@@ -291,7 +291,7 @@ impl PoseLoads {
     /// The next answer: a load done or past its deadline, or a waiting candidate past its
     /// deadline. Pending while there is none. Cancel-safe: nothing is taken out before the
     /// answer is returned.
-    pub async fn next(&mut self) -> Loaded {
+    pub(crate) async fn next(&mut self) -> Loaded {
         loop {
             self.pump();
             if let Some(i) = self.queue.iter().position(|q| q.deadline <= Instant::now()) {
@@ -327,13 +327,13 @@ impl PoseLoads {
     }
 
     /// On a stop: the answers of the candidates still waiting (status 2, not loaded), taken out.
-    pub fn drain_queued(&mut self) -> Vec<Loaded> {
+    pub(crate) fn drain_queued(&mut self) -> Vec<Loaded> {
         let why = "object: its mesh was not loaded: the node is stopping";
         self.queue.drain(..).map(|q| answered(*q, why)).collect()
     }
 
     /// Whether loads are running.
-    pub fn running(&self) -> bool {
+    pub(crate) fn running(&self) -> bool {
         !self.running.is_empty()
     }
 }

@@ -19,7 +19,7 @@ use std::time::Duration;
 const RECHECK: Duration = Duration::from_secs(1);
 
 /// The `grip_markers` publisher and what the node knows of its subscribers.
-pub struct MarkersOut {
+pub(crate) struct MarkersOut {
     publisher: Publisher<MarkerArray>,
     /// Whether a subscriber has ever been matched ([`MarkersOut::watch`]).
     matched: Cell<bool>,
@@ -27,7 +27,7 @@ pub struct MarkersOut {
 
 impl MarkersOut {
     /// The publisher, with no subscriber matched yet.
-    pub fn new(publisher: Publisher<MarkerArray>) -> Self {
+    pub(crate) fn new(publisher: Publisher<MarkerArray>) -> Self {
         Self {
             publisher,
             matched: Cell::new(false),
@@ -39,7 +39,7 @@ impl MarkersOut {
     /// date from DDS), so that a subscriber that comes late gets markers from the node's next
     /// answer on, and one that leaves stops them. ros2-client logs an error when asked about a
     /// writer that has never been matched, hence [`MarkersOut::watch`] first.
-    pub fn heard(&self, node: &Node) -> bool {
+    pub(crate) fn heard(&self, node: &Node) -> bool {
         self.matched.get() && self.publisher.get_subscription_count(node) > 0
     }
 
@@ -52,7 +52,7 @@ impl MarkersOut {
     /// lost behind others that name no subscription (publishers matched, participants' entity
     /// lists). The wait is therefore started afresh every [`RECHECK`]: a new wait looks the table
     /// up first, without ros2-client's error for a writer never matched.
-    pub async fn watch(&self, node: &Node) {
+    pub(crate) async fn watch(&self, node: &Node) {
         loop {
             let mut matched = pin!(self.publisher.wait_for_subscription(node).fuse());
             let mut recheck = pin!(smol::Timer::after(RECHECK).fuse());
@@ -66,7 +66,7 @@ impl MarkersOut {
 
     /// Publishes `markers` if `grip_markers` has a subscriber now (they may have been built for
     /// the recording alone), and counts what was published.
-    pub async fn publish(
+    pub(crate) async fn publish(
         &self,
         node: &Node,
         answerer: &mut Answerer,

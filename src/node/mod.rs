@@ -12,18 +12,18 @@
 //! answering single candidates, parameter requests and signals; their answers are published as
 //! they come back.
 
-pub mod answer;
-pub mod demo;
-pub mod loads;
+pub(crate) mod answer;
+pub(crate) mod demo;
+pub(crate) mod loads;
 
 mod markers_out;
 mod param_services;
 mod params;
-pub mod play;
-pub mod ros_args;
-pub mod session;
-pub mod set_worker;
-pub mod sets;
+pub(crate) mod play;
+pub(crate) mod ros_args;
+pub(crate) mod session;
+pub(crate) mod set_worker;
+pub(crate) mod sets;
 
 use crate::config::Config;
 use crate::kind::{Candidates, PoseSets, Poses, Sets};
@@ -53,7 +53,7 @@ use std::time::Duration;
 const STOP_GRACE: Duration = Duration::from_millis(300);
 
 /// Default node name.
-pub const NODE_NAME: &str = "grasp_orient";
+pub(crate) const NODE_NAME: &str = "grasp_orient";
 
 /// The node's topics, as it names them before namespace and remapping (checked to stay apart
 /// before any DDS entity is made).
@@ -71,7 +71,7 @@ const TOPICS: [&str; 9] = [
 
 /// What else the node does besides answering.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct Options {
+pub(crate) struct Options {
     /// Send the paper's four case studies from a second participant, print the answers, exit.
     pub demo: bool,
     /// Benchmark floor: answer every candidate with an empty recommendation (same header and
@@ -178,7 +178,7 @@ impl Endpoints {
 }
 
 /// Runs the node until Ctrl-C or SIGTERM (or until the demo is done).
-pub fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
+pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
     let start = Start::new(ros_argv)?;
     let name = start.node_name(NODE_NAME);
     start.ros.check_distinct(&TOPICS, &name)?;

@@ -27,7 +27,7 @@ use ros2_client::{
 };
 
 /// The servers of the six services.
-pub struct ParameterServices {
+pub(super) struct ParameterServices {
     get: Server<GetParametersRequest, GetParametersResponse>,
     get_types: Server<GetParameterTypesRequest, GetParameterTypesResponse>,
     set: Server<SetParametersRequest, SetParametersResponse>,
@@ -71,7 +71,7 @@ where
 impl ParameterServices {
     /// Offers the six services of `node` (started with `start_parameter_services(false)` and
     /// the parameters of `shared`).
-    pub fn offer(node: &mut Node, shared: &Shared) -> anyhow::Result<Self> {
+    pub(super) fn offer(node: &mut Node, shared: &Shared) -> anyhow::Result<Self> {
         Ok(Self {
             get: server(node, "get_parameters", "GetParameters")?,
             get_types: server(node, "get_parameter_types", "GetParameterTypes")?,
@@ -84,7 +84,7 @@ impl ParameterServices {
     }
 
     /// Answers requests until dropped.
-    pub async fn serve(&self, node: &Node) {
+    pub(super) async fn serve(&self, node: &Node) {
         let mut get = self.get.receive_request_stream();
         let mut get_types = self.get_types.receive_request_stream();
         let mut set = self.set.receive_request_stream();

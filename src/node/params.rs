@@ -13,12 +13,13 @@ use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
 
 /// A parameter hook as ros2-client takes it: `Err(reason)` refuses the value, the reason being
 /// a [`ParameterRefused`] in words (ros2-client's `SetParametersResult`).
-pub type ParameterHook = Box<dyn Fn(&str, &ParameterValue) -> SetParametersResult + Send + Sync>;
+pub(super) type ParameterHook =
+    Box<dyn Fn(&str, &ParameterValue) -> SetParametersResult + Send + Sync>;
 
 /// Why a parameter set is refused; its words are the reason ROS clients are given.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
-pub enum ParameterRefused {
+pub(crate) enum ParameterRefused {
     /// A set to "not set": the node's parameters cannot be deleted.
     #[error("parameter {name} cannot be deleted")]
     Deleted {
@@ -68,7 +69,7 @@ pub enum ParameterRefused {
 
 /// The parameters as they were from one time on.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Version {
+pub(crate) struct Version {
     /// Counts the versions, from 0 for the start.
     pub seq: u64,
     /// From which receive time (ns since the epoch) on they apply; 0 for the start.
@@ -86,11 +87,11 @@ const VERSIONS_KEPT: usize = 32;
 
 /// The parameters that say what is recorded where: a set of one of them, even to its current
 /// value, makes the recording follow them at once (setting `record` to true again retries).
-pub const RECORDING_PARAMETERS: [&str; 3] = ["record", "record_dir", "record_markers"];
+pub(super) const RECORDING_PARAMETERS: [&str; 3] = ["record", "record_dir", "record_markers"];
 
 /// The settings the answering loop reads, kept in step with the parameters.
 #[derive(Debug)]
-pub struct Live {
+pub(crate) struct Live {
     /// Every parameter, as now.
     pub config: Config,
     /// The solver settings they imply.
@@ -104,7 +105,7 @@ pub struct Live {
 impl Live {
     /// The version in force for a candidate received at `received` (ns since the epoch): the
     /// last one from before it (the oldest kept, for older candidates).
-    pub fn version_at(&self, received: u64) -> &Version {
+    pub(crate) fn version_at(&self, received: u64) -> &Version {
         let newer = self.versions.partition_point(|v| v.since <= received);
         let index = newer
             .saturating_sub(1)
@@ -113,22 +114,22 @@ impl Live {
     }
 
     /// The versions after `seq`, oldest first.
-    pub fn versions_after(&self, seq: u64) -> impl Iterator<Item = &Version> {
+    pub(crate) fn versions_after(&self, seq: u64) -> impl Iterator<Item = &Version> {
         self.versions.iter().filter(move |v| v.seq > seq)
     }
 
     /// Every version kept, oldest first.
-    pub fn versions(&self) -> impl Iterator<Item = &Version> {
+    pub(crate) fn versions(&self) -> impl Iterator<Item = &Version> {
         self.versions.iter()
     }
 
     /// The newest version's number.
-    pub fn last_seq(&self) -> u64 {
+    pub(crate) fn last_seq(&self) -> u64 {
         self.versions.back().map_or(0, |v| v.seq)
     }
 
     /// How many times one of the [`RECORDING_PARAMETERS`] was set.
-    pub fn recording_sets(&self) -> u64 {
+    pub(crate) fn recording_sets(&self) -> u64 {
         self.recording_sets
     }
 
@@ -155,7 +156,7 @@ type Wake = Box<dyn Fn() + Send + Sync>;
 
 /// [`Live`] shared between parameter services and the answering loop, and what wakes the loop.
 #[derive(Clone)]
-pub struct Shared(Arc<(Mutex<Live>, OnceLock<Wake>)>);
+pub(crate) struct Shared(Arc<(Mutex<Live>, OnceLock<Wake>)>);
 
 impl std::fmt::Debug for Shared {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -165,7 +166,7 @@ impl std::fmt::Debug for Shared {
 
 impl Shared {
     /// Shares a validated config, and logs its caveats ([`Config::caveats`]) as warnings.
-    pub fn new(config: Config, settings: Settings) -> Self {
+    pub(crate) fn new(config: Config, settings: Settings) -> Self {
         for caveat in config.caveats() {
             log::warn!("{caveat}");
         }
@@ -188,12 +189,12 @@ impl Shared {
     }
 
     /// Calls `wake` after every accepted set (the first call sets it; later ones are ignored).
-    pub fn wake_on_change(&self, wake: impl Fn() + Send + Sync + 'static) {
+    pub(crate) fn wake_on_change(&self, wake: impl Fn() + Send + Sync + 'static) {
         self.0 .1.set(Box::new(wake)).ok();
     }
 
     /// The current settings (a poisoned lock still holds valid settings: sets are atomic).
-    pub fn lock(&self) -> MutexGuard<'_, Live> {
+    pub(crate) fn lock(&self) -> MutexGuard<'_, Live> {
         self.0 .0.lock().unwrap_or_else(|e| e.into_inner())
     }
 
@@ -233,7 +234,7 @@ impl Shared {
 
     /// Node options that declare every parameter with its current value and validate every set
     /// through this.
-    pub fn declare(&self, options: NodeOptions) -> NodeOptions {
+    pub(crate) fn declare(&self, options: NodeOptions) -> NodeOptions {
         let mut options = options
             .parameter_validator(self.validator())
             .parameter_set_action(self.set_action());
@@ -249,7 +250,7 @@ impl Shared {
     }
 
     /// The validator handed to ros2-client: refuses with a reason, keeping the old value.
-    pub fn validator(&self) -> ParameterHook {
+    pub(crate) fn validator(&self) -> ParameterHook {
         let shared = self.clone();
         Box::new(move |name, value| {
             shared
@@ -261,7 +262,7 @@ impl Shared {
 
     /// The set action handed to ros2-client: a change makes a new [`Version`], in force for
     /// candidates received from now on, and the answering loop is woken to act on it at once.
-    pub fn set_action(&self) -> ParameterHook {
+    pub(crate) fn set_action(&self) -> ParameterHook {
         let shared = self.clone();
         Box::new(move |name, value| {
             let (config, settings) = shared.check(name, value).map_err(|e| e.to_string())?;
@@ -289,7 +290,7 @@ impl Shared {
 }
 
 /// A parameter value as YAML; `None` for deletion and for types the config has none of.
-pub fn to_yaml(value: &ParameterValue) -> Option<Value> {
+pub(super) fn to_yaml(value: &ParameterValue) -> Option<Value> {
     Some(match value {
         ParameterValue::Boolean(b) => Value::Bool(*b),
         ParameterValue::Integer(i) => Value::Number((*i).into()),
@@ -306,7 +307,7 @@ pub fn to_yaml(value: &ParameterValue) -> Option<Value> {
 }
 
 /// A YAML value as a parameter value.
-pub fn from_yaml(value: &Value) -> Option<ParameterValue> {
+pub(super) fn from_yaml(value: &Value) -> Option<ParameterValue> {
     Some(match value {
         Value::Bool(b) => ParameterValue::Boolean(*b),
         Value::Number(n) if n.is_i64() => ParameterValue::Integer(n.as_i64()?),
@@ -333,7 +334,7 @@ pub fn from_yaml(value: &Value) -> Option<ParameterValue> {
 
 /// A YAML value as a parameter value of a declared type: as [`from_yaml`], but a list (an
 /// empty one too) of a string array parameter is a string array.
-pub fn from_yaml_as(value: &Value, ros_type: RosType) -> Option<ParameterValue> {
+pub(super) fn from_yaml_as(value: &Value, ros_type: RosType) -> Option<ParameterValue> {
     match (ros_type, value) {
         (RosType::StringArray, Value::Sequence(items)) => Some(ParameterValue::StringArray(
             items
@@ -347,7 +348,7 @@ pub fn from_yaml_as(value: &Value, ros_type: RosType) -> Option<ParameterValue> 
 
 /// The ROS descriptor of a declared parameter: its type, doc and unit, its range, its other
 /// constraints in words, and whether it is read-only.
-pub fn descriptor(p: &Parameter) -> raw::ParameterDescriptor {
+pub(super) fn descriptor(p: &Parameter) -> raw::ParameterDescriptor {
     let description = if p.unit.is_empty() {
         p.summary().to_string()
     } else {

@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 
 /// How to play.
 #[derive(Debug, Clone, Copy)]
-pub struct Pace {
+pub(crate) struct Pace {
     /// Speed relative to the recording; 0 sends as fast as possible.
     pub rate: f64,
     /// Seconds to wait for a subscriber before starting.
@@ -25,7 +25,7 @@ pub struct Pace {
 
 /// What a play sent, and where.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct Played {
+pub(crate) struct Played {
     /// Candidates sent.
     pub candidates: usize,
     /// Candidate sets sent.
@@ -197,7 +197,7 @@ async fn paced(start: Instant, offset: f64, shutdown: &mut Shutdown) -> bool {
 /// remappable), in the order and at the pace they were received (their `log_time`): waits for a
 /// subscriber on each topic with something to send, keeps the recorded gaps, stops early on
 /// SIGINT or SIGTERM.
-pub fn publish(
+pub(crate) fn publish(
     session: &mut Session,
     source: &Path,
     bag: &Bag,

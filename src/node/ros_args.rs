@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 /// Parsed ROS arguments.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct RosArgs {
+pub(crate) struct RosArgs {
     /// `-r __node:=NAME`.
     pub node_name: Option<String>,
     /// `-r __ns:=/NS`.
@@ -24,7 +24,7 @@ pub struct RosArgs {
 
 /// A ROS log level, as `--log-level` takes it (any case).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum LogLevel {
+pub(crate) enum LogLevel {
     /// `debug`.
     Debug,
     /// `info`.
@@ -43,10 +43,11 @@ pub enum LogLevel {
 impl LogLevel {
     /// The level names rcl accepts (the tests parse each).
     #[cfg(test)]
-    pub const NAMES: [&'static str; 6] = ["debug", "info", "warn", "error", "fatal", "unset"];
+    pub(crate) const NAMES: [&'static str; 6] =
+        ["debug", "info", "warn", "error", "fatal", "unset"];
 
     /// The Rust log filter it stands for; `None` for `unset`.
-    pub fn filter(self) -> Option<log::LevelFilter> {
+    pub(crate) fn filter(self) -> Option<log::LevelFilter> {
         Some(match self {
             LogLevel::Debug => log::LevelFilter::Debug,
             LogLevel::Info => log::LevelFilter::Info,
@@ -77,7 +78,7 @@ impl std::str::FromStr for LogLevel {
 /// A malformed ROS argument.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
-pub enum RosArgsError {
+pub(crate) enum RosArgsError {
     /// A flag without its value.
     #[error("--ros-args: {flag} needs a value")]
     MissingValue {
@@ -122,7 +123,7 @@ pub enum RosArgsError {
 /// `rmw_validate_namespace` and `rmw_validate_node_name`).
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
-pub enum NameError {
+pub(crate) enum NameError {
     /// A rule with a `:=` in either side (`a:=b:=c`).
     #[error("has more than one ':='")]
     TwoAssignments,
@@ -176,7 +177,7 @@ pub enum NameError {
 
 impl RosArgs {
     /// Parses everything after `--ros-args` (up to a lone `--`).
-    pub fn parse(args: &[String]) -> Result<Self, RosArgsError> {
+    pub(crate) fn parse(args: &[String]) -> Result<Self, RosArgsError> {
         let mut out = RosArgs::default();
         let mut it = args.iter();
         let value = |it: &mut std::slice::Iter<'_, String>, flag: &str| {
@@ -264,7 +265,7 @@ impl RosArgs {
 
     /// Checks that the node's topics `bases` (as it names them) resolve to distinct names once
     /// remapped: two of them on one name would leave one without its endpoint.
-    pub fn check_distinct(&self, bases: &[&str], node: &str) -> Result<(), RosArgsError> {
+    pub(crate) fn check_distinct(&self, bases: &[&str], node: &str) -> Result<(), RosArgsError> {
         let resolved: Vec<String> = bases.iter().map(|b| self.topic(b, node)).collect();
         for (i, target) in resolved.iter().enumerate() {
             if let Some(j) = resolved[..i].iter().position(|t| t == target) {
@@ -279,7 +280,7 @@ impl RosArgs {
     }
 
     /// The namespace, `/` by default, without a trailing slash.
-    pub fn namespace(&self) -> String {
+    pub(crate) fn namespace(&self) -> String {
         match self.namespace.as_deref() {
             None | Some("/") => "/".to_string(),
             Some(ns) => ns.trim_end_matches('/').to_string(),
@@ -289,7 +290,7 @@ impl RosArgs {
     /// The absolute topic name for `name` after remapping: relative names resolve in the
     /// namespace, `~/x` in the node's private namespace, and a remap applies when its left side
     /// is the name as written or its resolved form.
-    pub fn topic(&self, name: &str, node: &str) -> String {
+    pub(crate) fn topic(&self, name: &str, node: &str) -> String {
         let ns = self.namespace();
         let resolved = resolve(name, &ns, node);
         for (from, to) in &self.remaps {

@@ -24,7 +24,7 @@ use ros2_client::{rosout, Context, Name, Node, NodeEvent, NodeName, NodeOptions,
 /// `ROS_AUTOMATIC_DISCOVERY_RANGE`: how far the node looks for others (Jazzy's rcl and
 /// rmw_fastrtps; docs/node.md, "Several hosts").
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum DiscoveryRange {
+pub(crate) enum DiscoveryRange {
     /// No other participant, not even on this host.
     Off,
     /// This host, and the static peers: no multicast.
@@ -37,7 +37,7 @@ pub enum DiscoveryRange {
 
 impl DiscoveryRange {
     /// The environment's spelling.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Self::Off => "OFF",
             Self::Localhost => "LOCALHOST",
@@ -82,7 +82,7 @@ const MAX_STATIC_PEERS: usize = 64;
 
 /// How this process takes part in the DDS graph.
 #[derive(Debug, Clone, Copy)]
-pub struct Graph {
+pub(crate) struct Graph {
     /// `ROS_DOMAIN_ID`.
     pub domain_id: u16,
     /// `ROS_AUTOMATIC_DISCOVERY_RANGE`, or LOCALHOST by the deprecated `ROS_LOCALHOST_ONLY=1`.
@@ -151,7 +151,7 @@ impl Graph {
     /// `ROS_DOMAIN_ID` (0 when unset), `ROS_AUTOMATIC_DISCOVERY_RANGE` and `ROS_STATIC_PEERS`
     /// as Jazzy's rcl reads them; `ROS_LOCALHOST_ONLY=1` (deprecated) means LOCALHOST without
     /// static peers. A bad value is an error, where rcl would warn and assume LOCALHOST.
-    pub fn from_env() -> anyhow::Result<Self> {
+    pub(crate) fn from_env() -> anyhow::Result<Self> {
         let var = |name| std::env::var(name).ok();
         let domain_id = match var("ROS_DOMAIN_ID") {
             Some(s) if !s.trim().is_empty() => match s.trim().parse::<u16>() {
@@ -174,7 +174,7 @@ impl Graph {
     /// `domain_id` on this host alone, with no static peers: for tests of the node's endpoints in
     /// one process.
     #[cfg(test)]
-    pub fn localhost(domain_id: u16) -> Self {
+    pub(crate) fn localhost(domain_id: u16) -> Self {
         Self {
             domain_id,
             range: DiscoveryRange::Localhost,
@@ -212,7 +212,7 @@ impl Graph {
     }
 
     /// The static peers in force.
-    pub fn static_peers(&self) -> &[std::net::Ipv4Addr] {
+    pub(crate) fn static_peers(&self) -> &[std::net::Ipv4Addr] {
         self.peers.as_slice()
     }
 
@@ -257,7 +257,7 @@ impl Graph {
     }
 
     /// The discovery range and static peers when they are not the default, for log lines.
-    pub fn scope(&self) -> String {
+    pub(crate) fn scope(&self) -> String {
         let peers: Vec<String> = self.static_peers().iter().map(|p| p.to_string()).collect();
         match (self.range, peers.is_empty()) {
             (DiscoveryRange::Subnet, true) => String::new(),
@@ -273,11 +273,11 @@ impl Graph {
 
 /// SIGINT and SIGTERM, caught from the start of a command (or never, for a helper participant).
 #[derive(Debug)]
-pub struct Shutdown(Option<Signals>);
+pub(crate) struct Shutdown(Option<Signals>);
 
 impl Shutdown {
     /// Waits for a request to stop; the signal's name.
-    pub async fn requested(&mut self) -> &'static str {
+    pub(crate) async fn requested(&mut self) -> &'static str {
         let Some(signals) = self.0.as_mut() else {
             return futures::future::pending().await;
         };
@@ -290,7 +290,7 @@ impl Shutdown {
 
 /// A command before it joins the graph: signals caught, `--ros-args` read.
 #[derive(Debug)]
-pub struct Start {
+pub(crate) struct Start {
     shutdown: Shutdown,
     /// The ROS arguments.
     pub ros: RosArgs,
@@ -300,7 +300,7 @@ impl Start {
     /// Catches SIGINT and SIGTERM first (a signal during start-up must still end the command
     /// cleanly), then reads the ROS arguments (`--log-level` is the binary's: it sets up the
     /// logger before any command runs).
-    pub fn new(ros_argv: &[String]) -> anyhow::Result<Self> {
+    pub(crate) fn new(ros_argv: &[String]) -> anyhow::Result<Self> {
         let signals = Signals::new([Signal::Int, Signal::Term]).context("cannot catch signals")?;
         let ros = RosArgs::parse(ros_argv)?;
         Ok(Self {
@@ -310,7 +310,7 @@ impl Start {
     }
 
     /// The node name: `-r __node:=NAME`, else `default`.
-    pub fn node_name(&self, default: &str) -> String {
+    pub(crate) fn node_name(&self, default: &str) -> String {
         self.ros
             .node_name
             .clone()
@@ -319,7 +319,7 @@ impl Start {
 
     /// Joins the graph as node `name` in the namespace of `-r __ns:=`, and watches it for
     /// another node of the same full name ([`Session::watch_namesakes`]).
-    pub fn open(self, name: &str, options: NodeOptions) -> anyhow::Result<Session> {
+    pub(crate) fn open(self, name: &str, options: NodeOptions) -> anyhow::Result<Session> {
         let graph = Graph::from_env()?;
         let namespace = self.ros.namespace();
         let mut session = Session::open(graph, &namespace, name, options, self.shutdown, self.ros)?;
@@ -329,7 +329,7 @@ impl Start {
 }
 
 /// One DDS participant with one node and its spinner.
-pub struct Session {
+pub(crate) struct Session {
     /// The domain and its scope.
     pub graph: Graph,
     /// The ROS arguments (empty for a helper participant).
@@ -359,7 +359,7 @@ impl std::fmt::Debug for Session {
 
 impl Session {
     /// A helper participant (no signals, no ROS arguments), as `--demo` uses.
-    pub fn open_helper(
+    pub(crate) fn open_helper(
         graph: Graph,
         namespace: &str,
         name: &str,
@@ -410,7 +410,7 @@ impl Session {
     /// participant's last list for those who join later). rcl only warns of a namesake in its
     /// own process; two nodes of one name on a domain share their parameter services, their
     /// `/rosout` logger and their line in `ros2 node list`.
-    pub fn watch_namesakes(&mut self) {
+    pub(crate) fn watch_namesakes(&mut self) {
         let Some(events) = self.node.status_receiver() else {
             return;
         };
@@ -437,29 +437,29 @@ impl Session {
     }
 
     /// The node.
-    pub fn node(&self) -> &Node {
+    pub(crate) fn node(&self) -> &Node {
         &self.node
     }
 
     /// The node, to create endpoints.
-    pub fn node_mut(&mut self) -> &mut Node {
+    pub(crate) fn node_mut(&mut self) -> &mut Node {
         &mut self.node
     }
 
     /// The absolute name of topic `base` after namespace and remapping.
-    pub fn topic_name(&self, base: &str) -> String {
+    pub(crate) fn topic_name(&self, base: &str) -> String {
         self.ros.topic(base, &self.name)
     }
 
     /// Runs `body` on this session's executor (the spinner runs beside it) until it ends.
-    pub fn run<T>(&mut self, body: impl AsyncFnOnce(&mut Node, &mut Shutdown) -> T) -> T {
+    pub(crate) fn run<T>(&mut self, body: impl AsyncFnOnce(&mut Node, &mut Shutdown) -> T) -> T {
         smol::block_on(self.executor.run(body(&mut self.node, &mut self.shutdown)))
     }
 
     /// Leaves the graph in order: the node (which stops the spinner), the spinner task, and
     /// last the context, whose drop disposes the DDS participant. Endpoints must be dropped
     /// before.
-    pub fn close(self) {
+    pub(crate) fn close(self) {
         let Session {
             executor,
             spinner,
@@ -492,7 +492,7 @@ fn namesake_warning(name: &str, gid: Gid) -> String {
 }
 
 /// Creates the topic `full_name` (absolute) carrying messages of type `M`.
-pub fn create_topic<M: RosMessage>(
+pub(crate) fn create_topic<M: RosMessage>(
     node: &Node,
     full_name: &str,
     qos: &QosProfile,
@@ -503,14 +503,14 @@ pub fn create_topic<M: RosMessage>(
 }
 
 /// Reliable, volatile, keep-last `depth`: what rclpy's default publisher and subscription offer.
-pub fn qos(depth: i64) -> QosProfile {
+pub(crate) fn qos(depth: i64) -> QosProfile {
     QosProfile::publisher_default().history(History::KeepLast {
         depth: usize::try_from(depth.max(1)).unwrap_or(1),
     })
 }
 
 /// Logs to stderr and to `/rosout`.
-pub fn say(node: &Node, level: log::Level, text: &str) {
+pub(crate) fn say(node: &Node, level: log::Level, text: &str) {
     log::log!(target: "grasp_orient::node", level, "{text}");
     let level = match level {
         log::Level::Error => LogLevel::Error,

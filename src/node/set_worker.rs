@@ -44,7 +44,7 @@ use std::time::{Duration, Instant};
 
 /// Where a set came from, and so where its answer goes.
 #[derive(Debug, Clone, Copy)]
-pub enum Via {
+pub(crate) enum Via {
     /// The topic `grasp_candidate_sets`; `taken`: from the set's arrival in the DDS reader to the
     /// node's thread taking it.
     Topic {
@@ -58,7 +58,7 @@ pub enum Via {
 
 /// One set for the set thread, with what its answer needs.
 #[derive(Debug)]
-pub struct SetJob {
+pub(crate) struct SetJob {
     /// The set.
     pub set: SetInput,
     /// When it was received and sent, ns since the epoch (its settings are those in force when
@@ -79,7 +79,7 @@ pub struct SetJob {
 
 /// A set's answer, back from the set thread.
 #[derive(Debug)]
-pub struct SetDone {
+pub(crate) struct SetDone {
     /// Where the answer goes.
     pub via: Via,
     /// The answer, its markers and what to record.
@@ -92,7 +92,7 @@ pub struct SetDone {
 
 /// The set thread, its queue and its clock.
 #[derive(Debug)]
-pub struct SetWorker {
+pub(crate) struct SetWorker {
     jobs: Option<mpsc::Sender<(SetJob, Instant)>>,
     /// The answers, as they are ready.
     pub done: UnboundedReceiver<SetDone>,
@@ -109,7 +109,7 @@ impl SetWorker {
     /// empty answer per candidate, nothing solved) and pose sets' meshes from `meshes` (the
     /// node's cache: a mesh named by a set is loaded off the node's thread, on one of
     /// `loaders`' threads).
-    pub fn start(
+    pub(crate) fn start(
         shared: Shared,
         echo: bool,
         meshes: Arc<MeshCache>,
@@ -147,7 +147,7 @@ impl SetWorker {
     /// Hands `job` to the set thread; when `max_queued_sets` sets already wait behind the one
     /// being solved (or the node is stopping), its answer at once instead: `STATUS_BUSY`, nothing
     /// solved.
-    pub fn submit(&self, job: SetJob) -> Result<(), Box<SetDone>> {
+    pub(crate) fn submit(&self, job: SetJob) -> Result<(), Box<SetDone>> {
         let (max_queued, rules) = {
             let live = self.shared.lock();
             let version = live.version_at(job.received);
@@ -178,14 +178,14 @@ impl SetWorker {
     /// Stops: the set being solved stops between two candidates, and those still waiting are
     /// answered with every candidate not solved; the set thread ends after them. Their answers
     /// still come on [`SetWorker::done`], which ends after the last.
-    pub fn stop(&mut self) {
+    pub(crate) fn stop(&mut self) {
         self.interrupt.raise(Halt::Stopping);
         self.jobs = None;
         self.clock.quit();
     }
 
     /// Whether the set thread has ended (its last answer sent).
-    pub fn ended(&self) -> bool {
+    pub(crate) fn ended(&self) -> bool {
         self.thread.as_ref().is_none_or(|t| t.is_finished())
     }
 }

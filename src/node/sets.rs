@@ -25,13 +25,13 @@ use ros2_client::{
 use std::time::{Duration, Instant};
 
 /// The service's name under the node (`~/recommend`).
-pub const SERVICE: &str = "recommend";
+pub(crate) const SERVICE: &str = "recommend";
 
 /// The pose service's name under the node (`~/recommend_poses`).
-pub const POSE_SERVICE: &str = "recommend_poses";
+pub(crate) const POSE_SERVICE: &str = "recommend_poses";
 
 /// The set topics and the service.
-pub struct SetEndpoints {
+pub(crate) struct SetEndpoints {
     /// `grasp_candidate_sets`.
     pub candidates: Subscription<GraspCandidateSet>,
     /// `grip_recommendation_sets`.
@@ -54,7 +54,7 @@ impl std::fmt::Debug for SetEndpoints {
 
 impl SetEndpoints {
     /// Creates the endpoints of the set kinds on `topics` with QoS depth `qos_depth`.
-    pub fn create(node: &mut Node, topics: &Topics, qos_depth: i64) -> anyhow::Result<Self> {
+    pub(crate) fn create(node: &mut Node, topics: &Topics, qos_depth: i64) -> anyhow::Result<Self> {
         let qos = qos(qos_depth);
         let sets = create_topic::<GraspCandidateSet>(
             node,
@@ -122,7 +122,7 @@ where
 
 /// Takes one set (of candidates or of poses) from its topic: hands it to the set thread, or
 /// answers it at once when the set thread's queue is full.
-pub async fn take_topic(
+pub(crate) async fn take_topic(
     node: &Node,
     endpoints: &SetEndpoints,
     markers: &MarkersOut,
@@ -152,7 +152,7 @@ pub async fn take_topic(
 
 /// Takes one call of `~/recommend` or `~/recommend_poses` (its times are when it was taken), as
 /// [`take_topic`] does.
-pub async fn take_call(
+pub(crate) async fn take_call(
     node: &Node,
     endpoints: &SetEndpoints,
     markers: &MarkersOut,
@@ -179,7 +179,7 @@ pub async fn take_call(
 
 /// Sends a set's answer where the set came from (published, or the response to its call); then
 /// its markers; then counts and records it.
-pub async fn answer_done(
+pub(crate) async fn answer_done(
     node: &Node,
     endpoints: &SetEndpoints,
     markers: &MarkersOut,

@@ -82,11 +82,11 @@ fn recover_hint(path: &Path, damage: &Damage) -> String {
 }
 
 /// How many examples of one kind of trouble a report keeps.
-pub const EXAMPLES_KEPT: usize = 10;
+pub(crate) const EXAMPLES_KEPT: usize = 10;
 
 /// Adds an example to `examples` unless it holds [`EXAMPLES_KEPT`] already; `example` is only
 /// made when there is room.
-pub fn keep_example(examples: &mut Vec<String>, example: impl FnOnce() -> String) {
+pub(crate) fn keep_example(examples: &mut Vec<String>, example: impl FnOnce() -> String) {
     if examples.len() < EXAMPLES_KEPT {
         examples.push(example());
     }
@@ -140,7 +140,7 @@ impl Bag {
 }
 
 /// Reads a whole file, refusing what is not a regular file (`/dev/zero` would never end).
-pub fn read_file(path: &Path) -> Result<Vec<u8>, BagError> {
+pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, BagError> {
     let io = |source| BagError::Io {
         path: path.to_path_buf(),
         source,

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 /// What the `record*` parameters ask for.
 #[derive(Debug, Clone, Copy)]
-pub struct Wanted<'a> {
+pub(crate) struct Wanted<'a> {
     /// Record at all (`record`).
     pub record: bool,
     /// The folder for new files (`record_dir`).
@@ -19,7 +19,7 @@ pub struct Wanted<'a> {
 
 /// A change of the recording, for the log.
 #[derive(Debug)]
-pub enum Change {
+pub(crate) enum Change {
     /// A file was started.
     Started(PathBuf),
     /// A file was finished.
@@ -37,7 +37,7 @@ pub enum Change {
 
 impl Change {
     /// Whether it reports a failure.
-    pub fn is_failure(&self) -> bool {
+    pub(crate) fn is_failure(&self) -> bool {
         matches!(self, Change::Failed(_) | Change::StartFailed(_))
     }
 }
@@ -103,7 +103,7 @@ struct Active {
 }
 
 /// The recording of one node run.
-pub struct Recording {
+pub(crate) struct Recording {
     node: String,
     topics: Topics,
     qos_depth: i64,
@@ -124,7 +124,7 @@ impl Recording {
     /// Nothing recorded yet; files of node `node` (its full name) will have the channels
     /// `topics` (markers if asked for). `on_stop` is called from the writer thread when writing
     /// fails, to have [`Recording::check`] called soon.
-    pub fn new(node: &str, topics: Topics, qos_depth: i64, on_stop: OnStop) -> Self {
+    pub(crate) fn new(node: &str, topics: Topics, qos_depth: i64, on_stop: OnStop) -> Self {
         Self {
             node: node.to_string(),
             topics,
@@ -137,7 +137,7 @@ impl Recording {
     /// Starts, stops or restarts recording to match `wanted`: a file in another folder or with
     /// other channels than asked for is closed and a new one started; with `record` true and
     /// no file (never started, stopped, or failed), a start is tried.
-    pub fn follow(&mut self, wanted: Wanted<'_>) -> Vec<Change> {
+    pub(crate) fn follow(&mut self, wanted: Wanted<'_>) -> Vec<Change> {
         let mut changes = Vec::new();
         if let Some(a) = &self.active {
             if !wanted.record || a.dir != wanted.dir || a.markers != wanted.markers {
@@ -176,18 +176,18 @@ impl Recording {
     }
 
     /// Whether a file is being written.
-    pub fn is_on(&self) -> bool {
+    pub(crate) fn is_on(&self) -> bool {
         self.active.is_some()
     }
 
     /// Whether the file being written takes markers.
-    pub fn records_markers(&self) -> bool {
+    pub(crate) fn records_markers(&self) -> bool {
         self.active.as_ref().is_some_and(|a| a.markers)
     }
 
     /// Hands one message to the file, if one is being written. A writer that has stopped takes
     /// nothing; [`Recording::check`] reports it.
-    pub fn record(&self, payload: Payload, log_time: u64, publish_time: u64) {
+    pub(crate) fn record(&self, payload: Payload, log_time: u64, publish_time: u64) {
         self.record_all(vec![Entry {
             payload,
             log_time,
@@ -196,14 +196,14 @@ impl Recording {
     }
 
     /// Hands messages to the file to be written together, if one is being written.
-    pub fn record_all(&self, entries: Vec<Entry>) {
+    pub(crate) fn record_all(&self, entries: Vec<Entry>) {
         if let Some(a) = &self.active {
             a.recorder.record_all(entries);
         }
     }
 
     /// Takes down a writer that stopped on a failure: its cause, once.
-    pub fn check(&mut self) -> Option<Change> {
+    pub(crate) fn check(&mut self) -> Option<Change> {
         if self.active.as_ref()?.recorder.has_stopped() {
             return self.stop();
         }
@@ -211,7 +211,7 @@ impl Recording {
     }
 
     /// Finishes the file, if any, and says what it holds.
-    pub fn stop(&mut self) -> Option<Change> {
+    pub(crate) fn stop(&mut self) -> Option<Change> {
         let r = self.active.take()?.recorder;
         let path = r.path().to_path_buf();
         Some(match r.finish() {

@@ -21,16 +21,20 @@
 //! a node run as its `record` parameters say.
 
 pub mod bag;
-pub mod channels;
-pub mod lifecycle;
-pub mod output;
+pub(crate) mod channels;
+pub(crate) mod lifecycle;
+pub(crate) mod output;
 mod pump;
 pub mod recover;
 pub(crate) mod resync;
-pub mod scan;
+pub(crate) mod scan;
 pub mod settings;
 mod sink;
 pub(crate) mod summary;
+
+pub use channels::{IncompatibleChannel, RecordedFields};
+pub use output::OutputError;
+pub use scan::{decompressed_limit, Damage};
 
 use crate::kind::{self, Kind, Visit};
 use crate::msg::{cdr, definitions, MarkerArray, RosMessage};
@@ -47,7 +51,7 @@ use std::time::Instant;
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 /// Longest time between two flushes of the file.
-pub const FLUSH_EVERY: Duration = Duration::from_secs(1);
+pub(crate) const FLUSH_EVERY: Duration = Duration::from_secs(1);
 /// Chunk size before compression, bytes.
 const CHUNK_SIZE: u64 = 1 << 20;
 
@@ -200,13 +204,13 @@ impl Topics {
     }
 
     /// Every kind on the node's default topics (`/grasp_candidates`, ...), markers left out.
-    pub fn default_names() -> Self {
+    pub(crate) fn default_names() -> Self {
         Self::named(|base| format!("/{base}"))
     }
 
     /// Every kind on the topics `name` gives each base name of [`Kind::TOPICS`] (the node's
     /// namespace and remappings), markers left out.
-    pub fn named(name: impl Fn(&str) -> String) -> Self {
+    pub(crate) fn named(name: impl Fn(&str) -> String) -> Self {
         struct All<F>(Topics, F);
         impl<F: Fn(&str) -> String> Visit for All<F> {
             fn kind<K: Kind>(&mut self) {
@@ -230,31 +234,24 @@ impl Topics {
         self
     }
 
-    /// Without kind `K`'s channels.
-    pub fn without<K: Kind>(mut self) -> Self {
-        self.names[kind::Channel::request::<K>().slot()] = None;
-        self.names[kind::Channel::answer::<K>().slot()] = None;
-        self
-    }
-
     /// With the markers on `topic`.
-    pub fn with_markers(mut self, topic: impl Into<String>) -> Self {
+    pub(crate) fn with_markers(mut self, topic: impl Into<String>) -> Self {
         self.markers = Some(topic.into());
         self
     }
 
     /// The topic of `channel`, if the recording has it.
-    pub fn of(&self, channel: kind::Channel) -> Option<&str> {
+    pub(crate) fn of(&self, channel: kind::Channel) -> Option<&str> {
         self.names[channel.slot()].as_deref()
     }
 
     /// The topic of kind `K`'s requests, if the recording has it.
-    pub fn requests<K: Kind>(&self) -> Option<&str> {
+    pub(crate) fn requests<K: Kind>(&self) -> Option<&str> {
         self.of(kind::Channel::request::<K>())
     }
 
     /// The topic of kind `K`'s answers, if the recording has it.
-    pub fn answers<K: Kind>(&self) -> Option<&str> {
+    pub(crate) fn answers<K: Kind>(&self) -> Option<&str> {
         self.of(kind::Channel::answer::<K>())
     }
 }
@@ -272,7 +269,7 @@ pub struct Written {
 
 impl Written {
     /// Messages written on `channel`.
-    pub fn of(&self, channel: kind::Channel) -> u64 {
+    pub(crate) fn of(&self, channel: kind::Channel) -> u64 {
         self.messages[channel.slot()]
     }
 
@@ -288,14 +285,14 @@ impl Written {
 }
 
 /// Nanoseconds since the Unix epoch, now.
-pub fn now_ns() -> u64 {
+pub(crate) fn now_ns() -> u64 {
     SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0, |d| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX))
 }
 
 /// `YYYYMMDDTHHMMSSZ` of a time in ns since the epoch (UTC, proleptic Gregorian).
-pub fn stamp_name(ns: u64) -> String {
+pub(crate) fn stamp_name(ns: u64) -> String {
     let secs = ns / 1_000_000_000;
     let (days, rem) = (secs / 86_400, secs % 86_400);
     // Civil date from days since 1970-01-01 (H. Hinnant's algorithm).
@@ -319,7 +316,7 @@ pub fn stamp_name(ns: u64) -> String {
 /// The part of a recording's name that names its node: the full name without its leading
 /// slash, namespaces joined by `__` (which no ROS name contains, so two nodes never share it),
 /// e.g. `/arm/grasp_orient` gives `arm__grasp_orient`.
-pub fn node_stem(node: &str) -> String {
+pub(crate) fn node_stem(node: &str) -> String {
     let stem = node.trim_start_matches('/').replace('/', "__");
     if stem.is_empty() {
         "grasp_orient".to_string()
@@ -331,7 +328,7 @@ pub fn node_stem(node: &str) -> String {
 /// rosbag2's `offered_qos_profiles` YAML (Jazzy form) for a reliable, volatile, keep-last
 /// publisher with no deadline, lifespan or lease (rosbag2 writes "infinite" as the largest
 /// `rmw_time_t` it can store).
-pub fn qos_yaml(depth: i64) -> String {
+pub(crate) fn qos_yaml(depth: i64) -> String {
     let infinite = "\n    sec: 9223372036\n    nsec: 854775807";
     format!(
         "- history: keep_last\n  depth: {depth}\n  reliability: reliable\n  durability: volatile\n  deadline:{infinite}\n  lifespan:{infinite}\n  liveliness: automatic\n  liveliness_lease_duration:{infinite}\n  avoid_ros_namespace_conventions: false\n"
@@ -389,7 +386,7 @@ impl BagWriter {
     }
 
     /// Writes into `file` (empty, opened for writing), known to the user as `path`.
-    pub fn on_file(
+    pub(crate) fn on_file(
         file: File,
         path: &Path,
         topics: &Topics,
@@ -475,7 +472,7 @@ impl BagWriter {
     }
 
     /// The file being written.
-    pub fn path(&self) -> &Path {
+    pub(crate) fn path(&self) -> &Path {
         &self.path
     }
 
@@ -598,7 +595,7 @@ impl BagWriter {
     }
 
     /// Closes the current chunk and hands the bytes to the OS.
-    pub fn flush(&mut self) -> Result<(), RecordError> {
+    pub(crate) fn flush(&mut self) -> Result<(), RecordError> {
         if let Err(e) = self.writer()?.flush() {
             return Err(self.mcap_failed(e));
         }
@@ -625,7 +622,7 @@ pub struct Recorder {
 }
 
 /// Called from a writer thread when it stops on a failure.
-pub type OnStop = Arc<dyn Fn() + Send + Sync>;
+pub(crate) type OnStop = Arc<dyn Fn() + Send + Sync>;
 
 impl Recorder {
     /// Starts a recording in `dir` (created if missing) for node `node` (its full name): a new
@@ -662,7 +659,7 @@ impl Recorder {
     }
 
     /// Whether the writer stopped on a failure ([`Recorder::finish`] gives it).
-    pub fn has_stopped(&self) -> bool {
+    pub(crate) fn has_stopped(&self) -> bool {
         self.writers.has_stopped()
     }
 
@@ -674,7 +671,7 @@ impl Recorder {
 
     /// Hands messages to the writer to be written together (no flush falls between them, so a
     /// candidate and its answer are both in the file or neither is); never blocks.
-    pub fn record_all(&self, entries: Vec<Entry>) -> bool {
+    pub(crate) fn record_all(&self, entries: Vec<Entry>) -> bool {
         self.writers.hand_over(entries)
     }
 

@@ -29,7 +29,7 @@ pub enum OutputError {
 }
 
 /// Whether `a` and `b` name the same existing file (through links, too).
-pub fn same_file(a: &Path, b: &Path) -> bool {
+pub(crate) fn same_file(a: &Path, b: &Path) -> bool {
     let (Ok(ma), Ok(mb)) = (std::fs::metadata(a), std::fs::metadata(b)) else {
         return false;
     };
@@ -47,7 +47,7 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
 
 /// An output being written under a temporary name in its destination's folder.
 #[derive(Debug)]
-pub struct Replacement {
+pub(crate) struct Replacement {
     destination: PathBuf,
     file: File,
     temp: tempfile::TempPath,
@@ -55,14 +55,14 @@ pub struct Replacement {
 
 /// The name a [`Replacement`] waits under, until [`Pending::commit`].
 #[derive(Debug)]
-pub struct Pending {
+pub(crate) struct Pending {
     destination: PathBuf,
     temp: tempfile::TempPath,
 }
 
 impl Replacement {
     /// A temporary file beside `destination`; refused when `destination` is one of `inputs`.
-    pub fn create(destination: &Path, inputs: &[&Path]) -> Result<Self, OutputError> {
+    pub(crate) fn create(destination: &Path, inputs: &[&Path]) -> Result<Self, OutputError> {
         if let Some(input) = inputs.iter().find(|i| same_file(i, destination)) {
             return Err(OutputError::IsInput {
                 output: destination.to_path_buf(),
@@ -98,12 +98,12 @@ impl Replacement {
     }
 
     /// The temporary file's path.
-    pub fn temporary_path(&self) -> &Path {
+    pub(crate) fn temporary_path(&self) -> &Path {
         &self.temp
     }
 
     /// The file to write, and what renames it into place.
-    pub fn into_parts(self) -> (File, Pending) {
+    pub(crate) fn into_parts(self) -> (File, Pending) {
         (
             self.file,
             Pending {
@@ -117,7 +117,7 @@ impl Replacement {
 impl Pending {
     /// Makes the temporary file (written in full, and closed) durable and renames it over the
     /// destination. Dropping a `Pending` instead removes the temporary file.
-    pub fn commit(self) -> std::io::Result<()> {
+    pub(crate) fn commit(self) -> std::io::Result<()> {
         File::open(&self.temp)?.sync_all()?;
         self.temp.persist(&self.destination).map_err(|e| e.error)
     }

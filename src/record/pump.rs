@@ -230,7 +230,7 @@ impl std::fmt::Debug for Shared {
 
 impl Writers {
     /// Starts the writer (at idle priority) and the rescuer (at the caller's) on `bag`.
-    pub fn start(bag: BagWriter, on_stop: OnStop) -> std::io::Result<Self> {
+    pub(super) fn start(bag: BagWriter, on_stop: OnStop) -> std::io::Result<Self> {
         Self::start_with(bag, on_stop, Rescue::default(), true)
     }
 
@@ -287,7 +287,7 @@ impl Writers {
     }
 
     /// Hands messages over; false once the recording has ended.
-    pub fn hand_over(&self, entries: Vec<Entry>) -> bool {
+    pub(super) fn hand_over(&self, entries: Vec<Entry>) -> bool {
         let n = entries.len() as u64;
         let sent = self.tx.as_ref().is_some_and(|tx| tx.send(entries).is_ok());
         if sent {
@@ -297,13 +297,13 @@ impl Writers {
     }
 
     /// Whether the recording stopped on a failure.
-    pub fn has_stopped(&self) -> bool {
+    pub(super) fn has_stopped(&self) -> bool {
         self.shared.stopped.load(Ordering::SeqCst)
     }
 
     /// Writes what is left on this thread, closes the file, stops the rescuer; how the
     /// recording ended. Only the first call ends it (later ones give [`RecordError::Thread`]).
-    pub fn finish(&mut self) -> Result<Written, RecordError> {
+    pub(super) fn finish(&mut self) -> Result<Written, RecordError> {
         let outcome = {
             // The lock first, so that the writer does not start the closing at idle priority.
             let mut p = self.shared.lock_wanted();

@@ -14,7 +14,7 @@ use std::borrow::Cow;
 /// Why a chunk record does not open; its words are the damage `recover` reports there.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
-pub enum Unopened {
+pub(crate) enum Unopened {
     /// The record is not a chunk.
     #[error("not a chunk")]
     NotAChunk,
@@ -43,13 +43,13 @@ pub enum Unopened {
 
 /// Decompressed bytes still allowed.
 #[derive(Debug, Clone, Copy)]
-pub struct Budget {
+pub(crate) struct Budget {
     left: u64,
 }
 
 impl Budget {
     /// [`scan::decompressed_limit`] of a file of `file_len` bytes.
-    pub fn new(file_len: u64) -> Self {
+    pub(crate) fn new(file_len: u64) -> Self {
         Self {
             left: scan::decompressed_limit(file_len),
         }
@@ -66,7 +66,7 @@ impl Budget {
 
 /// The record whose opcode is at `at`, when its header is inside `end` and its length fits
 /// before `end`; any opcode.
-pub fn record_at(bytes: &[u8], at: u64, end: u64) -> Option<Record<'_>> {
+pub(crate) fn record_at(bytes: &[u8], at: u64, end: u64) -> Option<Record<'_>> {
     let end = usize::try_from(end).ok()?.min(bytes.len());
     let at = usize::try_from(at).ok()?;
     let body = at.checked_add(9).filter(|b| *b <= end)?;
@@ -82,13 +82,13 @@ pub fn record_at(bytes: &[u8], at: u64, end: u64) -> Option<Record<'_>> {
 }
 
 /// The end of `record`'s bytes, as an offset.
-pub fn end_of(record: &Record<'_>) -> u64 {
+pub(crate) fn end_of(record: &Record<'_>) -> u64 {
     record.offset + 9 + record.body.len() as u64
 }
 
 /// A chunk record read and verified: the chunk, and its records decompressed. `Err` says why not
 /// (its fields, a length that says more than its fields, the decompression, the CRC).
-pub fn open_chunk<'a>(
+pub(crate) fn open_chunk<'a>(
     record: &Record<'a>,
     budget: &mut Budget,
 ) -> Result<(Chunk<'a>, Cow<'a, [u8]>), Unopened> {
@@ -133,7 +133,7 @@ fn starts_record(bytes: &[u8], at: u64, end: u64, end_is_sound: bool, budget: &m
 
 /// The first offset after `from` and before `until` where a record that verifies starts, else
 /// `until`.
-pub fn next_record(
+pub(crate) fn next_record(
     bytes: &[u8],
     from: u64,
     until: u64,

@@ -22,7 +22,7 @@ use std::fmt;
 use std::io::Read;
 
 /// The 8 bytes an MCAP file starts and ends with.
-pub const MAGIC: &[u8; 8] = b"\x89MCAP0\r\n";
+pub(crate) const MAGIC: &[u8; 8] = b"\x89MCAP0\r\n";
 
 /// The most bytes of records the chunks of a file of `file_len` bytes may declare in all: 1024
 /// times its size, and at least 1 MiB. The recordings of `grasp_orient` (lz4, whose ratio cannot
@@ -34,37 +34,37 @@ pub fn decompressed_limit(file_len: u64) -> u64 {
 }
 
 /// Record opcodes.
-pub mod op {
+pub(crate) mod op {
     /// Header.
-    pub const HEADER: u8 = 0x01;
+    pub(crate) const HEADER: u8 = 0x01;
     /// Footer.
-    pub const FOOTER: u8 = 0x02;
+    pub(crate) const FOOTER: u8 = 0x02;
     /// Schema.
-    pub const SCHEMA: u8 = 0x03;
+    pub(crate) const SCHEMA: u8 = 0x03;
     /// Channel.
-    pub const CHANNEL: u8 = 0x04;
+    pub(crate) const CHANNEL: u8 = 0x04;
     /// Message.
-    pub const MESSAGE: u8 = 0x05;
+    pub(crate) const MESSAGE: u8 = 0x05;
     /// Chunk.
-    pub const CHUNK: u8 = 0x06;
+    pub(crate) const CHUNK: u8 = 0x06;
     /// Message index.
-    pub const MESSAGE_INDEX: u8 = 0x07;
+    pub(crate) const MESSAGE_INDEX: u8 = 0x07;
     /// Chunk index.
-    pub const CHUNK_INDEX: u8 = 0x08;
+    pub(crate) const CHUNK_INDEX: u8 = 0x08;
     /// Attachment.
-    pub const ATTACHMENT: u8 = 0x09;
+    pub(crate) const ATTACHMENT: u8 = 0x09;
     /// Attachment index.
-    pub const ATTACHMENT_INDEX: u8 = 0x0A;
+    pub(crate) const ATTACHMENT_INDEX: u8 = 0x0A;
     /// Statistics.
-    pub const STATISTICS: u8 = 0x0B;
+    pub(crate) const STATISTICS: u8 = 0x0B;
     /// Metadata.
-    pub const METADATA: u8 = 0x0C;
+    pub(crate) const METADATA: u8 = 0x0C;
     /// Metadata index.
-    pub const METADATA_INDEX: u8 = 0x0D;
+    pub(crate) const METADATA_INDEX: u8 = 0x0D;
     /// Summary offset.
-    pub const SUMMARY_OFFSET: u8 = 0x0E;
+    pub(crate) const SUMMARY_OFFSET: u8 = 0x0E;
     /// Data end.
-    pub const DATA_END: u8 = 0x0F;
+    pub(crate) const DATA_END: u8 = 0x0F;
 }
 
 /// Where a file is damaged and how.
@@ -97,7 +97,7 @@ impl fmt::Display for Damage {
 
 /// One record: where it starts, its opcode, and its body (the bytes after opcode and length).
 #[derive(Debug, Clone, Copy)]
-pub struct Record<'a> {
+pub(crate) struct Record<'a> {
     /// Offset of its opcode (in the file, or in a chunk's records).
     pub offset: u64,
     /// The opcode.
@@ -109,7 +109,7 @@ pub struct Record<'a> {
 /// The records of a region, each length checked against what remains. Ends after the first
 /// damage.
 #[derive(Debug)]
-pub struct Records<'a> {
+pub(crate) struct Records<'a> {
     bytes: &'a [u8],
     pos: usize,
     base: u64,
@@ -122,7 +122,7 @@ impl<'a> Records<'a> {
     /// The records of `bytes`, whose first byte is at offset `base`. `end_is_cut`: a record
     /// running past the end means the region was cut short (a file without its end magic), not
     /// damaged.
-    pub fn new(bytes: &'a [u8], base: u64, end_is_cut: bool) -> Self {
+    pub(crate) fn new(bytes: &'a [u8], base: u64, end_is_cut: bool) -> Self {
         Self {
             bytes,
             pos: 0,
@@ -133,7 +133,7 @@ impl<'a> Records<'a> {
     }
 
     /// Offset of the next record.
-    pub fn position(&self) -> u64 {
+    pub(crate) fn position(&self) -> u64 {
         self.base + self.pos as u64
     }
 }
@@ -275,7 +275,7 @@ impl<'a> Fields<'a> {
 
 /// A schema record.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Schema<'a> {
+pub(crate) struct Schema<'a> {
     /// Its id (0 is not allowed).
     pub id: u16,
     /// The type name, e.g. `grasp_orient/msg/GraspCandidate`.
@@ -288,7 +288,7 @@ pub struct Schema<'a> {
 
 /// A channel record.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Channel {
+pub(crate) struct Channel {
     /// Its id.
     pub id: u16,
     /// Its schema's id, 0 for none.
@@ -303,7 +303,7 @@ pub struct Channel {
 
 /// A message record.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Message<'a> {
+pub(crate) struct Message<'a> {
     /// Its channel's id.
     pub channel_id: u16,
     /// Its sequence number.
@@ -318,7 +318,7 @@ pub struct Message<'a> {
 
 /// A chunk record, still compressed.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Chunk<'a> {
+pub(crate) struct Chunk<'a> {
     /// Size of its records once decompressed.
     pub uncompressed_size: u64,
     /// CRC-32 of its decompressed records, 0 when not computed.
@@ -331,7 +331,7 @@ pub struct Chunk<'a> {
 
 /// An attachment record.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Attachment<'a> {
+pub(crate) struct Attachment<'a> {
     /// When it was logged, ns.
     pub log_time: u64,
     /// When it was created, ns.
@@ -346,7 +346,7 @@ pub struct Attachment<'a> {
 
 /// What one record holds, as far as grasp_orient reads it.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Parsed<'a> {
+pub(crate) enum Parsed<'a> {
     /// The header: the profile, e.g. `ros2`.
     Header {
         /// The profile.
@@ -405,7 +405,7 @@ pub enum Parsed<'a> {
 /// Longer than a screen by a few lines: one short arm per record type of the specification,
 /// field by field in its order; the records with checks of their own (chunk, attachment,
 /// statistics) have functions of their own.
-pub fn parse<'a>(record: &Record<'a>) -> Result<Parsed<'a>, Damage> {
+pub(crate) fn parse<'a>(record: &Record<'a>) -> Result<Parsed<'a>, Damage> {
     Ok(match record.opcode {
         op::HEADER => {
             let mut f = Fields::new(record, "header");
@@ -565,7 +565,7 @@ fn parse_statistics<'a>(record: &Record<'a>) -> Result<Parsed<'a>, Damage> {
 
 /// A chunk index record of the summary: where one chunk lies in the file.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct ChunkIndex {
+pub(crate) struct ChunkIndex {
     /// Offset of the chunk record's opcode.
     pub chunk_start: u64,
     /// Length of the whole chunk record (opcode and length field included).
@@ -577,7 +577,7 @@ pub struct ChunkIndex {
 }
 
 /// Reads a chunk index record.
-pub fn parse_chunk_index(record: &Record<'_>) -> Result<ChunkIndex, Damage> {
+pub(crate) fn parse_chunk_index(record: &Record<'_>) -> Result<ChunkIndex, Damage> {
     let mut f = Fields::new(record, "chunk index");
     f.u64("message_start_time")?;
     f.u64("message_end_time")?;
@@ -596,14 +596,14 @@ pub fn parse_chunk_index(record: &Record<'_>) -> Result<ChunkIndex, Damage> {
 
 /// Reads the offset and length (of the whole record) that a metadata index or an attachment
 /// index record gives, both their first two fields.
-pub fn parse_record_index(record: &Record<'_>) -> Result<(u64, u64), Damage> {
+pub(crate) fn parse_record_index(record: &Record<'_>) -> Result<(u64, u64), Damage> {
     let mut f = Fields::new(record, "index");
     Ok((f.u64("offset")?, f.u64("length")?))
 }
 
 /// Whether a chunk record's body ends where its fields end (a length field that says more
 /// hides the records after it).
-pub fn chunk_fills_its_record(chunk: &Chunk<'_>, record: &Record<'_>) -> bool {
+pub(crate) fn chunk_fills_its_record(chunk: &Chunk<'_>, record: &Record<'_>) -> bool {
     // Two times, the size, the CRC, the compression's length and the records' length.
     let fields = 8 + 8 + 8 + 4 + 4 + 8;
     fields + chunk.compression.len() + chunk.data.len() == record.body.len()
@@ -612,7 +612,7 @@ pub fn chunk_fills_its_record(chunk: &Chunk<'_>, record: &Record<'_>) -> bool {
 /// A chunk's records, decompressed: exactly `uncompressed_size` bytes, their CRC checked when
 /// the chunk has one. Memory grows with what the decompressor produces, never with the size the
 /// chunk claims. `Err` says why not.
-pub fn decompress<'a>(chunk: &Chunk<'a>) -> Result<Cow<'a, [u8]>, Undecompressable> {
+pub(crate) fn decompress<'a>(chunk: &Chunk<'a>) -> Result<Cow<'a, [u8]>, Undecompressable> {
     let size = chunk.uncompressed_size;
     let compressed = chunk.data.len();
     let out: Cow<'a, [u8]> = match chunk.compression.as_str() {
@@ -651,7 +651,7 @@ pub fn decompress<'a>(chunk: &Chunk<'a>) -> Result<Cow<'a, [u8]>, Undecompressab
 /// Why a chunk's records cannot be had.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
-pub enum Undecompressable {
+pub(crate) enum Undecompressable {
     /// The lz4 stream is damaged.
     #[error("lz4: {0}")]
     Lz4(std::io::Error),
@@ -692,7 +692,7 @@ fn read_at_most(reader: impl Read, limit: u64, compressed: usize) -> std::io::Re
 
 /// A record of the data section, parsed, with its offset.
 #[derive(Debug, Clone)]
-pub struct Item<'a> {
+pub(crate) struct Item<'a> {
     /// Offset of its opcode in the file.
     pub offset: u64,
     /// Its opcode.
@@ -704,9 +704,7 @@ pub struct Item<'a> {
 
 /// A file walked from its magic to its end.
 #[derive(Debug, Default)]
-pub struct Scan<'a> {
-    /// The profile of its header record.
-    pub profile: Option<String>,
+pub(crate) struct Scan<'a> {
     /// The records of the data section, in file order (the header excluded).
     pub items: Vec<Item<'a>>,
     /// Schemas and channels of the summary section, when the summary's CRC verified (or it has
@@ -733,32 +731,29 @@ pub struct Scan<'a> {
 
 impl Scan<'_> {
     /// The first damage the walk met in a record, or where it stopped.
-    pub fn record_damage(&self) -> Option<&Damage> {
+    pub(crate) fn record_damage(&self) -> Option<&Damage> {
         let in_items = self.items.iter().filter_map(|i| i.parsed.as_ref().err());
         in_items.chain(self.stopped.iter()).min_by_key(|d| d.offset)
     }
 
     /// The first damage of the data section or the summary as a whole (their CRCs).
-    pub fn section_damage(&self) -> Option<&Damage> {
+    pub(crate) fn section_damage(&self) -> Option<&Damage> {
         self.damage.iter().chain(&self.summary_damage).next()
     }
 }
 
 /// Walks a whole file. `Err` when it is not an MCAP file at all (empty, too short, no magic, no
 /// header record); damage after the header is reported in the [`Scan`].
-pub fn scan(bytes: &[u8]) -> Result<Scan<'_>, Damage> {
-    let (profile, mut records) = open(bytes)?;
-    let mut out = Scan {
-        profile: Some(profile),
-        ..Scan::default()
-    };
+pub(crate) fn scan(bytes: &[u8]) -> Result<Scan<'_>, Damage> {
+    let (_, mut records) = open(bytes)?;
+    let mut out = Scan::default();
     walk(bytes, &mut records, &mut out);
     Ok(out)
 }
 
 /// The profile of a file's header record and the offset of the record after it. `Err` when it
 /// is not an MCAP file at all (empty, too short, no magic, no header record).
-pub fn header(bytes: &[u8]) -> Result<(String, u64), Damage> {
+pub(crate) fn header(bytes: &[u8]) -> Result<(String, u64), Damage> {
     let (profile, records) = open(bytes)?;
     Ok((profile, records.position()))
 }
@@ -1003,7 +998,7 @@ fn check_summary<'a>(
 
 /// A schema as a channel table keeps it (copied out of the chunk it came in).
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct KnownSchema {
+pub(crate) struct KnownSchema {
     /// The type name.
     pub name: String,
     /// e.g. `ros2msg`.
@@ -1015,7 +1010,7 @@ pub struct KnownSchema {
 /// The schemas and channels defined so far, by id. A second definition of an id must equal the
 /// first.
 #[derive(Debug, Clone, Default)]
-pub struct Table {
+pub(crate) struct Table {
     /// Schemas by id.
     pub schemas: std::collections::HashMap<u16, KnownSchema>,
     /// Channels by id.
@@ -1024,7 +1019,7 @@ pub struct Table {
 
 impl Table {
     /// Adds a schema found at `offset`.
-    pub fn add_schema(&mut self, schema: &Schema<'_>, offset: u64) -> Result<(), Damage> {
+    pub(crate) fn add_schema(&mut self, schema: &Schema<'_>, offset: u64) -> Result<(), Damage> {
         let known = KnownSchema {
             name: schema.name.clone(),
             encoding: schema.encoding.clone(),
@@ -1044,7 +1039,7 @@ impl Table {
     }
 
     /// Adds a channel found at `offset`.
-    pub fn add_channel(&mut self, channel: &Channel, offset: u64) -> Result<(), Damage> {
+    pub(crate) fn add_channel(&mut self, channel: &Channel, offset: u64) -> Result<(), Damage> {
         match self.channels.get(&channel.id) {
             Some(old) if old != channel => Err(Damage::at(
                 offset,
@@ -1059,7 +1054,7 @@ impl Table {
     }
 
     /// The schema of a channel, when it has one and it is known.
-    pub fn schema_of(&self, channel: &Channel) -> Option<&KnownSchema> {
+    pub(crate) fn schema_of(&self, channel: &Channel) -> Option<&KnownSchema> {
         self.schemas.get(&channel.schema_id)
     }
 }

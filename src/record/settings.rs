@@ -21,7 +21,7 @@ use serde_yaml_ng::{Mapping, Value};
 use std::collections::BTreeMap;
 
 /// The name of the metadata records that carry settings.
-pub const METADATA_NAME: &str = "grasp_orient.settings";
+pub(crate) const METADATA_NAME: &str = "grasp_orient.settings";
 
 /// The settings in force from one time on.
 #[derive(Debug, Clone, PartialEq)]
@@ -56,7 +56,7 @@ pub enum SettingsError {
 }
 
 /// Every parameter of `config` as a ROS 2 params file for all nodes.
-pub fn params_file(config: &Config) -> String {
+pub(crate) fn params_file(config: &Config) -> String {
     let parameters: Mapping = config
         .parameters()
         .into_iter()
@@ -72,7 +72,7 @@ pub fn params_file(config: &Config) -> String {
 
 impl SettingsRecord {
     /// The entries of its metadata record.
-    pub fn to_metadata(&self) -> BTreeMap<String, String> {
+    pub(crate) fn to_metadata(&self) -> BTreeMap<String, String> {
         BTreeMap::from([
             ("since_ns".to_string(), self.since.to_string()),
             ("node".to_string(), self.node.clone()),
@@ -83,7 +83,7 @@ impl SettingsRecord {
     }
 
     /// Reads the entries of a metadata record named [`METADATA_NAME`].
-    pub fn from_metadata(entries: &BTreeMap<String, String>) -> Result<Self, SettingsError> {
+    pub(crate) fn from_metadata(entries: &BTreeMap<String, String>) -> Result<Self, SettingsError> {
         let get = |key: &str| {
             entries
                 .get(key)

@@ -22,7 +22,7 @@ use std::sync::Arc;
 
 /// What a [`Sink`] shares with its recording.
 #[derive(Debug, Default)]
-pub struct State {
+pub(super) struct State {
     position: AtomicU64,
     refused: AtomicBool,
     /// Tests: writes past this many bytes fail as on a full disk.
@@ -31,32 +31,32 @@ pub struct State {
 
 impl State {
     /// Bytes written so far (the position after the last write).
-    pub fn position(&self) -> u64 {
+    pub(super) fn position(&self) -> u64 {
         self.position.load(Ordering::SeqCst)
     }
 
     /// From now on every write fails.
-    pub fn refuse_writes(&self) {
+    pub(super) fn refuse_writes(&self) {
         self.refused.store(true, Ordering::SeqCst);
     }
 
     /// Writes past `bytes` fail with "no space left on device" (for tests of a full disk).
     #[cfg(test)]
-    pub fn fail_past(&self, bytes: u64) {
+    pub(super) fn fail_past(&self, bytes: u64) {
         self.limit.store(bytes, Ordering::SeqCst);
     }
 }
 
 /// A recording's file: counts its position, and refuses every write after the first failure.
 #[derive(Debug)]
-pub struct Sink {
+pub(super) struct Sink {
     file: File,
     state: Arc<State>,
 }
 
 impl Sink {
     /// Writes into `file` from its start.
-    pub fn new(file: File) -> Self {
+    pub(super) fn new(file: File) -> Self {
         Self {
             file,
             state: Arc::new(State {
@@ -67,7 +67,7 @@ impl Sink {
     }
 
     /// Its state, to look at from the recording.
-    pub fn state(&self) -> Arc<State> {
+    pub(super) fn state(&self) -> Arc<State> {
         self.state.clone()
     }
 
@@ -121,7 +121,7 @@ impl Seek for Sink {
 
 /// A schema the recording defined.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct SchemaDef {
+pub(super) struct SchemaDef {
     /// Its id.
     pub id: u16,
     /// The type name.
@@ -134,7 +134,7 @@ pub struct SchemaDef {
 
 /// A channel the recording defined.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct ChannelDef {
+pub(super) struct ChannelDef {
     /// Its id.
     pub id: u16,
     /// Its schema's id.
@@ -149,7 +149,7 @@ pub struct ChannelDef {
 
 /// The schemas and channels of a recording, as its writer made them: what a summary repeats.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct Definitions {
+pub(super) struct Definitions {
     /// Schemas.
     pub schemas: Vec<SchemaDef>,
     /// Channels.
@@ -157,7 +157,7 @@ pub struct Definitions {
 }
 
 /// A file a recording is closed in: read, written, and cut to a length.
-pub trait Cut: Read + Write + Seek {
+pub(super) trait Cut: Read + Write + Seek {
     /// Cuts (or extends) the file to `length` bytes.
     fn cut(&mut self, length: u64) -> std::io::Result<()>;
     /// Makes what was written durable.
@@ -177,7 +177,7 @@ impl Cut for File {
 /// Cuts the MCAP file at `path` back to `length` bytes (the end of its last complete flush)
 /// and ends it there: a data end record with the CRC of those bytes, a summary of what they
 /// hold (with `defs`), the footer, the end magic ([`close`]).
-pub fn close_at(path: &Path, length: u64, defs: &Definitions) -> std::io::Result<()> {
+pub(super) fn close_at(path: &Path, length: u64, defs: &Definitions) -> std::io::Result<()> {
     let mut file = OpenOptions::new().read(true).write(true).open(path)?;
     close(&mut file, length, defs)
 }
@@ -189,7 +189,7 @@ pub fn close_at(path: &Path, length: u64, defs: &Definitions) -> std::io::Result
 /// a closed file. A summary without the schemas or the chunk index would fit more often, but
 /// `rosbags` cannot read a recording through it (its messages are not in time order), so none is
 /// written.
-pub fn close<F: Cut>(file: &mut F, length: u64, defs: &Definitions) -> std::io::Result<()> {
+pub(super) fn close<F: Cut>(file: &mut F, length: u64, defs: &Definitions) -> std::io::Result<()> {
     file.cut(length)?;
     let end = end_of(file, length, defs)?;
     file.seek(SeekFrom::Start(length))?;

@@ -20,7 +20,7 @@ const SUMMARY_OFFSET_LEN: usize = 1 + 8 + 1 + 8 + 8;
 
 /// A summary whose CRC verified.
 #[derive(Debug, Default)]
-pub struct Summary<'a> {
+pub(crate) struct Summary<'a> {
     /// Where it starts in this file: the data section ends here.
     pub start: u64,
     /// How far it lies from where the footer says (bytes inserted, or removed when negative,
@@ -40,10 +40,10 @@ pub struct Summary<'a> {
 
 /// Why a file's summary is not used: `None` when it has none to use (no footer, which a cut
 /// file lacks; no summary; a summary without a CRC), else the damage.
-pub type Unused = Option<Damage>;
+pub(crate) type Unused = Option<Damage>;
 
 /// The summary of `bytes`, when its CRC verifies.
-pub fn read(bytes: &[u8]) -> Result<Summary<'_>, Unused> {
+pub(crate) fn read(bytes: &[u8]) -> Result<Summary<'_>, Unused> {
     let len = bytes.len();
     if len < 2 * MAGIC.len() + FOOTER_LEN || !bytes.ends_with(MAGIC) {
         return Err(None);

@@ -7,8 +7,6 @@
 mod poses;
 mod sets;
 
-pub use poses::PoseAnswers;
-
 use crate::answer::{answer_one, Rules, BEHIND_TANGENT_NOTE};
 use crate::config::{Config, ConfigError};
 use crate::kind::{Key, Kind, Stream, Streams};
@@ -22,7 +20,7 @@ use serde_yaml_ng::Value;
 use std::collections::{BTreeMap, HashMap, VecDeque};
 
 /// Two numbers closer than this, relative to `max(1, |a|, |b|)`, are the same.
-pub const TOLERANCE: f64 = 1e-9;
+pub(crate) const TOLERANCE: f64 = 1e-9;
 
 /// How one replay went.
 #[derive(Debug, Clone, Default)]
@@ -63,7 +61,7 @@ pub struct Summary {
 
 impl Summary {
     /// Adds the summary of a replay of other candidates.
-    pub fn merge(&mut self, other: Summary) {
+    pub(crate) fn merge(&mut self, other: Summary) {
         self.candidates += other.candidates;
         self.compared += other.compared;
         self.differing += other.differing;
@@ -171,15 +169,17 @@ const EXACT: [ExactField; 10] = [
 ];
 
 /// Every field of `ours` against `recorded`: `(field, gap)` for each that differs.
-pub fn differences(
+#[cfg(test)]
+pub(crate) fn differences(
     ours: &GripRecommendation,
     recorded: &GripRecommendation,
 ) -> Vec<(&'static str, f64)> {
     differences_in(ours, recorded, &RecordedFields::default())
 }
 
-/// [`differences`] on the fields the recording has (`fields`); the others are not compared.
-pub fn differences_in(
+/// Every field of `ours` against `recorded` that the recording has (`fields`): `(field, gap)`
+/// for each that differs; the others are not compared.
+pub(crate) fn differences_in(
     ours: &GripRecommendation,
     recorded: &GripRecommendation,
     fields: &RecordedFields,
@@ -299,7 +299,11 @@ pub struct Plan {
 impl Plan {
     /// The settings for the candidates of `bag`: its recorded settings, or else `base`; with
     /// `overrides` applied over either.
-    pub fn for_bag(bag: &Bag, base: &Config, overrides: &[Override]) -> Result<Self, ReplayError> {
+    pub(crate) fn for_bag(
+        bag: &Bag,
+        base: &Config,
+        overrides: &[Override],
+    ) -> Result<Self, ReplayError> {
         let apply = |config: &Config| -> Result<(Config, Settings), ReplayError> {
             let mut config = config.clone();
             for (name, value) in overrides {
@@ -346,7 +350,7 @@ impl Plan {
     }
 
     /// [`Plan::fixed`] with gripper rules too.
-    pub fn fixed_with(settings: Settings, rules: Rules) -> Self {
+    pub(crate) fn fixed_with(settings: Settings, rules: Rules) -> Self {
         Self {
             timeline: Vec::new(),
             fallback: (settings, rules),
@@ -358,13 +362,13 @@ impl Plan {
     }
 
     /// Whether the bag carried its settings.
-    pub fn from_recording(&self) -> bool {
+    pub(crate) fn settings_recorded(&self) -> bool {
         !self.timeline.is_empty()
     }
 
     /// The settings for a candidate received at `log_time`: the last record from before it (the
     /// first record for earlier candidates).
-    pub fn settings_at(&self, log_time: u64) -> &Settings {
+    pub(crate) fn settings_at(&self, log_time: u64) -> &Settings {
         match self.index_at(log_time) {
             Some(i) => &self.timeline[i].1,
             None => &self.fallback.0,
@@ -372,7 +376,7 @@ impl Plan {
     }
 
     /// The gripper rules for a candidate (or set) received at `log_time`, as [`Plan::settings_at`].
-    pub fn rules_at(&self, log_time: u64) -> &Rules {
+    pub(crate) fn rules_at(&self, log_time: u64) -> &Rules {
         match self.index_at(log_time) {
             Some(i) => &self.timeline[i].2,
             None => &self.fallback.1,
@@ -381,7 +385,7 @@ impl Plan {
 
     /// The closing axis for a pose candidate (or pose set) received at `log_time`, as
     /// [`Plan::settings_at`].
-    pub fn closing_axis_at(&self, log_time: u64) -> ClosingAxis {
+    pub(crate) fn closing_axis_at(&self, log_time: u64) -> ClosingAxis {
         self.index_at(log_time)
             .and_then(|i| self.closing_axes.0.get(i).copied())
             .unwrap_or(self.closing_axes.1)
@@ -421,7 +425,7 @@ fn pose_meshes() -> std::sync::Arc<grasp_orient_geometry::MeshCache> {
 
 /// [`replay`], also returning the new answers: each kind's in its stream's `answers`, one per
 /// recorded request in the requests' order, each with its request's times.
-pub fn replay_with_answers(
+pub(crate) fn replay_with_answers(
     bag: &Bag,
     plan: &Plan,
     progress: impl Fn(u64) + Sync,
@@ -598,7 +602,10 @@ pub const RECORDED_BEHIND_TANGENT: &str =
 /// a contact) and `ours` is today's answer to it: not refused, its `message` noting
 /// ([`BEHIND_TANGENT_NOTE`]) the contact the refusal named, for the same candidate (id, header)
 /// and objective. Every other difference stays a difference (`docs/recordings.md`).
-pub fn answered_behind_tangent(ours: &GripRecommendation, theirs: &GripRecommendation) -> bool {
+pub(crate) fn answered_behind_tangent(
+    ours: &GripRecommendation,
+    theirs: &GripRecommendation,
+) -> bool {
     let Some(contact) = theirs.message.strip_prefix(RECORDED_BEHIND_TANGENT) else {
         return false;
     };
@@ -789,7 +796,7 @@ mod tests {
             ..Bag::default()
         };
         let plan = Plan::for_bag(&bag, &Config::default(), &[]).expect("a plan");
-        assert!(plan.from_recording());
+        assert!(plan.settings_recorded());
         assert_eq!(plan.settings_at(0).friction_safety_factor, 1.5);
         assert_eq!(plan.settings_at(99).friction_safety_factor, 1.5);
         assert_eq!(plan.settings_at(100).friction_safety_factor, 2.0);
@@ -803,7 +810,7 @@ mod tests {
         assert_eq!(plan.settings_at(200).friction_safety_factor, 1.25);
         assert_eq!(plan.overridden, ["friction_safety_factor"]);
         let plan = Plan::for_bag(&Bag::default(), &Config::default(), &[]).expect("a plan");
-        assert!(!plan.from_recording());
+        assert!(!plan.settings_recorded());
         assert_eq!(*plan.settings_at(5), Settings::default());
     }
 }

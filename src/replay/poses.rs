@@ -25,7 +25,7 @@ use std::sync::Arc;
 /// The new answers of a replay's pose candidates and pose sets, each with its candidate's (or
 /// set's) times, in the recording's order; empty unless asked for.
 #[derive(Debug, Default)]
-pub struct PoseAnswers {
+pub(crate) struct PoseAnswers {
     /// One per recorded pose candidate.
     pub recommendations: Vec<Recorded<PoseRecommendation>>,
     /// One per recorded pose set.

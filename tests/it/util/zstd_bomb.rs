@@ -1,7 +1,14 @@
 //! A decompression bomb in MCAP form, for the reader's tests (`tests/it/recordings.rs`) and the
 //! fuzz test's seeds (`tests/fuzz.rs`, which takes this file as a module of its own).
 
-use grasp_orient::record::scan::{op, MAGIC};
+/// The MCAP magic and the opcodes of the records written here, from the MCAP specification.
+const MAGIC: &[u8; 8] = b"\x89MCAP0\r\n";
+mod op {
+    pub const HEADER: u8 = 0x01;
+    pub const FOOTER: u8 = 0x02;
+    pub const CHUNK: u8 = 0x06;
+    pub const DATA_END: u8 = 0x0F;
+}
 
 /// A whole, valid MCAP file of about 2 kB whose one zstd chunk holds 64 MiB of zeros: reading it
 /// must stay within the budget of a 2 kB file (`record::scan::decompressed_limit`).
