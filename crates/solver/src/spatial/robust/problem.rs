@@ -16,7 +16,7 @@ use std::cell::{Cell, RefCell};
 /// Everything the solve needs, in axis coordinates.
 pub(super) struct Problem {
     pub(super) objective: Objective,
-    pub(super) quantity: Quantity,
+    quantity: Quantity,
     pub(super) view: AxisView,
     pub(super) region: Region,
     pub(super) segments: Vec<Segment>,
@@ -29,8 +29,8 @@ pub(super) struct Problem {
     /// The direction across the axis of the nominal object's plane (from the axis to `c`).
     pub(super) reference: Vector2<f64>,
     /// Unit inward normals, friction after the safety factor, the safety factor.
-    pub(super) mu: [f64; 2],
-    pub(super) safety: f64,
+    mu: [f64; 2],
+    safety: f64,
     /// Current gravity angle after the swing.
     pub(super) current: f64,
     /// Unit current gravity, candidate frame.
@@ -44,7 +44,7 @@ pub(super) struct Problem {
     /// The maximisations made so far, by quantity and tilt (the bits of θ): the last exchange
     /// round's tilt is the answer's, and usually one of the local minima's too, and a
     /// maximisation depends on nothing else, so each is made once.
-    pub(super) done: RefCell<Vec<(bool, u64, worst::Worst)>>,
+    done: RefCell<Vec<(bool, u64, worst::Worst)>>,
 }
 
 impl Problem {
@@ -298,7 +298,7 @@ pub(super) mod tests {
             crate::spatial::Verdict::Recommended(r) => *r,
             crate::spatial::Verdict::NoForceClosure(_) => return None,
         };
-        let u = super::Uncertainty {
+        let u = Uncertainty {
             center_of_mass_tolerance: t,
             mass_tolerance: 0.0,
         };
