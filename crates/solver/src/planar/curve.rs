@@ -7,8 +7,7 @@
 //! `Q`'s or `S`'s slope is the objective's. The nominal analysis (`analysis.rs`) and the robust
 //! envelope (`robust/envelope.rs`) are both made of such pieces and share this walk.
 
-use super::LocalMinimum;
-use super::PaperCandidate;
+use super::answer::{LocalMinimum, PaperCandidate};
 use crate::sinusoid::{next_periodic, Angle, QuadForm, Sinusoid};
 use std::f64::consts::{PI, TAU};
 

@@ -3,12 +3,13 @@
 
 use super::answer::{self, AxisRelation, CurrentPose, Miss, NoForceClosure, IN_PLANE_TOLERANCE};
 use super::candidate;
+use crate::limits::{
+    MAX_COORDINATE, MAX_FRICTION, MAX_GRAVITY, MAX_MASS, MAX_NORMAL_COMPONENT, MAX_SAFETY_FACTOR,
+    MIN_FRICTION, MIN_WEIGHT,
+};
 use crate::planar::analysis::Analysis;
 use crate::planar::frame::GraspFrame;
-use crate::planar::frame::{
-    friction, positive, times_pow2, vector, MAX_COORDINATE, MAX_FRICTION, MAX_GRAVITY, MAX_MASS,
-    MAX_NORMAL_COMPONENT, MAX_SAFETY_FACTOR, MIN_FRICTION, MIN_WEIGHT,
-};
+use crate::planar::frame::{friction, positive, times_pow2, vector};
 use crate::{
     planar::{Candidate, ConeMiss, Recommendation},
     Contact, InvalidInput, Settings,

@@ -5,7 +5,7 @@ use super::region::tests::{square_case_c, tolerance};
 use super::worst::tests::assert_envelope_is_the_maximum;
 use super::worst::vertex_frame;
 use super::*;
-use crate::planar::frame::MAX_COORDINATE;
+use crate::limits::MAX_COORDINATE;
 use crate::planar::paper;
 use crate::{AllowedRange, Objective};
 use nalgebra::Vector2;

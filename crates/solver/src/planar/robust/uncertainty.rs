@@ -1,7 +1,7 @@
 //! How well the object is known: the tolerances of its centre of mass and its mass, and their
 //! checks (shared with the spatial tolerances).
 
-use crate::planar::frame::MAX_COORDINATE;
+use crate::limits::MAX_COORDINATE;
 use crate::InvalidInput;
 use nalgebra::Vector2;
 
