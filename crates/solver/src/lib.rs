@@ -38,8 +38,10 @@
 //! one in 3D ([`spatial::solve`], [`spatial::analyse`]); each has a `robust` module for the worst
 //! case over tolerances ([`planar::robust::solve`], [`spatial::robust::solve`]). The two mirror
 //! each other: `Candidate`, `Recommendation`, `Verdict`, `NoForceClosure` in each, named by their
-//! module. The root holds only what both share: [`Settings`], [`Objective`], [`AllowedRange`],
-//! [`Contact`], [`InvalidInput`] and the input limits.
+//! module. The root holds only what both share: [`Settings`], [`Objective`], [`AllowedRange`]
+//! (`settings.rs`), [`Contact`] (`contact.rs`), [`InvalidInput`] (`invalid_input.rs`) and the
+//! input limits (`limits.rs`), re-exported here. Each module's `mod.rs` holds its docs and entry
+//! points; the types and steps lie in files below it, and no file uses one that uses it.
 
 mod contact;
 mod invalid_input;

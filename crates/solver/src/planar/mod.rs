@@ -1,11 +1,11 @@
 //! Planar grasps: the paper's problem, solved exactly (`docs/theory.md`).
 //!
 //! [`solve`] answers one [`Candidate`]; [`analyse`] gives the whole curve of gripping
-//! power over the graspable range. The submodules hold the steps: `frame` the paper frame and
-//! the input checks, `paper` the paper's closed forms, `analysis` the envelope and the objective on
-//! it, `curve` the objective's pieces and the walk that finds their local minima,
-//! `finger` the force each finger must give, and `robust` the worst case over a box of centres of
-//! mass and a mass tolerance.
+//! power over the graspable range. The submodules hold the types and the steps: `candidate` the
+//! grasp, `answer` the answer's types, `frame` the paper frame and the input checks, `paper` the
+//! paper's closed forms, `analysis` the envelope and the objective on it, `curve` the objective's
+//! pieces and the walk that finds their local minima, `finger` the force each finger must give,
+//! and `robust` the worst case over a box of centres of mass and a mass tolerance.
 
 pub(crate) mod analysis;
 mod answer;

@@ -160,6 +160,13 @@
 //! (`docs/theory.md`): with `a_i` the push of contact `i`, `(a_1 + a_2)/2` is the internal
 //! force and `a_1 - a_2` the weight's component along the line, `W_line = m|g| sin θ`, which does
 //! not depend on `c`. So the worst finger force is the worst internal force plus `m_max|g| |sin θ| / 2`.
+//!
+//! # Files
+//! `uncertainty.rs` the tolerances and their checks; `region.rs` the region and its points
+//! (section 3); `range.rs` the allowed range (section 4); `worst.rs` the vertices' frames
+//! (section 2), their curves and the worst case at one orientation (sections 1 and 5);
+//! `envelope.rs` the envelope and its exact minimum (section 6); `report.rs` what is reported
+//! (section 7); `tests.rs` the tests of the whole solve.
 
 mod envelope;
 mod range;

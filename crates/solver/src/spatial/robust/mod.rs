@@ -236,6 +236,14 @@
 //! The 1-norm with a centre-of-mass tolerance is refused ([`InvalidInput::Norm1SpatialTolerance`]):
 //! it depends on each plane's own split of the forces into normal and friction parts, which §3's
 //! convexity on `H_ψ` survives but the edge bounds of §4 do not cover.
+//!
+//! # Files
+//! `uncertainty.rs` the tolerances and their checks; `region.rs` the region, its points and the
+//! least elevation seen from a contact (§3, §6); `worst.rs` one object in closed form and the
+//! certified maximum along the edges (§2–§4); `problem.rs` the problem in axis coordinates, each
+//! object's plane and the worst case at one tilt (§1–§4); `range.rs` the allowed range (§6);
+//! `exchange.rs` the exchange method (§5, *Iteration bounds*); `report.rs` what is reported
+//! (§7); `tests.rs` the tests of the whole solve.
 
 mod exchange;
 mod problem;
