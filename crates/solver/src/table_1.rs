@@ -4,7 +4,7 @@
 //! in the ROS package holds the same four cases as messages, in SI units, and a test there holds
 //! the two to each other.
 
-use crate::planar::Candidate;
+use crate::planar::candidate::Candidate;
 
 /// Case `'a'` .. `'d'` of Table 1: `p1`, `p2`, `φ1`, `φ2`, `μ1`, `μ2`, with `Mg = 1`, in the paper
 /// frame (centre of mass at the origin, gravity along -y).

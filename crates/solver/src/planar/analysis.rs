@@ -11,15 +11,15 @@
 //!
 //! So the minimiser is one of a short list of closed-form angles, each of which is evaluated.
 
+use super::answer::{
+    CandidateC, ConeMiss, GraspCase, LocalMinimum, NoForceClosure, PaperCandidate, Recommendation,
+};
 use super::curve::{self, Curve, Piece, SAME_ANGLE};
 use super::finger;
 use super::frame::GraspFrame;
 use super::paper::{self, FORCE_SCALE};
-use super::sinusoid::{next_periodic, rising_zeros, wrap_angle, Angle, QuadForm, Sinusoid};
-use super::{
-    AllowedRange, CandidateC, ConeMiss, GraspCase, InvalidInput, LocalMinimum, NoForceClosure,
-    Objective, PaperCandidate, Recommendation,
-};
+use crate::sinusoid::{next_periodic, rising_zeros, wrap_angle, Angle, QuadForm, Sinusoid};
+use crate::{AllowedRange, InvalidInput, Objective};
 use smallvec::{smallvec, SmallVec};
 use std::f64::consts::TAU;
 
@@ -685,9 +685,10 @@ fn top_at(funcs: &[Sinusoid], at: &Angle, tol: f64) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::planar::candidate::Candidate;
     use crate::table_1::{paper_grasp, table_1};
-    use crate::{planar::Candidate, Settings};
-    use approx::abs_diff_eq;
+    use crate::Settings;
+    use approx::{abs_diff_eq, assert_abs_diff_eq};
 
     fn analysis(c: &Candidate, objective: Objective) -> Analysis {
         let f = GraspFrame::new(c, 1.0).expect("valid");
@@ -785,6 +786,39 @@ mod tests {
                     a.evaluate(t).power >= r.gripping_power - 1e-12,
                     "{objective:?} {t}"
                 );
+            }
+        }
+    }
+
+    /// Mean push = internal force and difference = the weight along the line, at every angle of
+    /// the graspable range, for every objective (norm1 may choose α above α_min).
+    #[test]
+    fn mean_push_is_the_internal_force_and_the_difference_the_weight_along_the_line() {
+        let grasps = [
+            table_1('a'),
+            table_1('b'),
+            table_1('c'),
+            table_1('d'),
+            paper_grasp((5.0, 4.0), -3.0, (0.785, 0.785), (1.5, 2.5)),
+        ];
+        for c in &grasps {
+            let frame = GraspFrame::new(c, 1.0).expect("valid");
+            for objective in [Objective::Norm2, Objective::Norm1, Objective::InternalForce] {
+                let a = Analysis::new(&frame, objective).expect("force closure");
+                let (lo, hi) = a.graspable_range();
+                for k in 0..=50 {
+                    let theta = lo + (hi - lo) * k as f64 / 50.0;
+                    let p = a.evaluate(theta);
+                    let [a1, a2] = finger::pushes(&frame, &p.forces);
+                    let tol = 1e-12 * frame.weight;
+                    assert_abs_diff_eq!(0.5 * (a1 + a2), p.internal_force, epsilon = tol);
+                    assert_abs_diff_eq!(a1 - a2, frame.weight * theta.sin(), epsilon = tol);
+                    assert_abs_diff_eq!(
+                        finger::finger_force(&frame, &p.forces),
+                        p.internal_force + 0.5 * (frame.weight * theta.sin()).abs(),
+                        epsilon = tol
+                    );
+                }
             }
         }
     }

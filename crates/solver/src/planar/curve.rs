@@ -7,8 +7,7 @@
 //! `Q`'s or `S`'s slope is the objective's. The nominal analysis (`analysis.rs`) and the robust
 //! envelope (`robust/envelope.rs`) are both made of such pieces and share this walk.
 
-use super::LocalMinimum;
-use super::PaperCandidate;
+use super::answer::{LocalMinimum, PaperCandidate};
 use crate::sinusoid::{next_periodic, Angle, QuadForm, Sinusoid};
 use std::f64::consts::{PI, TAU};
 
@@ -195,4 +194,33 @@ pub(crate) fn local_minima<P: Piece>(
         }
     }
     found
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quad_rising_zero_is_a_rising_zero() {
+        for &(p, q, r) in &[
+            (1.0, -2.0, 0.5),
+            (-0.3, 0.2, 1.0),
+            (0.0, 0.0, -1.0),
+            (2.0, -0.1, -3.0),
+        ] {
+            let d = QuadForm { p, q, r };
+            let t = quad_rising_zero(&d).expect("crosses zero");
+            let at = Angle::new(t);
+            assert!(d.value(&at).abs() < 1e-12, "{p} {q} {r}: {}", d.value(&at));
+            assert!(d.slope(&at) > 0.0);
+        }
+        assert_eq!(
+            quad_rising_zero(&QuadForm {
+                p: 1.0,
+                q: 2.0,
+                r: 0.1
+            }),
+            None
+        );
+    }
 }

@@ -23,10 +23,11 @@
 //!   along `(sin θ, -cos θ)`). So `a_1 - a_2 = W_x`: the finger the weight leans on pushes more,
 //!   `a_i = internal force ± W_x/2`, and the larger push is `internal force + |W_x|/2`.
 //!
-//! [`pushes`] computes `a_1, a_2` from the forces themselves (the definition); the unit tests
-//! below hold the two identities to the solver's own forces, and `tests/it/reference.rs` holds the
-//! result to the independent reference's contact forces projected on the line in the candidate's
-//! frame (code shared with nothing here).
+//! [`pushes`] computes `a_1, a_2` from the forces themselves (the definition); the unit test
+//! `mean_push_is_the_internal_force_and_the_difference_the_weight_along_the_line` in
+//! `analysis.rs`, which reports the finger force, holds the two identities to the solver's own
+//! forces, and `tests/it/reference.rs` holds the result to the independent reference's contact
+//! forces projected on the line in the candidate's frame (code shared with nothing here).
 
 use super::frame::GraspFrame;
 
@@ -44,46 +45,4 @@ pub(crate) fn pushes(f: &GraspFrame, forces: &[f64; 4]) -> [f64; 2] {
 pub(crate) fn finger_force(f: &GraspFrame, forces: &[f64; 4]) -> f64 {
     let [a1, a2] = pushes(f, forces);
     a1.max(a2)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::planar::analysis::Analysis;
-    use crate::table_1::{paper_grasp, table_1};
-    use crate::Objective;
-    use approx::assert_abs_diff_eq;
-
-    /// Mean push = internal force and difference = the weight along the line, at every angle of
-    /// the graspable range, for every objective (norm1 may choose α above α_min).
-    #[test]
-    fn mean_push_is_the_internal_force_and_the_difference_the_weight_along_the_line() {
-        let grasps = [
-            table_1('a'),
-            table_1('b'),
-            table_1('c'),
-            table_1('d'),
-            paper_grasp((5.0, 4.0), -3.0, (0.785, 0.785), (1.5, 2.5)),
-        ];
-        for c in &grasps {
-            let frame = GraspFrame::new(c, 1.0).expect("valid");
-            for objective in [Objective::Norm2, Objective::Norm1, Objective::InternalForce] {
-                let a = Analysis::new(&frame, objective).expect("force closure");
-                let (lo, hi) = a.graspable_range();
-                for k in 0..=50 {
-                    let theta = lo + (hi - lo) * k as f64 / 50.0;
-                    let p = a.evaluate(theta);
-                    let [a1, a2] = pushes(&frame, &p.forces);
-                    let tol = 1e-12 * frame.weight;
-                    assert_abs_diff_eq!(0.5 * (a1 + a2), p.internal_force, epsilon = tol);
-                    assert_abs_diff_eq!(a1 - a2, frame.weight * theta.sin(), epsilon = tol);
-                    assert_abs_diff_eq!(
-                        finger_force(&frame, &p.forces),
-                        p.internal_force + 0.5 * (frame.weight * theta.sin()).abs(),
-                        epsilon = tol
-                    );
-                }
-            }
-        }
-    }
 }

@@ -14,7 +14,7 @@
 //!   envelope of `α_3 .. α_6` alone (test `alpha_1_and_2_never_bind`).
 
 use super::frame::GraspFrame;
-use super::sinusoid::Sinusoid;
+use crate::sinusoid::Sinusoid;
 
 /// `Mg / (2 (x1 + x2))` in units where `Mg = 1` and `x1 + x2 = 1`.
 pub const FORCE_SCALE: f64 = 0.5;

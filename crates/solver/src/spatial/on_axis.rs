@@ -91,8 +91,8 @@
 //! rounding at the point found, but a derivative-free search locates a smooth minimum only to about 1e-8 rad (values closer than
 //! that agree to rounding).
 
+use super::answer::{AxisRelation, CurrentPose, Miss, NoForceClosure, Verdict};
 use super::plane::{Basis, Geometry, PlaneSolve};
-use super::{AxisRelation, CurrentPose};
 use crate::{
     planar::{ConeMiss, Recommendation},
     AllowedRange, Contact, InvalidInput, Objective, Settings,
@@ -454,7 +454,7 @@ fn norm1_candidates(
 #[derive(Debug)]
 enum Stop {
     Invalid(InvalidInput),
-    NoClosure(super::NoForceClosure),
+    NoClosure(NoForceClosure),
 }
 
 /// One solved plane.
@@ -493,12 +493,12 @@ fn solve_plane<'a>(
 }
 
 /// The best orientation over every plane through the axis (module docs).
-pub(super) fn solve(g: &Geometry, settings: &Settings) -> Result<super::Verdict, InvalidInput> {
+pub(super) fn solve(g: &Geometry, settings: &Settings) -> Result<Verdict, InvalidInput> {
     let grasp = match AxisGrasp::new(g) {
         Ok(grasp) => grasp,
         Err(misses) => {
-            return Ok(super::Verdict::NoForceClosure(super::NoForceClosure {
-                misses: misses.into_iter().map(super::Miss::Cone).collect(),
+            return Ok(Verdict::NoForceClosure(NoForceClosure {
+                misses: misses.into_iter().map(Miss::Cone).collect(),
                 friction_safety_factor: g.safety,
             }))
         }
@@ -506,12 +506,12 @@ pub(super) fn solve(g: &Geometry, settings: &Settings) -> Result<super::Verdict,
     match search(g, &grasp, settings) {
         Ok(r) => Ok(r),
         Err(Stop::Invalid(e)) => Err(e),
-        Err(Stop::NoClosure(miss)) => Ok(super::Verdict::NoForceClosure(miss)),
+        Err(Stop::NoClosure(miss)) => Ok(Verdict::NoForceClosure(miss)),
     }
 }
 
 /// Solves the candidate planes and keeps the best (ties to the smaller rotation).
-fn search(g: &Geometry, grasp: &AxisGrasp, settings: &Settings) -> Result<super::Verdict, Stop> {
+fn search(g: &Geometry, grasp: &AxisGrasp, settings: &Settings) -> Result<Verdict, Stop> {
     let psi0 = grasp.azimuth_of(&g.g0);
     // The plane of the current gravity: its current-pose answer, and the first candidate (so
     // that ties keep the object in it).
@@ -553,7 +553,7 @@ fn search(g: &Geometry, grasp: &AxisGrasp, settings: &Settings) -> Result<super:
     out.planar.gripping_power_current = current.0 * g.weight;
     out.planar.internal_force_current = current.1 * g.weight;
     out.planar.finger_force_current = current.2 * g.weight;
-    Ok(super::Verdict::Recommended(Box::new(out)))
+    Ok(Verdict::Recommended(Box::new(out)))
 }
 
 /// Whether `s` beats `b`: lower power, or a tie (1e-12 relative, unit weight) with a rotation

@@ -1,11 +1,15 @@
 //! Validation of a spatial candidate, the plane Π, the sliced cones (module docs §2), the planar
 //! candidate in Π and the way back to 3D (§3, §4).
 
-use super::{planar_outcome, v2, AxisRelation, CurrentPose, PlanarOutcome};
-use crate::planar::frame::{
-    friction, positive, times_pow2, vector, MAX_COORDINATE, MAX_FRICTION, MAX_GRAVITY, MAX_MASS,
-    MAX_NORMAL_COMPONENT, MAX_SAFETY_FACTOR, MIN_FRICTION, MIN_WEIGHT,
+use super::answer::{self, AxisRelation, CurrentPose, Miss, NoForceClosure, IN_PLANE_TOLERANCE};
+use super::candidate;
+use crate::limits::{
+    MAX_COORDINATE, MAX_FRICTION, MAX_GRAVITY, MAX_MASS, MAX_NORMAL_COMPONENT, MAX_SAFETY_FACTOR,
+    MIN_FRICTION, MIN_WEIGHT,
 };
+use crate::planar::analysis::Analysis;
+use crate::planar::frame::GraspFrame;
+use crate::planar::frame::{friction, positive, times_pow2, vector};
 use crate::{
     planar::{Candidate, ConeMiss, Recommendation},
     Contact, InvalidInput, Settings,
@@ -101,7 +105,7 @@ fn direction(field: &'static str, v: &Vector3<f64>) -> Result<Vector3<f64>, Inva
 
 /// Whether every field is within its limits (NaN and infinities are not): the common case, in
 /// one pass; [`validate`] names the field otherwise.
-fn within_limits(c: &super::Candidate) -> bool {
+fn within_limits(c: &candidate::Candidate) -> bool {
     let all = |v: &Vector3<f64>, limit: f64| v.iter().all(|x| x.abs() <= limit);
     let positive = |x: f64, limit: f64| x > 0.0 && x <= limit;
     all(&c.contact_1, MAX_COORDINATE)
@@ -117,7 +121,7 @@ fn within_limits(c: &super::Candidate) -> bool {
 
 /// Checks every field of a spatial candidate, naming the first one at fault, in the planar
 /// model's order.
-fn validate(c: &super::Candidate) -> Result<(), InvalidInput> {
+fn validate(c: &candidate::Candidate) -> Result<(), InvalidInput> {
     vector(
         ["contact_1.x", "contact_1.y", "contact_1.z"],
         &c.contact_1,
@@ -194,7 +198,7 @@ pub(super) struct Geometry {
 
 impl Geometry {
     /// Validates `c` and divides friction by `safety`.
-    pub fn new(c: &super::Candidate, safety: f64) -> Result<Self, InvalidInput> {
+    pub fn new(c: &candidate::Candidate, safety: f64) -> Result<Self, InvalidInput> {
         if !(1.0..=MAX_SAFETY_FACTOR).contains(&safety) {
             return Err(InvalidInput::SafetyFactor { value: safety });
         }
@@ -296,11 +300,11 @@ impl Geometry {
     }
 
     /// How far out of Π (rad) the current gravity may be and still count as in it:
-    /// [`IN_PLANE_TOLERANCE`](super::IN_PLANE_TOLERANCE), plus the uncertainty of Π's normal from
+    /// [`IN_PLANE_TOLERANCE`], plus the uncertainty of Π's normal from
     /// rounding coordinates of this magnitude at the centre of mass's distance from the axis
     /// (`64 ε M / dist`; 1e-9 rad at a millionth of the contact distance).
     pub fn in_plane_tolerance(&self) -> f64 {
-        super::IN_PLANE_TOLERANCE + 64.0 * f64::EPSILON * self.magnitude / (self.offset * self.d)
+        IN_PLANE_TOLERANCE + 64.0 * f64::EPSILON * self.magnitude / (self.offset * self.d)
     }
 
     /// The angle between the current gravity and the plane of `basis` (rad in `[0, π/2]`) when
@@ -372,7 +376,7 @@ fn cones_missing(
     points: &[Vector2<f64>; 3],
     normals: &[Vector2<f64>; 2],
     sliced: &[f64; 2],
-) -> Vec<super::Miss> {
+) -> Vec<Miss> {
     (0..2)
         .filter(|&i| sliced[i] > 0.0)
         .filter_map(|i| {
@@ -382,7 +386,7 @@ fn cones_missing(
                 .abs()
                 .atan2(u.dot(&to_other));
             (angle >= sliced[i].atan()).then(|| {
-                super::Miss::Cone(ConeMiss {
+                Miss::Cone(ConeMiss {
                     contact: [Contact::First, Contact::Second][i],
                     half_angle: sliced[i].atan(),
                     angle_to_other: angle,
@@ -415,7 +419,7 @@ impl<'a> PlaneSolve<'a> {
         g: &'a Geometry,
         basis: &Basis,
         points: [Vector2<f64>; 3],
-    ) -> Result<Self, Result<super::NoForceClosure, InvalidInput>> {
+    ) -> Result<Self, Result<NoForceClosure, InvalidInput>> {
         let mut normals2 = [Vector2::zeros(); 2];
         let mut normals = [Vector3::zeros(); 2];
         let mut tilt_tangent = [0.0; 2];
@@ -444,7 +448,7 @@ impl<'a> PlaneSolve<'a> {
             tilt_tangent[i] = across * inv;
             match sliced_friction(g.mu[i], tilt_tangent[i]) {
                 Some(mu) => sliced[i] = mu,
-                None => misses.push(super::Miss::Tilted {
+                None => misses.push(Miss::Tilted {
                     contact: [Contact::First, Contact::Second][i],
                     tilt: across.atan2(in_plane),
                     half_angle: g.mu[i].atan(),
@@ -453,7 +457,7 @@ impl<'a> PlaneSolve<'a> {
         }
         if !misses.is_empty() {
             misses.extend(cones_missing(&points, &normals2, &sliced));
-            return Err(Ok(super::NoForceClosure {
+            return Err(Ok(NoForceClosure {
                 misses,
                 friction_safety_factor: g.safety,
             }));
@@ -523,7 +527,7 @@ impl<'a> PlaneSolve<'a> {
         mut planar: Recommendation,
         current_pose: CurrentPose,
         axis: AxisRelation,
-    ) -> super::Recommendation {
+    ) -> answer::Recommendation {
         let (rotation_axis, rotation_angle) = self.rotation(&planar);
         let w = self.geometry.weight;
         planar.gripping_power *= w;
@@ -555,7 +559,7 @@ impl<'a> PlaneSolve<'a> {
             self.normals[0] * n1 + friction_directions[0] * f1,
             self.normals[1] * n2 + friction_directions[1] * f2,
         ];
-        super::Recommendation {
+        answer::Recommendation {
             gravity_direction: b.lift(&planar.gravity_direction),
             plane_x: b.x,
             plane_y: b.y,
@@ -577,6 +581,33 @@ impl<'a> PlaneSolve<'a> {
             planar,
         }
     }
+}
+
+/// The planar verdict of one plane: the recommendation (unit weight) or the misses, mapped into
+/// spatial terms.
+type PlanarOutcome = Result<crate::planar::Recommendation, NoForceClosure>;
+
+/// Runs the planar solver on a planar candidate built by the reduction and maps "no force
+/// closure" into spatial terms. The 3D input has been validated, so the planar checks are not run
+/// again; the friction coefficients are already divided by the safety factor `safety`.
+fn planar_outcome(
+    candidate: &crate::planar::Candidate,
+    settings: &Settings,
+    safety: f64,
+) -> Result<PlanarOutcome, InvalidInput> {
+    let frame = GraspFrame::from_valid(candidate, 1.0);
+    Ok(match Analysis::new(&frame, settings.objective) {
+        Ok(analysis) => Ok(analysis.recommend(&settings.range)?),
+        Err(crate::planar::NoForceClosure { misses, .. }) => Err(NoForceClosure {
+            misses: misses.into_iter().map(Miss::Cone).collect(),
+            friction_safety_factor: safety,
+        }),
+    })
+}
+
+/// A 2D vector's components, for building planar candidates.
+fn v2(x: f64, y: f64) -> Vector2<f64> {
+    Vector2::new(x, y)
 }
 
 #[cfg(test)]

@@ -1,8 +1,17 @@
 //! The upper envelope of the region's curves over the gravity angle, piece by piece, and its
 //! exact minimum (module docs of `planar::robust`, section 6).
 
-use super::*;
-use crate::planar::curve::{self, Piece};
+use crate::planar::curve::{self, Curve, Piece};
+use crate::planar::LocalMinimum;
+use crate::sinusoid::{wrap_angle, Angle};
+use std::f64::consts::TAU;
+
+/// Objective values closer than this, relative to themselves or to the weight, tie; the smaller
+/// wrist rotation wins (as in the nominal analysis).
+const TIE: f64 = 1e-12;
+/// Curves closer than this, relative to the largest, are level on the envelope; the steeper
+/// one goes on top.
+const ENVELOPE_TIE: f64 = 1e-12;
 
 /// One piece of the worst-case curve: on `[lo, hi]` vertex `vertex` is on top with `curve`.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -2,9 +2,73 @@
 //! docs §3), as the segments that hold its edges, its points on the contact axis, and the least
 //! elevation of its points seen from a contact (module docs §6).
 
-use super::{RegionPoint, RegionPointKind};
 use crate::{Contact, BEHIND_TANGENT};
 use nalgebra::Vector3;
+use std::fmt;
+
+/// A point of the region of possible centres of mass.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RegionPoint {
+    /// Position in the candidate frame, m.
+    pub position: Vector3<f64>,
+    /// Which point it is.
+    pub kind: RegionPointKind,
+}
+
+/// Which point of the region a [`RegionPoint`] is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RegionPointKind {
+    /// A corner of the box: the signs of its offset from `center_of_mass` along x, y and z (`0`
+    /// along an axis whose tolerance is zero).
+    Corner {
+        /// `-1`, `0` or `1`.
+        x: i8,
+        /// `-1`, `0` or `1`.
+        y: i8,
+        /// `-1`, `0` or `1`.
+        z: i8,
+    },
+    /// A vertex where the tangent plane at a contact cuts the box.
+    Cut {
+        /// The contact.
+        contact: Contact,
+    },
+    /// A point inside an edge of the region (module docs §3).
+    Edge,
+    /// A point of the region on the contact axis: every plane through the axis is taken.
+    Axis,
+}
+
+impl fmt::Display for RegionPoint {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let p = self.position;
+        let at = format!("({:.6}, {:.6}, {:.6}) m", p.x, p.y, p.z);
+        let sign = |s: i8| match s {
+            -1 => "-",
+            1 => "+",
+            _ => "",
+        };
+        match self.kind {
+            RegionPointKind::Corner { x: 0, y: 0, z: 0 } => write!(f, "the centre of mass {at}"),
+            RegionPointKind::Corner { x, y, z } => {
+                let names: Vec<String> = [(x, 'x'), (y, 'y'), (z, 'z')]
+                    .iter()
+                    .filter(|(s, _)| *s != 0)
+                    .map(|(s, n)| format!("{}{n}", sign(*s)))
+                    .collect();
+                write!(f, "corner ({}) of the box, {at}", names.join(", "))
+            }
+            RegionPointKind::Cut { contact } => {
+                write!(
+                    f,
+                    "{at}, where the box meets the tangent plane at {contact}"
+                )
+            }
+            RegionPointKind::Edge => write!(f, "{at} on an edge of the region"),
+            RegionPointKind::Axis => write!(f, "{at} on the contact axis"),
+        }
+    }
+}
 
 /// Lengths closer than this fraction of the scene's size are equal.
 const SAME: f64 = 1e-12;
