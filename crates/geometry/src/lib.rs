@@ -80,8 +80,8 @@ pub use cast::{
 pub use error::{Finger, GeometryError, MeshDefect};
 pub use formats::{parse_bytes, Triangles};
 pub use load::{load, parse, resolve, AmentIndex, MeshCache};
-pub use mass::{center_of_mass, check_closed};
-pub use mesh::Mesh;
+pub use mass::center_of_mass;
+pub use mesh::{check_closed, Mesh};
 pub use shape::{Primitive, Shape};
 
 /// The README's example runs as a doctest.
