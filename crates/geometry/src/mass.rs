@@ -27,7 +27,7 @@ use nalgebra::Point3;
 
 use crate::error::GeometryError;
 pub use crate::mesh::{check_closed, t_junctions, T_JUNCTION_TESTS};
-use crate::shape::Shape;
+use crate::shape::{check_pose, Shape};
 
 /// The centre of mass in the frame the object's pose is given in (the header frame).
 ///
@@ -39,7 +39,7 @@ pub fn center_of_mass(
     shape: &Shape,
     given: Option<Point3<f64>>,
 ) -> Result<Point3<f64>, GeometryError> {
-    crate::cast::check_pose(pose, "object pose")?;
+    check_pose(pose, "object pose")?;
     let local = match (given, shape) {
         (Some(point), _) => {
             if !point.iter().all(|v| v.is_finite()) {
