@@ -410,7 +410,7 @@ pub(crate) fn weld_tolerance(vertices: &[Vector]) -> f64 {
     WELD_TOLERANCE * diagonal.max(magnitude)
 }
 
-/// The weld tolerance relative to the mesh's size ([`weld_tolerance`]).
+/// The weld tolerance relative to the mesh's size (`weld_tolerance`).
 pub const WELD_TOLERANCE: f64 = 1e-6;
 
 /// One vertex per position up to `tolerance` (a vertex joins the first kept vertex within
