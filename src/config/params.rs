@@ -105,7 +105,7 @@ impl super::choices::Choice for ClosingAxis {
     const NAMES: &'static [&'static str] = &ClosingAxis::NAMES;
 }
 
-/// The largest mass a candidate may have, kg (`MAX_MASS` of `crates/solver/src/planar/frame.rs`,
+/// The largest mass a candidate may have, kg (`MAX_MASS` of `crates/solver/src/limits.rs`,
 /// which the crate keeps to itself): a mass tolerance from it on leaves no candidate a mass
 /// above its tolerance, so every one would be refused. `config::tests` checks the two agree.
 pub(crate) const MAX_MASS: f64 = 1e9;

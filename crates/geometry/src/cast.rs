@@ -49,7 +49,7 @@ use parry3d_f64::shape::{Ball, Cuboid};
 
 use crate::error::{Finger, GeometryError};
 use crate::mesh::Mesh;
-use crate::shape::{Primitive, Shape};
+use crate::shape::{check_pose, Primitive, Shape};
 
 /// A contact lies on an edge or a vertex when it is within this fraction of the object's size
 /// (the diagonal of its bounding box) of one. The same tolerance separates "starts on the
@@ -255,19 +255,6 @@ pub fn grasp_from_pose(
         contacts,
         center_of_mass,
     })
-}
-
-pub(crate) fn check_pose(pose: &Isometry3<f64>, field: &'static str) -> Result<(), GeometryError> {
-    let finite = pose.translation.vector.iter().all(|v| v.is_finite())
-        && pose.rotation.coords.iter().all(|v| v.is_finite());
-    if finite {
-        Ok(())
-    } else {
-        Err(GeometryError::BadNumber {
-            field,
-            positive: false,
-        })
-    }
 }
 
 /// A finger's ray in the object frame: unit direction, at most `max` long.

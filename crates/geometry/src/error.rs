@@ -31,7 +31,8 @@ impl fmt::Display for Finger {
     }
 }
 
-/// What is wrong with a mesh's topology, found by [`crate::mass`]'s closedness check.
+/// What is wrong with a mesh's topology, found by its closedness check
+/// ([`crate::mesh::check_closed`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum MeshDefect {

@@ -3,7 +3,7 @@
 //! By the file name's extension, case-insensitive: `.stl`, `.obj`, `.dae` (COLLADA, with its
 //! `<unit meter>` applied to every vertex and its node transforms applied; `<up_axis>` ignored,
 //! as RViz ignores it), parsed by `mesh-loader`. All the meshes in a file are merged into one.
-//! Reading the file is [`crate::load`]'s concern; this module sees bytes only.
+//! Reading the file is [`crate::load`](mod@crate::load)'s concern; this module sees bytes only.
 //!
 //! The bytes are untrusted: a COLLADA file is checked before `mesh-loader` parses it
 //! ([`collada`]: element nesting, the counts it reserves memory for, every index against the

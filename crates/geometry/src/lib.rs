@@ -34,6 +34,17 @@
 //! scale or primitive, an opening narrower than the object, an open mesh without a centre of
 //! mass).
 //!
+//! # Layers
+//! A module imports only the modules before it in this list, from the bottom up as parry lays
+//! out its own (shapes at the bottom, queries and mass properties above):
+//! 1. [`error`], and `bvh.rs` (the compact tree a mesh's casts walk);
+//! 2. [`mesh`] (welded, T-junctions split, the closedness check [`check_closed`], indexed), then
+//!    [`shape`] (the primitives, [`Shape`], the pose check);
+//! 3. [`formats`] (bytes to triangles), then [`load`](mod@load) (files to meshes: `load/resource.rs`,
+//!    `access.rs`, `file.rs`, `cache.rs`, each over the ones before);
+//! 4. [`mass`] (the centre of mass, over the shapes), then [`cast`] (the fingers, which gives
+//!    the centre of mass with the contacts in [`grasp_from_pose`]).
+//!
 //! # Dependencies
 //! parry3d-f64 0.31 (double precision, glam-based math types, converted at this crate's edges:
 //! the API speaks nalgebra like the solver) casts the rays on boxes, spheres and triangles,
@@ -80,8 +91,8 @@ pub use cast::{
 pub use error::{Finger, GeometryError, MeshDefect};
 pub use formats::{parse_bytes, Triangles};
 pub use load::{load, parse, resolve, AmentIndex, MeshCache};
-pub use mass::{center_of_mass, check_closed};
-pub use mesh::Mesh;
+pub use mass::center_of_mass;
+pub use mesh::{check_closed, Mesh};
 pub use shape::{Primitive, Shape};
 
 /// The README's example runs as a doctest.

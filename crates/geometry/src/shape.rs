@@ -7,7 +7,7 @@
 
 use std::sync::Arc;
 
-use nalgebra::Point3;
+use nalgebra::{Isometry3, Point3};
 
 use crate::error::GeometryError;
 use crate::mesh::Mesh;
@@ -206,6 +206,22 @@ impl From<Arc<Mesh>> for Shape {
 impl From<Mesh> for Shape {
     fn from(m: Mesh) -> Self {
         Shape::Mesh(Arc::new(m))
+    }
+}
+
+/// A pose (the object's in the header frame, or the gripper's tool frame) with every number
+/// finite; `field` names it in the error. Beside the shapes, below the casts and the centre of
+/// mass, which both take an object pose.
+pub(crate) fn check_pose(pose: &Isometry3<f64>, field: &'static str) -> Result<(), GeometryError> {
+    let finite = pose.translation.vector.iter().all(|v| v.is_finite())
+        && pose.rotation.coords.iter().all(|v| v.is_finite());
+    if finite {
+        Ok(())
+    } else {
+        Err(GeometryError::BadNumber {
+            field,
+            positive: false,
+        })
     }
 }
 
