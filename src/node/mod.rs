@@ -20,8 +20,10 @@ mod markers_out;
 mod param_services;
 mod params;
 pub(crate) mod play;
+pub(crate) mod pose_work;
 pub(crate) mod ros_args;
 pub(crate) mod session;
+pub(crate) mod set_io;
 pub(crate) mod set_worker;
 pub(crate) mod sets;
 

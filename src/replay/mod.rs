@@ -7,9 +7,9 @@
 mod poses;
 mod sets;
 
-use crate::answer::{answer_one, Rules, BEHIND_TANGENT_NOTE};
+use crate::answer::{Answering, PoseAnswerer, Rules, BEHIND_TANGENT_NOTE};
 use crate::config::{Config, ConfigError};
-use crate::kind::{Key, Kind, Stream, Streams};
+use crate::kind::{Candidates, Key, Kind, Stream, Streams};
 use crate::msg::{short_id, GraspCandidate, GripRecommendation};
 use crate::record::bag::{keep_example, Bag, Recorded};
 use crate::record::channels::RecordedFields;
@@ -281,13 +281,11 @@ pub type Override = (String, Value);
 /// Command-line overrides apply over both.
 #[derive(Debug, Clone)]
 pub struct Plan {
-    /// From which `log_time` on each applies, in time order, with the gripper rules.
-    timeline: Vec<(u64, Settings, Rules)>,
+    /// From which `log_time` on each applies, in time order: settings, gripper rules and the
+    /// closing axis of pose candidates, one mesh cache shared by all.
+    timeline: Vec<(u64, Answering)>,
     /// For a recording without settings records.
-    fallback: (Settings, Rules),
-    /// The closing axis of pose candidates, in force from each time of `timeline`, and the
-    /// fallback's.
-    closing_axes: (Vec<ClosingAxis>, ClosingAxis),
+    fallback: Answering,
     /// Whether each candidate is solved with the objective its recorded answer names.
     objective_from_answer: bool,
     /// The bag's settings records, overrides applied.
@@ -315,6 +313,7 @@ impl Plan {
             Ok((config, settings))
         };
         let (base, base_settings) = apply(base)?;
+        let meshes = pose_meshes();
         let mut recorded = Vec::new();
         for (name, entries) in &bag.metadata {
             if name == METADATA_NAME {
@@ -323,21 +322,21 @@ impl Plan {
         }
         // In time order; records of one time keep their file order, the last one winning.
         recorded.sort_by_key(|r| r.since);
+        let answering = |config: &Config, settings| {
+            let poses = PoseAnswerer::sharing(config.closing_axis, meshes.clone());
+            Answering::new(settings, config.rules(), poses)
+        };
         let mut timeline = Vec::with_capacity(recorded.len());
-        let mut axes = Vec::with_capacity(recorded.len());
         for record in &mut recorded {
             let (config, settings) = apply(&record.config)?;
-            let rules = config.rules();
-            axes.push(config.closing_axis);
+            timeline.push((record.since, answering(&config, settings)));
             record.config = config;
-            timeline.push((record.since, settings, rules));
         }
         let overridden: Vec<String> = overrides.iter().map(|(n, _)| n.clone()).collect();
         Ok(Self {
             objective_from_answer: timeline.is_empty()
                 && !overridden.iter().any(|n| n == "objective"),
-            fallback: (base_settings, base.rules()),
-            closing_axes: (axes, base.closing_axis),
+            fallback: answering(&base, base_settings),
             timeline,
             recorded,
             overridden,
@@ -351,10 +350,10 @@ impl Plan {
 
     /// [`Plan::fixed`] with gripper rules too.
     pub(crate) fn fixed_with(settings: Settings, rules: Rules) -> Self {
+        let poses = PoseAnswerer::sharing(ClosingAxis::default(), pose_meshes());
         Self {
             timeline: Vec::new(),
-            fallback: (settings, rules),
-            closing_axes: (Vec::new(), ClosingAxis::default()),
+            fallback: Answering::new(settings, rules, poses),
             objective_from_answer: true,
             recorded: Vec::new(),
             overridden: Vec::new(),
@@ -366,29 +365,18 @@ impl Plan {
         !self.timeline.is_empty()
     }
 
-    /// The settings for a candidate received at `log_time`: the last record from before it (the
-    /// first record for earlier candidates).
-    pub(crate) fn settings_at(&self, log_time: u64) -> &Settings {
+    /// What answers a candidate (or set, pose candidate, pose set) received at `log_time`: the
+    /// settings of the last record from before it (the first record's for earlier ones).
+    pub(crate) fn answering_at(&self, log_time: u64) -> &Answering {
         match self.index_at(log_time) {
             Some(i) => &self.timeline[i].1,
-            None => &self.fallback.0,
+            None => &self.fallback,
         }
     }
 
-    /// The gripper rules for a candidate (or set) received at `log_time`, as [`Plan::settings_at`].
-    pub(crate) fn rules_at(&self, log_time: u64) -> &Rules {
-        match self.index_at(log_time) {
-            Some(i) => &self.timeline[i].2,
-            None => &self.fallback.1,
-        }
-    }
-
-    /// The closing axis for a pose candidate (or pose set) received at `log_time`, as
-    /// [`Plan::settings_at`].
-    pub(crate) fn closing_axis_at(&self, log_time: u64) -> ClosingAxis {
-        self.index_at(log_time)
-            .and_then(|i| self.closing_axes.0.get(i).copied())
-            .unwrap_or(self.closing_axes.1)
+    /// The meshes of the replay's pose candidates (one cache for every settings record).
+    pub(crate) fn meshes(&self) -> &grasp_orient_geometry::MeshCache {
+        self.fallback.poses().meshes()
     }
 
     /// The timeline entry in force at `log_time`: the last from before it, the first for earlier
@@ -396,7 +384,7 @@ impl Plan {
     fn index_at(&self, log_time: u64) -> Option<usize> {
         let after = self
             .timeline
-            .partition_point(|(since, _, _)| *since <= log_time);
+            .partition_point(|(since, _)| *since <= log_time);
         after.checked_sub(1).or(self.timeline.first().map(|_| 0))
     }
 }
@@ -410,7 +398,7 @@ pub fn replay(
 ) -> Result<Summary, ReplayError> {
     let (mut summary, _) = replay_on_cores(bag, plan, false, &progress)?;
     summary.merge(sets::replay_sets(bag, plan, false).0);
-    summary.merge(poses::replay_poses(bag, plan, &pose_meshes(), false)?.0);
+    summary.merge(poses::replay_poses(bag, plan, false)?.0);
     Ok(summary)
 }
 
@@ -433,7 +421,7 @@ pub(crate) fn replay_with_answers(
     let (mut summary, recommendations) = replay_on_cores(bag, plan, true, &progress)?;
     let (of_sets, sets) = sets::replay_sets(bag, plan, true);
     summary.merge(of_sets);
-    let (of_poses, poses) = poses::replay_poses(bag, plan, &pose_meshes(), true)?;
+    let (of_poses, poses) = poses::replay_poses(bag, plan, true)?;
     summary.merge(of_poses);
     let mut answers = Streams::default();
     answers.candidates.answers = recommendations;
@@ -475,13 +463,11 @@ fn replay_on_cores(
                     let mut answers = Vec::with_capacity(if keep { cands.len() } else { 0 });
                     for (k, (c, p)) in cands.iter().zip(pairs).enumerate() {
                         let theirs = p.map(|i| &bag.streams.candidates.answers[i].message);
-                        let settings = plan.settings_at(c.log_time);
-                        let rules = plan.rules_at(c.log_time);
+                        let with = plan.answering_at(c.log_time);
                         let from_answer = plan.objective_from_answer;
                         let ours = check(
                             &c.message,
-                            settings,
-                            rules,
+                            with,
                             from_answer,
                             theirs,
                             &bag.fields,
@@ -539,8 +525,7 @@ fn panic_words(payload: &(dyn std::any::Any + Send)) -> String {
 /// Solves one candidate again and compares it with its recorded answer, if any.
 fn check(
     candidate: &GraspCandidate,
-    settings: &Settings,
-    rules: &Rules,
+    with: &Answering,
     objective_from_answer: bool,
     theirs: Option<&GripRecommendation>,
     fields: &RecordedFields,
@@ -548,7 +533,7 @@ fn check(
 ) -> GripRecommendation {
     summary.candidates += 1;
     let recorded = theirs.filter(|_| objective_from_answer);
-    let ours = solve_like(candidate, settings, rules, recorded);
+    let ours = solve_like(candidate, with, recorded);
     if let Some(theirs) = theirs {
         let label = || format!("candidate {:?}", short_id(&candidate.id));
         compare_one(label, &ours, theirs, fields, summary);
@@ -626,14 +611,18 @@ pub(crate) fn answered_behind_tangent(
         && ours.objective == theirs.objective
 }
 
-/// Solves with `settings` and `rules`, and with the objective `recorded` names, if given.
+/// Answers `with` its settings and rules, and with the objective `recorded` names, if given.
 fn solve_like(
     candidate: &GraspCandidate,
-    settings: &Settings,
-    rules: &Rules,
+    with: &Answering,
     recorded: Option<&GripRecommendation>,
 ) -> GripRecommendation {
-    answer_one(candidate, &objective_like(settings, recorded), rules)
+    match recorded {
+        None => with.answer::<Candidates>(candidate),
+        Some(r) => with
+            .with_settings(objective_like(with.settings(), Some(r)))
+            .answer::<Candidates>(candidate),
+    }
 }
 
 /// `settings` with the objective `recorded` names, if any.
@@ -797,20 +786,31 @@ mod tests {
         };
         let plan = Plan::for_bag(&bag, &Config::default(), &[]).expect("a plan");
         assert!(plan.settings_recorded());
-        assert_eq!(plan.settings_at(0).friction_safety_factor, 1.5);
-        assert_eq!(plan.settings_at(99).friction_safety_factor, 1.5);
-        assert_eq!(plan.settings_at(100).friction_safety_factor, 2.0);
-        assert_eq!(plan.settings_at(u64::MAX).friction_safety_factor, 2.0);
+        assert_eq!(plan.answering_at(0).settings().friction_safety_factor, 1.5);
+        assert_eq!(plan.answering_at(99).settings().friction_safety_factor, 1.5);
+        assert_eq!(
+            plan.answering_at(100).settings().friction_safety_factor,
+            2.0
+        );
+        assert_eq!(
+            plan.answering_at(u64::MAX)
+                .settings()
+                .friction_safety_factor,
+            2.0
+        );
         let overrides = [(
             "friction_safety_factor".to_string(),
             Value::Number(1.25.into()),
         )];
         let plan = Plan::for_bag(&bag, &Config::default(), &overrides).expect("a plan");
-        assert_eq!(plan.settings_at(0).friction_safety_factor, 1.25);
-        assert_eq!(plan.settings_at(200).friction_safety_factor, 1.25);
+        assert_eq!(plan.answering_at(0).settings().friction_safety_factor, 1.25);
+        assert_eq!(
+            plan.answering_at(200).settings().friction_safety_factor,
+            1.25
+        );
         assert_eq!(plan.overridden, ["friction_safety_factor"]);
         let plan = Plan::for_bag(&Bag::default(), &Config::default(), &[]).expect("a plan");
         assert!(!plan.settings_recorded());
-        assert_eq!(*plan.settings_at(5), Settings::default());
+        assert_eq!(*plan.answering_at(5).settings(), Settings::default());
     }
 }
