@@ -26,11 +26,9 @@ pub(crate) mod lifecycle;
 pub(crate) mod output;
 mod pump;
 pub mod recover;
-pub(crate) mod resync;
 pub(crate) mod scan;
 pub mod settings;
 mod sink;
-pub(crate) mod summary;
 
 pub use channels::{IncompatibleChannel, RecordedFields};
 pub use output::OutputError;
