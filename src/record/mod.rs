@@ -23,6 +23,8 @@
 pub mod bag;
 pub(crate) mod channels;
 pub(crate) mod lifecycle;
+#[cfg(test)]
+mod mcap_crate;
 pub(crate) mod output;
 mod pump;
 pub mod recover;
