@@ -385,7 +385,7 @@ mod tests {
     fn what_is_not_a_recording_is_refused() {
         for bytes in [
             &b""[..],
-            &scan::MAGIC[..],
+            scan::MAGIC,
             b"\x00\x01random bytes that are no MCAP at all",
         ] {
             assert!(matches!(

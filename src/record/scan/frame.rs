@@ -3,42 +3,11 @@
 
 use std::fmt;
 
-/// The 8 bytes an MCAP file starts and ends with.
-pub(crate) const MAGIC: &[u8; 8] = b"\x89MCAP0\r\n";
-
-/// Record opcodes.
-pub(crate) mod op {
-    /// Header.
-    pub(crate) const HEADER: u8 = 0x01;
-    /// Footer.
-    pub(crate) const FOOTER: u8 = 0x02;
-    /// Schema.
-    pub(crate) const SCHEMA: u8 = 0x03;
-    /// Channel.
-    pub(crate) const CHANNEL: u8 = 0x04;
-    /// Message.
-    pub(crate) const MESSAGE: u8 = 0x05;
-    /// Chunk.
-    pub(crate) const CHUNK: u8 = 0x06;
-    /// Message index.
-    pub(crate) const MESSAGE_INDEX: u8 = 0x07;
-    /// Chunk index.
-    pub(crate) const CHUNK_INDEX: u8 = 0x08;
-    /// Attachment.
-    pub(crate) const ATTACHMENT: u8 = 0x09;
-    /// Attachment index.
-    pub(crate) const ATTACHMENT_INDEX: u8 = 0x0A;
-    /// Statistics.
-    pub(crate) const STATISTICS: u8 = 0x0B;
-    /// Metadata.
-    pub(crate) const METADATA: u8 = 0x0C;
-    /// Metadata index.
-    pub(crate) const METADATA_INDEX: u8 = 0x0D;
-    /// Summary offset.
-    pub(crate) const SUMMARY_OFFSET: u8 = 0x0E;
-    /// Data end.
-    pub(crate) const DATA_END: u8 = 0x0F;
-}
+/// The record opcodes: the `mcap` crate's, whose writer writes the recordings, so that reader and
+/// writer share one definition.
+pub(crate) use mcap::records::op;
+/// The 8 bytes an MCAP file starts and ends with (the `mcap` crate's, as the opcodes).
+pub(crate) use mcap::MAGIC;
 
 /// Where a file is damaged and how.
 #[derive(Debug, Clone, PartialEq, Eq)]
