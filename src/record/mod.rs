@@ -23,14 +23,14 @@
 pub mod bag;
 pub(crate) mod channels;
 pub(crate) mod lifecycle;
+#[cfg(test)]
+mod mcap_crate;
 pub(crate) mod output;
 mod pump;
 pub mod recover;
-pub(crate) mod resync;
 pub(crate) mod scan;
 pub mod settings;
 mod sink;
-pub(crate) mod summary;
 
 pub use channels::{IncompatibleChannel, RecordedFields};
 pub use output::OutputError;
