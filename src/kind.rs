@@ -357,7 +357,7 @@ pub(crate) fn request_types() -> String {
 
 /// Which side of a kind a message is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Side {
+pub(crate) enum Side {
     /// What is asked.
     Request,
     /// What is answered.
@@ -366,7 +366,7 @@ pub enum Side {
 
 /// One side of one kind: a channel of a recording.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct Channel {
+pub(crate) struct Channel {
     /// The kind's [`Kind::INDEX`].
     pub kind: usize,
     /// Which side.

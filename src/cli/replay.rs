@@ -240,7 +240,7 @@ fn settings_words(plan: &Plan) -> String {
 fn write_replay(w: &mut BagWriter, bag: &Bag, plan: &Plan, answers: Streams) -> anyhow::Result<()> {
     for record in &plan.recorded {
         w.write(&Entry {
-            payload: Payload::Settings(Box::new(record.clone())),
+            payload: Payload::settings(record.clone()),
             log_time: record.since,
             publish_time: record.since,
         })?;

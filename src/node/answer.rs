@@ -239,11 +239,8 @@ impl Answerer {
             reason,
             config: version.config.clone(),
         };
-        self.recording.record(
-            Payload::Settings(Box::new(record)),
-            version.since,
-            version.since,
-        );
+        self.recording
+            .record(Payload::settings(record), version.since, version.since);
     }
 
     /// Whether an answer's markers are built: `publish_markers` (`markers_on`) and somebody
@@ -451,7 +448,7 @@ impl Answerer {
         };
         let mut entries = Vec::with_capacity(3);
         if let Some(array) = markers {
-            entries.push(entry(Payload::Markers(Box::new(array)), answered, answered));
+            entries.push(entry(Payload::markers(array), answered, answered));
         }
         entries.push(entry(candidate, received, sent));
         if let Some(r) = reply {
@@ -550,7 +547,7 @@ impl Answerer {
         };
         let mut entries = Vec::with_capacity(3);
         if let Some(array) = markers {
-            entries.push(entry(Payload::Markers(Box::new(array)), answered, answered));
+            entries.push(entry(Payload::markers(array), answered, answered));
         }
         entries.push(entry(set.payload(), received, sent));
         if let Some(r) = reply {

@@ -155,7 +155,7 @@ mod tests {
             config: crate::config::Config::default(),
         };
         w.write(&Entry {
-            payload: Payload::Settings(Box::new(settings)),
+            payload: Payload::settings(settings),
             log_time: 0,
             publish_time: 0,
         })
