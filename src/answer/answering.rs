@@ -137,6 +137,21 @@ impl Answering {
     }
 }
 
+/// Something done once for every kind, knowing how it is answered ([`each`]).
+pub trait VisitAnswer {
+    /// Done for kind `K`.
+    fn kind<K: Answer>(&mut self);
+}
+
+/// Calls `visit` for every kind, in [`Kind::INDEX`] order, as [`crate::kind::each`] does, where
+/// what is done needs the answer (a test holds the two lists to the same kinds).
+pub fn each(visit: &mut impl VisitAnswer) {
+    visit.kind::<Candidates>();
+    visit.kind::<Sets>();
+    visit.kind::<Poses>();
+    visit.kind::<PoseSets>();
+}
+
 /// How a kind's request is answered.
 pub trait Answer: Kind {
     /// The answer to `request` made `with` these settings, rules and meshes.
@@ -252,6 +267,27 @@ mod tests {
         fn status_members(&self) -> (u8, usize) {
             (self.status, self.recommendations.len())
         }
+    }
+
+    /// `each` here and `kind::each` visit the same kinds in the same order.
+    #[test]
+    fn every_kind_is_answerable() {
+        struct Answered(Vec<usize>);
+        impl VisitAnswer for Answered {
+            fn kind<K: Answer>(&mut self) {
+                self.0.push(K::INDEX);
+            }
+        }
+        struct Listed(Vec<usize>);
+        impl crate::kind::Visit for Listed {
+            fn kind<K: Kind>(&mut self) {
+                self.0.push(K::INDEX);
+            }
+        }
+        let (mut answered, mut listed) = (Answered(Vec::new()), Listed(Vec::new()));
+        each(&mut answered);
+        crate::kind::each(&mut listed);
+        assert_eq!(answered.0, listed.0);
     }
 
     /// The entry point gives what the functions it stands for give, under settings and rules

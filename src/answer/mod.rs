@@ -25,7 +25,7 @@ mod pose;
 mod reply;
 mod sets;
 
-pub use answering::{Answer, Answering};
+pub use answering::{each, Answer, Answering, VisitAnswer};
 pub use candidate::{answer, answer_in_full};
 pub(crate) use candidate::{Answered, BEHIND_TANGENT_NOTE};
 pub(crate) use pose::{pose_set_without_geometry, uncast, without_geometry, Refused};

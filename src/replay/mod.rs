@@ -727,6 +727,61 @@ mod tests {
         assert!(!answered_behind_tangent(&plain, &theirs));
     }
 
+    /// Every kind through replay's one path: a recording holding, of each kind, a request and
+    /// the answer `Answering` gives it replays with every answer paired and compared and none
+    /// differing; with each answer replaced by another (`Default`), each kind's answer differs.
+    #[test]
+    fn every_kind_replays_through_its_pair_and_answer() {
+        use crate::answer::{each, Answer, VisitAnswer};
+        struct Fill(Bag, bool);
+        impl VisitAnswer for Fill {
+            fn kind<K: Answer>(&mut self) {
+                let request = K::Request::default();
+                let answer = if self.1 {
+                    Answering::from_env().answer::<K>(&request)
+                } else {
+                    K::Answer::default()
+                };
+                fn at<T>(message: T) -> Recorded<T> {
+                    Recorded {
+                        message,
+                        log_time: 10,
+                        publish_time: 10,
+                    }
+                }
+                let stream = K::stream_mut(&mut self.0.streams);
+                stream.requests.push(at(request));
+                stream.answers.push(at(answer));
+            }
+        }
+        let replayed = |answered: bool| {
+            let mut fill = Fill(Bag::default(), answered);
+            each(&mut fill);
+            let plan = Plan::fixed(Settings::default());
+            replay(&fill.0, &plan, |_| {}).expect("replays")
+        };
+        let same = replayed(true);
+        assert_eq!(
+            (
+                same.candidates,
+                same.pose_candidates,
+                same.sets,
+                same.pose_sets
+            ),
+            (2, 1, 2, 1),
+            "one candidate and one pose candidate, one set and one pose set: {same:?}"
+        );
+        assert_eq!((same.compared, same.sets_compared), (2, 2), "{same:?}");
+        assert_eq!((same.differing, same.sets_differing), (0, 0), "{same:?}");
+        assert_eq!(
+            (same.unmatched_recommendations, same.unmatched_set_answers),
+            (0, 0)
+        );
+        let other = replayed(false);
+        assert_eq!((other.compared, other.sets_compared), (2, 2), "{other:?}");
+        assert_eq!((other.differing, other.sets_differing), (2, 2), "{other:?}");
+    }
+
     #[test]
     fn a_failing_worker_fails_the_replay() {
         let cases = crate::msg::paper_cases();
