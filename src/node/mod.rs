@@ -14,6 +14,7 @@
 
 pub(crate) mod answer;
 pub(crate) mod demo;
+mod endpoint;
 pub(crate) mod loads;
 
 mod markers_out;
@@ -29,19 +30,18 @@ pub(crate) mod sets;
 
 use crate::config::Config;
 use crate::kind::{Candidates, PoseSets, Poses, Sets};
-use crate::msg::{
-    short_id, GraspCandidate, GripRecommendation, MarkerArray, PoseCandidate, PoseRecommendation,
-};
+use crate::msg::{short_id, GraspCandidate, MarkerArray, PoseCandidate};
 use crate::record::{now_ns, OnStop, Topics};
 use answer::{Answerer, Note, SetInput};
 use anyhow::Context as _;
 use demo::Demo;
+use endpoint::Endpoint;
 use futures::{FutureExt, StreamExt};
 use loads::{Loaded, Loaders, PoseLoads};
 use markers_out::MarkersOut;
 use param_services::ParameterServices;
 use params::Shared;
-use ros2_client::{MessageInfo, Node, NodeOptions, Publisher, Subscription};
+use ros2_client::{MessageInfo, Node, NodeOptions};
 use ros_args::RosArgs;
 use session::{create_topic, qos, say, Session, Shutdown, Start};
 use set_worker::SetWorker;
@@ -119,12 +119,10 @@ fn load_config(ros: &RosArgs, node: &str) -> anyhow::Result<(Config, crate::solv
 /// The node's topics and their endpoints.
 struct Endpoints {
     topics: Topics,
-    candidates: Subscription<GraspCandidate>,
-    answers: Publisher<GripRecommendation>,
+    candidates: Endpoint<Candidates>,
     markers: MarkersOut,
     sets: SetEndpoints,
-    pose_candidates: Subscription<PoseCandidate>,
-    pose_answers: Publisher<PoseRecommendation>,
+    poses: Endpoint<Poses>,
 }
 
 impl Endpoints {
@@ -134,42 +132,11 @@ impl Endpoints {
             .with_markers(session.topic_name("grip_markers"));
         let markers_name = topics.markers.clone().unwrap_or_default();
         let node = session.node_mut();
-        let candidates = create_topic::<GraspCandidate>(
-            node,
-            topics.requests::<Candidates>().unwrap_or_default(),
-            &qos,
-        )?;
-        let answers = create_topic::<GripRecommendation>(
-            node,
-            topics.answers::<Candidates>().unwrap_or_default(),
-            &qos,
-        )?;
         let markers = create_topic::<MarkerArray>(node, &markers_name, &qos)?;
-        let sets = SetEndpoints::create(node, &topics, qos_depth)?;
-        let pose_candidates = create_topic::<PoseCandidate>(
-            node,
-            topics.requests::<Poses>().unwrap_or_default(),
-            &qos,
-        )?;
-        let pose_answers = create_topic::<PoseRecommendation>(
-            node,
-            topics.answers::<Poses>().unwrap_or_default(),
-            &qos,
-        )?;
         Ok(Self {
-            sets,
-            pose_candidates: node
-                .create_subscription(&pose_candidates, None)
-                .context("cannot subscribe to pose candidates")?,
-            pose_answers: node
-                .create_publisher(&pose_answers, None)
-                .context("cannot publish pose recommendations")?,
-            candidates: node
-                .create_subscription(&candidates, None)
-                .context("cannot subscribe")?,
-            answers: node
-                .create_publisher(&answers, None)
-                .context("cannot publish recommendations")?,
+            candidates: Endpoint::create(node, &topics, &qos)?,
+            sets: SetEndpoints::create(node, &topics, qos_depth)?,
+            poses: Endpoint::create(node, &topics, &qos)?,
             markers: MarkersOut::new(
                 node.create_publisher(&markers, None)
                     .context("cannot publish markers")?,
@@ -349,11 +316,11 @@ async fn serve(
         woken,
         loading,
     } = state;
-    let mut stream = pin!(endpoints.candidates.async_stream());
-    let mut set_stream = pin!(endpoints.sets.candidates.async_stream());
+    let mut stream = pin!(endpoints.candidates.requests.async_stream());
+    let mut set_stream = pin!(endpoints.sets.sets.requests.async_stream());
     let mut calls = pin!(endpoints.sets.service.receive_request_stream());
-    let mut poses = pin!(endpoints.pose_candidates.async_stream());
-    let mut pose_sets = pin!(endpoints.sets.pose_sets.async_stream());
+    let mut poses = pin!(endpoints.poses.requests.async_stream());
+    let mut pose_sets = pin!(endpoints.sets.pose_sets.requests.async_stream());
     let mut pose_calls = pin!(endpoints.sets.pose_service.receive_request_stream());
     let mut demo_done = pin!(async {
         match demo {
@@ -502,7 +469,12 @@ async fn answer_one(
         outcome.reply.gripping_power
     );
     tell(node, outcome.notes);
-    if let Err(e) = endpoints.answers.async_publish(outcome.reply).await {
+    if let Err(e) = endpoints
+        .candidates
+        .answers
+        .async_publish(outcome.reply)
+        .await
+    {
         say(
             node,
             log::Level::Error,
@@ -588,7 +560,7 @@ async fn send_pose(
         outcome.reply.recommendation.gripping_power
     );
     tell(node, outcome.notes);
-    if let Err(e) = endpoints.pose_answers.async_publish(outcome.reply).await {
+    if let Err(e) = endpoints.poses.answers.async_publish(outcome.reply).await {
         say(
             node,
             log::Level::Error,
