@@ -59,24 +59,12 @@ pub(crate) struct Counts {
     pub markers_published: u64,
 }
 
-/// The answer to one candidate, to publish in this order: `reply`, then `markers`.
+/// The answer to one candidate or pose candidate (`A`: its answer's type), to publish in this
+/// order: `reply`, then `markers`.
 #[derive(Debug)]
-pub(crate) struct Outcome {
-    /// The recommendation.
-    pub reply: GripRecommendation,
-    /// The markers, when they are on, wanted ([`Answerer::draws`]) and the answer has status 0.
-    pub markers: Option<MarkerArray>,
-    /// Lines to log.
-    pub notes: Vec<Note>,
-    /// What goes to the recording once the answer is out.
-    pub recorded: Recorded,
-}
-
-/// The answer to one pose candidate, to publish in this order: `reply`, then `markers`.
-#[derive(Debug)]
-pub(crate) struct PoseOutcome {
+pub(crate) struct Outcome<A> {
     /// The answer.
-    pub reply: PoseRecommendation,
+    pub reply: A,
     /// The markers, when they are on, wanted ([`Answerer::draws`]) and the answer has status 0.
     pub markers: Option<MarkerArray>,
     /// Lines to log.
@@ -261,7 +249,7 @@ impl Answerer {
         received: u64,
         sent: u64,
         audience: bool,
-    ) -> Outcome {
+    ) -> Outcome<GripRecommendation> {
         let mut notes = Vec::new();
         let (with, markers_on) = {
             let live = self.shared.lock();
@@ -340,7 +328,7 @@ impl Answerer {
         received: u64,
         sent: u64,
         audience: bool,
-    ) -> PoseOutcome {
+    ) -> Outcome<PoseRecommendation> {
         let work = self.pose_work(received, audience);
         let (reply, markers) = work.run(&candidate);
         self.account_pose(candidate, reply, markers, received, sent)
@@ -389,7 +377,7 @@ impl Answerer {
         markers: Option<MarkerArray>,
         received: u64,
         sent: u64,
-    ) -> PoseOutcome {
+    ) -> Outcome<PoseRecommendation> {
         let mut notes = Vec::new();
         self.count_one(&reply.recommendation, &mut notes);
         let recorded = self.readied(
@@ -399,7 +387,7 @@ impl Answerer {
             received,
             sent,
         );
-        PoseOutcome {
+        Outcome {
             reply,
             markers,
             notes,

@@ -30,7 +30,9 @@ pub(crate) mod sets;
 
 use crate::config::Config;
 use crate::kind::{Candidates, PoseSets, Poses, Sets};
-use crate::msg::{short_id, GraspCandidate, MarkerArray, PoseCandidate};
+use crate::msg::{
+    short_id, GraspCandidate, GripRecommendation, MarkerArray, PoseCandidate, PoseRecommendation,
+};
 use crate::record::{now_ns, OnStop, Topics};
 use answer::{Answerer, Note, SetInput};
 use anyhow::Context as _;
@@ -460,28 +462,8 @@ async fn answer_one(
     let (received, sent) = message_times(info);
     let audience = endpoints.markers.heard(node);
     let outcome = answerer.handle(candidate, received, sent, audience);
-    log::debug!(
-        "candidate {:?}: status {}, gravity angle {}, {} {} N",
-        short_id(&outcome.reply.candidate_id),
-        outcome.reply.status,
-        outcome.reply.gravity_angle,
-        outcome.reply.objective,
-        outcome.reply.gripping_power
-    );
-    tell(node, outcome.notes);
-    if let Err(e) = endpoints
-        .candidates
-        .answers
-        .async_publish(outcome.reply)
-        .await
-    {
-        say(
-            node,
-            log::Level::Error,
-            &format!("cannot publish an answer: {e:?}"),
-        );
-    }
-    markers_then_record(node, endpoints, answerer, outcome.markers, outcome.recorded).await;
+    let answers = &endpoints.candidates.answers;
+    send_answer(node, endpoints, answerer, answers, outcome).await;
 }
 
 /// Takes one pose candidate: answered on the node's thread when its mesh is loaded already, or
@@ -512,13 +494,13 @@ async fn take_pose(
     }
     let (reply, markers) = work.run(&candidate);
     let outcome = answerer.account_pose(candidate, reply, markers, received, sent);
-    send_pose(node, endpoints, answerer, outcome).await;
+    send_answer(node, endpoints, answerer, &endpoints.poses.answers, outcome).await;
 }
 
 /// Counts, sends and records a pose candidate answered off the node's thread.
 async fn send_loaded(node: &Node, endpoints: &Endpoints, answerer: &mut Answerer, l: Loaded) {
     let outcome = answerer.account_pose(l.candidate, l.reply, l.markers, l.received, l.sent);
-    send_pose(node, endpoints, answerer, outcome).await;
+    send_answer(node, endpoints, answerer, &endpoints.poses.answers, outcome).await;
 }
 
 /// On a stop request: for at most [`STOP_GRACE`], sends the answers of the pose candidates still
@@ -544,28 +526,51 @@ async fn finish_loads(
     }
 }
 
-/// Sends one pose candidate's answer, as [`answer_one`] a candidate's: the answer, its markers,
-/// then the recording.
-async fn send_pose(
+/// An answer to one candidate or pose candidate, as its log line names it.
+trait Recommends {
+    /// What it answers, for the log: "candidate", "pose candidate".
+    const WHAT: &'static str;
+    /// Its recommendation (a pose answer's is inside it).
+    fn recommendation(&self) -> &GripRecommendation;
+}
+
+impl Recommends for GripRecommendation {
+    const WHAT: &'static str = "candidate";
+    fn recommendation(&self) -> &GripRecommendation {
+        self
+    }
+}
+
+impl Recommends for PoseRecommendation {
+    const WHAT: &'static str = "pose candidate";
+    fn recommendation(&self) -> &GripRecommendation {
+        &self.recommendation
+    }
+}
+
+/// Sends one answer on `answers`: the answer goes out first; its markers, then the recording,
+/// follow it.
+async fn send_answer<A: Recommends + serde::Serialize + std::fmt::Debug>(
     node: &Node,
     endpoints: &Endpoints,
     answerer: &mut Answerer,
-    outcome: answer::PoseOutcome,
+    answers: &ros2_client::Publisher<A>,
+    outcome: answer::Outcome<A>,
 ) {
+    let r = outcome.reply.recommendation();
     log::debug!(
-        "pose candidate {:?}: status {}, {} {} N",
-        short_id(&outcome.reply.recommendation.candidate_id),
-        outcome.reply.recommendation.status,
-        outcome.reply.recommendation.objective,
-        outcome.reply.recommendation.gripping_power
+        "{} {:?}: status {}, gravity angle {}, {} {} N",
+        A::WHAT,
+        short_id(&r.candidate_id),
+        r.status,
+        r.gravity_angle,
+        r.objective,
+        r.gripping_power
     );
     tell(node, outcome.notes);
-    if let Err(e) = endpoints.poses.answers.async_publish(outcome.reply).await {
-        say(
-            node,
-            log::Level::Error,
-            &format!("cannot publish a pose answer: {e:?}"),
-        );
+    if let Err(e) = answers.async_publish(outcome.reply).await {
+        let why = format!("cannot publish the answer to a {}: {e:?}", A::WHAT);
+        say(node, log::Level::Error, &why);
     }
     markers_then_record(node, endpoints, answerer, outcome.markers, outcome.recorded).await;
 }
