@@ -34,7 +34,7 @@ use crate::msg::{
     short_id, GraspCandidate, GripRecommendation, MarkerArray, PoseCandidate, PoseRecommendation,
 };
 use crate::record::{now_ns, OnStop, Topics};
-use answer::{Answerer, Note, SetInput};
+use answer::{Answerer, SetInput};
 use anyhow::Context as _;
 use demo::Demo;
 use endpoint::Endpoint;
@@ -45,7 +45,7 @@ use param_services::ParameterServices;
 use params::Shared;
 use ros2_client::{MessageInfo, Node, NodeOptions};
 use ros_args::RosArgs;
-use session::{create_topic, qos, say, Session, Shutdown, Start};
+use session::{create_topic, message_times, qos, say, tell, Session, Shutdown, Start};
 use set_worker::SetWorker;
 use sets::SetEndpoints;
 use std::pin::pin;
@@ -439,18 +439,6 @@ async fn finish_sets(
     }
 }
 
-/// When a message was received and when it was sent, ns since the epoch: the DDS timestamps
-/// when present (received: now otherwise; sent: when received otherwise).
-fn message_times(info: &MessageInfo) -> (u64, u64) {
-    let received = info
-        .received_timestamp()
-        .map_or_else(now_ns, |t| u64::try_from(t.to_nanos()).unwrap_or(0));
-    let sent = info.source_timestamp().map_or(received, |t| {
-        u64::try_from(t.to_nanos()).unwrap_or(received)
-    });
-    (received, sent)
-}
-
 /// Answers one candidate: the answer goes out first; markers and the recording follow it.
 async fn answer_one(
     node: &Node,
@@ -588,13 +576,6 @@ async fn markers_then_record(
     endpoints.markers.publish(node, answerer, markers).await;
     let notes = answerer.record(recorded, answered);
     tell(node, notes);
-}
-
-/// Logs each note to stderr and `/rosout`.
-fn tell(node: &Node, notes: Vec<Note>) {
-    for (level, text) in notes {
-        say(node, level, &text);
-    }
 }
 
 /// The node's mesh cache: files read only under `mesh_roots` and inside packages' share

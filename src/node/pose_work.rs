@@ -3,7 +3,9 @@
 //! index.
 
 use crate::answer::{markers, Answering};
-use crate::msg::{GripRecommendation, MarkerArray, PoseCandidate, PoseRecommendation};
+use crate::msg::{
+    GraspCandidate, GripRecommendation, MarkerArray, PoseCandidate, PoseRecommendation,
+};
 
 /// The fewest triangles of an inline mesh (`object.inline_mesh`) for which a single pose candidate
 /// is answered off the node's thread. An inline mesh is indexed anew for every candidate that
@@ -70,7 +72,7 @@ impl PoseWork {
             return None;
         }
         inline_mesh_too_large(&candidate.object, self.max_inline)
-            .map(|why| super::loads::refused(candidate, &why))
+            .map(|why| refused(candidate, &why))
     }
 
     /// The answer, and its markers when they are on and wanted and the answer has status 0.
@@ -103,4 +105,14 @@ impl PoseWork {
         });
         (reply, markers)
     }
+}
+
+/// The status-2 answer to a pose candidate, saying `why`.
+pub(crate) fn refused(candidate: &PoseCandidate, why: &str) -> PoseRecommendation {
+    let stub = GraspCandidate {
+        header: candidate.header.clone(),
+        id: candidate.id.clone(),
+        ..GraspCandidate::default()
+    };
+    crate::answer::without_geometry(crate::msg::invalid(&stub, &why))
 }

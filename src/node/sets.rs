@@ -10,7 +10,7 @@
 use super::answer::{Answerer, SetInput, SetOutcome, SetReply};
 use super::endpoint::Endpoint;
 use super::markers_out::MarkersOut;
-use super::session::{qos, say};
+use super::session::{message_times, qos, say, tell};
 use super::set_worker::{SetDone, SetJob, SetWorker, Via};
 use crate::kind::{PoseSets, Sets};
 use crate::msg::{
@@ -92,7 +92,7 @@ pub(crate) async fn take_topic(
     set: SetInput,
     info: &MessageInfo,
 ) {
-    let (received, sent) = super::message_times(info);
+    let (received, sent) = message_times(info);
     // From the sample's arrival in the DDS reader (the last fragment) to here: the node's
     // thread waking, and the set decoded.
     let taken = Duration::from_nanos(now_ns().saturating_sub(received));
@@ -158,7 +158,7 @@ pub(crate) async fn answer_done(
         markers: array,
         recorded,
     } = outcome;
-    super::tell(node, answerer.count_set(&reply, array.is_some()));
+    tell(node, answerer.count_set(&reply, array.is_some()));
     let (how, taken) = match via {
         Via::Topic { taken } => ("topic", Some(taken)),
         Via::Service(_) => ("service", None),
@@ -172,7 +172,7 @@ pub(crate) async fn answer_done(
         say(node, log::Level::Error, &e);
     }
     markers.publish(node, answerer, array).await;
-    super::tell(node, answerer.record_set(recorded, answered));
+    tell(node, answerer.record_set(recorded, answered));
 }
 
 /// Sends a set's answer where its set came from: its topic, or the response to its call.

@@ -10,8 +10,9 @@
 //! `AMENT_PREFIX_PATH`): one that cannot be read where the recording answered its pose is an
 //! error ([`ReplayError::Mesh`]), not a difference.
 
+use super::compare::{compare_one, number_gap, pair, Summary, TOLERANCE};
+use super::plan::{Plan, ReplayError};
 use super::sets::{compare_set, rules_like};
-use super::{compare_one, number_gap, pair, Plan, ReplayError, Summary, TOLERANCE};
 use crate::answer::{cut_like, uncast};
 use crate::kind::{PoseSets, Poses};
 use crate::msg::{

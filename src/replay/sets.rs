@@ -12,7 +12,8 @@
 //! new answers' values within [`TOLERANCE`] (ties by `|wrist_rotation|`): candidates whose force
 //! agrees to rounding may swap places.
 
-use super::{compare_one, objective_like, pair, Plan, Summary, TOLERANCE};
+use super::compare::{compare_one, pair, Summary, TOLERANCE};
+use super::plan::{objective_like, Plan};
 use crate::answer::{is_sorted_by, GripperDrive, RankBy, Rules};
 use crate::kind::Sets;
 use crate::msg::{short_id, GraspCandidateSet, GripRecommendation, GripRecommendationSet};
