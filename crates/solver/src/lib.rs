@@ -43,6 +43,7 @@
 //! input limits (`limits.rs`), re-exported here. Each module's `mod.rs` holds its docs and entry
 //! points; the types and steps lie in files below it, and no file uses one that uses it.
 
+pub mod batch;
 mod contact;
 mod invalid_input;
 mod limits;
