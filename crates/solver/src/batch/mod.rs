@@ -23,16 +23,24 @@
 //! data-dependent sequence per grasp. So the batch keeps each grasp's arithmetic as the single
 //! path's (the very same functions, so the answers are equal bit for bit, every field, and
 //! refusals included) and takes its gain where it is exact: the grasps are independent, so a
-//! large batch is cut into contiguous runs, one per core, each writing its answers straight into
-//! its own part of the output (no per-run buffers, no reordering). A run is at least
-//! [`MIN_PER_THREAD`] grasps: starting a thread costs tens of microseconds, the time of about a
-//! hundred grasps, so a small batch stays on the calling thread, where it costs what the single
-//! path costs.
+//! large batch is answered on every core: the calling thread and helper threads started once
+//! (`batch/pool.rs`, which says why not threads per batch) each take the next piece of 32 grasps
+//! not yet taken, and the calling thread never waits long for a helper the machine does not
+//! schedule (it answers that piece itself). Helpers join only for [`MIN_PER_THREAD`] grasps a
+//! thread or more: handing work over costs microseconds, so a small batch stays on the calling
+//! thread. On one thread the batch saves what the single path allocates and copies per grasp
+//! (the answer's box, the storage of the envelope's pieces, handed on from grasp to grasp).
 //!
 //! The mathematics shared is all of the single path's: `planar/frame.rs` (validation, paper
 //! frame), `planar/paper.rs` (closed forms, force closure), `planar/analysis.rs` and
 //! `planar/curve.rs` (envelope, objective, minima), `spatial/plane.rs` and `spatial/on_axis.rs`
 //! (the reduction to the grasp plane).
+
+mod planar;
+mod pool;
+
+pub use crate::spatial::batch::SpatialAnswer;
+pub use planar::PlanarAnswer;
 
 use crate::{planar as planar_solver, spatial as spatial_solver, InvalidInput, Settings};
 use std::num::NonZeroUsize;
@@ -40,6 +48,10 @@ use std::num::NonZeroUsize;
 /// The fewest grasps a thread of the batch is started for (see the module docs): below
 /// `2 × MIN_PER_THREAD` grasps the batch runs on the calling thread alone.
 pub const MIN_PER_THREAD: usize = 256;
+
+/// Grasps a thread of the batch takes at a time: about 30 µs of work, against a lock taken and
+/// released once per piece.
+const PIECE: usize = 32;
 
 /// How many threads a batch may use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -65,11 +77,6 @@ impl Threads {
     }
 }
 
-/// What [`planar`] answers for one grasp: the same as [`crate::planar::solve`].
-pub type PlanarAnswer = Result<planar_solver::Verdict, InvalidInput>;
-/// What [`spatial`] answers for one grasp: the same as [`crate::spatial::solve`].
-pub type SpatialAnswer = Result<spatial_solver::Verdict, InvalidInput>;
-
 /// Answers every planar candidate with `settings`, appending the answers to `out` in the
 /// candidates' order (what was in `out` stays). Each answer equals
 /// `planar::solve(candidate, settings)`; a large batch runs on the cores [`Threads::Available`]
@@ -89,9 +96,7 @@ pub fn planar_with(
     threads: Threads,
     out: &mut Vec<PlanarAnswer>,
 ) {
-    in_runs(candidates, threads, out, |c| {
-        planar_solver::solve(c, settings)
-    });
+    in_runs(candidates, settings, threads, out, planar::solve);
 }
 
 /// Answers every spatial candidate with `settings`, appending the answers to `out` in the
@@ -112,49 +117,42 @@ pub fn spatial_with(
     threads: Threads,
     out: &mut Vec<SpatialAnswer>,
 ) {
-    in_runs(candidates, threads, out, |c| {
-        spatial_solver::solve(c, settings)
-    });
+    in_runs(
+        candidates,
+        settings,
+        threads,
+        out,
+        spatial_solver::batch::solve,
+    );
 }
 
-/// Appends `answer(c)` for every `c` of `items` to `out`, in order, cutting the items into
-/// contiguous runs of nearly equal length, one per thread ([`Threads::for_batch`]); the calling
-/// thread answers the first run.
+/// Appends `answer(c, settings, state)` for every `c` of `items` to `out`, in order, on the
+/// calling thread and up to [`Threads::for_batch`]` - 1` helpers (`pool.rs`). Each thread has its
+/// own `state` (storage one answer hands to the next), made by `S::default()`.
 ///
 /// The output is first extended by placeholders (a refusal, which costs nothing to make or
-/// drop), and each run overwrites its own disjoint part of it, so no answer is moved after it
-/// is made.
-fn in_runs<C: Sync, V: Send>(
+/// drop), which the answers then overwrite in place.
+fn in_runs<C, V, S>(
     items: &[C],
+    settings: &Settings,
     threads: Threads,
     out: &mut Vec<Result<V, InvalidInput>>,
-    answer: impl Fn(&C) -> Result<V, InvalidInput> + Sync,
-) {
+    answer: fn(&C, &Settings, &mut S) -> Result<V, InvalidInput>,
+) where
+    C: Clone + Send + Sync + 'static,
+    V: Send + 'static,
+    S: Default + 'static,
+{
     let n = items.len();
     let k = threads.for_batch(n);
-    if k <= 1 {
-        out.extend(items.iter().map(&answer));
-        return;
-    }
-    let start = out.len();
-    out.resize_with(start + n, || Err(InvalidInput::CoincidentContacts));
-    let run = n.div_ceil(k);
-    let answer = &answer;
-    std::thread::scope(|scope| {
-        let mut pairs = items.chunks(run).zip(out[start..].chunks_mut(run));
-        let first = pairs.next();
-        for (inputs, outputs) in pairs {
-            scope.spawn(move || fill(inputs, outputs, answer));
+    if k > 1 {
+        let start = out.len();
+        out.resize_with(start + n, || Err(InvalidInput::CoincidentContacts));
+        if pool::run(items, settings, k - 1, &mut out[start..], answer) {
+            return;
         }
-        if let Some((inputs, outputs)) = first {
-            fill(inputs, outputs, answer);
-        }
-    });
-}
-
-/// `outputs[i] = answer(&inputs[i])` for every `i`.
-fn fill<C, R>(inputs: &[C], outputs: &mut [R], answer: &impl Fn(&C) -> R) {
-    for (slot, c) in outputs.iter_mut().zip(inputs) {
-        *slot = answer(c);
+        out.truncate(start);
     }
+    let mut state = S::default();
+    out.extend(items.iter().map(|c| answer(c, settings, &mut state)));
 }

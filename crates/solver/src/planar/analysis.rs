@@ -146,9 +146,28 @@ pub struct Analysis {
     segments: Vec<Segment>,
 }
 
+/// The storage of an analysis's pieces, handed on from one analysis to the next
+/// ([`Analysis::reusing`], [`Analysis::into_pieces`]) so that a batch of grasps allocates it once.
+#[derive(Debug, Default)]
+pub(crate) struct Pieces(Vec<Segment>);
+
 impl Analysis {
     /// Checks force closure and builds the objective over the graspable range.
     pub(crate) fn new(frame: &GraspFrame, objective: Objective) -> Result<Self, NoForceClosure> {
+        // Two to four pieces on most grasps; a larger reservation (16: 2 kB) took mimalloc's
+        // slower path for blocks over 1 kB on every grasp.
+        Self::reusing(frame, objective, Pieces(Vec::with_capacity(4)))
+    }
+
+    /// [`Analysis::new`] with its pieces kept in `pieces` (emptied first): the same arithmetic,
+    /// without a new allocation when `pieces` holds enough room.
+    pub(crate) fn reusing(
+        frame: &GraspFrame,
+        objective: Objective,
+        pieces: Pieces,
+    ) -> Result<Self, NoForceClosure> {
+        let Pieces(mut segments) = pieces;
+        segments.clear();
         let misses = paper::closure_misses(frame);
         if misses.iter().any(Option::is_some) {
             return Err(NoForceClosure {
@@ -176,12 +195,15 @@ impl Analysis {
             graspable,
             from_above,
             crossings: [None; 3],
-            // Two to four pieces on most grasps; a larger reservation (16: 2 kB) took mimalloc's
-            // slower path for blocks over 1 kB on every grasp.
-            segments: Vec::with_capacity(4),
+            segments,
         };
         analysis.build_segments();
         Ok(analysis)
+    }
+
+    /// The storage of the pieces, for the next [`Analysis::reusing`].
+    pub(crate) fn into_pieces(self) -> Pieces {
+        Pieces(self.segments)
     }
 
     /// The six bounds `α_1 .. α_6` at gravity angle `theta` (normalised units: lengths over the
