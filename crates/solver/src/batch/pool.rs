@@ -197,3 +197,67 @@ where
 fn piece_range(p: usize, n: usize) -> std::ops::Range<usize> {
     p * PIECE..((p + 1) * PIECE).min(n)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::atomic::AtomicBool;
+
+    /// Set once the batch has returned: the helper's answers wait for it.
+    static RETURNED: AtomicBool = AtomicBool::new(false);
+    /// Set when a helper has taken a piece.
+    static HELPER_STARTED: AtomicBool = AtomicBool::new(false);
+    /// Set when a helper has answered a grasp.
+    static HELPER_ANSWERED: AtomicBool = AtomicBool::new(false);
+
+    /// Waits until `flag` is set, or 10 s.
+    fn wait_for(flag: &AtomicBool) {
+        let give_up = Instant::now() + Duration::from_secs(10);
+        while !flag.load(Ordering::SeqCst) && Instant::now() < give_up {
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+
+    /// `3c + 1`. On a helper thread only once the batch has returned (or after 10 s); on the
+    /// calling thread, its first grasp only once a helper has taken a piece, so that one has.
+    fn held_on_helpers(c: &u64, _: &Settings, _: &mut ()) -> u64 {
+        let on_helper = std::thread::current()
+            .name()
+            .is_some_and(|n| n.starts_with("grasp-batch"));
+        if on_helper {
+            HELPER_STARTED.store(true, Ordering::SeqCst);
+            wait_for(&RETURNED);
+            HELPER_ANSWERED.store(true, Ordering::SeqCst);
+        } else if *c == 0 {
+            wait_for(&HELPER_STARTED);
+        }
+        3 * c + 1
+    }
+
+    /// A helper that takes a piece and does not finish it delays the batch by no more than the
+    /// calling thread's short wait: the calling thread answers that piece itself, and every
+    /// answer is in its place.
+    #[test]
+    fn a_helper_that_does_not_finish_delays_nothing_and_changes_nothing() {
+        let items: Vec<u64> = (0..20 * PIECE as u64).collect();
+        let mut out = vec![0; items.len()];
+        let ran = run(&items, &Settings::default(), 1, &mut out, held_on_helpers);
+        let helper_answered = HELPER_ANSWERED.load(Ordering::SeqCst);
+        RETURNED.store(true, Ordering::SeqCst);
+        if !ran {
+            // One core: no helpers, the caller answers on its own thread.
+            assert_eq!(
+                std::thread::available_parallelism().map_or(1, usize::from),
+                1
+            );
+            return;
+        }
+        assert!(
+            HELPER_STARTED.load(Ordering::SeqCst),
+            "a helper took a piece"
+        );
+        assert!(!helper_answered, "the batch waited for its helper");
+        let want: Vec<u64> = items.iter().map(|c| 3 * c + 1).collect();
+        assert_eq!(out, want);
+    }
+}
