@@ -70,7 +70,7 @@ impl Threads {
     /// least [`MIN_PER_THREAD`] grasps.
     pub fn for_batch(self, n: usize) -> usize {
         let limit = match self {
-            Threads::Available => std::thread::available_parallelism().map_or(1, usize::from),
+            Threads::Available => pool::cores(),
             Threads::AtMost(k) => k.get(),
         };
         (n / MIN_PER_THREAD).clamp(1, limit.max(1))

@@ -38,12 +38,19 @@ struct Pool {
 /// answers them itself: about two pieces' work.
 const WAIT_FOR_HELPERS: Duration = Duration::from_micros(60);
 
+/// [`std::thread::available_parallelism`], asked once: on Linux it reads the process's cgroup
+/// files each time, about 50 µs here: the time of fifty grasps.
+pub(super) fn cores() -> usize {
+    static CORES: OnceLock<usize> = OnceLock::new();
+    *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, usize::from))
+}
+
 /// The pool, started on first use with one helper fewer than the cores; `None` when no helper
 /// could be started (the batch then runs on the calling thread).
 fn pool() -> Option<&'static Pool> {
     static POOL: OnceLock<Option<Pool>> = OnceLock::new();
     POOL.get_or_init(|| {
-        let cores = std::thread::available_parallelism().map_or(1, usize::from);
+        let cores = cores();
         let (sender, receiver) = mpsc::channel::<Job>();
         let receiver = Arc::new(Mutex::new(receiver));
         let mut helpers = 0;
