@@ -1,40 +1,52 @@
 //! Many candidates in one call: [`planar`] and [`spatial`] answer a slice of grasps with the
-//! same settings, in order, each answer equal bit for bit to what [`crate::planar::solve`] or
-//! [`crate::spatial::solve`] gives for that grasp alone.
+//! same settings, in order, each answer equal bit for bit, every field, to what
+//! [`crate::planar::solve`] or [`crate::spatial::solve`] gives for that grasp alone (the only
+//! difference is the type: the recommendation is not boxed, [`PlanarAnswer`], [`SpatialAnswer`]).
+//! Every objective and range is answered, refusals included.
 //!
-//! # Layout, and why
-//! Where one planar grasp spends its time (`perf record` of `benches/batch.rs`, norm2 from
-//! above, 1,000 random grasps with force closure, release build):
+//! # Where one grasp's time goes
+//! `perf record` of the single path in `benches/batch.rs` (norm2 from above, 1,000 random planar
+//! grasps with force closure, release build), shares of its time:
 //!
 //! | share | what |
 //! |---|---|
-//! | 27 % | the C library's `sin_cos` and `atan2`: the ends and minima of the envelope's pieces (`planar/analysis.rs`, `Angle::new` in `sinusoid.rs`), the current gravity angle and the ranges (`planar/frame.rs`, `planar/paper.rs`), the stationary points of the quadratic forms (`QuadForm::minima_between`, `sinusoid.rs`) |
-//! | 26 % | the closed forms of the paper and the walk of the envelope (`Analysis::new`, `planar/analysis.rs`; `planar/paper.rs`): data-dependent branches, two to six pieces a grasp |
-//! | 9 % | the SIMD `atan2` of the ten crossings (`rising_zeros`, `sinusoid.rs`), four a call |
-//! | 17 % | recommend, evaluate, local minima and labels (`planar/analysis.rs`, `planar/curve.rs`) |
+//! | 28 % | the C library's `sin_cos` and `atan2`: the ends and minima of the envelope's pieces (`Angle::new`, `sinusoid.rs`), the stationary points of the quadratic forms (`QuadForm::minima_between`, `sinusoid.rs`), the current gravity angle and the ranges (`planar/frame.rs`, `planar/paper.rs`) |
+//! | 17 % | force closure, the closed forms and the walk of the envelope into pieces (`Analysis::new`, `planar/analysis.rs`, with `planar/paper.rs` inlined): data-dependent branches, two to six pieces a grasp |
+//! | 9 % | the SIMD `atan2` of the ten crossings of the bounds (`rising_zeros`, `sinusoid.rs`), four a call |
+//! | 22 % | the recommendation: the candidate points, the objective there, the local minima and the labels (`recommend`, `evaluate_at` in `planar/analysis.rs`; `planar/curve.rs`) |
 //! | 12 % | validation and the map into the paper frame (`planar/frame.rs`) |
-//! | 6 % | allocation and copying the answer (its box, its list of minima, the pieces) |
+//! | 6 % | allocating, copying and freeing the answer (its box, its list of minima, the pieces) |
 //!
-//! Nothing large is both vectorisable and exact. A vector `sin_cos` or `atan2` across grasps
+//! # Layout, and why
+//! Little of that is both vectorisable and exact. A vector `sin_cos` or `atan2` across grasps
 //! gives other bits than the C library's (the `wide` crate's `atan2` is within 4.4e-16 rad of
 //! it, `sinusoid.rs`), and the answer is made of decisions on those values (which bound is on
-//! top, which candidate point is lowest, which ties): an angle one rounding away can change a
-//! label or a tie-break, which is not "the same answer". The walk of the envelope is a short,
-//! data-dependent sequence per grasp. So the batch keeps each grasp's arithmetic as the single
-//! path's (the very same functions, so the answers are equal bit for bit, every field, and
-//! refusals included) and takes its gain where it is exact: the grasps are independent, so a
-//! large batch is answered on every core: the calling thread and helper threads started once
-//! (`batch/pool.rs`, which says why not threads per batch) each take the next piece of 32 grasps
-//! not yet taken, and the calling thread never waits long for a helper the machine does not
-//! schedule (it answers that piece itself). Helpers join only for [`MIN_PER_THREAD`] grasps a
-//! thread or more: handing work over costs microseconds, so a small batch stays on the calling
-//! thread. On one thread the batch saves what the single path allocates and copies per grasp
-//! (the answer's box, the storage of the envelope's pieces, handed on from grasp to grasp).
+//! top, which candidate point is lowest, what ties, which label an angle gets): an angle one
+//! rounding away can change a label or a tie-break, which is not the same answer, and a
+//! gravity angle near zero has no relative error to speak of. The walk of the envelope is a short
+//! data-dependent sequence per grasp, with nothing to lay side by side across grasps. Packing the
+//! ten crossings of every grasp into full four-lane `atan2` calls (12 lanes a grasp today, 10
+//! then) would save at most a sixth of its 9 %. So the batch keeps each grasp's arithmetic the
+//! single path's (the same functions, called in the same order: the answers are equal bit for
+//! bit) and takes its gain where it is exact:
+//! - **Nothing allocated per grasp but the answer's list of minima**: the storage of the
+//!   envelope's pieces is handed from grasp to grasp (`Analysis::reusing`,
+//!   `planar/analysis.rs`), and the answer goes unboxed into the caller's vector
+//!   (`batch/planar.rs`, `spatial/batch.rs`: the steps of `planar::solve` and `spatial::solve`,
+//!   with the same reduction to the plane, `spatial/plane.rs`; on the contact axis the single
+//!   path's search, `spatial/on_axis.rs`).
+//! - **Every core for a large batch**: the grasps are independent, so the calling thread and
+//!   helper threads started once (`batch/pool.rs`, which says why not threads per batch) each
+//!   take the next piece of 32 grasps not yet taken. The calling thread never waits long for a
+//!   helper the machine does not schedule: it answers that piece itself. Helpers join only for
+//!   [`MIN_PER_THREAD`] grasps a thread or more (handing work over costs microseconds), and not
+//!   at all under [`Threads::ONE`], for a caller with a pool of its own. On a machine whose
+//!   cores are busy with other work the helpers gain little or lose a little (`docs/performance.md`).
 //!
-//! The mathematics shared is all of the single path's: `planar/frame.rs` (validation, paper
-//! frame), `planar/paper.rs` (closed forms, force closure), `planar/analysis.rs` and
-//! `planar/curve.rs` (envelope, objective, minima), `spatial/plane.rs` and `spatial/on_axis.rs`
-//! (the reduction to the grasp plane).
+//! The mathematics is all the single path's: `planar/frame.rs` (validation, paper frame),
+//! `planar/paper.rs` (closed forms, force closure), `planar/analysis.rs` and `planar/curve.rs`
+//! (envelope, objective, minima), `spatial/plane.rs` and `spatial/on_axis.rs` (the reduction to
+//! the grasp plane); `docs/theory.md` derives it.
 
 mod planar;
 mod pool;
