@@ -3,19 +3,19 @@
 //!
 //! # Why not threads started per batch
 //! A thread started per batch (`std::thread::scope`) must be joined before the batch returns.
-//! On a machine whose other core is busy, the scheduler starts a new thread only after the
-//! running one's time slice: the calling thread answered every grasp itself and then waited
-//! milliseconds for a helper that had nothing left to do; a batch of 1,000 grasps took three
-//! times as long as the single path. Here the calling thread never waits for a helper: it
-//! answers pieces itself until none is left untaken, collects what the helpers have finished,
-//! and answers again any piece a helper has taken but not finished in time (the helper's late
-//! answer is dropped). The arithmetic is the same function of the same grasp either way, so the
-//! answer is the same bits whoever computes it.
+//! On a machine whose other core is busy, a new or woken thread often runs first on the
+//! caller's own core, and the caller then waits for it: with scoped threads a batch of 1,000
+//! grasps takes up to three times as long as the single path. Here the calling thread never
+//! waits long for a helper: it answers pieces itself until none is left untaken, collects what
+//! the helpers finish within [`WAIT_FOR_HELPERS`], and answers again any piece a helper has
+//! taken but not finished by then (the helper's late answer is dropped). The arithmetic is the
+//! same function of the same grasp either way, so the answer is the same bits whoever computes
+//! it.
 //!
 //! # What a helper owns
 //! Helpers outlive the batch, so they cannot borrow it: a batch copies its candidates into a
-//! shared block (`Arc<[C]>`, a few microseconds for 1,000 grasps) and each helper sends the
-//! answers of a piece back over a channel.
+//! block the helpers share (a few microseconds for 1,000 grasps), and a helper sends the answers
+//! of each piece back over a channel.
 
 use super::PIECE;
 use crate::Settings;
@@ -175,11 +175,11 @@ where
     let mut missing = placed.iter().filter(|m| !**m).count();
     let deadline = Instant::now() + WAIT_FOR_HELPERS;
     while missing > 0 {
-        // Polled, not slept on: a timed sleep of microseconds lasts milliseconds on a busy
-        // machine.
+        // Polled, not slept on: a timed sleep of microseconds can last milliseconds on a busy
+        // machine. Each poll yields the core, to the helper when it waits on this one.
         let got = match finished.try_recv() {
             Err(TryRecvError::Empty) if Instant::now() < deadline => {
-                std::hint::spin_loop();
+                std::thread::yield_now();
                 continue;
             }
             got => got,
