@@ -70,7 +70,9 @@ const PIECE: usize = 32;
 pub enum Threads {
     /// As many as [`std::thread::available_parallelism`] says, when the batch is large enough.
     /// The helper threads (one fewer than that) start with the first such batch and then wait
-    /// for work as long as the process lives.
+    /// for work as long as the process lives. They pay only when a core is free: on a machine
+    /// whose cores are busy with other work a woken helper may run on the caller's core first,
+    /// and the batch then takes longer than on [`Threads::ONE`] (`docs/performance.md`).
     Available,
     /// At most this many (1: the calling thread only, for a caller that has its own pool).
     AtMost(NonZeroUsize),
