@@ -39,9 +39,11 @@
 //!   helper threads started once (`batch/pool.rs`, which says why not threads per batch) each
 //!   take the next piece of 32 grasps not yet taken. The calling thread never waits long for a
 //!   helper the machine does not schedule: it answers that piece itself. Helpers join only for
-//!   [`MIN_PER_THREAD`] grasps a thread or more (handing work over costs microseconds), and not
-//!   at all under [`Threads::ONE`], for a caller with a pool of its own. On a machine whose
-//!   cores are busy with other work the helpers gain little or lose a little (`docs/performance.md`).
+//!   [`MIN_PER_THREAD`] grasps a thread or more (handing work over costs microseconds), not at
+//!   all under [`Threads::ONE`] (for a caller with a pool of its own), and not for a while after
+//!   a batch in which they did not run beside the caller (`batch/pool.rs`, *Backing off*): on a
+//!   machine whose cores are busy with other work a woken helper often runs on the caller's own
+//!   core first (`docs/performance.md`).
 //!
 //! The mathematics is all the single path's: `planar/frame.rs` (validation, paper frame),
 //! `planar/paper.rs` (closed forms, force closure), `planar/analysis.rs` and `planar/curve.rs`
@@ -72,7 +74,8 @@ pub enum Threads {
     /// The helper threads (one fewer than that) start with the first such batch and then wait
     /// for work as long as the process lives. They pay only when a core is free: on a machine
     /// whose cores are busy with other work a woken helper may run on the caller's core first,
-    /// and the batch then takes longer than on [`Threads::ONE`] (`docs/performance.md`).
+    /// and the batch then takes as long as on [`Threads::ONE`] or longer; the next batches then
+    /// leave the helpers out for a while (`batch/pool.rs`, `docs/performance.md`).
     Available,
     /// At most this many (1: the calling thread only, for a caller that has its own pool).
     AtMost(NonZeroUsize),
@@ -177,7 +180,7 @@ fn in_runs<C, V, S>(
 {
     let n = items.len();
     let k = threads.for_batch(n);
-    if k > 1 {
+    if k > 1 && pool::helpers_may_join() {
         let start = out.len();
         out.resize_with(start + n, || Err(InvalidInput::CoincidentContacts));
         if pool::run(items, settings, k - 1, &mut out[start..], answer) {

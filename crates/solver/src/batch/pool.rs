@@ -12,6 +12,15 @@
 //! same function of the same grasp either way, so the answer is the same bits whoever computes
 //! it.
 //!
+//! # Backing off when helpers do not pay
+//! When the calling thread answers less than half its fair share of a batch's pieces (`1/k` of
+//! them on `k` threads), the helpers did not run beside it: a woken helper ran on the caller's
+//! own core, or the caller lost its core to other work, and the batch took about as long as on
+//! one thread, or longer. The next batches then run on the calling thread alone: one after the
+//! first such batch, twice as many after each further one in a row, at most [`MAX_SKIP`]; a
+//! batch in which the caller does its share ends the backing off. So on a machine with a free
+//! core every large batch uses it, and on a busy one the helpers are tried again now and then.
+//!
 //! # What a helper owns
 //! Helpers outlive the batch, so they cannot borrow it: a batch copies its candidates into a
 //! block the helpers share (a few microseconds for 1,000 grasps), and a helper sends the answers
@@ -19,7 +28,7 @@
 
 use super::PIECE;
 use crate::Settings;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender, TryRecvError};
 use std::sync::{Arc, Mutex, OnceLock};
 use std::time::{Duration, Instant};
@@ -37,6 +46,55 @@ struct Pool {
 /// How long the calling thread waits, at most, for the pieces helpers have taken before it
 /// answers them itself: about two pieces' work.
 const WAIT_FOR_HELPERS: Duration = Duration::from_micros(60);
+
+/// The most batches in a row that run on the calling thread alone after helpers did not pay.
+const MAX_SKIP: u32 = 64;
+
+/// Whether helpers paid lately (module docs, *Backing off*). Batches on several threads at once
+/// update it without order: the rule is a rate, not an invariant.
+#[derive(Debug)]
+struct Backoff {
+    /// Batches still to run on the calling thread alone.
+    skip: AtomicU32,
+    /// How many to skip after the next batch in which helpers do not pay.
+    next: AtomicU32,
+}
+
+impl Backoff {
+    const fn new() -> Self {
+        Self {
+            skip: AtomicU32::new(0),
+            next: AtomicU32::new(1),
+        }
+    }
+
+    /// Whether this batch is to run on the calling thread alone (counting it off if so).
+    fn skips(&self) -> bool {
+        self.skip
+            .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |s| s.checked_sub(1))
+            .is_ok()
+    }
+
+    /// Records a batch on `threads` threads of which the calling thread answered `own` of
+    /// `pieces` pieces.
+    fn record(&self, own: usize, pieces: usize, threads: usize) {
+        if 2 * threads * own < pieces {
+            let n = self.next.load(Ordering::Relaxed);
+            self.skip.store(n, Ordering::Relaxed);
+            self.next.store((2 * n).min(MAX_SKIP), Ordering::Relaxed);
+        } else {
+            self.next.store(1, Ordering::Relaxed);
+        }
+    }
+}
+
+/// The process's record of whether helpers paid lately.
+static HELPERS_PAY: Backoff = Backoff::new();
+
+/// Whether the next large batch may use helpers: `false` while backing off (module docs).
+pub(super) fn helpers_may_join() -> bool {
+    !HELPERS_PAY.skips()
+}
 
 /// [`std::thread::available_parallelism`], asked once: on Linux it reads the process's cgroup
 /// files each time, about 50 µs here: the time of fifty grasps.
@@ -155,8 +213,9 @@ where
         answer,
     });
     let (done, finished) = mpsc::channel::<(usize, Vec<R>)>();
+    let helpers = extra.min(pool.helpers);
     if let Ok(jobs) = pool.jobs.lock() {
-        for _ in 0..extra.min(pool.helpers) {
+        for _ in 0..helpers {
             let (shared, done) = (Arc::clone(&shared), done.clone());
             // A helper that cannot be reached leaves its share to the calling thread.
             let _ = jobs.send(Box::new(move || shared.help(&done)));
@@ -173,6 +232,7 @@ where
     }
     // The helpers' pieces: what they finish in time, then the rest answered here.
     let mut missing = placed.iter().filter(|m| !**m).count();
+    HELPERS_PAY.record(pieces - missing, pieces, helpers + 1);
     let deadline = Instant::now() + WAIT_FOR_HELPERS;
     while missing > 0 {
         // Polled, not slept on: a timed sleep of microseconds can last milliseconds on a busy
@@ -239,6 +299,33 @@ mod tests {
             wait_for(&HELPER_STARTED);
         }
         3 * c + 1
+    }
+
+    /// Helpers that do not pay send the next batches to the calling thread: 1, 2, 4, … up to
+    /// `MAX_SKIP` in a row, and a batch in which the caller does its share ends that.
+    #[test]
+    fn batches_back_off_from_helpers_that_do_not_pay() {
+        let b = Backoff::new();
+        assert!(!b.skips(), "no batch skips at first");
+        // On 2 threads the caller's fair share of 32 pieces is 16: 7 is less than half of it.
+        for run in [1, 2, 4, 8, 16, 32, 64, 64] {
+            b.record(7, 32, 2);
+            for _ in 0..run {
+                assert!(b.skips(), "a run of {run}");
+            }
+            assert!(!b.skips(), "after a run of {run}");
+        }
+        // 8 of 32 is half the fair share: the helpers paid, and the next miss skips one again.
+        b.record(8, 32, 2);
+        assert!(!b.skips());
+        b.record(0, 32, 2);
+        assert!(b.skips());
+        assert!(!b.skips());
+        // On 4 threads the fair share is 8: 3 is less than half of it, 4 is not.
+        b.record(4, 32, 4);
+        assert!(!b.skips());
+        b.record(3, 32, 4);
+        assert!(b.skips());
     }
 
     /// A helper that takes a piece and does not finish it delays the batch by no more than the
