@@ -146,28 +146,22 @@ pub struct Analysis {
     segments: Vec<Segment>,
 }
 
-/// The storage of an analysis's pieces, handed on from one analysis to the next
-/// ([`Analysis::reusing`], [`Analysis::into_pieces`]) so that a batch of grasps allocates it once.
+/// The storage of an analysis's pieces, handed from one analysis to the next (a batch's).
 #[derive(Debug, Default)]
 pub(crate) struct Pieces(Vec<Segment>);
 
 impl Analysis {
     /// Checks force closure and builds the objective over the graspable range.
     pub(crate) fn new(frame: &GraspFrame, objective: Objective) -> Result<Self, NoForceClosure> {
-        // Two to four pieces on most grasps; a larger reservation (16: 2 kB) took mimalloc's
-        // slower path for blocks over 1 kB on every grasp.
-        Self::reusing(frame, objective, Pieces(Vec::with_capacity(4)))
+        Self::reusing(frame, objective, Pieces::default())
     }
 
-    /// [`Analysis::new`] with its pieces kept in `pieces` (emptied first): the same arithmetic,
-    /// without a new allocation when `pieces` holds enough room.
+    /// [`Analysis::new`], its pieces stored in `pieces` (emptied first): the same arithmetic.
     pub(crate) fn reusing(
         frame: &GraspFrame,
         objective: Objective,
-        pieces: Pieces,
+        Pieces(mut segments): Pieces,
     ) -> Result<Self, NoForceClosure> {
-        let Pieces(mut segments) = pieces;
-        segments.clear();
         let misses = paper::closure_misses(frame);
         if misses.iter().any(Option::is_some) {
             return Err(NoForceClosure {
@@ -185,6 +179,10 @@ impl Analysis {
                 friction_safety_factor: frame.friction_safety_factor,
             });
         }
+        // Two to four pieces on most grasps; a larger reservation (16: 2 kB) took mimalloc's
+        // slower path for blocks over 1 kB on every grasp. (Storage handed on keeps its room.)
+        segments.clear();
+        segments.reserve_exact(4);
         let (graspable, from_above) = paper::ranges(frame);
         let mut analysis = Self {
             frame: *frame,
