@@ -146,9 +146,22 @@ pub struct Analysis {
     segments: Vec<Segment>,
 }
 
+/// The storage of an analysis's pieces, handed from one analysis to the next (a batch's).
+#[derive(Debug, Default)]
+pub(crate) struct Pieces(Vec<Segment>);
+
 impl Analysis {
     /// Checks force closure and builds the objective over the graspable range.
     pub(crate) fn new(frame: &GraspFrame, objective: Objective) -> Result<Self, NoForceClosure> {
+        Self::reusing(frame, objective, Pieces::default())
+    }
+
+    /// [`Analysis::new`], its pieces stored in `pieces` (emptied first): the same arithmetic.
+    pub(crate) fn reusing(
+        frame: &GraspFrame,
+        objective: Objective,
+        Pieces(mut segments): Pieces,
+    ) -> Result<Self, NoForceClosure> {
         let misses = paper::closure_misses(frame);
         if misses.iter().any(Option::is_some) {
             return Err(NoForceClosure {
@@ -166,6 +179,10 @@ impl Analysis {
                 friction_safety_factor: frame.friction_safety_factor,
             });
         }
+        // Two to four pieces on most grasps; a larger reservation (16: 2 kB) took mimalloc's
+        // slower path for blocks over 1 kB on every grasp. (Storage handed on keeps its room.)
+        segments.clear();
+        segments.reserve_exact(4);
         let (graspable, from_above) = paper::ranges(frame);
         let mut analysis = Self {
             frame: *frame,
@@ -176,12 +193,15 @@ impl Analysis {
             graspable,
             from_above,
             crossings: [None; 3],
-            // Two to four pieces on most grasps; a larger reservation (16: 2 kB) took mimalloc's
-            // slower path for blocks over 1 kB on every grasp.
-            segments: Vec::with_capacity(4),
+            segments,
         };
         analysis.build_segments();
         Ok(analysis)
+    }
+
+    /// The storage of the pieces, for the next [`Analysis::reusing`].
+    pub(crate) fn into_pieces(self) -> Pieces {
+        Pieces(self.segments)
     }
 
     /// The six bounds `α_1 .. α_6` at gravity angle `theta` (normalised units: lengths over the
