@@ -14,7 +14,7 @@
 use super::answer::{
     CandidateC, ConeMiss, GraspCase, LocalMinimum, NoForceClosure, PaperCandidate, Recommendation,
 };
-use super::curve::{self, Curve, Piece, SAME_ANGLE};
+use super::curve::{self, AtMostTwo, Curve, Piece, SAME_ANGLE};
 use super::finger;
 use super::frame::GraspFrame;
 use super::paper::{self, FORCE_SCALE};
@@ -35,25 +35,6 @@ const ENVELOPE_TIE: f64 = 1e-12;
 /// The allowed range's intervals inside the graspable range: one for the named ranges, at most
 /// five for explicit bounds (kept inline, not on the heap, up to three).
 type Intervals = SmallVec<[(f64, f64); 3]>;
-
-/// Up to two angles, collected without allocating (a piece shorter than 2π has at most two
-/// stationary minima).
-#[derive(Debug, Default)]
-struct AtMostTwo {
-    values: [f64; 2],
-    len: usize,
-}
-
-impl Extend<f64> for AtMostTwo {
-    fn extend<I: IntoIterator<Item = f64>>(&mut self, iter: I) {
-        for v in iter {
-            if self.len < 2 {
-                self.values[self.len] = v;
-                self.len += 1;
-            }
-        }
-    }
-}
 
 /// One interval of θ on which the objective is a single [`Curve`].
 ///
