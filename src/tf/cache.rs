@@ -57,10 +57,15 @@ impl Cache {
         }
     }
 
-    /// Drops the oldest dynamic sample (to make room); false when there is none to spare.
-    pub(crate) fn drop_oldest(&mut self) -> bool {
+    /// Makes room for a new dynamic sample at `stamp` by dropping the oldest one; the only one
+    /// goes only for a newer sample, so that the frame keeps its latest. False when neither.
+    pub(crate) fn make_room(&mut self, stamp: i64) -> bool {
         match self {
-            Cache::Dynamic(samples) if samples.len() > 1 => samples.pop_front().is_some(),
+            Cache::Dynamic(samples)
+                if samples.len() > 1 || samples.front().is_some_and(|s| s.stamp < stamp) =>
+            {
+                samples.pop_front().is_some()
+            }
             _ => false,
         }
     }

@@ -45,7 +45,7 @@ pub(crate) const MAX_FRAME_NAME_BYTES: usize = 256;
 /// The most dynamic samples one frame keeps (10 s at 1 kHz); past it, its oldest go.
 pub(crate) const MAX_SAMPLES_PER_FRAME: usize = 10_000;
 /// The most samples the buffer keeps in all, about 72 bytes each; past it, a frame makes room
-/// from its own oldest, and a frame with none to spare gets no new one.
+/// from its own oldest (its only one for a newer), and a frame with none gets no new one.
 pub(crate) const MAX_SAMPLES: usize = 1 << 18;
 /// tf2's `QUATERNION_NORMALIZATION_TOLERANCE`: a rotation whose squared norm is further than
 /// this from 1 is not a rotation, and the transform is dropped.
@@ -173,7 +173,7 @@ impl TfBuffer {
                 }
                 Inserted::Added
                     if (cache.len() >= MAX_SAMPLES_PER_FRAME || self.samples >= MAX_SAMPLES)
-                        && !cache.drop_oldest() =>
+                        && !cache.make_room(sample.stamp) =>
                 {
                     self.dropped.over_cap += 1;
                     return;

@@ -349,6 +349,28 @@ fn the_caps_bound_frames_and_samples() {
     for f in 0..frames {
         assert!(b.lookup("w", &format!("f{f}"), 0).is_ok(), "f{f}");
     }
+    // Full: a frame of one sample moves on to a newer one, keeps it for an older one, and a
+    // new frame gets none.
+    let mut b = TfBuffer::new();
+    b.insert(&tf("w", "lone", S, [0.0; 3], 0.0), false);
+    for k in 0..(MAX_SAMPLES + MAX_SAMPLES_PER_FRAME) as i64 {
+        let f = k as usize % (MAX_SAMPLES / MAX_SAMPLES_PER_FRAME + 1);
+        b.insert(
+            &tf("w", &format!("f{f}"), S + k * 1000, [0.0; 3], 0.0),
+            false,
+        );
+    }
+    assert_eq!(b.sample_count(), MAX_SAMPLES);
+    b.insert(&tf("w", "lone", 2 * S, [1.0, 0.0, 0.0], 0.0), false);
+    assert!(close(at(&b, "w", "lone", 0, [0.0; 3]), [1.0, 0.0, 0.0]));
+    assert!(b.lookup("w", "lone", S).is_err());
+    b.insert(&tf("w", "lone", S + S / 2, [0.0; 3], 0.0), false);
+    assert!(close(at(&b, "w", "lone", 0, [0.0; 3]), [1.0, 0.0, 0.0]));
+    let over = b.dropped().over_cap;
+    b.insert(&tf("w", "newcomer", 2 * S, [0.0; 3], 0.0), false);
+    assert_eq!(b.dropped().over_cap, over + 1);
+    assert!(b.lookup("w", "newcomer", 0).is_err());
+    assert_eq!(b.sample_count(), MAX_SAMPLES);
 }
 
 #[test]
