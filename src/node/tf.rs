@@ -16,6 +16,10 @@ use ros2_client::qos::{Durability, History};
 use ros2_client::{Node, QosProfile, Subscription};
 use std::time::{Duration, Instant};
 
+/// The dynamic transforms' topic, as tf2_ros names it (before remapping).
+pub(crate) const TF_TOPIC: &str = "/tf";
+/// The static transforms' topic, as tf2_ros names it (before remapping).
+pub(crate) const TF_STATIC_TOPIC: &str = "/tf_static";
 /// tf2_ros's listener depth, both topics.
 const DEPTH: usize = 100;
 /// The most messages one [`TfListener::drain`] takes from each topic, so that a flood cannot
@@ -50,17 +54,18 @@ pub(crate) struct Drained {
 }
 
 impl TfListener {
-    /// Subscribes to `/tf` and `/tf_static` (absolute names: TF is global, whatever the node's
-    /// namespace, as with tf2_ros).
-    pub(crate) fn create(node: &mut Node) -> anyhow::Result<Self> {
-        let dynamic_topic = create_topic::<TfMessage>(node, "/tf", &dynamic_qos())?;
-        let static_topic = create_topic::<TfMessage>(node, "/tf_static", &static_qos())?;
+    /// Subscribes to the full names `tf` and `tf_static`: [`TF_TOPIC`] and [`TF_STATIC_TOPIC`]
+    /// (absolute: TF is global, whatever the node's namespace, as with tf2_ros), or what a
+    /// remap makes of them (`-r /tf:=/robot1/tf`, as multi-robot stacks do).
+    pub(crate) fn create(node: &mut Node, tf: &str, tf_static: &str) -> anyhow::Result<Self> {
+        let dynamic_topic = create_topic::<TfMessage>(node, tf, &dynamic_qos())?;
+        let static_topic = create_topic::<TfMessage>(node, tf_static, &static_qos())?;
         let dynamic = node
             .create_subscription(&dynamic_topic, Some(dynamic_qos()))
-            .map_err(|e| anyhow::anyhow!("cannot subscribe to /tf: {e:?}"))?;
+            .map_err(|e| anyhow::anyhow!("cannot subscribe to {tf}: {e:?}"))?;
         let fixed = node
             .create_subscription(&static_topic, Some(static_qos()))
-            .map_err(|e| anyhow::anyhow!("cannot subscribe to /tf_static: {e:?}"))?;
+            .map_err(|e| anyhow::anyhow!("cannot subscribe to {tf_static}: {e:?}"))?;
         Ok(Self { dynamic, fixed })
     }
 
