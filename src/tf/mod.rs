@@ -131,7 +131,10 @@ impl TfBuffer {
         };
         let new_frames = usize::from(!self.ids.contains_key(parent))
             + usize::from(!self.ids.contains_key(child));
-        if self.frames.len() + new_frames > MAX_FRAMES {
+        // A frame new to the buffer needs a sample of room: without it, refused before its
+        // name is kept.
+        let room = self.samples < MAX_SAMPLES || self.ids.contains_key(child);
+        if self.frames.len() + new_frames > MAX_FRAMES || !room {
             self.dropped.over_cap += 1;
             return;
         }

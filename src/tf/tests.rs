@@ -369,7 +369,12 @@ fn the_caps_bound_frames_and_samples() {
     let over = b.dropped().over_cap;
     b.insert(&tf("w", "newcomer", 2 * S, [0.0; 3], 0.0), false);
     assert_eq!(b.dropped().over_cap, over + 1);
-    assert!(b.lookup("w", "newcomer", 0).is_err());
+    assert_eq!(
+        b.lookup("w", "newcomer", 0)
+            .expect_err("not kept")
+            .to_string(),
+        "\"newcomer\" passed to lookupTransform argument source_frame does not exist. "
+    );
     assert_eq!(b.sample_count(), MAX_SAMPLES);
 }
 
