@@ -89,9 +89,6 @@ pub use poses::{
     PoseRecommendation, PoseRecommendationSet, SolidPrimitive,
 };
 
-mod tf;
-pub use tf::{TfMessage, Transform, TransformStamped};
-
 mod visualization;
 pub use visualization::{
     ColorRgba, CompressedImage, Duration, Marker, MarkerArray, MeshFile, Pose, UvCoordinate,
