@@ -63,10 +63,6 @@ use std::num::NonZeroUsize;
 /// `2 × MIN_PER_THREAD` grasps the batch runs on the calling thread alone.
 pub const MIN_PER_THREAD: usize = 256;
 
-/// Grasps a thread of the batch takes at a time: about 30 µs of work, against one atomic
-/// increment and, on a helper, one message per piece.
-const PIECE: usize = 32;
-
 /// How many threads a batch may use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Threads {
