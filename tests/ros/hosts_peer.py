@@ -53,12 +53,15 @@ def graph(peer, args) -> dict:
 
     sets: dict[str, object] = {}
     pub = peer.node.create_publisher(GraspCandidateSet, "grasp_candidate_sets", C.reliable_qos(10))
-    peer.node.create_subscription(GripRecommendationSet, "grip_recommendation_sets",
-                                  lambda m: sets.setdefault(m.set_id, m), C.reliable_qos(10))
+    sub = peer.node.create_subscription(GripRecommendationSet, "grip_recommendation_sets",
+                                        lambda m: sets.setdefault(m.set_id, m), C.reliable_qos(10))
     s = GraspCandidateSet()
     s.id = "hosts-set"
     s.candidates = [C.candidate_msg(c) for c in cands[:5]]
-    assert peer.spin_until(lambda: pub.get_subscription_count() > 0, args.timeout), "no match on the set topic"
+    # Both directions: an answer published before the node's publisher matches this new
+    # subscription would be lost (reliable, volatile).
+    matched = lambda: pub.get_subscription_count() > 0 and sub.get_publisher_count() > 0  # noqa: E731
+    assert peer.spin_until(matched, args.timeout), "no match on the set topics"
     pub.publish(s)
     assert peer.spin_until(lambda: s.id in sets, args.timeout), "no answer to the set"
 

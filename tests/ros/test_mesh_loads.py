@@ -82,11 +82,11 @@ def test_a_set_that_panicked_the_parser_leaves_later_sets_answered(start_node, p
     from grasp_orient.msg import PoseRecommendationSet
     set_pub = peer.node.create_publisher(PoseCandidateSet, f"{ns}/pose_candidate_sets", reliable_qos(10))
     answers: dict = {}
-    peer.node.create_subscription(PoseRecommendationSet, f"{ns}/pose_recommendation_sets",
-                                  lambda m: answers.setdefault(m.set_id, m), reliable_qos(10))
+    sub = peer.node.create_subscription(PoseRecommendationSet, f"{ns}/pose_recommendation_sets",
+                                        lambda m: answers.setdefault(m.set_id, m), reliable_qos(10))
     srv = peer.node.create_client(RecommendPoses, f"{ns}/grasp_orient/recommend_poses")
-    assert peer.spin_until(lambda: set_pub.get_subscription_count() > 0, 15.0)
-    peer.spin_for(0.5)
+    # Both directions: answers sent before the node's publisher matches ours would be lost.
+    assert peer.spin_until(lambda: set_pub.get_subscription_count() > 0 and sub.get_publisher_count() > 0, 15.0)
     base = pc.sets()[2]  # on the cylinder
     for k in range(20):  # more than max_queued_sets (16): a dead set thread would answer every later one busy
         bad = dict(base, id=f"bad-{k}", object={**base["object"], "primitive": {"type": 0, "dimensions": []},
@@ -127,11 +127,11 @@ def test_fifo_meshes_block_nothing(start_node, peer, tmp_path):
     from grasp_orient.msg import PoseRecommendation
     pub = peer.node.create_publisher(PoseCandidate, f"{ns}/pose_candidates", reliable_qos(100))
     answers: dict = {}
-    peer.node.create_subscription(PoseRecommendation, f"{ns}/pose_recommendations",
-                                  lambda m: answers.setdefault(m.recommendation.candidate_id, (m, time.monotonic())),
-                                  reliable_qos(100))
-    assert peer.spin_until(lambda: pub.get_subscription_count() > 0, 15.0)
-    peer.spin_for(0.5)
+    sub = peer.node.create_subscription(
+        PoseRecommendation, f"{ns}/pose_recommendations",
+        lambda m: answers.setdefault(m.recommendation.candidate_id, (m, time.monotonic())), reliable_qos(100))
+    # Both directions: answers sent before the node's publisher matches ours would be lost.
+    assert peer.spin_until(lambda: pub.get_subscription_count() > 0 and sub.get_publisher_count() > 0, 15.0)
     ids = [f"fifo-{k}" for k in range(6)]  # more than the 4 loading slots
     t0 = time.monotonic()
     for i in ids:
@@ -178,10 +178,11 @@ def test_inline_meshes_are_bounded(start_node, peer):
     from grasp_orient.msg import PoseRecommendation
     pub = peer.node.create_publisher(PoseCandidate, f"{ns}/pose_candidates", reliable_qos(100))
     answers: dict = {}
-    peer.node.create_subscription(PoseRecommendation, f"{ns}/pose_recommendations",
-                                  lambda m: answers.setdefault(m.recommendation.candidate_id, m), reliable_qos(100))
-    assert peer.spin_until(lambda: pub.get_subscription_count() > 0, 15.0)
-    peer.spin_for(0.5)
+    sub = peer.node.create_subscription(PoseRecommendation, f"{ns}/pose_recommendations",
+                                        lambda m: answers.setdefault(m.recommendation.candidate_id, m),
+                                        reliable_qos(100))
+    # Both directions: answers sent before the node's publisher matches ours would be lost.
+    assert peer.spin_until(lambda: pub.get_subscription_count() > 0 and sub.get_publisher_count() > 0, 15.0)
     base = pc.singles()[0]
     base["object"] = {"pose": pc.pose(0, 0, 0), "scale": pc.ONE, "mass": 0.25, "friction": 0.5}
     base["grasp_pose"] = pc.pose(0, 0, 0)
