@@ -13,6 +13,9 @@
 //! (`arrays.rs`); the GIL is released while the rows are answered, on every core unless
 //! `threads` says otherwise (`chunks.rs`).
 
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 mod arrays;
 mod chunks;
 mod columns;
