@@ -213,8 +213,8 @@ fn solve<'py>(
 /// friction (both contacts) and gravity (three numbers, m/s², in the mesh's frame) are shared
 /// by every pose.
 ///
-/// closing_axis: the tool frame's axis the fingers close along ("x", "y" or "z"; ACRONYM's
-/// and graspnetAPI's grippers close along... see docs/python.md). center_of_mass: three numbers
+/// closing_axis: the tool frame's axis the fingers close along ("x", "y" or "z"; docs/python.md
+/// says which a dataset's poses take). center_of_mass: three numbers
 /// in the mesh's frame (m), or None for the closed mesh's centroid. scale: the factor from the
 /// mesh's units to metres, one number or three (0.001 for millimetres). The other options
 /// are solve()'s.
