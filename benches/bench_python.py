@@ -9,7 +9,7 @@
 
 The Rust path is crates/python/benches/rust_path.rs, built and run here by cargo on files this
 script writes (the same numbers, the poses' quaternions the ones the module made of their
-matrices). The module is timed on one thread (threads=1: the same work as the Rust path, plus
+matrices). The rounds alternate between the module and the Rust path. The module is timed on one thread (threads=1: the same work as the Rust path, plus
 reading the arrays and writing the columns) and on every core (the default). Each figure is the
 median of --rounds rounds; the ratios are module / Rust (target: at most 1.2 on one thread).
 
@@ -101,12 +101,19 @@ def timed(rounds: int, f):
     return statistics.median(times), out
 
 
-def rust_path(folder: Path, rounds: int) -> dict:
-    env = {k: v for k, v in os.environ.items() if k not in ("VIRTUAL_ENV",)}
-    subprocess.run(["cargo", "bench", "-p", "grasp_orient_python", "--bench", "rust_path", "--no-run"],
-                   cwd=REPO, env=env, check=True, capture_output=True)
-    done = subprocess.run(["cargo", "bench", "-p", "grasp_orient_python", "--bench", "rust_path", "--",
-                           str(folder), str(rounds)], cwd=REPO, env=env, check=True, capture_output=True, text=True)
+def build_rust_path() -> Path:
+    """The Rust path's executable, built by cargo (bench profile)."""
+    done = subprocess.run(["cargo", "bench", "-p", "grasp_orient_python", "--bench", "rust_path", "--no-run",
+                           "--message-format=json"], cwd=REPO, check=True, capture_output=True, text=True)
+    for line in done.stdout.splitlines():
+        if '"executable":"' in line and "rust_path" in line:
+            return Path(line.split('"executable":"')[1].split('"')[0])
+    raise SystemExit("cargo built no rust_path executable")
+
+
+def rust_round(exe: Path, folder: Path) -> dict:
+    """One round of the Rust path: {"grasps": (n, s), "poses": (n, s)}."""
+    done = subprocess.run([str(exe), str(folder), "1"], check=True, capture_output=True, text=True)
     out = {}
     for line in done.stdout.splitlines():
         name, n, seconds = line.split()
@@ -118,22 +125,25 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--grasps", type=int, default=1_000_000)
     ap.add_argument("--poses", type=int, default=100_000)
-    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--rounds", type=int, default=5)
     args = ap.parse_args()
 
     grasps = planar_grasps(args.grasps)
-    t_one, ours = timed(args.rounds, lambda: grasp_orient.solve(**grasps, model="planar", threads=1))
-    t_all, _ = timed(args.rounds, lambda: grasp_orient.solve(**grasps, model="planar"))
-    ok = int((ours["status"] == 0).sum())
-
     vertices, triangles = torus()
     poses, widths = poses_on_torus(args.poses)
     gravity = (0.0, 0.0, -9.81)
-    p_one, pose_out = timed(args.rounds, lambda: grasp_orient.solve_poses(
-        vertices, triangles, poses, widths, 0.3, 0.5, gravity, threads=1))
-    p_all, _ = timed(args.rounds, lambda: grasp_orient.solve_poses(vertices, triangles, poses, widths, 0.3, 0.5, gravity))
+    solve_one = lambda: grasp_orient.solve(**grasps, model="planar", threads=1)  # noqa: E731
+    solve_all = lambda: grasp_orient.solve(**grasps, model="planar")  # noqa: E731
+    poses_one = lambda: grasp_orient.solve_poses(  # noqa: E731
+        vertices, triangles, poses, widths, 0.3, 0.5, gravity, threads=1)
+    poses_all = lambda: grasp_orient.solve_poses(  # noqa: E731
+        vertices, triangles, poses, widths, 0.3, 0.5, gravity)
+    ours, pose_out = solve_one(), poses_one()
+    ok = int((ours["status"] == 0).sum())
     pose_ok = int((pose_out["status"] == 0).sum())
 
+    exe = build_rust_path()
+    times = {k: [] for k in ("t_one", "t_all", "p_one", "p_all", "r_grasps", "r_poses")}
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         rows = np.concatenate([grasps["contact_1"], grasps["normal_1"], grasps["contact_2"], grasps["normal_2"],
@@ -145,10 +155,17 @@ def main() -> None:
         np.concatenate([poses[:, :3, 3], pose_out["grasp_orientation"], widths[:, None]], axis=1) \
             .astype("<f8").tofile(folder / "poses.f64")
         np.array([0.3, 0.5, *gravity, 1.0]).astype("<f8").tofile(folder / "object.f64")
-        rust = rust_path(folder, args.rounds)
-
-    n, r_grasps = rust["grasps"]
-    m, r_poses = rust["poses"]
+        # Rounds interleaved, the module and the Rust path in turn, so that a slow moment of a
+        # shared machine slows both alike; medians over the rounds.
+        for _ in range(args.rounds):
+            for key, f in (("t_one", solve_one), ("t_all", solve_all), ("p_one", poses_one), ("p_all", poses_all)):
+                times[key].append(timed(1, f)[0])
+            rust = rust_round(exe, folder)
+            times["r_grasps"].append(rust["grasps"][1])
+            times["r_poses"].append(rust["poses"][1])
+    t_one, t_all, p_one, p_all, r_grasps, r_poses = (statistics.median(times[k]) for k in
+                                                     ("t_one", "t_all", "p_one", "p_all", "r_grasps", "r_poses"))
+    n, m = rust["grasps"][0], rust["poses"][0]
     print(f"python {sys.version.split()[0]}, numpy {np.__version__}, {os.cpu_count()} cores; medians of {args.rounds} rounds")
     print(f"{n:,} planar grasps ({ok:,} solved), one solve call:")
     print(f"  module, threads=1:   {t_one:.3f} s ({t_one / n * 1e6:.3f} us a grasp)")

@@ -71,14 +71,16 @@ fi
 # `maturin develop --profile test` cannot be used for it, since maturin builds through `cargo rustc`,
 # which with that profile compiles a test harness instead of the module. The test build is installed
 # as maturin develop installs a mixed project: the package's Python files and the native library,
-# named as CPython's abi3 loader finds it. --release builds and installs the wheel with maturin.
+# named as CPython's abi3 loader finds it. --release builds and installs the wheel with maturin (an
+# editable install: the library beside the package's Python files, a .pth naming their folder;
+# numpy, which the package requires, is installed already).
 START=$SECONDS
 SITE="$("$VENV/bin/python" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')"
 if [ "$PROFILE" = release ]; then
     log "building crates/python with maturin develop --release into $VENV"
     rm -rf "$SITE/grasp_orient"
     run_logged maturin-develop env -u PYTHONPATH VIRTUAL_ENV="$VENV" PATH="$VENV/bin:$PATH" \
-        PYO3_PYTHON="$VENV/bin/python" "$VENV/bin/maturin" develop --release --skip-install \
+        PYO3_PYTHON="$VENV/bin/python" "$VENV/bin/maturin" develop --release \
         --manifest-path "$REPO/crates/python/Cargo.toml"
 else
     log "building crates/python (test profile) into $VENV"

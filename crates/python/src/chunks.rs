@@ -46,14 +46,18 @@ impl Threads {
     }
 }
 
-/// The answers to rows `0..n`, `answer` called on consecutive ranges of at most `chunk` rows,
-/// concatenated in row order.
+/// The answers to rows `0..n`: on the calling thread `answer(0..n)`; on threads, `answer`
+/// called on consecutive ranges of at most `chunk` rows, concatenated in row order.
 pub(crate) fn answer_in_chunks(
     n: usize,
     chunk: usize,
     threads: &Threads,
     answer: impl Fn(Range<usize>) -> Columns + Sync,
 ) -> Columns {
+    if matches!(threads, Threads::Calling) {
+        // One range: the columns are written once, where they stay (no chunks to join).
+        return answer(0..n);
+    }
     let chunk = chunk.max(1);
     let ranges: Vec<Range<usize>> = (0..n)
         .step_by(chunk)

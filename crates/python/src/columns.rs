@@ -63,10 +63,28 @@ fn quaternion(out: &mut Vec<f64>, q: &Quaternion) {
 impl Columns {
     /// Room for `rows` rows.
     pub(crate) fn with_capacity(rows: usize) -> Self {
-        let mut c = Columns::default();
-        c.status.reserve(rows);
-        c.message.reserve(rows);
-        c
+        Columns {
+            status: Vec::with_capacity(rows),
+            message: Vec::with_capacity(rows),
+            wrist_rotation: Vec::with_capacity(rows),
+            rotation: Vec::with_capacity(4 * rows),
+            rotation_axis: Vec::with_capacity(3 * rows),
+            gravity_direction: Vec::with_capacity(3 * rows),
+            gravity_angle: Vec::with_capacity(rows),
+            gripping_power: Vec::with_capacity(rows),
+            gripping_power_nominal: Vec::with_capacity(rows),
+            internal_force: Vec::with_capacity(rows),
+            finger_force: Vec::with_capacity(rows),
+            contact_forces: Vec::with_capacity(4 * rows),
+            gripping_power_current: Vec::with_capacity(rows),
+            internal_force_current: Vec::with_capacity(rows),
+            finger_force_current: Vec::with_capacity(rows),
+            candidate_c: Vec::with_capacity(rows),
+            grasp_case: Vec::with_capacity(rows),
+            recommended_label: Vec::with_capacity(rows),
+            objective: Vec::with_capacity(rows),
+            geometry: Geometry::default(),
+        }
     }
 
     /// Rows so far.
@@ -212,15 +230,24 @@ fn rows(py: Python<'_>, values: Vec<f64>, n: usize, k: usize) -> PyResult<Bound<
 }
 
 /// A list of str; equal texts share one str object (most rows' messages are empty, and the
-/// labels take a few values), so a million rows do not make a million strings.
+/// labels take a few values), so a million rows do not make a million strings. A text equal to
+/// the row before's takes its object without a look-up.
 fn texts<'py>(py: Python<'py>, values: &[CompactString]) -> PyResult<Bound<'py, PyList>> {
     let mut seen: HashMap<&str, Bound<'py, PyString>> = HashMap::new();
-    let mut items = Vec::with_capacity(values.len());
+    let mut items: Vec<Bound<'py, PyString>> = Vec::with_capacity(values.len());
+    let mut previous: Option<(&str, Bound<'py, PyString>)> = None;
     for v in values {
-        let s = seen
-            .entry(v.as_str())
-            .or_insert_with(|| PyString::new(py, v))
-            .clone();
+        let s = match &previous {
+            Some((text, object)) if *text == v.as_str() => object.clone(),
+            _ => {
+                let object = seen
+                    .entry(v.as_str())
+                    .or_insert_with(|| PyString::new(py, v))
+                    .clone();
+                previous = Some((v.as_str(), object.clone()));
+                object
+            }
+        };
         items.push(s);
     }
     PyList::new(py, items)

@@ -104,6 +104,10 @@ pub(crate) fn compact_str_row(row: usize, message: &str) -> CompactString {
     out
 }
 
+/// Candidates answered at a time within a chunk: few enough that their answers (about 400
+/// bytes each, and their lists) are still in the core's cache when they become columns.
+const SLICE: usize = 64;
+
 /// The rows of `range`, answered.
 fn answer_range(
     g: &Grasps<'_>,
@@ -111,11 +115,16 @@ fn answer_range(
     settings: &Settings,
     rules: &Rules,
 ) -> Columns {
-    let candidates: Vec<GraspCandidate> = range.clone().map(|i| g.candidate(i)).collect();
-    let answers = answer_candidates(&candidates, settings, rules);
-    let mut out = Columns::with_capacity(answers.len());
-    for (row, r) in range.zip(&answers) {
-        out.push(r, row_message(row, r));
+    let mut out = Columns::with_capacity(range.len());
+    let mut candidates = Vec::with_capacity(SLICE);
+    for start in range.clone().step_by(SLICE) {
+        let rows = start..(start + SLICE).min(range.end);
+        candidates.clear();
+        candidates.extend(rows.clone().map(|i| g.candidate(i)));
+        let answers = answer_candidates(&candidates, settings, rules);
+        for (row, r) in rows.zip(&answers) {
+            out.push(r, row_message(row, r));
+        }
     }
     out
 }
