@@ -84,8 +84,12 @@ if [ "$PROFILE" = release ]; then
         --manifest-path "$REPO/crates/python/Cargo.toml"
 else
     log "building crates/python (test profile) into $VENV"
+    # The workspace's other crates are selected too, as `cargo test` selects them: built as
+    # dependencies of the module alone, cargo compiled them once more (147 s on the 2-core machine
+    # after `cargo test --all-targets --no-run`; selected, nothing but the module's own crates).
     run_logged cargo-build env PYO3_PYTHON="$VENV/bin/python" cargo build --profile test \
-        --manifest-path "$REPO/Cargo.toml" -p grasp_orient_python --features pyo3/extension-module
+        --manifest-path "$REPO/Cargo.toml" -p grasp_orient_python -p grasp_orient \
+        -p grasp_orient_solver -p grasp_orient_geometry --features pyo3/extension-module
     TARGET="${CARGO_TARGET_DIR:-$REPO/target}"
     # maturin's editable install of another build leaves a .pth that would shadow this copy.
     rm -f "$SITE"/grasp_orient*.pth
