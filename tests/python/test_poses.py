@@ -190,3 +190,40 @@ def test_every_thread_count_gives_the_same_poses():
             assert v == other[k], k
         else:
             np.testing.assert_array_equal(v, other[k], err_msg=k)
+
+
+def rotation_of(q: np.ndarray) -> np.ndarray:
+    """The rotation matrix of a unit quaternion (x, y, z, w), written out."""
+    x, y, z, w = q / np.linalg.norm(q)
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+@pytest.mark.parametrize("closing_axis,column", [("x", 0), ("y", 1), ("z", 2)])
+def test_each_pose_is_its_matrix_and_the_fingers_close_along_its_axis(closing_axis, column):
+    # The quaternion the module made of each matrix gives the matrix back, and the contacts lie on
+    # the line through the tool frame's origin along the closing axis's column: checks of the
+    # conversion that share nothing with it.
+    vertices, triangles = sphere_mesh(0.035)
+    rng = np.random.default_rng(column)
+    poses = np.zeros((200, 4, 4))
+    for i in range(200):
+        poses[i, :3, :3] = rotation(rng)
+        poses[i, :3, 3] = rng.normal(scale=0.005, size=3)
+        poses[i, 3, 3] = 1.0
+    out = grasp_orient.solve_poses(vertices, triangles, poses, np.full(200, 0.1), 0.2, 0.5, GRAVITY,
+                                   closing_axis=closing_axis)
+    for i in range(200):
+        np.testing.assert_allclose(rotation_of(out["grasp_orientation"][i]), poses[i, :3, :3], atol=1e-12)
+    ok = out["status"] != 2
+    assert ok.sum() > 150
+    axis = poses[ok, :3, column]
+    for c in ("contact_1", "contact_2"):
+        offset = out[c][ok] - poses[ok, :3, 3]
+        np.testing.assert_allclose(np.cross(offset, axis), 0.0, atol=1e-9)
+    # Finger 1 starts on the negative side of the axis, finger 2 on the positive.
+    along = np.einsum("ij,ij->i", out["contact_2"][ok] - out["contact_1"][ok], axis)
+    assert (along > 0).all()

@@ -228,22 +228,3 @@ pub(crate) fn number(value: f64, name: &str) -> PyResult<f64> {
         )))
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn index_text_counts_in_c_order() {
-        assert_eq!(index_text(0, &[4, 3]), "[0, 0]");
-        assert_eq!(index_text(5, &[4, 3]), "[1, 2]");
-        assert_eq!(index_text(7, &[2, 2, 2]), "[1, 1, 1]");
-        assert_eq!(index_text(3, &[5]), "[3]");
-    }
-
-    #[test]
-    fn shape_text_writes_numpy_shapes() {
-        assert_eq!(shape_text(&[None, Some(3)]), "(N, 3)");
-        assert_eq!(shape_text(&[Some(4)]), "(4,)");
-    }
-}
