@@ -72,17 +72,19 @@ impl Grasps<'_> {
     }
 }
 
-/// The answers to `candidates`, in order: the one place a slice of candidates is answered, so
-/// that a batch path of the solver can take it over.
+/// The answers to `candidates`, each handed to `each` with its index in the slice, in order: the
+/// one place a slice of candidates is answered, so that a batch path of the solver can take it
+/// over. An answer is handed over as soon as it is made, so that it is still in the core's cache
+/// when it becomes columns.
 pub(crate) fn answer_candidates(
     candidates: &[GraspCandidate],
     settings: &Settings,
     rules: &Rules,
-) -> Vec<GripRecommendation> {
-    candidates
-        .iter()
-        .map(|m| answer_one(m, settings, rules))
-        .collect()
+    mut each: impl FnMut(usize, &GripRecommendation),
+) {
+    for (i, m) in candidates.iter().enumerate() {
+        each(i, &answer_one(m, settings, rules));
+    }
 }
 
 /// The message a row's answer is reported with: a refusal of its input (status 2) names the
@@ -104,8 +106,8 @@ pub(crate) fn compact_str_row(row: usize, message: &str) -> CompactString {
     out
 }
 
-/// Candidates answered at a time within a chunk: few enough that their answers (about 400
-/// bytes each, and their lists) are still in the core's cache when they become columns.
+/// Candidates made at a time within a chunk (about 250 bytes each): a slice stays in the core's
+/// cache while it is answered.
 const SLICE: usize = 64;
 
 /// The rows of `range`, answered.
@@ -121,10 +123,9 @@ fn answer_range(
         let rows = start..(start + SLICE).min(range.end);
         candidates.clear();
         candidates.extend(rows.clone().map(|i| g.candidate(i)));
-        let answers = answer_candidates(&candidates, settings, rules);
-        for (row, r) in rows.zip(&answers) {
-            out.push(r, row_message(row, r));
-        }
+        answer_candidates(&candidates, settings, rules, |i, r| {
+            out.push(r, row_message(start + i, r));
+        });
     }
     out
 }
