@@ -4,9 +4,9 @@
 //! UTF-8, not JSON or not a candidate gets status 2 with its line number, and the lines after it
 //! are answered as usual. Memory is bounded by the longest line.
 
-use crate::answer::{answer_one, without_geometry, PoseAnswerer, Rules};
+use crate::answer::{without_geometry, Answering};
+use crate::kind::{Candidates, Poses};
 use crate::msg::{invalid, GraspCandidate, GripRecommendation, PoseCandidate, PoseRecommendation};
-use crate::solver::Settings;
 use std::io::{BufRead, Read, Write};
 
 /// Longest line read, bytes (a candidate with a 1 MiB id is about 1 MiB); a longer line is
@@ -180,19 +180,14 @@ fn number_before(text: &str, line: usize, column: usize) -> String {
 
 /// The answer to line `number` (from 1) holding `line` (without its line break), with the
 /// gripper's limit of `rules` applied.
-pub(crate) fn answer_line(
-    line: &[u8],
-    number: usize,
-    settings: &Settings,
-    rules: &Rules,
-) -> GripRecommendation {
+pub(crate) fn answer_line(line: &[u8], number: usize, with: &Answering) -> GripRecommendation {
     let mut reply = match std::str::from_utf8(line) {
         Err(e) => invalid(
             &GraspCandidate::default(),
             &format_args!("not UTF-8: invalid byte at column {}", e.valid_up_to() + 1),
         ),
         Ok(text) => match parse::<GraspCandidate>(text) {
-            Ok(candidate) => answer_one(&candidate, settings, rules),
+            Ok(candidate) => with.answer::<Candidates>(&candidate),
             Err(e) => invalid(&partial(text), &e),
         },
     };
@@ -256,22 +251,16 @@ pub(crate) fn is_pose_set(text: &str) -> bool {
     serde_json::from_str::<Kind>(text).is_ok_and(|k| k.poses.is_some())
 }
 
-/// [`answer_line`], with a `PoseCandidate` line answered by `poses`.
-pub(crate) fn answer_any_line(
-    line: &[u8],
-    number: usize,
-    settings: &Settings,
-    rules: &Rules,
-    poses: &PoseAnswerer,
-) -> LineAnswer {
+/// [`answer_line`], or a `PoseCandidate` line's answer.
+pub(crate) fn answer_any_line(line: &[u8], number: usize, with: &Answering) -> LineAnswer {
     let Some(text) = std::str::from_utf8(line)
         .ok()
         .filter(|text| is_pose_candidate(text))
     else {
-        return LineAnswer::Grasp(answer_line(line, number, settings, rules));
+        return LineAnswer::Grasp(answer_line(line, number, with));
     };
     let mut reply = match parse::<PoseCandidate>(text) {
-        Ok(candidate) => poses.answer(&candidate, settings, rules),
+        Ok(candidate) => with.answer::<Poses>(&candidate),
         Err(e) => without_geometry(invalid(&partial(text), &e)),
     };
     let r = &mut reply.recommendation;
@@ -283,26 +272,12 @@ pub(crate) fn answer_any_line(
 
 /// Answers every non-blank line of `input` on `output`, one JSON line each, flushed at once;
 /// `refused` hears the message of every answer whose status is not 0. A closed output (a
-/// reader that went away, as `solve | head` does) ends the run without an error. Pose
-/// candidates close along the default axis (y), meshes found through `AMENT_PREFIX_PATH`.
+/// reader that went away, as `solve | head` does) ends the run without an error. Every line is
+/// answered `with` the same settings, rules and meshes.
 pub fn answer_lines(
-    input: impl BufRead,
-    output: impl Write,
-    settings: &Settings,
-    rules: &Rules,
-    refused: impl FnMut(&str),
-) -> Result<Counts, LinesError> {
-    let poses = PoseAnswerer::from_env(Default::default());
-    answer_lines_with(input, output, settings, rules, &poses, refused)
-}
-
-/// [`answer_lines`], with pose candidates answered by `poses`.
-pub(crate) fn answer_lines_with(
     mut input: impl BufRead,
     mut output: impl Write,
-    settings: &Settings,
-    rules: &Rules,
-    poses: &PoseAnswerer,
+    with: &Answering,
     mut refused: impl FnMut(&str),
 ) -> Result<Counts, LinesError> {
     let mut counts = Counts::default();
@@ -334,7 +309,7 @@ pub(crate) fn answer_lines_with(
             if text.iter().all(u8::is_ascii_whitespace) {
                 continue;
             }
-            answer_any_line(text, number, settings, rules, poses)
+            answer_any_line(text, number, with)
         };
         counts.answered += 1;
         let r = reply.recommendation();
@@ -400,14 +375,7 @@ mod tests {
 
     fn run(input: &[u8]) -> (Vec<serde_json::Value>, Counts) {
         let mut out = Vec::new();
-        let counts = answer_lines(
-            input,
-            &mut out,
-            &Settings::default(),
-            &Rules::default(),
-            |_| {},
-        )
-        .expect("runs");
+        let counts = answer_lines(input, &mut out, &Answering::from_env(), |_| {}).expect("runs");
         let lines = String::from_utf8(out)
             .expect("the output is UTF-8")
             .lines()
@@ -534,14 +502,8 @@ mod tests {
                 Ok(())
             }
         }
-        let counts = answer_lines(
-            &b"{}\n{}\n"[..],
-            Closed,
-            &Settings::default(),
-            &Rules::default(),
-            |_| {},
-        )
-        .expect("a closed pipe is not an error");
+        let counts = answer_lines(&b"{}\n{}\n"[..], Closed, &Answering::from_env(), |_| {})
+            .expect("a closed pipe is not an error");
         assert_eq!(counts.answered, 1);
     }
 }

@@ -62,6 +62,10 @@ pub trait Kind: Sized + 'static {
     const INDEX: usize;
     /// The node's topics of its requests and answers, relative to the node's namespace.
     const TOPICS: [&'static str; 2];
+    /// Its requests in a report: "candidates", "pose sets".
+    const PLURAL: &'static str;
+    /// One request in a message: "a candidate", "a pose set".
+    const ONE: &'static str;
     /// Whether a recording makes its channels when the file is created (the node always has
     /// them); the others' channels are made by their first message, as rosbag2 adds a topic when
     /// it first sees a publisher.
@@ -99,6 +103,8 @@ impl Kind for Candidates {
     type Answer = GripRecommendation;
     const INDEX: usize = 0;
     const TOPICS: [&'static str; 2] = ["grasp_candidates", "grip_recommendations"];
+    const PLURAL: &'static str = "candidates";
+    const ONE: &'static str = "a candidate";
     const AT_START: bool = true;
     fn stream(streams: &Streams) -> &Stream<Self> {
         &streams.candidates
@@ -119,6 +125,8 @@ impl Kind for Sets {
     type Answer = GripRecommendationSet;
     const INDEX: usize = 1;
     const TOPICS: [&'static str; 2] = ["grasp_candidate_sets", "grip_recommendation_sets"];
+    const PLURAL: &'static str = "candidate sets";
+    const ONE: &'static str = "a set";
     const AT_START: bool = false;
     fn stream(streams: &Streams) -> &Stream<Self> {
         &streams.sets
@@ -139,6 +147,8 @@ impl Kind for Poses {
     type Answer = PoseRecommendation;
     const INDEX: usize = 2;
     const TOPICS: [&'static str; 2] = ["pose_candidates", "pose_recommendations"];
+    const PLURAL: &'static str = "pose candidates";
+    const ONE: &'static str = "a pose candidate";
     const AT_START: bool = false;
     fn stream(streams: &Streams) -> &Stream<Self> {
         &streams.poses
@@ -159,6 +169,8 @@ impl Kind for PoseSets {
     type Answer = PoseRecommendationSet;
     const INDEX: usize = 3;
     const TOPICS: [&'static str; 2] = ["pose_candidate_sets", "pose_recommendation_sets"];
+    const PLURAL: &'static str = "pose sets";
+    const ONE: &'static str = "a pose set";
     const AT_START: bool = false;
     fn stream(streams: &Streams) -> &Stream<Self> {
         &streams.pose_sets
@@ -290,6 +302,19 @@ impl Streams {
         count.1
     }
 
+    /// How many requests of each kind they hold, by [`Kind::INDEX`].
+    pub(crate) fn request_counts(&self) -> [usize; COUNT] {
+        struct Count<'a>(&'a Streams, [usize; COUNT]);
+        impl Visit for Count<'_> {
+            fn kind<K: Kind>(&mut self) {
+                self.1[K::INDEX] = K::stream(self.0).requests.len();
+            }
+        }
+        let mut count = Count(self, [0; COUNT]);
+        each(&mut count);
+        count.1
+    }
+
     /// The requests alone.
     pub(crate) fn requests_only(mut self) -> Streams {
         struct Drop<'a>(&'a mut Streams);
@@ -303,9 +328,36 @@ impl Streams {
     }
 }
 
+/// The plural name of each kind's requests ([`Kind::PLURAL`]), by [`Kind::INDEX`].
+pub(crate) fn plurals() -> [&'static str; COUNT] {
+    struct Names([&'static str; COUNT]);
+    impl Visit for Names {
+        fn kind<K: Kind>(&mut self) {
+            self.0[K::INDEX] = K::PLURAL;
+        }
+    }
+    let mut names = Names([""; COUNT]);
+    each(&mut names);
+    names.0
+}
+
+/// The request types of every kind, as a recording names them, in a sentence: "a, b, c or d".
+pub(crate) fn request_types() -> String {
+    let names: Vec<&str> = Channel::all()
+        .iter()
+        .filter(|(c, _, _)| c.side == Side::Request)
+        .map(|(_, name, _)| *name)
+        .collect();
+    match names.split_last() {
+        Some((last, [])) => (*last).to_string(),
+        Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+        None => String::new(),
+    }
+}
+
 /// Which side of a kind a message is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Side {
+pub(crate) enum Side {
     /// What is asked.
     Request,
     /// What is answered.
@@ -314,7 +366,7 @@ pub enum Side {
 
 /// One side of one kind: a channel of a recording.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct Channel {
+pub(crate) struct Channel {
     /// The kind's [`Kind::INDEX`].
     pub kind: usize,
     /// Which side.
@@ -397,6 +449,15 @@ mod tests {
         let names: std::collections::HashSet<_> =
             Channel::all().iter().map(|(_, n, _)| *n).collect();
         assert_eq!(names.len(), Channel::COUNT, "a type on two channels");
+    }
+
+    #[test]
+    fn the_request_types_are_named_in_a_sentence() {
+        assert_eq!(
+            request_types(),
+            "grasp_orient/msg/GraspCandidate, grasp_orient/msg/GraspCandidateSet, \
+             grasp_orient/msg/PoseCandidate or grasp_orient/msg/PoseCandidateSet"
+        );
     }
 
     #[test]

@@ -541,8 +541,7 @@ fn json_target() -> Target {
             let counts = answer_lines(
                 bytes,
                 &mut out,
-                &Settings::default(),
-                &Rules::default(),
+                &grasp_orient::answer::Answering::from_env(),
                 |_| {},
             )
             .map_err(|e| TestCaseError::fail(e.to_string()))?;

@@ -6,7 +6,7 @@
 //!   (planar or spatial, nominal or robust), with which tolerances, and the refusals.
 //! - [`answer_one`], [`answer_set`] and [`rank`] (`sets.rs`): the grip force a gripper is set to,
 //!   the gripper's limit, the node's default tolerances, and sets answered and ranked.
-//! - [`PoseAnswerer`] (`pose.rs`): a gripper pose on an object (a pose candidate or a set of
+//! - [`PoseAnswerer`] (`pose/`): a gripper pose on an object (a pose candidate or a set of
 //!   them) → contacts, normals and centre of mass (`grasp_orient_geometry`) → the spatial
 //!   candidate they make, answered and ranked as above.
 //! - [`markers`]: an answer drawn for RViz and Foxglove.
@@ -17,6 +17,7 @@
 //! To add an output field: fill it here (or in the solver), declare it in `msg/*.msg` and the wire
 //! struct (`crate::msg`), and map it in `reply.rs` (a force: in `forces.rs`).
 
+mod answering;
 mod candidate;
 mod forces;
 pub mod markers;
@@ -24,6 +25,7 @@ mod pose;
 mod reply;
 mod sets;
 
+pub use answering::{each, Answer, Answering, VisitAnswer};
 pub use candidate::{answer, answer_in_full};
 pub(crate) use candidate::{Answered, BEHIND_TANGENT_NOTE};
 pub(crate) use pose::{pose_set_without_geometry, uncast, without_geometry, Refused};

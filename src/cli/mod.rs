@@ -8,13 +8,14 @@ pub(crate) mod recover;
 pub(crate) mod replay;
 pub(crate) mod solve;
 
-use crate::answer::{GripperDrive, Rules};
+use crate::answer::{Answering, GripperDrive, PoseAnswerer};
 use crate::config::declare::{Real, Setting};
 use crate::config::{
     bounds, params_in_file, Config, Domain, InvalidBounds, Parameter, RangeKind, ValueError,
 };
+use crate::geometry::ClosingAxis;
 use crate::replay::Override;
-use crate::solver::{AllowedRange, Objective, Settings, UnknownObjective};
+use crate::solver::{AllowedRange, Objective, UnknownObjective};
 use anyhow::bail;
 use serde_yaml_ng::Value;
 use std::path::PathBuf;
@@ -124,12 +125,17 @@ impl SolveOptions {
         Ok(config)
     }
 
-    /// [`SolveOptions::config`], its solver settings and its gripper rules.
-    pub(crate) fn configured(&self) -> anyhow::Result<(Config, Settings, Rules)> {
+    /// [`SolveOptions::config`], and what answers with it: its solver settings, its gripper
+    /// rules, and pose candidates closing along `closing_axis` (else the config's), meshes
+    /// found through `AMENT_PREFIX_PATH`.
+    pub(crate) fn answering(
+        &self,
+        closing_axis: Option<ClosingAxis>,
+    ) -> anyhow::Result<(Config, Answering)> {
         let config = self.config()?;
-        let settings = config.solver_settings()?;
-        let rules = config.rules();
-        Ok((config, settings, rules))
+        let poses = PoseAnswerer::from_env(closing_axis.unwrap_or(config.closing_axis));
+        let with = Answering::from_config(&config, poses)?;
+        Ok((config, with))
     }
 }
 

@@ -1,6 +1,7 @@
-//! `grasp_orient play BAG`: republishes recorded candidates, candidate sets, pose candidates and
-//! pose sets to the live graph at the recorded pace (or `--rate` times it), like `ros2 bag play`.
+//! `grasp_orient play BAG`: republishes the recorded requests of every kind (candidates,
+//! candidate sets, pose candidates, pose sets) to the live graph at the recorded pace (or `--rate` times it), like `ros2 bag play`.
 
+use crate::kind::{Candidates, Kind};
 use crate::node::play::{publish, Pace};
 use crate::node::session::Start;
 use crate::record::bag;
@@ -12,8 +13,8 @@ use std::path::PathBuf;
 /// Arguments of `play`.
 #[derive(Debug, Clone, clap::Args)]
 pub(crate) struct Args {
-    /// A recording with grasp_orient/msg/GraspCandidate, GraspCandidateSet, PoseCandidate or
-    /// PoseCandidateSet messages.
+    /// A recording with grasp_orient requests: candidates, candidate sets, pose candidates or
+    /// pose sets.
     pub bag: PathBuf,
     /// Speed relative to the recording (2 = twice as fast), from 0.001 to 1000; 0 sends as fast
     /// as possible.
@@ -44,15 +45,11 @@ fn rate(text: &str) -> Result<f64, super::BadValue> {
 pub(crate) fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
     let start = Start::new(ros_argv)?;
     let recorded = bag::read(&args.bag)?;
-    if recorded.streams.candidates.requests.is_empty()
-        && recorded.streams.sets.requests.is_empty()
-        && recorded.streams.poses.requests.is_empty()
-        && recorded.streams.pose_sets.requests.is_empty()
-    {
+    if recorded.streams.request_counts().iter().all(|n| *n == 0) {
         bail!(
-            "{}: no grasp_orient/msg/GraspCandidate, GraspCandidateSet, PoseCandidate or \
-             PoseCandidateSet messages",
-            args.bag.display()
+            "{}: no {} messages",
+            args.bag.display(),
+            crate::kind::request_types()
         );
     }
     let name = start.node_name("grasp_orient_play");
@@ -65,39 +62,17 @@ pub(crate) fn run(args: &Args, ros_argv: &[String]) -> anyhow::Result<()> {
     let played = publish(&mut session, &args.bag, &recorded, pace);
     session.close();
     let played = played?;
-    writeln!(
-        std::io::stdout(),
-        "published {} of {} candidates on {}",
-        played.candidates,
-        recorded.streams.candidates.requests.len(),
-        played.candidates_topic
-    )?;
-    if !recorded.streams.sets.requests.is_empty() {
-        writeln!(
-            std::io::stdout(),
-            "published {} of {} candidate sets on {}",
-            played.sets,
-            recorded.streams.sets.requests.len(),
-            played.sets_topic
-        )?;
-    }
-    if !recorded.streams.poses.requests.is_empty() {
-        writeln!(
-            std::io::stdout(),
-            "published {} of {} pose candidates on {}",
-            played.poses,
-            recorded.streams.poses.requests.len(),
-            played.poses_topic
-        )?;
-    }
-    if !recorded.streams.pose_sets.requests.is_empty() {
-        writeln!(
-            std::io::stdout(),
-            "published {} of {} pose sets on {}",
-            played.pose_sets,
-            recorded.streams.pose_sets.requests.len(),
-            played.pose_sets_topic
-        )?;
+    let recorded_requests = recorded.streams.request_counts();
+    let mut out = std::io::stdout().lock();
+    for (k, plural) in crate::kind::plurals().into_iter().enumerate() {
+        // Candidates always (the node's first kind); another kind when the bag holds it.
+        if k == Candidates::INDEX || recorded_requests[k] > 0 {
+            writeln!(
+                out,
+                "published {} of {} {plural} on {}",
+                played.sent[k], recorded_requests[k], played.topics[k]
+            )?;
+        }
     }
     Ok(())
 }

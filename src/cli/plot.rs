@@ -11,7 +11,7 @@
 //! section 2), with the robust recommendation on it.
 //!
 //! A pose candidate (a file holding a `PoseCandidate`, a JSON object with `grasp_pose`,
-//! `docs/poses.md`) is cast by the answer layer (`PoseAnswerer`, `src/answer/pose.rs`) into the
+//! `docs/poses.md`) is cast by the answer layer (`PoseAnswerer`, `src/answer/pose/`) into the
 //! spatial candidate its fingers make, and that candidate is drawn; the figure's title and the
 //! printed line name the pose and its derived contacts. A pose the geometry refuses is refused as
 //! a candidate is, with the answer's message.
@@ -89,12 +89,12 @@ struct Robust {
 
 /// Draws the figure.
 pub(crate) fn run(args: &Args) -> anyhow::Result<()> {
-    let (config, settings, rules) = args.options.configured()?;
+    let (_, with) = args.options.answering(args.closing_axis)?;
+    let (settings, rules) = (with.settings(), with.rules());
     let text = crate::config::read_text(&args.candidate, crate::config::MAX_FILE_BYTES)
         .with_context(|| format!("cannot read {}", args.candidate.display()))?;
     let (message, pose) = if crate::jsonl::is_pose_candidate(&text) {
-        let closing_axis = args.closing_axis.unwrap_or(config.closing_axis);
-        let (message, pose) = cast_pose(&text, args, closing_axis)?;
+        let (message, pose) = cast_pose(&text, args, with.poses())?;
         (message, Some(pose))
     } else {
         let message: GraspCandidate = crate::jsonl::parse(&text)
@@ -102,10 +102,8 @@ pub(crate) fn run(args: &Args) -> anyhow::Result<()> {
         (message, None)
     };
     let mut figure = match message.model {
-        GraspCandidate::MODEL_PLANAR => {
-            planar_figure(&rules.tolerances.apply(&message), &settings)?
-        }
-        GraspCandidate::MODEL_SPATIAL => spatial_figure(&message, &settings)?,
+        GraspCandidate::MODEL_PLANAR => planar_figure(&rules.tolerances.apply(&message), settings)?,
+        GraspCandidate::MODEL_SPATIAL => spatial_figure(&message, settings)?,
         value => return Err(refused(MessageLimits::Model { value })),
     };
     if let Some(pose) = pose {
@@ -141,11 +139,10 @@ struct PoseNote {
 fn cast_pose(
     text: &str,
     args: &Args,
-    closing_axis: ClosingAxis,
+    answerer: &PoseAnswerer,
 ) -> anyhow::Result<(GraspCandidate, PoseNote)> {
     let pose: PoseCandidate = crate::jsonl::parse(text)
         .with_context(|| format!("{} is not a PoseCandidate", args.candidate.display()))?;
-    let answerer = PoseAnswerer::from_env(closing_axis);
     let (candidate, notes) = answerer
         .spatial_candidate_noted(&pose)
         .map_err(|answer| refused_pose(&answer))?;

@@ -3,9 +3,10 @@
 //! GraspCandidates and PoseCandidates, or one PoseCandidateSet (`docs/poses.md`).
 
 use super::SolveOptions;
-use crate::answer::{answer_set, PoseAnswerer, RankBy, Rules};
+use crate::answer::{PoseAnswerer, RankBy, Rules};
 use crate::geometry::ClosingAxis;
 use crate::jsonl::{is_pose_candidate, is_pose_set};
+use crate::kind::{PoseSets, Sets};
 use crate::msg::{
     invalid, short_id, GraspCandidate, GraspCandidateSet, GripRecommendation,
     GripRecommendationSet, PoseCandidate, PoseCandidateSet,
@@ -48,17 +49,18 @@ const ID_CHARS: usize = 32;
 /// with status 2 and its line number; a pose candidate the geometry refuses, with its refusal),
 /// answers it, and prints the table or the JSON answer.
 pub(crate) fn run(args: &Args) -> anyhow::Result<()> {
-    let (config, settings, mut rules) = args.options.configured()?;
+    let (_, with) = args.options.answering(args.closing_axis)?;
+    let mut rules = *with.rules();
     if let Some(r) = args.rank_by {
         rules.rank_by = r;
     }
     if let Some(n) = args.max_set_size {
         rules.max_set_size = usize::try_from(n).unwrap_or(usize::MAX);
     }
-    let poses = PoseAnswerer::from_env(args.closing_axis.unwrap_or(config.closing_axis));
-    let (set, reply) = match read_input(args, &poses)? {
+    let with = with.with_rules(rules);
+    let (set, reply) = match read_input(args, with.poses())? {
         Input::Candidates(set, replaced) => {
-            let mut reply = answer_set(&set, &settings, &rules);
+            let mut reply = with.answer::<Sets>(&set);
             for (index, answer) in replaced {
                 if let Some(r) = reply.recommendations.get_mut(index) {
                     *r = answer;
@@ -70,7 +72,7 @@ pub(crate) fn run(args: &Args) -> anyhow::Result<()> {
             (set, reply)
         }
         Input::PoseSet(pose_set) => {
-            let reply = poses.answer_set(&pose_set, &settings, &rules);
+            let reply = with.answer::<PoseSets>(&pose_set);
             if args.json {
                 return print(&reply, reply.status, &reply.message);
             }
@@ -340,7 +342,7 @@ mod tests {
         }
         set.candidates.push(spatial);
         let rules = Rules::default();
-        let reply = answer_set(&set, &Settings::default(), &rules);
+        let reply = crate::answer::answer_set(&set, &Settings::default(), &rules);
         let text = table(&set, &reply, &rules);
         let lines: Vec<&str> = text.lines().collect();
         let row = |id: &str| {
@@ -355,7 +357,7 @@ mod tests {
             "{text}"
         );
         set.candidates.pop();
-        let reply = answer_set(&set, &Settings::default(), &rules);
+        let reply = crate::answer::answer_set(&set, &Settings::default(), &rules);
         let text = table(&set, &reply, &rules);
         let lines: Vec<&str> = text.lines().collect();
         assert!(

@@ -8,10 +8,7 @@
 use super::{Negative, SolveOptions};
 use crate::config::Config;
 use crate::kind::{self, Kind, Streams, Visit};
-use crate::msg::{
-    GraspCandidate, GraspCandidateSet, GripRecommendation, PoseCandidate, PoseCandidateSet,
-    RosMessage,
-};
+use crate::msg::{GripRecommendation, RosMessage};
 use crate::record::bag::{self, Bag, Recorded};
 use crate::record::output::{Pending, Replacement};
 use crate::record::{BagWriter, Entry, Payload, Topics};
@@ -136,18 +133,11 @@ fn replay_file(
     trouble: &mut Vec<String>,
 ) -> anyhow::Result<Summary> {
     let mut bag = bag::read(path)?;
-    let poses = bag.streams.poses.requests.len() + bag.streams.pose_sets.requests.len();
-    if bag.streams.candidates.requests.is_empty()
-        && bag.streams.sets.requests.is_empty()
-        && poses == 0
-    {
+    if bag.streams.request_counts().iter().all(|n| *n == 0) {
         bail!(
-            "{}: no {}, {}, {} or {} messages (cdr) in it",
+            "{}: no {} messages (cdr) in it",
             path.display(),
-            GraspCandidate::TYPE_NAME,
-            GraspCandidateSet::TYPE_NAME,
-            PoseCandidate::TYPE_NAME,
-            PoseCandidateSet::TYPE_NAME
+            kind::request_types()
         );
     }
     let missing = bag.fields.missing::<GripRecommendation>();
@@ -250,7 +240,7 @@ fn settings_words(plan: &Plan) -> String {
 fn write_replay(w: &mut BagWriter, bag: &Bag, plan: &Plan, answers: Streams) -> anyhow::Result<()> {
     for record in &plan.recorded {
         w.write(&Entry {
-            payload: Payload::Settings(Box::new(record.clone())),
+            payload: Payload::settings(record.clone()),
             log_time: record.since,
             publish_time: record.since,
         })?;

@@ -1,9 +1,8 @@
 //! `grasp_orient solve [FILE]`: JSON lines in, one JSON line out per candidate.
 
 use super::SolveOptions;
-use crate::answer::PoseAnswerer;
 use crate::geometry::ClosingAxis;
-use crate::jsonl::answer_lines_with;
+use crate::jsonl::answer_lines;
 use anyhow::Context;
 use std::io::BufReader;
 use std::path::PathBuf;
@@ -25,8 +24,7 @@ pub(crate) struct Args {
 
 /// Solves every line; a bad line gets status 2 with its line number and the run goes on.
 pub(crate) fn run(args: &Args) -> anyhow::Result<()> {
-    let (config, settings, rules) = args.options.configured()?;
-    let poses = PoseAnswerer::from_env(args.closing_axis.unwrap_or(config.closing_axis));
+    let (_, with) = args.options.answering(args.closing_axis)?;
     let stdout = std::io::stdout();
     let out = std::io::BufWriter::new(stdout.lock());
     let warn = |message: &str| log::warn!("{message}");
@@ -34,16 +32,9 @@ pub(crate) fn run(args: &Args) -> anyhow::Result<()> {
         Some(path) if path.as_os_str() != "-" => {
             let file = std::fs::File::open(path)
                 .with_context(|| format!("cannot open {}", path.display()))?;
-            answer_lines_with(BufReader::new(file), out, &settings, &rules, &poses, warn)
+            answer_lines(BufReader::new(file), out, &with, warn)
         }
-        _ => answer_lines_with(
-            std::io::stdin().lock(),
-            out,
-            &settings,
-            &rules,
-            &poses,
-            warn,
-        ),
+        _ => answer_lines(std::io::stdin().lock(), out, &with, warn),
     }?;
     log::info!(
         "{} candidates, {} not solved",

@@ -4,6 +4,7 @@
 //! [`PARAMETERS`](super::PARAMETERS).
 
 use super::choices::Choice;
+pub(crate) use super::error::ValueError;
 use serde_yaml_ng::Value;
 use std::fmt;
 
@@ -144,46 +145,6 @@ impl Parameter {
     pub(crate) fn summary(&self) -> &'static str {
         self.doc.trim()
     }
-}
-
-/// Why a value does not fit its parameter (in a [`ConfigError`](super::ConfigError), the words
-/// after "parameter NAME: "; for a command-line option, the whole reason).
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum ValueError {
-    /// Not of the parameter's type (the YAML reader's words).
-    #[error("{0}")]
-    Type(String),
-    /// A vector with the wrong number of components.
-    #[error("expected 3 numbers [x, y, z], got {0}")]
-    Components(usize),
-    /// Outside the declared domain.
-    #[error("must be {domain}, got {value}")]
-    Domain {
-        /// The domain, as the parameter table prints it.
-        domain: String,
-        /// The value given.
-        value: String,
-    },
-    /// One component of a vector is wrong.
-    #[error("{axis}: {why}")]
-    Component {
-        /// `x`, `y` or `z`.
-        axis: &'static str,
-        /// What is wrong with it.
-        why: Box<ValueError>,
-    },
-    /// Not one of the names a choice takes.
-    #[error("{0}")]
-    Name(String),
-    /// `range_min` and `range_max` bound no interval.
-    #[error("bounds need finite range_min < range_max, got {lo} and {hi}")]
-    Bounds {
-        /// `range_min`, rad.
-        lo: f64,
-        /// `range_max`, rad.
-        hi: f64,
-    },
 }
 
 /// A type a parameter can have: how it reads from and writes to YAML and ROS, and how it is
@@ -351,8 +312,8 @@ macro_rules! parameters {
         }
 
         /// Every parameter, in declaration order.
-        pub(crate) const PARAMETERS: &[$crate::config::Parameter] = &[$(
-            $crate::config::Parameter {
+        pub(crate) const PARAMETERS: &[$crate::config::declare::Parameter] = &[$(
+            $crate::config::declare::Parameter {
                 name: stringify!($name),
                 ros_type: <$ty as $crate::config::declare::Setting>::ROS_TYPE,
                 unit: $unit,
@@ -370,8 +331,8 @@ macro_rules! parameters {
                 &mut self,
                 name: &str,
                 value: ::serde_yaml_ng::Value,
-            ) -> Result<(), $crate::config::ConfigError> {
-                use $crate::config::{declare::Setting, ConfigError};
+            ) -> Result<(), $crate::config::error::ConfigError> {
+                use $crate::config::{declare::Setting, error::ConfigError};
                 match name {
                     $(
                         stringify!($name) => {
@@ -392,8 +353,8 @@ macro_rules! parameters {
             }
 
             /// Checks every value against the domain its declaration states.
-            pub(crate) fn check_domains(&self) -> Result<(), $crate::config::ConfigError> {
-                use $crate::config::{declare::Setting, ConfigError};
+            pub(crate) fn check_domains(&self) -> Result<(), $crate::config::error::ConfigError> {
+                use $crate::config::{declare::Setting, error::ConfigError};
                 let mut declared = PARAMETERS.iter();
                 $(
                     if let Some(p) = declared.next() {

@@ -5,12 +5,15 @@
 
 pub(crate) mod choices;
 pub(crate) mod declare;
+pub(crate) mod error;
 mod params;
 pub(crate) mod render;
 
 pub use choices::RangeKind;
 pub(crate) use choices::{bounds, InvalidBounds};
-pub(crate) use declare::{Domain, Parameter, RosType, ValueError};
+pub(crate) use declare::{Domain, Parameter, RosType};
+pub use error::ConfigError;
+pub(crate) use error::ValueError;
 pub use params::Config;
 pub(crate) use params::PARAMETERS;
 
@@ -41,60 +44,6 @@ pub(crate) fn read_text(path: &Path, max: u64) -> std::io::Result<String> {
 
 /// The params file shipped with the package, compiled in.
 pub(crate) const DEFAULT_YAML: &str = include_str!("../../config/grasp_orient.yaml");
-
-/// Why settings were refused.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum ConfigError {
-    /// The file could not be read.
-    #[error("cannot read {path}: {source}")]
-    Read {
-        /// The file.
-        path: String,
-        /// The cause.
-        source: std::io::Error,
-    },
-    /// The YAML is malformed.
-    #[error("{origin}: {source}")]
-    Yaml {
-        /// Where the text came from.
-        origin: String,
-        /// The cause.
-        source: serde_yaml_ng::Error,
-    },
-    /// No parameter has this name.
-    #[error("grasp_orient has no parameter {name}")]
-    Unknown {
-        /// The name given.
-        name: String,
-    },
-    /// A value is of the wrong type, or out of its domain.
-    #[error("parameter {name}: {why}")]
-    Value {
-        /// The parameter.
-        name: &'static str,
-        /// What is wrong.
-        why: ValueError,
-    },
-    /// A params file has no `ros__parameters` section for the node.
-    #[error("{origin} has no section for node {node} (found: {}); a params file for it starts with `{node}:` or `/**:`, then `ros__parameters:`", if .found.is_empty() { "none".to_string() } else { .found.join(", ") })]
-    NoSection {
-        /// The file.
-        origin: String,
-        /// The node's name.
-        node: String,
-        /// The top-level keys it has.
-        found: Vec<String>,
-    },
-    /// A params file holds a refused parameter.
-    #[error("{origin}: {source}")]
-    InFile {
-        /// The file.
-        origin: String,
-        /// What is wrong with it.
-        source: Box<ConfigError>,
-    },
-}
 
 /// The top-level sections of a params file: which there are, and which applied to the node.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]

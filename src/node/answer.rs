@@ -7,13 +7,16 @@
 
 use super::params::Shared;
 use super::params::Version;
+pub(crate) use super::pose_work::{
+    inline_mesh_too_large, load_time, PoseWork, INLINE_OFF_THREAD_TRIANGLES,
+};
+pub(crate) use super::set_io::{RecordedSet, SetInput, SetOutcome, SetReply};
 use crate::answer::markers;
-use crate::answer::{answer_one_in_full, Answered, PoseAnswerer};
-use crate::kind::{Candidates, PoseSets, Poses, Sets};
+use crate::answer::Answered;
+use crate::kind::{Candidates, Poses};
 use crate::msg::{
-    short_id, CompactString, GraspCandidate, GraspCandidateSet, GripRecommendation,
-    GripRecommendationSet, MarkerArray, PoseCandidate, PoseCandidateSet, PoseRecommendation,
-    PoseRecommendationSet,
+    short_id, GraspCandidate, GripRecommendation, GripRecommendationSet, MarkerArray,
+    PoseCandidate, PoseRecommendation,
 };
 use crate::record::lifecycle::{Change, Recording, Wanted};
 use crate::record::settings::SettingsRecord;
@@ -56,128 +59,18 @@ pub(crate) struct Counts {
     pub markers_published: u64,
 }
 
-/// The answer to one candidate, to publish in this order: `reply`, then `markers`.
+/// The answer to one candidate or pose candidate (`A`: its answer's type), to publish in this
+/// order: `reply`, then `markers`.
 #[derive(Debug)]
-pub(crate) struct Outcome {
-    /// The recommendation.
-    pub reply: GripRecommendation,
-    /// The markers, when they are on, wanted ([`Answerer::draws`]) and the answer has status 0.
-    pub markers: Option<MarkerArray>,
-    /// Lines to log.
-    pub notes: Vec<Note>,
-    /// What goes to the recording once the answer is out.
-    pub recorded: Recorded,
-}
-
-/// The answer to one pose candidate, to publish in this order: `reply`, then `markers`.
-#[derive(Debug)]
-pub(crate) struct PoseOutcome {
+pub(crate) struct Outcome<A> {
     /// The answer.
-    pub reply: PoseRecommendation,
+    pub reply: A,
     /// The markers, when they are on, wanted ([`Answerer::draws`]) and the answer has status 0.
     pub markers: Option<MarkerArray>,
     /// Lines to log.
     pub notes: Vec<Note>,
     /// What goes to the recording once the answer is out.
     pub recorded: Recorded,
-}
-
-/// The fewest triangles of an inline mesh (`object.inline_mesh`) for which a single pose candidate
-/// is answered off the node's thread. An inline mesh is indexed anew for every candidate that
-/// carries it (vertices merged, closedness and mass properties, the BVH): 0.5 to 1 µs a triangle.
-/// `cargo bench --bench inline_mesh` measured, in one run each, a hop to smol's blocking pool and
-/// back at 29 to 83 µs, and a whole answer on a 48- to 64-triangle mesh at 45 to 58 µs, on a
-/// 100-triangle one at 64 to 66 µs, on a 1,000-triangle one at 0.55 to 0.64 ms: below 100
-/// triangles the index costs about a hop or less, and the answer keeps its place among the pose
-/// answers (docs/node.md).
-pub(crate) const INLINE_OFF_THREAD_TRIANGLES: usize = 100;
-
-/// `max_mesh_load_time` (s, checked in (0, 3600]) as a duration.
-pub(crate) fn load_time(seconds: f64) -> std::time::Duration {
-    std::time::Duration::try_from_secs_f64(seconds).unwrap_or(std::time::Duration::from_secs(3))
-}
-
-/// Answering one pose candidate, apart from the node's counts and recording: the settings in
-/// force when it was received, whether its markers are wanted, and the node's meshes. It may run
-/// on another thread.
-#[derive(Debug, Clone)]
-pub(crate) struct PoseWork {
-    settings: crate::solver::Settings,
-    rules: crate::answer::Rules,
-    markers_on: bool,
-    echo: bool,
-    poses: PoseAnswerer,
-    /// `max_mesh_load_time`.
-    load_time: std::time::Duration,
-    /// `max_inline_mesh_triangles`.
-    max_inline: usize,
-}
-
-/// Why an inline mesh is refused before it is indexed: more than `max_triangles` triangles
-/// (parameter `max_inline_mesh_triangles`), or more than three vertices per triangle allowed
-/// (a triangle soup has three; more are vertices no triangle uses, held all the same).
-pub(crate) fn inline_mesh_too_large(
-    object: &crate::msg::GraspObject,
-    max_triangles: usize,
-) -> Option<String> {
-    let mesh = &object.inline_mesh;
-    if mesh.triangles.len() > max_triangles {
-        return Some(format!(
-            "object.inline_mesh has {} triangles, more than max_inline_mesh_triangles ({max_triangles}); send a coarser mesh",
-            mesh.triangles.len()
-        ));
-    }
-    let max_vertices = max_triangles.saturating_mul(3);
-    (mesh.vertices.len() > max_vertices).then(|| {
-        format!(
-            "object.inline_mesh has {} vertices, more than 3 x max_inline_mesh_triangles ({max_vertices})",
-            mesh.vertices.len()
-        )
-    })
-}
-
-impl PoseWork {
-    /// How long the answer waits for its mesh (`max_mesh_load_time`).
-    pub(crate) fn load_time(&self) -> std::time::Duration {
-        self.load_time
-    }
-
-    /// The answer at once, without a mesh loaded or indexed, when the candidate is refused
-    /// before: an inline mesh beyond `max_inline_mesh_triangles`.
-    pub(crate) fn refusal(&self, candidate: &PoseCandidate) -> Option<PoseRecommendation> {
-        if self.echo {
-            return None;
-        }
-        inline_mesh_too_large(&candidate.object, self.max_inline)
-            .map(|why| super::loads::refused(candidate, &why))
-    }
-
-    /// The answer, and its markers when they are on and wanted and the answer has status 0.
-    pub(crate) fn run(
-        &self,
-        candidate: &PoseCandidate,
-    ) -> (PoseRecommendation, Option<MarkerArray>) {
-        if let Some(reply) = self.refusal(candidate) {
-            return (reply, None);
-        }
-        if self.echo {
-            let empty = GripRecommendation {
-                header: candidate.header.clone(),
-                candidate_id: candidate.id.clone(),
-                ..GripRecommendation::default()
-            };
-            return (crate::answer::without_geometry(empty), None);
-        }
-        let (reply, object) = self
-            .poses
-            .answer_with_object(candidate, &self.settings, &self.rules);
-        let ok = reply.recommendation.status == GripRecommendation::STATUS_OK;
-        let markers = (self.markers_on && ok).then(|| {
-            let axis = self.poses.closing_axis();
-            markers::build_pose(candidate, object.as_ref(), axis, &reply, &self.settings)
-        });
-        (reply, markers)
-    }
 }
 
 /// The messages of one answer for the recording (a candidate or a pose candidate, and its
@@ -189,140 +82,6 @@ pub(crate) struct Recorded {
     sent: u64,
     reply: Option<Payload>,
     markers: Option<MarkerArray>,
-}
-
-/// A set as it came: of candidates (`grasp_candidate_sets`, `~/recommend`) or of gripper poses
-/// (`pose_candidate_sets`, `~/recommend_poses`).
-#[derive(Debug, Clone)]
-pub(crate) enum SetInput {
-    /// A `GraspCandidateSet`.
-    Candidates(GraspCandidateSet),
-    /// A `PoseCandidateSet` (boxed: its object is large).
-    Poses(Box<PoseCandidateSet>),
-}
-
-impl SetInput {
-    /// The message for the recording.
-    fn payload(self) -> Payload {
-        match self {
-            SetInput::Candidates(set) => Payload::request::<Sets>(set),
-            SetInput::Poses(set) => Payload::request::<PoseSets>(*set),
-        }
-    }
-}
-
-/// A set's answer, of the kind of its set.
-#[derive(Debug, Clone)]
-pub(crate) enum SetReply {
-    /// To a `GraspCandidateSet`.
-    Candidates(GripRecommendationSet),
-    /// To a `PoseCandidateSet`.
-    Poses(PoseRecommendationSet),
-}
-
-impl SetReply {
-    /// The set's id.
-    pub(crate) fn set_id(&self) -> &CompactString {
-        match self {
-            SetReply::Candidates(r) => &r.set_id,
-            SetReply::Poses(r) => &r.set_id,
-        }
-    }
-
-    /// The set's status.
-    pub(crate) fn status(&self) -> u8 {
-        match self {
-            SetReply::Candidates(r) => r.status,
-            SetReply::Poses(r) => r.status,
-        }
-    }
-
-    /// Why, when the status is not OK.
-    pub(crate) fn message(&self) -> &str {
-        match self {
-            SetReply::Candidates(r) => &r.message,
-            SetReply::Poses(r) => &r.message,
-        }
-    }
-
-    /// The members' recommendations, in order.
-    pub(crate) fn members(&self) -> Vec<&GripRecommendation> {
-        match self {
-            SetReply::Candidates(r) => r.recommendations.iter().collect(),
-            SetReply::Poses(r) => r
-                .recommendations
-                .iter()
-                .map(|p| &p.recommendation)
-                .collect(),
-        }
-    }
-
-    /// How many members are ranked, and by which field.
-    pub(crate) fn ranked(&self) -> (usize, &str) {
-        match self {
-            SetReply::Candidates(r) => (r.ranking.len(), &r.ranked_by),
-            SetReply::Poses(r) => (r.ranking.len(), &r.ranked_by),
-        }
-    }
-
-    /// The message for the recording.
-    fn payload(self) -> Payload {
-        match self {
-            SetReply::Candidates(r) => Payload::answer::<Sets>(r),
-            SetReply::Poses(r) => Payload::answer::<PoseSets>(r),
-        }
-    }
-
-    /// The answer to a candidate set (tests).
-    #[cfg(test)]
-    pub(crate) fn candidates(&self) -> &GripRecommendationSet {
-        match self {
-            SetReply::Candidates(r) => r,
-            SetReply::Poses(_) => panic!("a pose set's answer"),
-        }
-    }
-}
-
-/// The answer to one set, to publish (or send as the service's response) in this order:
-/// `reply`, then `markers`.
-#[derive(Debug)]
-pub(crate) struct SetOutcome {
-    /// The answer to the set.
-    pub reply: SetReply,
-    /// The markers of the best candidate, when they are on and one can be held.
-    pub markers: Option<MarkerArray>,
-    /// What goes to the recording once the answer is out.
-    pub recorded: RecordedSet,
-}
-
-/// The messages of one set's answer for the recording, with the set's times.
-#[derive(Debug)]
-pub(crate) struct RecordedSet {
-    set: SetInput,
-    received: u64,
-    sent: u64,
-    reply: Option<SetReply>,
-    markers: Option<MarkerArray>,
-}
-
-impl RecordedSet {
-    /// What to record of a set received at `received` and sent at `sent` (ns since the epoch):
-    /// the set, and its answer and markers when they are recorded.
-    pub(crate) fn new(
-        reply: Option<SetReply>,
-        markers: Option<MarkerArray>,
-        set: SetInput,
-        received: u64,
-        sent: u64,
-    ) -> Self {
-        Self {
-            set,
-            received,
-            sent,
-            reply,
-            markers,
-        }
-    }
 }
 
 /// Answers candidates with the settings in force when each was received; counts; records.
@@ -468,11 +227,8 @@ impl Answerer {
             reason,
             config: version.config.clone(),
         };
-        self.recording.record(
-            Payload::Settings(Box::new(record)),
-            version.since,
-            version.since,
-        );
+        self.recording
+            .record(Payload::settings(record), version.since, version.since);
     }
 
     /// Whether an answer's markers are built: `publish_markers` (`markers_on`) and somebody
@@ -493,15 +249,14 @@ impl Answerer {
         received: u64,
         sent: u64,
         audience: bool,
-    ) -> Outcome {
+    ) -> Outcome<GripRecommendation> {
         let mut notes = Vec::new();
-        let (settings, markers_on, rules) = {
+        let (with, markers_on) = {
             let live = self.shared.lock();
             let version = live.version_at(received);
             (
-                version.settings,
+                version.answering(&self.meshes),
                 version.config.publish_markers,
-                version.config.rules(),
             )
         };
         let Answered { reply, spatial } = if self.echo {
@@ -514,13 +269,13 @@ impl Answerer {
                 spatial: None,
             }
         } else {
-            answer_one_in_full(&candidate, &settings, &rules)
+            with.candidate_in_full(&candidate)
         };
         self.count_one(&reply, &mut notes);
         let draw = self.draws(markers_on, audience);
         let markers = (draw && reply.status == GripRecommendation::STATUS_OK).then(|| {
             markers::build(
-                &rules.tolerances.apply(&candidate),
+                &with.rules().tolerances.apply(&candidate),
                 &reply,
                 spatial.as_deref(),
             )
@@ -573,7 +328,7 @@ impl Answerer {
         received: u64,
         sent: u64,
         audience: bool,
-    ) -> PoseOutcome {
+    ) -> Outcome<PoseRecommendation> {
         let work = self.pose_work(received, audience);
         let (reply, markers) = work.run(&candidate);
         self.account_pose(candidate, reply, markers, received, sent)
@@ -586,11 +341,9 @@ impl Answerer {
         let live = self.shared.lock();
         let version = live.version_at(received);
         PoseWork {
-            settings: version.settings,
-            rules: version.config.rules(),
+            with: version.answering(&self.meshes),
             markers_on: self.draws(version.config.publish_markers, audience),
             echo: self.echo,
-            poses: PoseAnswerer::sharing(version.config.closing_axis, self.meshes.clone()),
             load_time: load_time(version.config.max_mesh_load_time),
             max_inline: usize::try_from(version.config.max_inline_mesh_triangles)
                 .unwrap_or(usize::MAX),
@@ -624,7 +377,7 @@ impl Answerer {
         markers: Option<MarkerArray>,
         received: u64,
         sent: u64,
-    ) -> PoseOutcome {
+    ) -> Outcome<PoseRecommendation> {
         let mut notes = Vec::new();
         self.count_one(&reply.recommendation, &mut notes);
         let recorded = self.readied(
@@ -634,7 +387,7 @@ impl Answerer {
             received,
             sent,
         );
-        PoseOutcome {
+        Outcome {
             reply,
             markers,
             notes,
@@ -683,7 +436,7 @@ impl Answerer {
         };
         let mut entries = Vec::with_capacity(3);
         if let Some(array) = markers {
-            entries.push(entry(Payload::Markers(Box::new(array)), answered, answered));
+            entries.push(entry(Payload::markers(array), answered, answered));
         }
         entries.push(entry(candidate, received, sent));
         if let Some(r) = reply {
@@ -782,7 +535,7 @@ impl Answerer {
         };
         let mut entries = Vec::with_capacity(3);
         if let Some(array) = markers {
-            entries.push(entry(Payload::Markers(Box::new(array)), answered, answered));
+            entries.push(entry(Payload::markers(array), answered, answered));
         }
         entries.push(entry(set.payload(), received, sent));
         if let Some(r) = reply {

@@ -20,8 +20,8 @@
 //! A panic while loading (a parser's bug) ends the load's thread only: its candidate gets
 //! status 2 "internal error while loading".
 
-use super::answer::PoseWork;
-use crate::msg::{GraspCandidate, MarkerArray, PoseCandidate, PoseRecommendation};
+use super::pose_work::{refused, PoseWork};
+use crate::msg::{MarkerArray, PoseCandidate, PoseRecommendation};
 use futures::channel::oneshot;
 use futures::stream::FuturesUnordered;
 use futures::StreamExt;
@@ -138,16 +138,6 @@ struct Queued {
     received: u64,
     sent: u64,
     deadline: Instant,
-}
-
-/// The status-2 answer to a pose candidate, saying `why`.
-pub(crate) fn refused(candidate: &PoseCandidate, why: &str) -> PoseRecommendation {
-    let stub = GraspCandidate {
-        header: candidate.header.clone(),
-        id: candidate.id.clone(),
-        ..GraspCandidate::default()
-    };
-    crate::answer::without_geometry(crate::msg::invalid(&stub, &why))
 }
 
 /// What a candidate answered at its deadline is told.

@@ -14,14 +14,17 @@
 
 pub(crate) mod answer;
 pub(crate) mod demo;
+mod endpoint;
 pub(crate) mod loads;
 
 mod markers_out;
 mod param_services;
 mod params;
 pub(crate) mod play;
+pub(crate) mod pose_work;
 pub(crate) mod ros_args;
 pub(crate) mod session;
+pub(crate) mod set_io;
 pub(crate) mod set_worker;
 pub(crate) mod sets;
 
@@ -31,17 +34,18 @@ use crate::msg::{
     short_id, GraspCandidate, GripRecommendation, MarkerArray, PoseCandidate, PoseRecommendation,
 };
 use crate::record::{now_ns, OnStop, Topics};
-use answer::{Answerer, Note, SetInput};
+use answer::{Answerer, SetInput};
 use anyhow::Context as _;
 use demo::Demo;
+use endpoint::Endpoint;
 use futures::{FutureExt, StreamExt};
 use loads::{Loaded, Loaders, PoseLoads};
 use markers_out::MarkersOut;
 use param_services::ParameterServices;
 use params::Shared;
-use ros2_client::{MessageInfo, Node, NodeOptions, Publisher, Subscription};
+use ros2_client::{MessageInfo, Node, NodeOptions};
 use ros_args::RosArgs;
-use session::{create_topic, qos, say, Session, Shutdown, Start};
+use session::{create_topic, message_times, qos, say, tell, Session, Shutdown, Start};
 use set_worker::SetWorker;
 use sets::SetEndpoints;
 use std::pin::pin;
@@ -117,12 +121,10 @@ fn load_config(ros: &RosArgs, node: &str) -> anyhow::Result<(Config, crate::solv
 /// The node's topics and their endpoints.
 struct Endpoints {
     topics: Topics,
-    candidates: Subscription<GraspCandidate>,
-    answers: Publisher<GripRecommendation>,
+    candidates: Endpoint<Candidates>,
     markers: MarkersOut,
     sets: SetEndpoints,
-    pose_candidates: Subscription<PoseCandidate>,
-    pose_answers: Publisher<PoseRecommendation>,
+    poses: Endpoint<Poses>,
 }
 
 impl Endpoints {
@@ -132,42 +134,11 @@ impl Endpoints {
             .with_markers(session.topic_name("grip_markers"));
         let markers_name = topics.markers.clone().unwrap_or_default();
         let node = session.node_mut();
-        let candidates = create_topic::<GraspCandidate>(
-            node,
-            topics.requests::<Candidates>().unwrap_or_default(),
-            &qos,
-        )?;
-        let answers = create_topic::<GripRecommendation>(
-            node,
-            topics.answers::<Candidates>().unwrap_or_default(),
-            &qos,
-        )?;
         let markers = create_topic::<MarkerArray>(node, &markers_name, &qos)?;
-        let sets = SetEndpoints::create(node, &topics, qos_depth)?;
-        let pose_candidates = create_topic::<PoseCandidate>(
-            node,
-            topics.requests::<Poses>().unwrap_or_default(),
-            &qos,
-        )?;
-        let pose_answers = create_topic::<PoseRecommendation>(
-            node,
-            topics.answers::<Poses>().unwrap_or_default(),
-            &qos,
-        )?;
         Ok(Self {
-            sets,
-            pose_candidates: node
-                .create_subscription(&pose_candidates, None)
-                .context("cannot subscribe to pose candidates")?,
-            pose_answers: node
-                .create_publisher(&pose_answers, None)
-                .context("cannot publish pose recommendations")?,
-            candidates: node
-                .create_subscription(&candidates, None)
-                .context("cannot subscribe")?,
-            answers: node
-                .create_publisher(&answers, None)
-                .context("cannot publish recommendations")?,
+            candidates: Endpoint::create(node, &topics, &qos)?,
+            sets: SetEndpoints::create(node, &topics, qos_depth)?,
+            poses: Endpoint::create(node, &topics, &qos)?,
             markers: MarkersOut::new(
                 node.create_publisher(&markers, None)
                     .context("cannot publish markers")?,
@@ -347,11 +318,11 @@ async fn serve(
         woken,
         loading,
     } = state;
-    let mut stream = pin!(endpoints.candidates.async_stream());
-    let mut set_stream = pin!(endpoints.sets.candidates.async_stream());
+    let mut stream = pin!(endpoints.candidates.requests.async_stream());
+    let mut set_stream = pin!(endpoints.sets.sets.requests.async_stream());
     let mut calls = pin!(endpoints.sets.service.receive_request_stream());
-    let mut poses = pin!(endpoints.pose_candidates.async_stream());
-    let mut pose_sets = pin!(endpoints.sets.pose_sets.async_stream());
+    let mut poses = pin!(endpoints.poses.requests.async_stream());
+    let mut pose_sets = pin!(endpoints.sets.pose_sets.requests.async_stream());
     let mut pose_calls = pin!(endpoints.sets.pose_service.receive_request_stream());
     let mut demo_done = pin!(async {
         match demo {
@@ -468,18 +439,6 @@ async fn finish_sets(
     }
 }
 
-/// When a message was received and when it was sent, ns since the epoch: the DDS timestamps
-/// when present (received: now otherwise; sent: when received otherwise).
-fn message_times(info: &MessageInfo) -> (u64, u64) {
-    let received = info
-        .received_timestamp()
-        .map_or_else(now_ns, |t| u64::try_from(t.to_nanos()).unwrap_or(0));
-    let sent = info.source_timestamp().map_or(received, |t| {
-        u64::try_from(t.to_nanos()).unwrap_or(received)
-    });
-    (received, sent)
-}
-
 /// Answers one candidate: the answer goes out first; markers and the recording follow it.
 async fn answer_one(
     node: &Node,
@@ -491,23 +450,8 @@ async fn answer_one(
     let (received, sent) = message_times(info);
     let audience = endpoints.markers.heard(node);
     let outcome = answerer.handle(candidate, received, sent, audience);
-    log::debug!(
-        "candidate {:?}: status {}, gravity angle {}, {} {} N",
-        short_id(&outcome.reply.candidate_id),
-        outcome.reply.status,
-        outcome.reply.gravity_angle,
-        outcome.reply.objective,
-        outcome.reply.gripping_power
-    );
-    tell(node, outcome.notes);
-    if let Err(e) = endpoints.answers.async_publish(outcome.reply).await {
-        say(
-            node,
-            log::Level::Error,
-            &format!("cannot publish an answer: {e:?}"),
-        );
-    }
-    markers_then_record(node, endpoints, answerer, outcome.markers, outcome.recorded).await;
+    let answers = &endpoints.candidates.answers;
+    send_answer(node, endpoints, answerer, answers, outcome).await;
 }
 
 /// Takes one pose candidate: answered on the node's thread when its mesh is loaded already, or
@@ -538,13 +482,13 @@ async fn take_pose(
     }
     let (reply, markers) = work.run(&candidate);
     let outcome = answerer.account_pose(candidate, reply, markers, received, sent);
-    send_pose(node, endpoints, answerer, outcome).await;
+    send_answer(node, endpoints, answerer, &endpoints.poses.answers, outcome).await;
 }
 
 /// Counts, sends and records a pose candidate answered off the node's thread.
 async fn send_loaded(node: &Node, endpoints: &Endpoints, answerer: &mut Answerer, l: Loaded) {
     let outcome = answerer.account_pose(l.candidate, l.reply, l.markers, l.received, l.sent);
-    send_pose(node, endpoints, answerer, outcome).await;
+    send_answer(node, endpoints, answerer, &endpoints.poses.answers, outcome).await;
 }
 
 /// On a stop request: for at most [`STOP_GRACE`], sends the answers of the pose candidates still
@@ -570,28 +514,51 @@ async fn finish_loads(
     }
 }
 
-/// Sends one pose candidate's answer, as [`answer_one`] a candidate's: the answer, its markers,
-/// then the recording.
-async fn send_pose(
+/// An answer to one candidate or pose candidate, as its log line names it.
+trait Recommends {
+    /// What it answers, for the log: "candidate", "pose candidate".
+    const WHAT: &'static str;
+    /// Its recommendation (a pose answer's is inside it).
+    fn recommendation(&self) -> &GripRecommendation;
+}
+
+impl Recommends for GripRecommendation {
+    const WHAT: &'static str = "candidate";
+    fn recommendation(&self) -> &GripRecommendation {
+        self
+    }
+}
+
+impl Recommends for PoseRecommendation {
+    const WHAT: &'static str = "pose candidate";
+    fn recommendation(&self) -> &GripRecommendation {
+        &self.recommendation
+    }
+}
+
+/// Sends one answer on `answers`: the answer goes out first; its markers, then the recording,
+/// follow it.
+async fn send_answer<A: Recommends + serde::Serialize + std::fmt::Debug>(
     node: &Node,
     endpoints: &Endpoints,
     answerer: &mut Answerer,
-    outcome: answer::PoseOutcome,
+    answers: &ros2_client::Publisher<A>,
+    outcome: answer::Outcome<A>,
 ) {
+    let r = outcome.reply.recommendation();
     log::debug!(
-        "pose candidate {:?}: status {}, {} {} N",
-        short_id(&outcome.reply.recommendation.candidate_id),
-        outcome.reply.recommendation.status,
-        outcome.reply.recommendation.objective,
-        outcome.reply.recommendation.gripping_power
+        "{} {:?}: status {}, gravity angle {}, {} {} N",
+        A::WHAT,
+        short_id(&r.candidate_id),
+        r.status,
+        r.gravity_angle,
+        r.objective,
+        r.gripping_power
     );
     tell(node, outcome.notes);
-    if let Err(e) = endpoints.pose_answers.async_publish(outcome.reply).await {
-        say(
-            node,
-            log::Level::Error,
-            &format!("cannot publish a pose answer: {e:?}"),
-        );
+    if let Err(e) = answers.async_publish(outcome.reply).await {
+        let why = format!("cannot publish the answer to a {}: {e:?}", A::WHAT);
+        say(node, log::Level::Error, &why);
     }
     markers_then_record(node, endpoints, answerer, outcome.markers, outcome.recorded).await;
 }
@@ -609,13 +576,6 @@ async fn markers_then_record(
     endpoints.markers.publish(node, answerer, markers).await;
     let notes = answerer.record(recorded, answered);
     tell(node, notes);
-}
-
-/// Logs each note to stderr and `/rosout`.
-fn tell(node: &Node, notes: Vec<Note>) {
-    for (level, text) in notes {
-        say(node, level, &text);
-    }
 }
 
 /// The node's mesh cache: files read only under `mesh_roots` and inside packages' share

@@ -2,6 +2,7 @@
 //! a whole on every set, shared with the answering loop, and described from their declarations
 //! ([`crate::config::PARAMETERS`]).
 
+use crate::answer::{Answering, PoseAnswerer};
 use crate::config::{Config, ConfigError, Domain, Parameter, RosType};
 use crate::solver::Settings;
 use ros2_client::parameters::{
@@ -80,6 +81,15 @@ pub(crate) struct Version {
     pub config: Config,
     /// The solver settings they imply.
     pub settings: Settings,
+}
+
+impl Version {
+    /// What answers with these parameters: their settings and gripper rules, pose candidates
+    /// closing along their `closing_axis`, on the node's `meshes`.
+    pub(crate) fn answering(&self, meshes: &Arc<grasp_orient_geometry::MeshCache>) -> Answering {
+        let poses = PoseAnswerer::sharing(self.config.closing_axis, meshes.clone());
+        Answering::new(self.settings, self.config.rules(), poses)
+    }
 }
 
 /// How many versions are kept for candidates received before a change and answered after it.

@@ -1,10 +1,10 @@
-//! Republishing recorded candidates, candidate sets, pose candidates and pose sets to the live
-//! graph at the recorded pace (or `rate` times it), like `ros2 bag play`; `grasp_orient play`
-//! (`cli/play.rs`) reads the bag and opens the session.
+//! Republishing the recorded requests of every kind (candidates, candidate sets, pose
+//! candidates, pose sets) to the live graph at the recorded pace (or `rate` times it), like
+//! `ros2 bag play`; `grasp_orient play` (`cli/play.rs`) reads the bag and opens the session.
 
 use super::session::{create_topic, qos, Session, Shutdown};
-use crate::msg::{GraspCandidate, GraspCandidateSet, PoseCandidate, PoseCandidateSet, RosMessage};
-use crate::record::bag::{Bag, Recorded};
+use crate::kind::{self, Kind, Visit};
+use crate::record::bag::Bag;
 use anyhow::bail;
 use futures::future::BoxFuture;
 use futures::FutureExt;
@@ -23,137 +23,115 @@ pub(crate) struct Pace {
     pub depth: i64,
 }
 
-/// What a play sent, and where.
+/// What a play sent of each kind, and where, by [`Kind::INDEX`].
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub(crate) struct Played {
-    /// Candidates sent.
-    pub candidates: usize,
-    /// Candidate sets sent.
-    pub sets: usize,
-    /// Pose candidates sent.
-    pub poses: usize,
-    /// Pose sets sent.
-    pub pose_sets: usize,
-    /// The candidates topic's absolute name.
-    pub candidates_topic: String,
-    /// The sets topic's absolute name.
-    pub sets_topic: String,
-    /// The pose candidates topic's absolute name.
-    pub poses_topic: String,
-    /// The pose sets topic's absolute name.
-    pub pose_sets_topic: String,
+    /// Requests sent.
+    pub sent: [usize; kind::COUNT],
+    /// The requests' topic's absolute name.
+    pub topics: [String; kind::COUNT],
 }
 
-/// One message to play.
-enum Item<'a> {
-    Candidate(&'a GraspCandidate),
-    Set(&'a GraspCandidateSet),
-    Pose(&'a PoseCandidate),
-    PoseSet(&'a PoseCandidateSet),
+/// The publisher of one kind's requests.
+trait Player: Send + Sync {
+    /// Publishes request `index` of the kind's stream in `bag`.
+    fn send<'a>(&'a self, bag: &'a Bag, index: usize) -> BoxFuture<'a, anyhow::Result<()>>;
+    /// Until the topic has a subscriber.
+    fn subscribed<'a>(&'a self, node: &'a Node) -> BoxFuture<'a, ()>;
 }
 
-/// The messages in recorded order (by `log_time`; on a tie candidates, then sets, then pose
-/// candidates, then pose sets, each in file order), each with its time.
-fn merged(bag: &Bag) -> Vec<(u64, Item<'_>)> {
-    fn timed<'a, M>(
-        recorded: &'a [Recorded<M>],
-        item: impl Fn(&'a M) -> Item<'a> + 'a,
-    ) -> impl Iterator<Item = (u64, Item<'a>)> + 'a {
-        recorded.iter().map(move |r| (r.log_time, item(&r.message)))
+/// A publisher of `K`'s requests.
+struct KindPlayer<K: Kind> {
+    publisher: Publisher<K::Request>,
+}
+
+impl<K: Kind> Player for KindPlayer<K> {
+    fn send<'a>(&'a self, bag: &'a Bag, index: usize) -> BoxFuture<'a, anyhow::Result<()>> {
+        async move {
+            let Some(r) = K::stream(&bag.streams).requests.get(index) else {
+                return Ok(());
+            };
+            let sent = self.publisher.async_publish(r.message.clone()).await;
+            sent.map_err(|e| anyhow::anyhow!("cannot publish {}: {e:?}", K::ONE))
+        }
+        .boxed()
     }
-    let mut all: Vec<(u64, Item<'_>)> = timed(&bag.streams.candidates.requests, Item::Candidate)
-        .chain(timed(&bag.streams.sets.requests, Item::Set))
-        .chain(timed(&bag.streams.poses.requests, Item::Pose))
-        .chain(timed(&bag.streams.pose_sets.requests, Item::PoseSet))
-        .collect();
-    // Stable: the chained order is kept among equal times.
-    all.sort_by_key(|(t, _)| *t);
-    all
+
+    fn subscribed<'a>(&'a self, node: &'a Node) -> BoxFuture<'a, ()> {
+        self.publisher.wait_for_subscription(node).boxed()
+    }
 }
 
-/// The four publishers, one per topic played.
-struct Publishers {
-    candidates: Publisher<GraspCandidate>,
-    sets: Publisher<GraspCandidateSet>,
-    poses: Publisher<PoseCandidate>,
-    pose_sets: Publisher<PoseCandidateSet>,
+/// The messages in recorded order (by `log_time`; on a tie in [`Kind::INDEX`] order, each kind
+/// in file order), each as its time, kind and index in its stream.
+fn merged(bag: &Bag) -> Vec<(u64, usize, usize)> {
+    struct Timed<'a>(&'a Bag, Vec<(u64, usize, usize)>);
+    impl Visit for Timed<'_> {
+        fn kind<K: Kind>(&mut self) {
+            let requests = &K::stream(&self.0.streams).requests;
+            let timed = requests.iter().enumerate();
+            self.1.extend(timed.map(|(i, r)| (r.log_time, K::INDEX, i)));
+        }
+    }
+    let mut all = Timed(bag, Vec::new());
+    kind::each(&mut all);
+    // Stable: the kinds' order is kept among equal times.
+    all.1.sort_by_key(|(t, _, _)| *t);
+    all.1
 }
 
-/// A reliable, volatile publisher of `M` on `topic`.
-fn publisher<M: RosMessage + serde::Serialize>(
+/// One publisher per kind, by [`Kind::INDEX`], each reliable and volatile on its topic.
+fn players(
     session: &mut Session,
-    topic: &str,
+    topics: &[String; kind::COUNT],
     depth: i64,
-) -> anyhow::Result<Publisher<M>> {
-    let topic = create_topic::<M>(session.node(), topic, &qos(depth))?;
-    Ok(session.node_mut().create_publisher::<M>(&topic, None)?)
+) -> anyhow::Result<Vec<Box<dyn Player>>> {
+    struct Make<'a> {
+        session: &'a mut Session,
+        topics: &'a [String; kind::COUNT],
+        depth: i64,
+        made: anyhow::Result<Vec<Box<dyn Player>>>,
+    }
+    impl Visit for Make<'_> {
+        fn kind<K: Kind>(&mut self) {
+            let Ok(made) = &mut self.made else {
+                return;
+            };
+            let topic = &self.topics[K::INDEX];
+            let created = create_topic::<K::Request>(self.session.node(), topic, &qos(self.depth))
+                .and_then(|t| Ok(self.session.node_mut().create_publisher(&t, None)?));
+            match created {
+                Ok(publisher) => made.push(Box::new(KindPlayer::<K> { publisher })),
+                Err(e) => self.made = Err(e),
+            }
+        }
+    }
+    let mut make = Make {
+        session,
+        topics,
+        depth,
+        made: Ok(Vec::new()),
+    };
+    kind::each(&mut make);
+    make.made
 }
 
-impl Publishers {
-    fn create(session: &mut Session, names: &Played, depth: i64) -> anyhow::Result<Self> {
-        Ok(Self {
-            candidates: publisher(session, &names.candidates_topic, depth)?,
-            sets: publisher(session, &names.sets_topic, depth)?,
-            poses: publisher(session, &names.poses_topic, depth)?,
-            pose_sets: publisher(session, &names.pose_sets_topic, depth)?,
-        })
-    }
-
-    /// Publishes one item and counts it in `played`.
-    async fn send(&self, item: &Item<'_>, played: &mut Played) -> anyhow::Result<()> {
-        let failed =
-            |what: &str, e: &dyn std::fmt::Debug| anyhow::anyhow!("cannot publish {what}: {e:?}");
-        match item {
-            Item::Candidate(c) => {
-                let sent = self.candidates.async_publish((*c).clone()).await;
-                sent.map_err(|e| failed("a candidate", &e))?;
-                played.candidates += 1;
-            }
-            Item::Set(s) => {
-                let sent = self.sets.async_publish((*s).clone()).await;
-                sent.map_err(|e| failed("a set", &e))?;
-                played.sets += 1;
-            }
-            Item::Pose(p) => {
-                let sent = self.poses.async_publish((*p).clone()).await;
-                sent.map_err(|e| failed("a pose candidate", &e))?;
-                played.poses += 1;
-            }
-            Item::PoseSet(s) => {
-                let sent = self.pose_sets.async_publish((*s).clone()).await;
-                sent.map_err(|e| failed("a pose set", &e))?;
-                played.pose_sets += 1;
-            }
-        }
-        Ok(())
-    }
-
-    /// For each topic with something to send, the wait for its first subscriber, and its name.
-    fn waits<'a>(
-        &'a self,
-        node: &'a Node,
-        bag: &Bag,
-        names: &'a Played,
-    ) -> Vec<(BoxFuture<'a, ()>, &'a str)> {
-        let mut waits = Vec::new();
-        if !bag.streams.candidates.requests.is_empty() {
-            let found = self.candidates.wait_for_subscription(node).boxed();
-            waits.push((found, names.candidates_topic.as_str()));
-        }
-        if !bag.streams.sets.requests.is_empty() {
-            let found = self.sets.wait_for_subscription(node).boxed();
-            waits.push((found, names.sets_topic.as_str()));
-        }
-        if !bag.streams.poses.requests.is_empty() {
-            let found = self.poses.wait_for_subscription(node).boxed();
-            waits.push((found, names.poses_topic.as_str()));
-        }
-        if !bag.streams.pose_sets.requests.is_empty() {
-            let found = self.pose_sets.wait_for_subscription(node).boxed();
-            waits.push((found, names.pose_sets_topic.as_str()));
-        }
-        waits
-    }
+/// For each kind with something to send, the wait for its topic's first subscriber, and its
+/// name.
+fn waits<'a>(
+    players: &'a [Box<dyn Player>],
+    node: &'a Node,
+    bag: &Bag,
+    topics: &'a [String; kind::COUNT],
+) -> Vec<(BoxFuture<'a, ()>, &'a str)> {
+    let counts = bag.streams.request_counts();
+    players
+        .iter()
+        .zip(topics)
+        .zip(counts)
+        .filter(|(_, n)| *n > 0)
+        .map(|((p, topic), _)| (p.subscribed(node), topic.as_str()))
+        .collect()
 }
 
 /// Waits until each publisher with something to send has a subscriber, or `wait` seconds pass;
@@ -192,62 +170,72 @@ async fn paced(start: Instant, offset: f64, shutdown: &mut Shutdown) -> bool {
     }
 }
 
-/// Publishes the bag's candidates on `grasp_candidates`, its sets on `grasp_candidate_sets`, its
-/// pose candidates on `pose_candidates` and its pose sets on `pose_candidate_sets` (all
-/// remappable), in the order and at the pace they were received (their `log_time`): waits for a
-/// subscriber on each topic with something to send, keeps the recorded gaps, stops early on
-/// SIGINT or SIGTERM.
+/// Publishes the requests of every kind the bag holds on its topic (`grasp_candidates`,
+/// `grasp_candidate_sets`, `pose_candidates`, `pose_candidate_sets`, all remappable), in the
+/// order and at the pace they were received (their `log_time`): waits for a subscriber on each
+/// topic with something to send, keeps the recorded gaps, stops early on SIGINT or SIGTERM.
 pub(crate) fn publish(
     session: &mut Session,
     source: &Path,
     bag: &Bag,
     pace: Pace,
 ) -> anyhow::Result<Played> {
-    let names = Played {
-        candidates_topic: session.topic_name("grasp_candidates"),
-        sets_topic: session.topic_name("grasp_candidate_sets"),
-        poses_topic: session.topic_name("pose_candidates"),
-        pose_sets_topic: session.topic_name("pose_candidate_sets"),
-        ..Played::default()
-    };
-    let publishers = Publishers::create(session, &names, pace.depth)?;
+    struct Topics<'a>(&'a Session, [String; kind::COUNT]);
+    impl Visit for Topics<'_> {
+        fn kind<K: Kind>(&mut self) {
+            self.1[K::INDEX] = self.0.topic_name(K::TOPICS[0]);
+        }
+    }
+    let mut topics = Topics(session, Default::default());
+    kind::each(&mut topics);
+    let topics = topics.1;
+    let players = players(session, &topics, pace.depth)?;
     let items = merged(bag);
     let result: anyhow::Result<Played> = session.run(async |node, shutdown| {
-        let mut played = names.clone();
-        let waits = publishers.waits(node, bag, &names);
+        let mut played = Played {
+            sent: [0; kind::COUNT],
+            topics: topics.clone(),
+        };
+        let waits = waits(&players, node, bag, &topics);
         if !wait_for_subscribers(shutdown, waits, pace.wait).await? {
             return Ok(played);
         }
+        // The kinds it holds, and their topics.
+        let (what, on): (Vec<String>, Vec<&str>) = bag
+            .streams
+            .request_counts()
+            .iter()
+            .zip(kind::plurals())
+            .zip(&topics)
+            .filter(|((n, _), _)| **n > 0)
+            .map(|((n, name), topic)| (format!("{n} {name}"), topic.as_str()))
+            .unzip();
         log::info!(
-            "playing {} candidates, {} sets, {} pose candidates and {} pose sets from {} on {}, \
-             {}, {} and {}",
-            bag.streams.candidates.requests.len(),
-            bag.streams.sets.requests.len(),
-            bag.streams.poses.requests.len(),
-            bag.streams.pose_sets.requests.len(),
+            "playing {} from {} on {}",
+            what.join(", "),
             source.display(),
-            names.candidates_topic,
-            names.sets_topic,
-            names.poses_topic,
-            names.pose_sets_topic
+            on.join(", ")
         );
         let start = Instant::now();
-        let first = items.first().map_or(0, |(t, _)| *t);
-        for (time, item) in &items {
+        let first = items.first().map_or(0, |(t, _, _)| *t);
+        for &(time, kind, index) in &items {
             if pace.rate > 0.0 {
                 let offset = time.saturating_sub(first) as f64 / 1e9 / pace.rate;
                 if !paced(start, offset, shutdown).await {
                     break;
                 }
             }
-            publishers.send(item, &mut played).await?;
+            if let Some(player) = players.get(kind) {
+                player.send(bag, index).await?;
+                played.sent[kind] += 1;
+            }
         }
-        let sent = played.candidates + played.sets + played.poses + played.pose_sets;
+        let sent: usize = played.sent.iter().sum();
         log::debug!("sent {sent} of {} messages", items.len());
         // Let reliable delivery finish before leaving.
         smol::Timer::after(Duration::from_millis(500)).await;
         Ok(played)
     });
-    drop(publishers);
+    drop(players);
     result
 }

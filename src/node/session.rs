@@ -521,6 +521,27 @@ pub(crate) fn say(node: &Node, level: log::Level, text: &str) {
     rosout!(*node, level, "{}", text);
 }
 
+/// When a message was received and when it was sent, ns since the epoch: the DDS timestamps
+/// when present (received: now otherwise; sent: when received otherwise).
+pub(crate) fn message_times(info: &ros2_client::MessageInfo) -> (u64, u64) {
+    let received = info
+        .received_timestamp()
+        .map_or_else(crate::record::now_ns, |t| {
+            u64::try_from(t.to_nanos()).unwrap_or(0)
+        });
+    let sent = info.source_timestamp().map_or(received, |t| {
+        u64::try_from(t.to_nanos()).unwrap_or(received)
+    });
+    (received, sent)
+}
+
+/// Logs each note to stderr and `/rosout`.
+pub(crate) fn tell(node: &Node, notes: Vec<(log::Level, String)>) {
+    for (level, text) in notes {
+        say(node, level, &text);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::{DiscoveryRange, Graph, StaticPeers};

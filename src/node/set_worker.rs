@@ -27,16 +27,15 @@ use super::answer::{
 };
 use super::loads::{too_slow, Loaders, LOAD_PANICKED};
 use super::params::Shared;
-use crate::answer::{answer_in_full, markers, Refused, Rules};
-use crate::answer::{answer_set_within, busy, echo_set, solver_pool, Halt, Interrupt};
+use crate::answer::{answer_in_full, markers, Answering, Refused};
+use crate::answer::{busy, echo_set, solver_pool, Halt, Interrupt};
 use crate::answer::{pose_set_without_geometry, uncast, PoseAnswerer, PARALLEL_FROM};
 use crate::msg::{
     GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet, MarkerArray,
     PoseCandidate, PoseCandidateSet,
 };
-use crate::solver::Settings;
 use futures::channel::mpsc::{unbounded, UnboundedReceiver, UnboundedSender};
-use grasp_orient_geometry::{ClosingAxis, MeshCache};
+use grasp_orient_geometry::MeshCache;
 use ros2_client::RmwRequestId;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{mpsc, Arc, Condvar, Mutex, MutexGuard};
@@ -290,12 +289,11 @@ struct Solver {
 
 /// The settings a set is answered with: those in force when it was received.
 struct InForce {
-    settings: Settings,
+    /// The settings, rules and closing axis, on the node's meshes.
+    with: Answering,
     markers_on: bool,
-    rules: Rules,
     threads: i64,
     budget: f64,
-    closing_axis: ClosingAxis,
     /// `max_mesh_load_time`.
     load_time: Duration,
     /// `max_inline_mesh_triangles`.
@@ -334,7 +332,7 @@ impl Solver {
                  status 2 and the set thread goes on"
             );
             // The solving's interrupt may be left raised for time: the next set lowers it.
-            (failed_reply(&job.set, &now.rules, SET_PANICKED), None)
+            (failed_reply(&job.set, now.with.rules(), SET_PANICKED), None)
         });
         let SetJob {
             set,
@@ -371,12 +369,10 @@ impl Solver {
             let live = self.shared.lock();
             let version = live.version_at(received);
             InForce {
-                settings: version.settings,
+                with: version.answering(&self.meshes),
                 markers_on: version.config.publish_markers && (audience || record_markers),
-                rules: version.config.rules(),
                 threads: version.config.solver_threads,
                 budget: version.config.max_set_time,
-                closing_axis: version.config.closing_axis,
                 load_time: load_time(version.config.max_mesh_load_time),
                 max_inline: usize::try_from(version.config.max_inline_mesh_triangles)
                     .unwrap_or(usize::MAX),
@@ -486,14 +482,7 @@ impl Solver {
             let pool = self.pool_for(set.candidates.len(), now.threads);
             self.interrupt.lower_time();
             let _watched = self.clock.watch(now.budget);
-            answer_set_within(
-                set,
-                &now.settings,
-                &now.rules,
-                pool,
-                &self.interrupt,
-                now.budget,
-            )
+            now.with.set_within(set, pool, &self.interrupt, now.budget)
         };
         let best = reply.ranking.first().map(|&i| i as usize);
         let markers = best.filter(|_| self.draws(now)).and_then(|i| {
@@ -501,10 +490,10 @@ impl Solver {
             // A spatial best candidate is drawn in 3D: its 3D solution is solved again (one
             // candidate; the set's answers keep only the message fields).
             let spatial = (candidate.model == GraspCandidate::MODEL_SPATIAL)
-                .then(|| answer_in_full(candidate, &now.settings).spatial)
+                .then(|| answer_in_full(candidate, now.with.settings()).spatial)
                 .flatten();
             Some(markers::build(
-                &now.rules.tolerances.apply(candidate),
+                &now.with.rules().tolerances.apply(candidate),
                 reply.recommendations.get(i)?,
                 spatial.as_deref(),
             ))
@@ -515,31 +504,21 @@ impl Solver {
     /// A pose set's answer (its mesh loaded here when the cache does not hold it yet, within
     /// the set's time) and its best pose's markers.
     fn poses(&self, set: &PoseCandidateSet, now: &InForce) -> (SetReply, Option<MarkerArray>) {
-        let answerer = PoseAnswerer::sharing(now.closing_axis, self.meshes.clone());
         let (reply, object) = if self.echo {
             (pose_set_without_geometry(set, echo_set(&uncast(set))), None)
         } else {
             let pool = self.pool_for(set.poses.len(), now.threads);
             self.interrupt.lower_time();
             let _watched = self.clock.watch(now.budget);
-            let object = (set.poses.len() <= now.rules.max_set_size)
-                .then(|| self.object_within(&answerer, set, now));
+            let object = (set.poses.len() <= now.with.rules().max_set_size)
+                .then(|| self.object_within(now.with.poses(), set, now));
             if object.as_ref().is_some_and(Result::is_err) {
                 // Refused, perhaps because max_set_time ran out while it loaded: each pose says
                 // why, and the set is answered whole (there is nothing left to solve).
                 self.interrupt.lower_time();
             }
-            let (reply, object) = answerer.answer_set_on(set, object, |candidates| {
-                answer_set_within(
-                    candidates,
-                    &now.settings,
-                    &now.rules,
-                    pool,
-                    &self.interrupt,
-                    now.budget,
-                )
-            });
-            (reply, object)
+            now.with
+                .pose_set_within(set, object, pool, &self.interrupt, now.budget)
         };
         let best = reply.ranking.first().map(|&i| i as usize);
         let markers = best.filter(|_| self.draws(now)).and_then(|i| {
@@ -555,9 +534,9 @@ impl Solver {
             Some(markers::build_pose(
                 &candidate,
                 object.as_ref(),
-                now.closing_axis,
+                now.with.poses().closing_axis(),
                 reply.recommendations.get(i)?,
-                &now.settings,
+                now.with.settings(),
             ))
         });
         (SetReply::Poses(reply), markers)
@@ -693,6 +672,7 @@ mod tests {
     use crate::config::Config;
     use crate::msg::{GripRecommendation, GripRecommendationSet};
     use futures::StreamExt;
+    use grasp_orient_geometry::ClosingAxis;
 
     /// The id of a set whose answering panics (`Solver::answer`).
     pub(super) const PANICS: &str = "test: this set panics";

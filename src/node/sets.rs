@@ -8,20 +8,17 @@
 //! thread's queue is full is answered the same way, at once.
 
 use super::answer::{Answerer, SetInput, SetOutcome, SetReply};
+use super::endpoint::Endpoint;
 use super::markers_out::MarkersOut;
-use super::session::{create_topic, qos, say};
+use super::session::{message_times, qos, say, tell};
 use super::set_worker::{SetDone, SetJob, SetWorker, Via};
 use crate::kind::{PoseSets, Sets};
 use crate::msg::{
-    short_id, GraspCandidateSet, GripRecommendationSet, PoseCandidateSet, PoseRecommendationSet,
-    RecommendPosesRequest, RecommendPosesResponse, RecommendRequest, RecommendResponse,
+    short_id, RecommendPosesRequest, RecommendPosesResponse, RecommendRequest, RecommendResponse,
 };
 use crate::record::{now_ns, Topics};
 use anyhow::Context as _;
-use ros2_client::{
-    MessageInfo, Name, Node, Publisher, RmwRequestId, Server, ServiceMapping, ServiceTypeName,
-    Subscription,
-};
+use ros2_client::{MessageInfo, Name, Node, RmwRequestId, Server, ServiceMapping, ServiceTypeName};
 use std::time::{Duration, Instant};
 
 /// The service's name under the node (`~/recommend`).
@@ -30,18 +27,14 @@ pub(crate) const SERVICE: &str = "recommend";
 /// The pose service's name under the node (`~/recommend_poses`).
 pub(crate) const POSE_SERVICE: &str = "recommend_poses";
 
-/// The set topics and the service.
+/// The set topics and the services.
 pub(crate) struct SetEndpoints {
-    /// `grasp_candidate_sets`.
-    pub candidates: Subscription<GraspCandidateSet>,
-    /// `grip_recommendation_sets`.
-    pub answers: Publisher<GripRecommendationSet>,
+    /// `grasp_candidate_sets` and `grip_recommendation_sets`.
+    pub sets: Endpoint<Sets>,
     /// `~/recommend`.
     pub service: Server<RecommendRequest, RecommendResponse>,
-    /// `pose_candidate_sets`.
-    pub pose_sets: Subscription<PoseCandidateSet>,
-    /// `pose_recommendation_sets`.
-    pub pose_answers: Publisher<PoseRecommendationSet>,
+    /// `pose_candidate_sets` and `pose_recommendation_sets`.
+    pub pose_sets: Endpoint<PoseSets>,
     /// `~/recommend_poses`.
     pub pose_service: Server<RecommendPosesRequest, RecommendPosesResponse>,
 }
@@ -56,43 +49,11 @@ impl SetEndpoints {
     /// Creates the endpoints of the set kinds on `topics` with QoS depth `qos_depth`.
     pub(crate) fn create(node: &mut Node, topics: &Topics, qos_depth: i64) -> anyhow::Result<Self> {
         let qos = qos(qos_depth);
-        let sets = create_topic::<GraspCandidateSet>(
-            node,
-            topics.requests::<Sets>().unwrap_or_default(),
-            &qos,
-        )?;
-        let answers = create_topic::<GripRecommendationSet>(
-            node,
-            topics.answers::<Sets>().unwrap_or_default(),
-            &qos,
-        )?;
-        let pose_sets = create_topic::<PoseCandidateSet>(
-            node,
-            topics.requests::<PoseSets>().unwrap_or_default(),
-            &qos,
-        )?;
-        let pose_answers = create_topic::<PoseRecommendationSet>(
-            node,
-            topics.answers::<PoseSets>().unwrap_or_default(),
-            &qos,
-        )?;
-        let service = serve(node, SERVICE, "Recommend", &qos)?;
-        let pose_service = serve(node, POSE_SERVICE, "RecommendPoses", &qos)?;
         Ok(Self {
-            pose_sets: node
-                .create_subscription(&pose_sets, None)
-                .context("cannot subscribe to pose sets")?,
-            pose_answers: node
-                .create_publisher(&pose_answers, None)
-                .context("cannot publish pose set answers")?,
-            pose_service,
-            candidates: node
-                .create_subscription(&sets, None)
-                .context("cannot subscribe to sets")?,
-            answers: node
-                .create_publisher(&answers, None)
-                .context("cannot publish set answers")?,
-            service,
+            pose_sets: Endpoint::create(node, topics, &qos)?,
+            pose_service: serve(node, POSE_SERVICE, "RecommendPoses", &qos)?,
+            sets: Endpoint::create(node, topics, &qos)?,
+            service: serve(node, SERVICE, "Recommend", &qos)?,
         })
     }
 }
@@ -131,7 +92,7 @@ pub(crate) async fn take_topic(
     set: SetInput,
     info: &MessageInfo,
 ) {
-    let (received, sent) = super::message_times(info);
+    let (received, sent) = message_times(info);
     // From the sample's arrival in the DDS reader (the last fragment) to here: the node's
     // thread waking, and the set decoded.
     let taken = Duration::from_nanos(now_ns().saturating_sub(received));
@@ -197,7 +158,7 @@ pub(crate) async fn answer_done(
         markers: array,
         recorded,
     } = outcome;
-    super::tell(node, answerer.count_set(&reply, array.is_some()));
+    tell(node, answerer.count_set(&reply, array.is_some()));
     let (how, taken) = match via {
         Via::Topic { taken } => ("topic", Some(taken)),
         Via::Service(_) => ("service", None),
@@ -211,19 +172,21 @@ pub(crate) async fn answer_done(
         say(node, log::Level::Error, &e);
     }
     markers.publish(node, answerer, array).await;
-    super::tell(node, answerer.record_set(recorded, answered));
+    tell(node, answerer.record_set(recorded, answered));
 }
 
 /// Sends a set's answer where its set came from: its topic, or the response to its call.
 async fn send(endpoints: &SetEndpoints, via: Via, reply: SetReply) -> Result<(), String> {
     match (via, reply) {
         (Via::Topic { .. }, SetReply::Candidates(reply)) => endpoints
+            .sets
             .answers
             .async_publish(reply)
             .await
             .map_err(|e| format!("cannot publish a set answer: {e:?}")),
         (Via::Topic { .. }, SetReply::Poses(reply)) => endpoints
-            .pose_answers
+            .pose_sets
+            .answers
             .async_publish(reply)
             .await
             .map_err(|e| format!("cannot publish a pose set answer: {e:?}")),

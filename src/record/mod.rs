@@ -23,14 +23,14 @@
 pub mod bag;
 pub(crate) mod channels;
 pub(crate) mod lifecycle;
+#[cfg(test)]
+mod mcap_crate;
 pub(crate) mod output;
 mod pump;
 pub mod recover;
-pub(crate) mod resync;
 pub(crate) mod scan;
 pub mod settings;
 mod sink;
-pub(crate) mod summary;
 
 pub use channels::{IncompatibleChannel, RecordedFields};
 pub use output::OutputError;
@@ -140,32 +140,53 @@ fn closed_words(kept: &Written, closed: &Result<(), std::io::Error>) -> String {
     }
 }
 
-/// One message for the recording.
+/// One message for the recording: a request or an answer of one kind ([`crate::kind`]), a
+/// marker array, or the settings in force from a time on.
 #[derive(Debug, Clone)]
-pub enum Payload {
-    /// A request or an answer of one kind ([`crate::kind`]), on that kind's channel.
+pub struct Payload(Carried);
+
+/// What a [`Payload`] carries.
+#[derive(Debug, Clone)]
+enum Carried {
+    /// A request or an answer, on its kind's channel.
     Message(kind::Channel, Arc<dyn Encode>),
     /// On the markers topic.
     Markers(Box<MarkerArray>),
-    /// The settings in force from a time on, written as a metadata record (the entry's times
-    /// are not used).
+    /// Written as a metadata record (the entry's times are not used).
     Settings(Box<SettingsRecord>),
 }
 
 impl Payload {
     /// A request of kind `K`.
     pub fn request<K: Kind>(message: K::Request) -> Self {
-        Payload::Message(kind::Channel::request::<K>(), Arc::new(message))
+        Payload(Carried::Message(
+            kind::Channel::request::<K>(),
+            Arc::new(message),
+        ))
     }
 
     /// An answer of kind `K`.
     pub fn answer<K: Kind>(message: K::Answer) -> Self {
-        Payload::Message(kind::Channel::answer::<K>(), Arc::new(message))
+        Payload(Carried::Message(
+            kind::Channel::answer::<K>(),
+            Arc::new(message),
+        ))
+    }
+
+    /// A marker array, on the markers topic.
+    pub(crate) fn markers(markers: MarkerArray) -> Self {
+        Payload(Carried::Markers(Box::new(markers)))
+    }
+
+    /// The settings in force from `settings.since` on, written as a metadata record (the
+    /// entry's times are not used).
+    pub fn settings(settings: SettingsRecord) -> Self {
+        Payload(Carried::Settings(Box::new(settings)))
     }
 }
 
 /// A message the recording's writer thread encodes as CDR.
-pub trait Encode: std::fmt::Debug + Send + Sync {
+pub(crate) trait Encode: std::fmt::Debug + Send + Sync {
     /// The message as encapsulated CDR.
     fn encode(&self) -> Result<Vec<u8>, cdr::CdrError>;
 }
@@ -515,10 +536,10 @@ impl BagWriter {
     /// Writes one message (dropped when the recording has no channel for it), or a settings
     /// record (after which the file is flushed).
     pub fn write(&mut self, entry: &Entry) -> Result<(), RecordError> {
-        let (index, bytes) = match &entry.payload {
-            Payload::Message(channel, m) => (channel.slot(), m.encode()?),
-            Payload::Markers(m) => (MARKERS, cdr::encode(m.as_ref())?),
-            Payload::Settings(s) => return self.write_settings(s),
+        let (index, bytes) = match &entry.payload.0 {
+            Carried::Message(channel, m) => (channel.slot(), m.encode()?),
+            Carried::Markers(m) => (MARKERS, cdr::encode(m.as_ref())?),
+            Carried::Settings(s) => return self.write_settings(s),
         };
         if index != MARKERS && self.channels[index].is_none() {
             self.add_lazy_channel(index)?;

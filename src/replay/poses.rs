@@ -10,17 +10,17 @@
 //! `AMENT_PREFIX_PATH`): one that cannot be read where the recording answered its pose is an
 //! error ([`ReplayError::Mesh`]), not a difference.
 
+use super::compare::{compare_one, number_gap, pair, Summary, TOLERANCE};
+use super::plan::{Plan, ReplayError};
 use super::sets::{compare_set, rules_like};
-use super::{compare_one, number_gap, pair, Plan, ReplayError, Summary, TOLERANCE};
-use crate::answer::{cut_like, uncast, PoseAnswerer};
+use crate::answer::{cut_like, uncast};
+use crate::kind::{PoseSets, Poses};
 use crate::msg::{
     short_id, GraspObject, GripRecommendation, GripRecommendationSet, Point, PoseCandidateSet,
     PoseRecommendation, PoseRecommendationSet, Vector3,
 };
 use crate::record::bag::{keep_example, Bag, Recorded};
 use grasp_orient_geometry::MeshCache;
-
-use std::sync::Arc;
 
 /// The new answers of a replay's pose candidates and pose sets, each with its candidate's (or
 /// set's) times, in the recording's order; empty unless asked for.
@@ -37,9 +37,9 @@ pub(crate) struct PoseAnswers {
 pub(super) fn replay_poses(
     bag: &Bag,
     plan: &Plan,
-    meshes: &Arc<MeshCache>,
     keep: bool,
 ) -> Result<(Summary, PoseAnswers), ReplayError> {
+    let meshes = plan.meshes();
     let mut summary = Summary::default();
     let mut kept = PoseAnswers::default();
     let (pairs, unmatched) = pair(&bag.streams.poses);
@@ -48,9 +48,7 @@ pub(super) fn replay_poses(
         let theirs = p.map(|i| &bag.streams.poses.answers[i].message);
         let answered = theirs.is_some_and(|t| answered(&t.recommendation));
         check_mesh(&c.message.object, answered, meshes)?;
-        let poses = PoseAnswerer::sharing(plan.closing_axis_at(c.log_time), meshes.clone());
-        let (settings, rules) = (plan.settings_at(c.log_time), plan.rules_at(c.log_time));
-        let ours = poses.answer(&c.message, settings, rules);
+        let ours = plan.answering_at(c.log_time).answer::<Poses>(&c.message);
         summary.candidates += 1;
         summary.pose_candidates += 1;
         if let Some(theirs) = theirs {
@@ -69,7 +67,7 @@ pub(super) fn replay_poses(
             });
         }
     }
-    kept.sets = replay_pose_sets(bag, plan, meshes, &mut summary, keep)?;
+    kept.sets = replay_pose_sets(bag, plan, &mut summary, keep)?;
     Ok((summary, kept))
 }
 
@@ -77,10 +75,10 @@ pub(super) fn replay_poses(
 fn replay_pose_sets(
     bag: &Bag,
     plan: &Plan,
-    meshes: &Arc<MeshCache>,
     summary: &mut Summary,
     keep: bool,
 ) -> Result<Vec<Recorded<PoseRecommendationSet>>, ReplayError> {
+    let meshes = plan.meshes();
     let mut kept = Vec::new();
     let (pairs, unmatched) = pair(&bag.streams.pose_sets);
     summary.unmatched_set_answers += unmatched;
@@ -92,15 +90,14 @@ fn replay_pose_sets(
                 .any(|r| answered(&r.recommendation))
         });
         check_mesh(&set.message.object, answered, meshes)?;
-        let poses = PoseAnswerer::sharing(plan.closing_axis_at(set.log_time), meshes.clone());
-        let (settings, rules) = (plan.settings_at(set.log_time), plan.rules_at(set.log_time));
+        let with = plan.answering_at(set.log_time);
         let theirs_grip = theirs.map(as_grip);
-        let rules = if plan.objective_from_answer {
-            rules_like(rules, theirs_grip.as_ref())
+        let ours = if plan.objective_from_answer {
+            with.with_rules(rules_like(with.rules(), theirs_grip.as_ref()))
+                .answer::<PoseSets>(&set.message)
         } else {
-            *rules
+            with.answer::<PoseSets>(&set.message)
         };
-        let ours = poses.answer_set(&set.message, settings, &rules);
         summary.sets += 1;
         summary.pose_sets += 1;
         summary.candidates += set.message.poses.len() as u64;

@@ -12,8 +12,10 @@
 //! new answers' values within [`TOLERANCE`] (ties by `|wrist_rotation|`): candidates whose force
 //! agrees to rounding may swap places.
 
-use super::{compare_one, objective_like, pair, Plan, Summary, TOLERANCE};
-use crate::answer::{answer_set, is_sorted_by, GripperDrive, RankBy, Rules};
+use super::compare::{compare_one, pair, Summary, TOLERANCE};
+use super::plan::{objective_like, Plan};
+use crate::answer::{is_sorted_by, GripperDrive, RankBy, Rules};
+use crate::kind::Sets;
 use crate::msg::{short_id, GraspCandidateSet, GripRecommendation, GripRecommendationSet};
 use crate::record::bag::{keep_example, Bag, Recorded};
 
@@ -51,17 +53,15 @@ pub(super) fn replay_sets(
     });
     for (set, p) in bag.streams.sets.requests.iter().zip(pairs) {
         let theirs = p.map(|i| &bag.streams.sets.answers[i].message);
-        let (settings, rules) = (plan.settings_at(set.log_time), plan.rules_at(set.log_time));
+        let with = plan.answering_at(set.log_time);
         let ours = if plan.objective_from_answer {
             let first =
                 theirs.and_then(|t| t.recommendations.iter().find(|r| !r.objective.is_empty()));
-            answer_set(
-                &set.message,
-                &objective_like(settings, first),
-                &rules_like(rules, theirs),
-            )
+            with.with_settings(objective_like(with.settings(), first))
+                .with_rules(rules_like(with.rules(), theirs))
+                .answer::<Sets>(&set.message)
         } else {
-            answer_set(&set.message, settings, rules)
+            with.answer::<Sets>(&set.message)
         };
         summary.sets += 1;
         summary.candidates += set.message.candidates.len() as u64;

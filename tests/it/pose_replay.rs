@@ -73,12 +73,12 @@ fn write_bag(path: &Path, change: impl Fn(&mut PoseRecommendation)) {
     let poses = PoseAnswerer::new(ClosingAxis::Y, AmentIndex::new([prefix()]));
     let topics = crate::util::pose_bag_topics();
     let mut w = BagWriter::create(path, &topics, 100).expect("create");
-    let mut entries = vec![Payload::Settings(Box::new(SettingsRecord {
+    let mut entries = vec![Payload::settings(SettingsRecord {
         since: 0,
         node: "/grasp_orient".into(),
         reason: "start".into(),
         config,
-    }))];
+    })];
     let singles = [
         candidate(0, BLOCK, 0.1, 0.09),
         candidate(1, BLOCK, 0.08, 0.09),

@@ -26,12 +26,12 @@ fn write_bag(path: &Path, n: usize, config: &Config, with_settings: bool) {
     let mut w = BagWriter::create(path, &topics(), 100).expect("create");
     if with_settings {
         w.write(&Entry {
-            payload: Payload::Settings(Box::new(SettingsRecord {
+            payload: Payload::settings(SettingsRecord {
                 since: 0,
                 node: "/grasp_orient".into(),
                 reason: "start".into(),
                 config: config.clone(),
-            })),
+            }),
             log_time: 0,
             publish_time: 0,
         })

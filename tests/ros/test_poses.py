@@ -41,19 +41,22 @@ class PoseClient:
                                              reliable_qos(10))
         self.answers: dict[str, object] = {}
         self.set_answers: dict[str, object] = {}
-        node.create_subscription(PoseRecommendation, f"{ns}/pose_recommendations" if ns else "pose_recommendations",
-                                 lambda m: self.answers.setdefault(m.recommendation.candidate_id, m),
-                                 reliable_qos(100))
-        node.create_subscription(PoseRecommendationSet,
-                                 f"{ns}/pose_recommendation_sets" if ns else "pose_recommendation_sets",
-                                 lambda m: self.set_answers.setdefault(m.set_id, m), reliable_qos(10))
+        self.sub = node.create_subscription(
+            PoseRecommendation, f"{ns}/pose_recommendations" if ns else "pose_recommendations",
+            lambda m: self.answers.setdefault(m.recommendation.candidate_id, m), reliable_qos(100))
+        self.set_sub = node.create_subscription(
+            PoseRecommendationSet, f"{ns}/pose_recommendation_sets" if ns else "pose_recommendation_sets",
+            lambda m: self.set_answers.setdefault(m.set_id, m), reliable_qos(10))
         self.srv = node.create_client(RecommendPoses, f"{ns}/grasp_orient/recommend_poses")
 
     def wait_matched(self):
+        # Both directions: the node's answers published before its publisher matches our
+        # subscription would be lost (reliable, volatile).
         ok = self.peer.spin_until(lambda: self.pub.get_subscription_count() > 0
-                                  and self.set_pub.get_subscription_count() > 0, 15.0)
+                                  and self.set_pub.get_subscription_count() > 0
+                                  and self.sub.get_publisher_count() > 0
+                                  and self.set_sub.get_publisher_count() > 0, 15.0)
         assert ok, "no match on the pose topics"
-        self.peer.spin_for(0.5)  # the answers' direction too
 
     def send(self, cands: list[dict]) -> dict[str, dict]:
         for c in cands:

@@ -40,9 +40,11 @@
 //! each other: `Candidate`, `Recommendation`, `Verdict`, `NoForceClosure` in each, named by their
 //! module. The root holds only what both share: [`Settings`], [`Objective`], [`AllowedRange`]
 //! (`settings.rs`), [`Contact`] (`contact.rs`), [`InvalidInput`] (`invalid_input.rs`) and the
-//! input limits (`limits.rs`), re-exported here. Each module's `mod.rs` holds its docs and entry
+//! input limits (`limits.rs`), re-exported here. [`batch`] answers many planar or spatial
+//! candidates in one call, each as the single path does, bit for bit. Each module's `mod.rs` holds its docs and entry
 //! points; the types and steps lie in files below it, and no file uses one that uses it.
 
+pub mod batch;
 mod contact;
 mod invalid_input;
 mod limits;

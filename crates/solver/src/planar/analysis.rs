@@ -14,7 +14,7 @@
 use super::answer::{
     CandidateC, ConeMiss, GraspCase, LocalMinimum, NoForceClosure, PaperCandidate, Recommendation,
 };
-use super::curve::{self, Curve, Piece, SAME_ANGLE};
+use super::curve::{self, AtMostTwo, Curve, Piece, SAME_ANGLE};
 use super::finger;
 use super::frame::GraspFrame;
 use super::paper::{self, FORCE_SCALE};
@@ -35,25 +35,6 @@ const ENVELOPE_TIE: f64 = 1e-12;
 /// The allowed range's intervals inside the graspable range: one for the named ranges, at most
 /// five for explicit bounds (kept inline, not on the heap, up to three).
 type Intervals = SmallVec<[(f64, f64); 3]>;
-
-/// Up to two angles, collected without allocating (a piece shorter than 2π has at most two
-/// stationary minima).
-#[derive(Debug, Default)]
-struct AtMostTwo {
-    values: [f64; 2],
-    len: usize,
-}
-
-impl Extend<f64> for AtMostTwo {
-    fn extend<I: IntoIterator<Item = f64>>(&mut self, iter: I) {
-        for v in iter {
-            if self.len < 2 {
-                self.values[self.len] = v;
-                self.len += 1;
-            }
-        }
-    }
-}
 
 /// One interval of θ on which the objective is a single [`Curve`].
 ///
@@ -146,9 +127,22 @@ pub struct Analysis {
     segments: Vec<Segment>,
 }
 
+/// The storage of an analysis's pieces, handed from one analysis to the next (a batch's).
+#[derive(Debug, Default)]
+pub(crate) struct Pieces(Vec<Segment>);
+
 impl Analysis {
     /// Checks force closure and builds the objective over the graspable range.
     pub(crate) fn new(frame: &GraspFrame, objective: Objective) -> Result<Self, NoForceClosure> {
+        Self::reusing(frame, objective, Pieces::default())
+    }
+
+    /// [`Analysis::new`], its pieces stored in `pieces` (emptied first): the same arithmetic.
+    pub(crate) fn reusing(
+        frame: &GraspFrame,
+        objective: Objective,
+        Pieces(mut segments): Pieces,
+    ) -> Result<Self, NoForceClosure> {
         let misses = paper::closure_misses(frame);
         if misses.iter().any(Option::is_some) {
             return Err(NoForceClosure {
@@ -166,6 +160,10 @@ impl Analysis {
                 friction_safety_factor: frame.friction_safety_factor,
             });
         }
+        // Two to four pieces on most grasps; a larger reservation (16: 2 kB) took mimalloc's
+        // slower path for blocks over 1 kB on every grasp. (Storage handed on keeps its room.)
+        segments.clear();
+        segments.reserve_exact(4);
         let (graspable, from_above) = paper::ranges(frame);
         let mut analysis = Self {
             frame: *frame,
@@ -176,12 +174,15 @@ impl Analysis {
             graspable,
             from_above,
             crossings: [None; 3],
-            // Two to four pieces on most grasps; a larger reservation (16: 2 kB) took mimalloc's
-            // slower path for blocks over 1 kB on every grasp.
-            segments: Vec::with_capacity(4),
+            segments,
         };
         analysis.build_segments();
         Ok(analysis)
+    }
+
+    /// The storage of the pieces, for the next [`Analysis::reusing`].
+    pub(crate) fn into_pieces(self) -> Pieces {
+        Pieces(self.segments)
     }
 
     /// The six bounds `α_1 .. α_6` at gravity angle `theta` (normalised units: lengths over the

@@ -196,6 +196,25 @@ pub(crate) fn local_minima<P: Piece>(
     found
 }
 
+/// Up to two angles, collected without allocating (a piece shorter than 2π has at most two
+/// stationary minima).
+#[derive(Debug, Default)]
+pub(crate) struct AtMostTwo {
+    pub(crate) values: [f64; 2],
+    pub(crate) len: usize,
+}
+
+impl Extend<f64> for AtMostTwo {
+    fn extend<I: IntoIterator<Item = f64>>(&mut self, iter: I) {
+        for v in iter {
+            if self.len < 2 {
+                self.values[self.len] = v;
+                self.len += 1;
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -117,6 +117,7 @@
 //! ([`InvalidInput::CenterOfMassAtContact`]).
 
 mod answer;
+pub(crate) mod batch;
 mod candidate;
 pub mod on_axis;
 mod plane;

@@ -1,4 +1,4 @@
-//! Where records start again after damage, for `recover` ([`super::recover`]): the next offset
+//! Where records start again after damage, for `recover` ([`super`]): the next offset
 //! where a record that verifies begins, found by trying each byte in turn. A chunk qualifies
 //! when its fields fit its record and its records decompress to the size and CRC it declares;
 //! another record when its opcode is one MCAP defines, its fields fit its length, and another
@@ -8,7 +8,7 @@
 //! ([`scan::decompressed_limit`]), so that no file, however many chunk headers it fakes, makes
 //! `recover` decompress more than a bounded multiple of its size.
 
-use super::scan::{self, op, Chunk, Parsed, Record, Undecompressable};
+use crate::record::scan::{self, op, Chunk, Parsed, Record, Undecompressable};
 use std::borrow::Cow;
 
 /// Why a chunk record does not open; its words are the damage `recover` reports there.

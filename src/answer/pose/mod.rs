@@ -22,6 +22,9 @@
 //!   ranked by [`answer_set`] exactly as a [`GraspCandidateSet`]'s (the gripper's limit, the
 //!   set's `max_grip_force`, `max_set_size`), a pose refused by the geometry never ranked.
 
+mod checks;
+mod refusal;
+
 use super::reply::no_closure;
 use super::{answer_one, answer_set, Rules};
 use crate::msg::{
@@ -29,175 +32,20 @@ use crate::msg::{
     GripRecommendationSet, Header, Point, Pose, PoseCandidate, PoseCandidateSet,
     PoseRecommendation, PoseRecommendationSet, Vector3,
 };
-use crate::solver::{
-    check_friction, check_mass, spatial::check_weight, times_pow2, InvalidInput, Readable,
-    Settings, MAX_COORDINATE, MAX_GRAVITY, SQUARE_SAFE,
-};
+use crate::solver::Settings;
+use checks::{check_object_numbers, check_scale, coordinate, isometry, point, units_hint, vector};
 use grasp_orient_geometry::{
     grasp_from_pose, AmentIndex, ClosingAxis, Contact, Feature, GeometryError, Grasp, GripperPose,
     MeshCache, Object, Primitive, Shape,
 };
-use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3 as V3};
-use std::fmt::{self, Display};
+use nalgebra::Point3;
+use refusal::MAX_WIDTH;
+pub(crate) use refusal::{NumberFault, PoseRefusal, Refused};
+use std::fmt::Display;
 use std::sync::Arc;
 
 /// The most bytes of meshes a [`PoseAnswerer`] keeps loaded (least recently used dropped first).
 pub const MESH_CACHE_BYTES: usize = 512 << 20;
-
-/// The largest opening accepted, m: the solver's coordinate limit ([`MAX_COORDINATE`]), since
-/// the fingers start `width / 2` from the tool frame's origin. Beyond it the contacts, computed
-/// from finger starts `width / 2` away, would have lost every digit of the object's size (an
-/// opening of 1e300 m made both contacts the same point).
-pub(super) const MAX_WIDTH: f64 = MAX_COORDINATE;
-/// The smallest scale factor accepted on a mesh's axis: from nanometres to metres. Below it the
-/// mesh shrinks towards a point, and its faces' normals are lost to underflow (a scale of 1e-100
-/// made the contact normals NaN).
-pub(super) const MIN_SCALE: f64 = 1e-9;
-/// The largest scale factor accepted on a mesh's axis. Above it the vertices leave the solver's
-/// coordinate limit for any mesh unit in use, and reach infinity from single-precision files.
-pub(super) const MAX_SCALE: f64 = 1e9;
-/// A finger starting inside a mesh that is, along the closing line, between these many times
-/// wider than the opening: the refusal adds a hint that the mesh may be in millimetres without a
-/// scale. A mesh in millimetres read as metres is 1000 times too large, so an object from 0.3 to
-/// 1000 times the opening in truth (a gripper rarely closes on one more than 300 times its
-/// opening) lands here; beyond the upper end it is the opening that is wrong, not the units.
-pub(super) const UNITS_HINT_RATIO: std::ops::RangeInclusive<f64> = 300.0..=1e6;
-
-/// What is wrong with one number of a pose candidate (the solver's words for the same faults).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum NumberFault {
-    /// NaN or infinite.
-    NotFinite,
-    /// Larger in magnitude than `limit` (with its unit, leading space included).
-    Above {
-        /// The value.
-        value: f64,
-        /// The largest accepted magnitude.
-        limit: f64,
-        /// Its unit, with its leading space.
-        unit: &'static str,
-    },
-    /// Below `minimum`.
-    Below {
-        /// The value.
-        value: f64,
-        /// The smallest accepted value.
-        minimum: f64,
-    },
-}
-
-impl Display for NumberFault {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match *self {
-            NumberFault::NotFinite => f.write_str("is not a finite number"),
-            NumberFault::Above { value, limit, unit } => write!(
-                f,
-                "is out of range: {value:e} exceeds {limit:e}{unit} in magnitude"
-            ),
-            NumberFault::Below { value, minimum } => write!(
-                f,
-                "is out of range: {value:e} is below the smallest accepted {minimum:e}"
-            ),
-        }
-    }
-}
-
-/// Why a pose candidate cannot be turned into a grasp.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub(crate) enum PoseRefusal {
-    /// The geometry's refusal: status 1 for a finger that closes on nothing, 2 otherwise.
-    #[error(transparent)]
-    Geometry(#[from] GeometryError),
-    /// Not exactly one of `mesh`, `inline_mesh` and `primitive` is given.
-    #[error("object: give exactly one shape (mesh, inline_mesh or primitive), got {given}")]
-    Shapes {
-        /// The shapes given, by field name (empty for none).
-        given: String,
-    },
-    /// A primitive with a scale other than 1.
-    #[error(
-        "object.scale must be 1 on every axis for a primitive (its dimensions are metres), got \
-         [{}, {}, {}]", Readable(.scale[0]), Readable(.scale[1]), Readable(.scale[2])
-    )]
-    PrimitiveScale {
-        /// The scale given.
-        scale: [f64; 3],
-    },
-    /// A quaternion that is no rotation.
-    #[error("{field} is not a rotation: its norm is {norm}")]
-    Orientation {
-        /// `grasp_pose.orientation`, `object.pose.orientation`, `poses[i].grasp_pose.orientation`.
-        field: String,
-        /// Its norm.
-        norm: f64,
-    },
-    /// A number of the pose candidate out of its domain, named by its path in the message
-    /// (`grasp_pose.position.x`, `poses[2].width`, `object.scale.y`, …).
-    #[error("{field} {fault}")]
-    Number {
-        /// The field's path.
-        field: String,
-        /// What is wrong with it.
-        fault: NumberFault,
-    },
-    /// A number the solver refuses, named by the pose candidate's field it comes from
-    /// (`object.friction`, which is both contacts' friction; `object.mass`).
-    #[error(transparent)]
-    Solver(#[from] InvalidInput),
-    /// A finger starts inside a mesh that is many times wider than the opening along the closing
-    /// line: the geometry's refusal, with a hint about the mesh's units.
-    #[error(
-        "{source}: the mesh is {} times wider than the opening along the closing line: is it in \
-         millimetres? {}",
-        Rounded(*.ratio),
-        if *.unit_scale { "set object.scale to 0.001" } else { "check object.scale" }
-    )]
-    StartsInsideUnits {
-        /// The geometry's refusal ([`GeometryError::StartsInside`]).
-        source: GeometryError,
-        /// The mesh's extent along the closing line over the opening.
-        ratio: f64,
-        /// Whether `object.scale` is 1 on every axis.
-        unit_scale: bool,
-    },
-    /// `center_of_mass` given without `has_center_of_mass`.
-    #[error(
-        "object.center_of_mass is given but object.has_center_of_mass is false: set it true, or \
-         leave center_of_mass at zero for the shape's centroid"
-    )]
-    CenterOfMassFlag,
-}
-
-/// A ratio to about three significant digits, as a plain number (`1000`, `2500`, `15000`).
-struct Rounded(f64);
-
-impl Display for Rounded {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let r = self.0;
-        if !(r.is_finite() && r >= 1.0) {
-            return write!(f, "{r:e}");
-        }
-        let digits = r.log10().floor() as i32;
-        let step = 10f64.powi((digits - 2).max(0));
-        let rounded = (r / step).round() * step;
-        if rounded < 1e16 {
-            write!(f, "{rounded:.0}")
-        } else {
-            write!(f, "{rounded:e}")
-        }
-    }
-}
-
-impl PoseRefusal {
-    /// The status of the answer: 1 when a finger closes on nothing, 2 otherwise.
-    pub(crate) fn status(&self) -> u8 {
-        match self {
-            PoseRefusal::Geometry(e) => e.status(),
-            _ => GripRecommendation::STATUS_INVALID_INPUT,
-        }
-    }
-}
 
 /// Answers pose candidates: the closing axis, and the meshes loaded so far (each file at each
 /// scale once, `package://` through the ament index it was made with).
@@ -523,25 +371,6 @@ impl PoseAnswerer {
     }
 }
 
-/// A refusal as an answer gives it: its status and words (the geometry's errors hold an
-/// `io::Error`, which does not clone, and a set's object refused is every pose's refusal).
-#[derive(Debug, Clone)]
-pub(crate) struct Refused {
-    /// The answer's status.
-    pub status: u8,
-    /// Its message.
-    pub message: String,
-}
-
-impl From<PoseRefusal> for Refused {
-    fn from(e: PoseRefusal) -> Self {
-        Refused {
-            status: e.status(),
-            message: e.to_string(),
-        }
-    }
-}
-
 /// A pose candidate's header, id, object and gravity.
 fn target_of(m: &PoseCandidate) -> Target<'_> {
     Target {
@@ -710,163 +539,6 @@ fn feature_note(name: &str, c: &Contact) -> Option<String> {
         "{name} lies on {feature} of the object: its normal is the pseudo-normal there \
          (docs/poses.md)"
     ))
-}
-
-/// A pose as an isometry, its quaternion normalised. `field` names the pose: each coordinate of
-/// its position must be finite and within the solver's coordinate limit, each component of its
-/// quaternion finite, and the quaternion not zero.
-///
-/// # Normalisation
-/// A quaternion is a rotation at any length: it is divided by its norm. The norm of one whose
-/// largest component `m` lies outside `1e-150..=1e150` is first brought near 1 by an exact power
-/// of two (`2^-floor(log2 m)`), since squaring its components would overflow (norm 1e200: inf)
-/// or underflow (norm 1e-200: 0); one inside is divided by its norm as it is, bit for bit as
-/// before.
-fn isometry(p: &Pose, field: &dyn Display) -> Result<Isometry3<f64>, PoseRefusal> {
-    let t = &p.position;
-    for (axis, v) in [("x", t.x), ("y", t.y), ("z", t.z)] {
-        coordinate(&format_args!("{field}.position.{axis}"), v)?;
-    }
-    let o = &p.orientation;
-    for (axis, v) in [("x", o.x), ("y", o.y), ("z", o.z), ("w", o.w)] {
-        if !v.is_finite() {
-            return Err(PoseRefusal::Number {
-                field: format!("{field}.orientation.{axis}"),
-                fault: NumberFault::NotFinite,
-            });
-        }
-    }
-    let q = Quaternion::new(o.w, o.x, o.y, o.z);
-    let largest = q.coords.amax();
-    if largest == 0.0 {
-        return Err(PoseRefusal::Orientation {
-            field: format!("{field}.orientation"),
-            norm: 0.0,
-        });
-    }
-    let q = if SQUARE_SAFE.contains(&largest) {
-        q
-    } else {
-        let k = -(largest.log2().floor() as i32);
-        Quaternion::from(q.coords.map(|c| times_pow2(c, k)))
-    };
-    Ok(Isometry3::from_parts(
-        Translation3::new(t.x, t.y, t.z),
-        UnitQuaternion::from_quaternion(q),
-    ))
-}
-
-/// A coordinate of a pose candidate, m: finite and within the solver's coordinate limit.
-fn coordinate(field: &dyn Display, v: f64) -> Result<(), PoseRefusal> {
-    let fault = if !v.is_finite() {
-        NumberFault::NotFinite
-    } else if v.abs() > MAX_COORDINATE {
-        NumberFault::Above {
-            value: v,
-            limit: MAX_COORDINATE,
-            unit: " m",
-        }
-    } else {
-        return Ok(());
-    };
-    Err(PoseRefusal::Number {
-        field: field.to_string(),
-        fault,
-    })
-}
-
-/// A mesh's scale: each axis's factor within `[MIN_SCALE, MAX_SCALE]`. A factor that is zero or
-/// negative is left to the geometry, which names the resource and the scale.
-fn check_scale(scale: [f64; 3]) -> Result<(), PoseRefusal> {
-    for (axis, v) in ["x", "y", "z"].into_iter().zip(scale) {
-        let fault = if !v.is_finite() {
-            NumberFault::NotFinite
-        } else if v > MAX_SCALE {
-            NumberFault::Above {
-                value: v,
-                limit: MAX_SCALE,
-                unit: "",
-            }
-        } else if v > 0.0 && v < MIN_SCALE {
-            NumberFault::Below {
-                value: v,
-                minimum: MIN_SCALE,
-            }
-        } else {
-            continue;
-        };
-        return Err(PoseRefusal::Number {
-            field: format!("object.scale.{axis}"),
-            fault,
-        });
-    }
-    Ok(())
-}
-
-/// The object's friction and mass as the solver checks them, named as the pose candidate's
-/// fields (the spatial candidate gives `object.friction` to both contacts, and would name
-/// `friction_1`), and the weight they make with `gravity` once gravity is within the solver's
-/// limits (otherwise the solver names the gravity field at fault, `gravity.z`, the same path).
-fn check_object_numbers(o: &GraspObject, gravity: &Vector3) -> Result<(), PoseRefusal> {
-    check_friction("object.friction", o.friction)?;
-    let mass = check_mass("object.mass", o.mass)?;
-    let g = V3::new(gravity.x, gravity.y, gravity.z);
-    let gravity_checked = g.iter().all(|c| c.abs() <= MAX_GRAVITY) && g != V3::zeros();
-    if gravity_checked {
-        check_weight("object.mass", mass, &g)?;
-    }
-    Ok(())
-}
-
-/// A finger's refusal for starting inside the object, with a hint about units when the object is
-/// a mesh [`UNITS_HINT_RATIO`] times wider along the closing line than the opening.
-///
-/// The extent is the spread of the mesh's vertices along the closing axis `b` in the object
-/// frame, `max(v·b) − min(v·b)`: the object's own length along the line the fingers close on.
-fn units_hint(
-    e: GeometryError,
-    gripper: &GripperPose,
-    object: &Object,
-    o: &GraspObject,
-) -> PoseRefusal {
-    let Shape::Mesh(mesh) = &object.shape else {
-        return e.into();
-    };
-    let b_header = gripper.tool_pose.rotation * gripper.closing_axis.unit().into_inner();
-    let b = object.pose.rotation.inverse() * b_header;
-    let (lo, hi) = mesh
-        .corners()
-        .flatten()
-        .map(|v| V3::from(v).dot(&b))
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
-            (lo.min(x), hi.max(x))
-        });
-    let ratio = (hi - lo) / gripper.width;
-    if UNITS_HINT_RATIO.contains(&ratio) {
-        PoseRefusal::StartsInsideUnits {
-            source: e,
-            ratio,
-            unit_scale: [o.scale.x, o.scale.y, o.scale.z] == [1.0; 3],
-        }
-    } else {
-        e.into()
-    }
-}
-
-fn point(p: &Point3<f64>) -> Point {
-    Point {
-        x: p.x,
-        y: p.y,
-        z: p.z,
-    }
-}
-
-fn vector(v: &nalgebra::UnitVector3<f64>) -> Vector3 {
-    Vector3 {
-        x: v.x,
-        y: v.y,
-        z: v.z,
-    }
 }
 
 #[cfg(test)]

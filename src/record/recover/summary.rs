@@ -1,4 +1,4 @@
-//! The summary of a file, read from its end for `recover` ([`super::recover`]): the footer just
+//! The summary of a file, read from its end for `recover` ([`super`]): the footer just
 //! before the end magic says where the summary starts and carries the CRC of the summary and of
 //! its own fields. A summary whose CRC verifies is believed: its schemas, channels and statistics,
 //! and the chunk, metadata and attachment indexes that say where each of those records lies, so
@@ -10,7 +10,7 @@
 //! puts them is the shift; a summary found there whose CRC verifies is used, and each index
 //! entry is looked for at its recorded offset and at the shifted one.
 
-use super::scan::{self, op, Channel, ChunkIndex, Damage, Parsed, Record, Schema, MAGIC};
+use crate::record::scan::{self, op, Channel, ChunkIndex, Damage, Parsed, Record, Schema, MAGIC};
 use std::collections::BTreeMap;
 
 /// Bytes of a footer record: opcode, length, summary_start, summary_offset_start, summary_crc.

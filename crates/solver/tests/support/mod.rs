@@ -1,0 +1,3 @@
+//! Helpers of the solver crate's integration tests (and its `batch` benchmark).
+
+pub mod random;
