@@ -138,6 +138,11 @@ nice -n 19 cargo test --all-targets --no-run --message-format=json-render-diagno
 [ "${#BESIDE_PIDS[@]}" -gt 0 ] || { echo "cargo reported no grasp_orient binary" >&2; exit 1; }
 phase "cargo test"
 nice -n 19 cargo test
+phase "the Python module: built into its venv (tests/python/setup.sh), pytest tests/python against grasp_orient solve"
+# The module's build (crates/python, test profile) reuses what `cargo test` compiled of the
+# workspace, the clippy wrapper above included, and lints the module's crate as it compiles it.
+PYTHON_FOR_MODULE=$(nice -n 19 bash tests/python/setup.sh | tail -n 1)
+GRASP_ORIENT_BIN="$UNDER_TEST" "$PYTHON_FOR_MODULE" -m pytest tests/python -v --durations=5
 phase "the message contract against the peer's Jazzy .msg files (cargo test --test it peer_ -- --ignored)"
 # tests/it/msg_contract.rs holds the embedded message definitions to the peer's Jazzy .msg files,
 # found through the ament index as rosbag2 finds them; plain `cargo test` lists these as ignored.

@@ -1,0 +1,254 @@
+//! The answers of a call as columns: one array per field of `GripRecommendation` that has one
+//! value a row (vectors and quaternions as rows of an `(N, k)` array), and, for poses, the
+//! geometry of `PoseRecommendation`. Filled chunk by chunk, in row order, then handed to Python
+//! as a dict of numpy arrays (and lists of str for the text fields).
+
+use grasp_orient::msg::{
+    CompactString, GripRecommendation, Point, PoseRecommendation, Quaternion, Vector3,
+};
+use numpy::{PyArray1, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList, PyString};
+use std::collections::HashMap;
+
+/// The columns of a recommendation's fields.
+#[derive(Debug, Default)]
+pub(crate) struct Columns {
+    status: Vec<u8>,
+    message: Vec<CompactString>,
+    wrist_rotation: Vec<f64>,
+    rotation: Vec<f64>,
+    rotation_axis: Vec<f64>,
+    gravity_direction: Vec<f64>,
+    gravity_angle: Vec<f64>,
+    gripping_power: Vec<f64>,
+    gripping_power_nominal: Vec<f64>,
+    internal_force: Vec<f64>,
+    finger_force: Vec<f64>,
+    contact_forces: Vec<f64>,
+    gripping_power_current: Vec<f64>,
+    internal_force_current: Vec<f64>,
+    finger_force_current: Vec<f64>,
+    candidate_c: Vec<u8>,
+    grasp_case: Vec<CompactString>,
+    recommended_label: Vec<CompactString>,
+    objective: Vec<CompactString>,
+    /// The pose fields, filled by [`Columns::push_pose`] only.
+    geometry: Geometry,
+}
+
+/// The geometry of a pose's answer, and the quaternion its pose's rotation became.
+#[derive(Debug, Default)]
+struct Geometry {
+    contact_1: Vec<f64>,
+    contact_2: Vec<f64>,
+    normal_1: Vec<f64>,
+    normal_2: Vec<f64>,
+    center_of_mass: Vec<f64>,
+    grasp_orientation: Vec<f64>,
+}
+
+fn point(out: &mut Vec<f64>, p: &Point) {
+    out.extend_from_slice(&[p.x, p.y, p.z]);
+}
+
+fn vector(out: &mut Vec<f64>, v: &Vector3) {
+    out.extend_from_slice(&[v.x, v.y, v.z]);
+}
+
+fn quaternion(out: &mut Vec<f64>, q: &Quaternion) {
+    out.extend_from_slice(&[q.x, q.y, q.z, q.w]);
+}
+
+impl Columns {
+    /// Room for `rows` rows.
+    pub(crate) fn with_capacity(rows: usize) -> Self {
+        Columns {
+            status: Vec::with_capacity(rows),
+            message: Vec::with_capacity(rows),
+            wrist_rotation: Vec::with_capacity(rows),
+            rotation: Vec::with_capacity(4 * rows),
+            rotation_axis: Vec::with_capacity(3 * rows),
+            gravity_direction: Vec::with_capacity(3 * rows),
+            gravity_angle: Vec::with_capacity(rows),
+            gripping_power: Vec::with_capacity(rows),
+            gripping_power_nominal: Vec::with_capacity(rows),
+            internal_force: Vec::with_capacity(rows),
+            finger_force: Vec::with_capacity(rows),
+            contact_forces: Vec::with_capacity(4 * rows),
+            gripping_power_current: Vec::with_capacity(rows),
+            internal_force_current: Vec::with_capacity(rows),
+            finger_force_current: Vec::with_capacity(rows),
+            candidate_c: Vec::with_capacity(rows),
+            grasp_case: Vec::with_capacity(rows),
+            recommended_label: Vec::with_capacity(rows),
+            objective: Vec::with_capacity(rows),
+            geometry: Geometry::default(),
+        }
+    }
+
+    /// Rows so far.
+    pub(crate) fn len(&self) -> usize {
+        self.status.len()
+    }
+
+    /// One answer; `message` is its message as the caller reports it (the row named).
+    pub(crate) fn push(&mut self, r: &GripRecommendation, message: CompactString) {
+        self.status.push(r.status);
+        self.message.push(message);
+        self.wrist_rotation.push(r.wrist_rotation);
+        quaternion(&mut self.rotation, &r.rotation);
+        vector(&mut self.rotation_axis, &r.rotation_axis);
+        vector(&mut self.gravity_direction, &r.gravity_direction);
+        self.gravity_angle.push(r.gravity_angle);
+        self.gripping_power.push(r.gripping_power);
+        self.gripping_power_nominal.push(r.gripping_power_nominal);
+        self.internal_force.push(r.internal_force);
+        self.finger_force.push(r.finger_force);
+        self.contact_forces.extend_from_slice(&r.contact_forces);
+        self.gripping_power_current.push(r.gripping_power_current);
+        self.internal_force_current.push(r.internal_force_current);
+        self.finger_force_current.push(r.finger_force_current);
+        self.candidate_c.push(r.candidate_c);
+        self.grasp_case.push(r.grasp_case.clone());
+        self.recommended_label.push(r.recommended_label.clone());
+        self.objective.push(r.objective.clone());
+    }
+
+    /// One pose's answer, and the quaternion `orientation` its pose's rotation became.
+    pub(crate) fn push_pose(
+        &mut self,
+        p: &PoseRecommendation,
+        message: CompactString,
+        orientation: &Quaternion,
+    ) {
+        self.push(&p.recommendation, message);
+        let g = &mut self.geometry;
+        point(&mut g.contact_1, &p.contact_1);
+        point(&mut g.contact_2, &p.contact_2);
+        vector(&mut g.normal_1, &p.normal_1);
+        vector(&mut g.normal_2, &p.normal_2);
+        point(&mut g.center_of_mass, &p.center_of_mass);
+        quaternion(&mut g.grasp_orientation, orientation);
+    }
+
+    /// `other`'s rows after these.
+    pub(crate) fn append(&mut self, mut other: Columns) {
+        macro_rules! each {
+            ($($field:ident).+) => {
+                self.$($field).+.append(&mut other.$($field).+);
+            };
+        }
+        each!(status);
+        each!(message);
+        each!(wrist_rotation);
+        each!(rotation);
+        each!(rotation_axis);
+        each!(gravity_direction);
+        each!(gravity_angle);
+        each!(gripping_power);
+        each!(gripping_power_nominal);
+        each!(internal_force);
+        each!(finger_force);
+        each!(contact_forces);
+        each!(gripping_power_current);
+        each!(internal_force_current);
+        each!(finger_force_current);
+        each!(candidate_c);
+        each!(grasp_case);
+        each!(recommended_label);
+        each!(objective);
+        each!(geometry.contact_1);
+        each!(geometry.contact_2);
+        each!(geometry.normal_1);
+        each!(geometry.normal_2);
+        each!(geometry.center_of_mass);
+        each!(geometry.grasp_orientation);
+    }
+
+    /// The columns as a dict of numpy arrays and lists of str, the pose fields only when
+    /// `poses`.
+    pub(crate) fn into_dict(self, py: Python<'_>, poses: bool) -> PyResult<Bound<'_, PyDict>> {
+        let n = self.len();
+        let d = PyDict::new(py);
+        d.set_item("status", PyArray1::from_vec(py, self.status))?;
+        d.set_item("message", texts(py, &self.message)?)?;
+        d.set_item(
+            "wrist_rotation",
+            PyArray1::from_vec(py, self.wrist_rotation),
+        )?;
+        d.set_item("rotation", rows(py, self.rotation, n, 4)?)?;
+        d.set_item("rotation_axis", rows(py, self.rotation_axis, n, 3)?)?;
+        d.set_item("gravity_direction", rows(py, self.gravity_direction, n, 3)?)?;
+        d.set_item("gravity_angle", PyArray1::from_vec(py, self.gravity_angle))?;
+        d.set_item(
+            "gripping_power",
+            PyArray1::from_vec(py, self.gripping_power),
+        )?;
+        d.set_item(
+            "gripping_power_nominal",
+            PyArray1::from_vec(py, self.gripping_power_nominal),
+        )?;
+        d.set_item(
+            "internal_force",
+            PyArray1::from_vec(py, self.internal_force),
+        )?;
+        d.set_item("finger_force", PyArray1::from_vec(py, self.finger_force))?;
+        d.set_item("contact_forces", rows(py, self.contact_forces, n, 4)?)?;
+        d.set_item(
+            "gripping_power_current",
+            PyArray1::from_vec(py, self.gripping_power_current),
+        )?;
+        d.set_item(
+            "internal_force_current",
+            PyArray1::from_vec(py, self.internal_force_current),
+        )?;
+        d.set_item(
+            "finger_force_current",
+            PyArray1::from_vec(py, self.finger_force_current),
+        )?;
+        d.set_item("candidate_c", PyArray1::from_vec(py, self.candidate_c))?;
+        d.set_item("grasp_case", texts(py, &self.grasp_case)?)?;
+        d.set_item("recommended_label", texts(py, &self.recommended_label)?)?;
+        d.set_item("objective", texts(py, &self.objective)?)?;
+        if poses {
+            let g = self.geometry;
+            d.set_item("contact_1", rows(py, g.contact_1, n, 3)?)?;
+            d.set_item("contact_2", rows(py, g.contact_2, n, 3)?)?;
+            d.set_item("normal_1", rows(py, g.normal_1, n, 3)?)?;
+            d.set_item("normal_2", rows(py, g.normal_2, n, 3)?)?;
+            d.set_item("center_of_mass", rows(py, g.center_of_mass, n, 3)?)?;
+            d.set_item("grasp_orientation", rows(py, g.grasp_orientation, n, 4)?)?;
+        }
+        Ok(d)
+    }
+}
+
+/// `values` as an `(n, k)` array.
+fn rows(py: Python<'_>, values: Vec<f64>, n: usize, k: usize) -> PyResult<Bound<'_, PyAny>> {
+    Ok(PyArray1::from_vec(py, values).reshape([n, k])?.into_any())
+}
+
+/// A list of str; equal texts share one str object (most rows' messages are empty, and the
+/// labels take a few values), so a million rows do not make a million strings. A text equal to
+/// the row before's takes its object without a look-up.
+fn texts<'py>(py: Python<'py>, values: &[CompactString]) -> PyResult<Bound<'py, PyList>> {
+    let mut seen: HashMap<&str, Bound<'py, PyString>> = HashMap::new();
+    let mut items: Vec<Bound<'py, PyString>> = Vec::with_capacity(values.len());
+    let mut previous: Option<(&str, Bound<'py, PyString>)> = None;
+    for v in values {
+        let s = match &previous {
+            Some((text, object)) if *text == v.as_str() => object.clone(),
+            _ => {
+                let object = seen
+                    .entry(v.as_str())
+                    .or_insert_with(|| PyString::new(py, v))
+                    .clone();
+                previous = Some((v.as_str(), object.clone()));
+                object
+            }
+        };
+        items.push(s);
+    }
+    PyList::new(py, items)
+}
