@@ -417,33 +417,36 @@ type Push = fn(&ChannelReader, &[u8], &mut Streams, (u64, u64)) -> Result<(), cd
 
 /// [`Push`] of each channel, by [`kind::Channel::slot`].
 static PUSH: std::sync::LazyLock<[Push; kind::Channel::COUNT]> = std::sync::LazyLock::new(|| {
-    fn request<K: Kind>(
+    /// Decodes `bytes` onto the end of `list`, with the message's times.
+    fn decode_onto<M: serde::de::DeserializeOwned>(
         r: &ChannelReader,
         bytes: &[u8],
-        streams: &mut Streams,
+        list: &mut Vec<Recorded<M>>,
         (log_time, publish_time): (u64, u64),
     ) -> Result<(), cdr::CdrError> {
         let message = r.decode(bytes)?;
-        K::stream_mut(streams).requests.push(Recorded {
+        list.push(Recorded {
             message,
             log_time,
             publish_time,
         });
         Ok(())
     }
+    fn request<K: Kind>(
+        r: &ChannelReader,
+        bytes: &[u8],
+        streams: &mut Streams,
+        times: (u64, u64),
+    ) -> Result<(), cdr::CdrError> {
+        decode_onto(r, bytes, &mut K::stream_mut(streams).requests, times)
+    }
     fn answer<K: Kind>(
         r: &ChannelReader,
         bytes: &[u8],
         streams: &mut Streams,
-        (log_time, publish_time): (u64, u64),
+        times: (u64, u64),
     ) -> Result<(), cdr::CdrError> {
-        let message = r.decode(bytes)?;
-        K::stream_mut(streams).answers.push(Recorded {
-            message,
-            log_time,
-            publish_time,
-        });
-        Ok(())
+        decode_onto(r, bytes, &mut K::stream_mut(streams).answers, times)
     }
     struct Table([Push; kind::Channel::COUNT]);
     impl Visit for Table {
