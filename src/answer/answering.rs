@@ -9,7 +9,6 @@ use super::{
     answer_one, answer_one_in_full, answer_set, answer_set_within, Answered, Interrupt,
     PoseAnswerer, Refused, Rules,
 };
-use crate::config::{Config, ConfigError};
 use crate::geometry::ClosingAxis;
 use crate::geometry::Object;
 use crate::kind::{Candidates, Kind, PoseSets, Poses, Sets};
@@ -45,11 +44,6 @@ impl Answering {
             Rules::default(),
             PoseAnswerer::from_env(ClosingAxis::default()),
         )
-    }
-
-    /// What `config` says (its settings are checked here), pose candidates by `poses`.
-    pub fn from_config(config: &Config, poses: PoseAnswerer) -> Result<Self, ConfigError> {
-        Ok(Self::new(config.solver_settings()?, config.rules(), poses))
     }
 
     /// The solver's settings.
