@@ -8,8 +8,8 @@
 use super::pose::{pose_set_without_geometry, uncast};
 use super::sets::{busy, echo_set, SetAnswer};
 use super::{
-    answer_one, answer_one_in_full, answer_set, answer_set_within, Answered, Interrupt,
-    PoseAnswerer, Rules,
+    answer_one, answer_one_in_full, answer_set, answer_set_on, answer_set_within, Answered,
+    Interrupt, PoseAnswerer, Rules,
 };
 use crate::geometry::ClosingAxis;
 use crate::geometry::Object;
@@ -71,7 +71,7 @@ impl Answering {
     }
 
     /// The same, with `rules`.
-    pub fn with_rules(&self, rules: Rules) -> Self {
+    pub(crate) fn with_rules(&self, rules: Rules) -> Self {
         Self {
             rules,
             ..self.clone()
@@ -97,9 +97,21 @@ impl Answering {
             .answer_with_object(m, &self.settings, &self.rules)
     }
 
+    /// A set's answer with its candidates shared among the threads of `pool` (the calling
+    /// thread among them) when there is one, and sets smaller than a few hundred candidates
+    /// answered on the calling thread whatever the pool: the same answer as
+    /// [`Answering::answer`]'s.
+    pub fn set_on(
+        &self,
+        set: &GraspCandidateSet,
+        pool: Option<&rayon::ThreadPool>,
+    ) -> GripRecommendationSet {
+        answer_set_on(set, &self.settings, &self.rules, pool)
+    }
+
     /// A set's answer on `pool`, stopped between two candidates once `interrupt` is raised
     /// (`max_set_time`, s, is the budget its message names): [`answer_set_within`].
-    pub(crate) fn set_within(
+    pub fn set_within(
         &self,
         set: &GraspCandidateSet,
         pool: Option<&rayon::ThreadPool>,
@@ -118,14 +130,16 @@ impl Answering {
 }
 
 /// Something done once for every kind, knowing how it is answered ([`each`]).
-pub trait VisitAnswer {
+#[cfg(test)]
+pub(crate) trait VisitAnswer {
     /// Done for kind `K`.
     fn kind<K: Answer>(&mut self);
 }
 
 /// Calls `visit` for every kind, in [`Kind::INDEX`] order, as [`crate::kind::each`] does, where
 /// what is done needs the answer (a test holds the two lists to the same kinds).
-pub fn each(visit: &mut impl VisitAnswer) {
+#[cfg(test)]
+pub(crate) fn each(visit: &mut impl VisitAnswer) {
     visit.kind::<Candidates>();
     visit.kind::<Sets>();
     visit.kind::<Poses>();

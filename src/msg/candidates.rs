@@ -2,7 +2,7 @@
 //! `msg/GraspCandidateSet.msg`, `msg/GripRecommendationSet.msg`) and the service
 //! `srv/Recommend.srv` that answers a set.
 
-use super::{CompactString, Header, Point, Quaternion, RosMessage, RosType, Vector3};
+use super::{CompactString, Header, Point, Quaternion, RosFields, RosMessage, RosType, Vector3};
 use serde::{Deserialize, Serialize};
 
 ros_message! {
@@ -186,16 +186,16 @@ pub struct RecommendResponse {
 impl ros2_client::Message for RecommendRequest {}
 impl ros2_client::Message for RecommendResponse {}
 
-impl RecommendRequest {
+impl RosFields for RecommendRequest {
     /// `(name, ROS type)` of each field, as in `srv/Recommend.srv` above `---`.
-    pub fn fields() -> Vec<(&'static str, String)> {
+    fn fields() -> Vec<(&'static str, String)> {
         vec![("candidate_set", GraspCandidateSet::ros_type())]
     }
 }
 
-impl RecommendResponse {
+impl RosFields for RecommendResponse {
     /// `(name, ROS type)` of each field, as in `srv/Recommend.srv` below `---`.
-    pub fn fields() -> Vec<(&'static str, String)> {
+    fn fields() -> Vec<(&'static str, String)> {
         vec![("recommendation_set", GripRecommendationSet::ros_type())]
     }
 }

@@ -12,7 +12,8 @@ pub(crate) mod convert;
 pub mod definitions;
 pub(crate) mod schema;
 
-pub use contract::{message_type_name, RosMessage, RosType};
+pub(crate) use contract::message_type_name;
+pub use contract::{RosFields, RosMessage, RosType};
 pub use convert::MessageLimits;
 pub(crate) use convert::{clip, invalid, short_id, MAX_TEXT_BYTES};
 

@@ -8,7 +8,9 @@
 //! leaves out shape_msgs' `polygon` (for `PRISM`, which is refused) and writes `dimensions`
 //! unbounded (shape_msgs: `float64[<=3]`).
 
-use super::{CompactString, GripRecommendation, Header, Point, Pose, RosMessage, RosType, Vector3};
+use super::{
+    CompactString, GripRecommendation, Header, Point, Pose, RosFields, RosMessage, RosType, Vector3,
+};
 use serde::{Deserialize, Serialize};
 
 ros_message! {
@@ -206,16 +208,16 @@ pub struct RecommendPosesResponse {
 impl ros2_client::Message for RecommendPosesRequest {}
 impl ros2_client::Message for RecommendPosesResponse {}
 
-impl RecommendPosesRequest {
+impl RosFields for RecommendPosesRequest {
     /// `(name, ROS type)` of each field, as in `srv/RecommendPoses.srv` above `---`.
-    pub fn fields() -> Vec<(&'static str, String)> {
+    fn fields() -> Vec<(&'static str, String)> {
         vec![("pose_set", PoseCandidateSet::ros_type())]
     }
 }
 
-impl RecommendPosesResponse {
+impl RosFields for RecommendPosesResponse {
     /// `(name, ROS type)` of each field, as in `srv/RecommendPoses.srv` below `---`.
-    pub fn fields() -> Vec<(&'static str, String)> {
+    fn fields() -> Vec<(&'static str, String)> {
         vec![("recommendation_set", PoseRecommendationSet::ros_type())]
     }
 }

@@ -78,10 +78,10 @@ const TOPICS: [&str; 9] = [
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct Options {
     /// Send the paper's four case studies from a second participant, print the answers, exit.
-    pub demo: bool,
+    pub(crate) demo: bool,
     /// Benchmark floor: answer every candidate with an empty recommendation (same header and
     /// id) without solving.
-    pub echo: bool,
+    pub(crate) echo: bool,
 }
 
 /// Reads the settings: the built-in defaults, then each `--params-file`, then each `-p`.

@@ -266,11 +266,11 @@ impl SetReply {
 #[derive(Debug)]
 pub(crate) struct SetOutcome {
     /// The answer to the set.
-    pub reply: SetReply,
+    pub(crate) reply: SetReply,
     /// The markers of the best candidate, when they are on and one can be held.
-    pub markers: Option<MarkerArray>,
+    pub(crate) markers: Option<MarkerArray>,
     /// What goes to the recording once the answer is out.
-    pub recorded: RecordedSet,
+    pub(crate) recorded: RecordedSet,
 }
 
 /// The messages of one set's answer for the recording, with the set's times.

@@ -38,34 +38,34 @@ use std::time::{Duration, Instant};
 #[derive(Debug)]
 pub(crate) struct SetJob {
     /// The set.
-    pub set: SetInput,
+    pub(crate) set: SetInput,
     /// When it was received and sent, ns since the epoch (its settings are those in force when
     /// it was received).
-    pub received: u64,
+    pub(crate) received: u64,
     /// When it was sent.
-    pub sent: u64,
+    pub(crate) sent: u64,
     /// Where the answer goes.
-    pub via: Via,
+    pub(crate) via: Via,
     /// Whether the recording was on when the set was taken: its answer is then cloned for it.
-    pub record: bool,
+    pub(crate) record: bool,
     /// Whether the recording takes markers.
-    pub record_markers: bool,
+    pub(crate) record_markers: bool,
     /// Whether `grip_markers` had a subscriber when the set was taken: the best candidate is
     /// drawn only for it or for the recording.
-    pub audience: bool,
+    pub(crate) audience: bool,
 }
 
 /// A set's answer, back from the set thread.
 #[derive(Debug)]
 pub(crate) struct SetDone {
     /// Where the answer goes.
-    pub via: Via,
+    pub(crate) via: Via,
     /// The answer, its markers and what to record.
-    pub outcome: SetOutcome,
+    pub(crate) outcome: SetOutcome,
     /// From the node's thread handing the set over to the set thread starting it.
-    pub waited: Duration,
+    pub(crate) waited: Duration,
     /// The solving, the ranking, the best candidate's markers and the recording's copy.
-    pub took: Duration,
+    pub(crate) took: Duration,
 }
 
 /// The set thread, its queue and its clock.
@@ -73,7 +73,7 @@ pub(crate) struct SetDone {
 pub(crate) struct SetWorker {
     jobs: Option<mpsc::Sender<(SetJob, Instant)>>,
     /// The answers, as they are ready.
-    pub done: UnboundedReceiver<SetDone>,
+    pub(crate) done: UnboundedReceiver<SetDone>,
     /// Sets handed over and not yet answered, the one being solved among them.
     in_hand: Arc<AtomicUsize>,
     interrupt: Arc<Interrupt>,

@@ -90,7 +90,7 @@ impl PoseAnswerer {
     }
 
     /// The answer to one pose candidate under `rules`.
-    pub fn answer(
+    pub(crate) fn answer(
         &self,
         m: &PoseCandidate,
         settings: &Settings,
@@ -154,7 +154,7 @@ impl PoseAnswerer {
 
     /// The answer to a set: its object's shape once, each pose answered against it, ranked as a
     /// [`GraspCandidateSet`] is.
-    pub fn answer_set(
+    pub(crate) fn answer_set(
         &self,
         set: &PoseCandidateSet,
         settings: &Settings,
