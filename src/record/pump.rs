@@ -440,9 +440,9 @@ mod tests {
         }
         std::thread::sleep(RESCUE_EVERY * 3);
         assert_eq!(taken(&w), 0, "taken within the bound");
-        for i in 5..50 {
-            assert!(w.hand_over(vec![candidate(i)]));
-        }
+        // In one hand-over: handed one by one, a rescue between two of them could leave the
+        // last few within the bound, and the count below would depend on the scheduler.
+        assert!(w.hand_over((5..50).map(candidate).collect()));
         assert!(wait_until(|| taken(&w) == 50), "not rescued: {}", taken(&w));
         for i in 50..55 {
             assert!(w.hand_over(vec![candidate(i)]));
