@@ -53,6 +53,7 @@ mod settings;
 mod sinusoid;
 pub mod spatial;
 pub mod table_1;
+mod trig;
 
 /// The README's example runs as a doctest.
 #[cfg(doctest)]

@@ -19,6 +19,7 @@ use super::finger;
 use super::frame::GraspFrame;
 use super::paper::{self, FORCE_SCALE};
 use crate::sinusoid::{next_periodic, rising_zeros, wrap_angle, Angle, QuadForm, Sinusoid};
+use crate::trig::Trig;
 use crate::{AllowedRange, InvalidInput, Objective};
 use smallvec::{smallvec, SmallVec};
 use std::f64::consts::TAU;
@@ -54,12 +55,12 @@ struct Segment {
 }
 
 impl Segment {
-    fn new(lo: Angle, hi: Angle, shape: Curve) -> Self {
+    fn new(lo: Angle, hi: Angle, shape: Curve, trig: Trig) -> Self {
         let mut found = AtMostTwo::default();
-        shape.minima_between(lo.theta, hi.theta, &mut found);
+        shape.minima_between_with(lo.theta, hi.theta, &mut found, trig);
         let mut minima = [lo; 2];
         for (m, &t) in minima.iter_mut().zip(&found.values[..found.len]) {
-            *m = Angle::new(t);
+            *m = Angle::with(t, trig);
         }
         Self {
             lo,
@@ -125,6 +126,8 @@ pub struct Analysis {
     /// through `α_4` (eqs. 36, 42, 39 up to 2π; see `paper::candidate_angles`).
     crossings: [Option<f64>; 3],
     segments: Vec<Segment>,
+    /// Where the sines, cosines and arctangents come from (`trig.rs`).
+    trig: Trig,
 }
 
 /// The storage of an analysis's pieces, handed from one analysis to the next (a batch's).
@@ -134,14 +137,16 @@ pub(crate) struct Pieces(Vec<Segment>);
 impl Analysis {
     /// Checks force closure and builds the objective over the graspable range.
     pub(crate) fn new(frame: &GraspFrame, objective: Objective) -> Result<Self, NoForceClosure> {
-        Self::reusing(frame, objective, Pieces::default())
+        Self::reusing(frame, objective, Pieces::default(), Trig::Libm)
     }
 
-    /// [`Analysis::new`], its pieces stored in `pieces` (emptied first): the same arithmetic.
+    /// [`Analysis::new`], its pieces stored in `pieces` (emptied first), its sines, cosines and
+    /// arctangents from `trig`: with [`Trig::Libm`] the same arithmetic.
     pub(crate) fn reusing(
         frame: &GraspFrame,
         objective: Objective,
         Pieces(mut segments): Pieces,
+        trig: Trig,
     ) -> Result<Self, NoForceClosure> {
         let misses = paper::closure_misses(frame);
         if misses.iter().any(Option::is_some) {
@@ -164,7 +169,7 @@ impl Analysis {
         // slower path for blocks over 1 kB on every grasp. (Storage handed on keeps its room.)
         segments.clear();
         segments.reserve_exact(4);
-        let (graspable, from_above) = paper::ranges(frame);
+        let (graspable, from_above) = paper::ranges_with(frame, trig);
         let mut analysis = Self {
             frame: *frame,
             objective,
@@ -175,6 +180,7 @@ impl Analysis {
             from_above,
             crossings: [None; 3],
             segments,
+            trig,
         };
         analysis.build_segments();
         Ok(analysis)
@@ -253,7 +259,7 @@ impl Analysis {
         // funcs = [α3, α4, α5, α6, 0]: B, C, D are where α3 rises through α6, α4 through α3,
         // α5 through α4.
         self.crossings = [rise[3][0], rise[0][1], rise[1][2]];
-        let mut t = Angle::new(lo);
+        let mut t = Angle::with(lo, self.trig);
         let mut active = top_at(funcs, &t, tol);
         // Each step moves to a crossing of the active bound; there are at most two crossings per
         // pair in a range shorter than 2π, so this bound is never reached on real input.
@@ -263,7 +269,7 @@ impl Analysis {
                 .flatten()
                 .map(|&r| next_periodic(r, TAU, t.theta))
                 .fold(f64::INFINITY, f64::min);
-            let end = Angle::new(next.min(hi));
+            let end = Angle::with(next.min(hi), self.trig);
             if end.theta > t.theta {
                 self.push_piece(t, end, &funcs[active]);
             }
@@ -286,28 +292,35 @@ impl Analysis {
                     lo,
                     hi,
                     Curve::Quad(QuadForm::sum_of_squares(&terms)),
+                    self.trig,
                 ));
             }
-            Objective::InternalForce => self.segments.push(Segment::new(lo, hi, Curve::Sin(*f))),
+            Objective::InternalForce => {
+                let segment = Segment::new(lo, hi, Curve::Sin(*f), self.trig);
+                self.segments.push(segment);
+            }
             Objective::Norm1 => {
                 // Breakpoints inside the piece: where a friction force at α = f changes sign,
                 // and where the two friction zeros cross (r1 = r2 ⇔ c2 T_F1 - c1 T_F2 = 0).
                 let (l, h) = (lo.theta, hi.theta);
                 let mut cuts = Vec::with_capacity(8);
-                t[1].plus_scaled(w[1], f).zeros_between(l, h, &mut cuts);
-                t[3].plus_scaled(w[3], f).zeros_between(l, h, &mut cuts);
+                let trig = self.trig;
+                t[1].plus_scaled(w[1], f)
+                    .zeros_between_with(l, h, &mut cuts, trig);
+                t[3].plus_scaled(w[3], f)
+                    .zeros_between_with(l, h, &mut cuts, trig);
                 if w[1] != 0.0 && w[3] != 0.0 {
                     t[1].scaled(w[3])
                         .minus(&t[3].scaled(w[1]))
-                        .zeros_between(l, h, &mut cuts);
+                        .zeros_between_with(l, h, &mut cuts, trig);
                 }
                 cuts.sort_by(f64::total_cmp);
-                let inner = cuts.iter().map(|&c| Angle::new(c));
+                let inner = cuts.iter().map(|&c| Angle::with(c, trig));
                 let mut a = lo;
                 for b in inner.chain(std::iter::once(hi)) {
                     if b.theta > a.theta {
                         let shape = Curve::Sin(self.norm1_piece(f, 0.5 * (a.theta + b.theta)));
-                        self.segments.push(Segment::new(a, b, shape));
+                        self.segments.push(Segment::new(a, b, shape, trig));
                         a = b;
                     }
                 }
@@ -347,7 +360,7 @@ impl Analysis {
 
     /// The 1-norm as one sinusoid on a stretch where signs and choices do not change.
     fn norm1_piece(&self, f: &Sinusoid, mid: f64) -> Sinusoid {
-        let at = Angle::new(mid);
+        let at = Angle::with(mid, self.trig);
         let (_, alpha) = self.norm1_alpha(f, &at);
         (0..4).fold(Sinusoid::ZERO, |acc, i| {
             let term = self.particular[i].plus_scaled(self.internal[i], &alpha);
@@ -553,7 +566,7 @@ impl Analysis {
             if theta.to_bits() == end.theta.to_bits() {
                 *end
             } else {
-                Angle::new(theta)
+                Angle::with(theta, self.trig)
             }
         };
         for seg in &self.segments {
@@ -567,7 +580,7 @@ impl Analysis {
                 let plateau = seg
                     .shape
                     .is_constant()
-                    .then(|| Angle::new(current.clamp(lo, hi)));
+                    .then(|| Angle::with(current.clamp(lo, hi), self.trig));
                 for at in [lo_at, hi_at]
                     .into_iter()
                     .chain(inside.copied())
@@ -579,7 +592,7 @@ impl Analysis {
             }
         }
         // The allowed intervals lie inside the graspable range, which the segments cover.
-        let (at, _) = best.unwrap_or_else(|| (Angle::new(allowed[0].0), f64::NAN));
+        let (at, _) = best.unwrap_or_else(|| (Angle::with(allowed[0].0, self.trig), f64::NAN));
         Ok(self.report(&at, current, &allowed))
     }
 
@@ -588,7 +601,7 @@ impl Analysis {
         let f = &self.frame;
         let theta = best.theta;
         let at_best = self.evaluate_at(best);
-        let at_current = self.evaluate(current);
+        let at_current = self.evaluate_at(&Angle::with(current, self.trig));
         let labels = self.labelled_angles();
         let minima = self.local_minima(&labels);
         let recommended_label = self.label_of(&labels, theta);
