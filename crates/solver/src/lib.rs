@@ -53,7 +53,6 @@ mod settings;
 mod sinusoid;
 pub mod spatial;
 pub mod table_1;
-mod trig;
 
 /// The README's example runs as a doctest.
 #[cfg(doctest)]

@@ -4,7 +4,6 @@
 //! Their zeros, crossings and stationary points are closed forms (`atan2`), which is what makes
 //! the solver exact: no grid, no iteration.
 
-use crate::trig::Trig;
 use std::f64::consts::{PI, TAU};
 
 /// `sin θ` and `cos θ` of one angle, computed once and shared by every evaluation at it.
@@ -21,13 +20,7 @@ pub struct Angle {
 impl Angle {
     /// The angle `theta` with its sine and cosine.
     pub fn new(theta: f64) -> Self {
-        Self::with(theta, Trig::Libm)
-    }
-
-    /// [`Angle::new`], its sine and cosine from `trig`.
-    #[inline]
-    pub(crate) fn with(theta: f64, trig: Trig) -> Self {
-        let (sin, cos) = trig.sin_cos(theta);
+        let (sin, cos) = theta.sin_cos();
         Self { theta, sin, cos }
     }
 }
@@ -90,23 +83,17 @@ impl Sinusoid {
     ///
     /// Returns `None` for the zero function.
     pub fn rising_zero(&self) -> Option<f64> {
-        self.rising_zero_with(Trig::Libm)
-    }
-
-    /// [`Sinusoid::rising_zero`], its `atan2` from `trig`.
-    pub(crate) fn rising_zero_with(&self, trig: Trig) -> Option<f64> {
         if self.is_zero() {
             None
         } else {
-            Some(-trig.atan2(self.b, self.a))
+            Some(-self.b.atan2(self.a))
         }
     }
 
     /// Every zero (rising or falling) strictly inside `(lo, hi)`, in increasing order, appended to
     /// `out`.
-    /// Its `atan2` from `trig`.
-    pub(crate) fn zeros_between_with(&self, lo: f64, hi: f64, out: &mut Vec<f64>, trig: Trig) {
-        if let Some(t0) = self.rising_zero_with(trig) {
+    pub fn zeros_between(&self, lo: f64, hi: f64, out: &mut Vec<f64>) {
+        if let Some(t0) = self.rising_zero() {
             // Zeros repeat every π.
             let mut t = next_periodic(t0, PI, lo);
             while t < hi {
@@ -121,18 +108,7 @@ impl Sinusoid {
     /// # Formula
     /// `R sin(θ + γ)` is least at `θ + γ = -π/2 (mod 2π)`.
     pub fn minima_between(&self, lo: f64, hi: f64, out: &mut impl Extend<f64>) {
-        self.minima_between_with(lo, hi, out, Trig::Libm);
-    }
-
-    /// [`Sinusoid::minima_between`], its `atan2` from `trig`.
-    pub(crate) fn minima_between_with(
-        &self,
-        lo: f64,
-        hi: f64,
-        out: &mut impl Extend<f64>,
-        trig: Trig,
-    ) {
-        if let Some(t0) = self.rising_zero_with(trig) {
+        if let Some(t0) = self.rising_zero() {
             let mut t = next_periodic(t0 - 0.5 * PI, TAU, lo);
             while t < hi {
                 out.extend([t]);
@@ -239,21 +215,10 @@ impl QuadForm {
     /// `Q(θ) = (p+q)/2 + A cos 2θ + B sin 2θ` with `A = (q-p)/2`, `B = r/2`; it is least where
     /// `2θ = atan2(B, A) + π (mod 2π)`, so at `θ = (atan2(B, A) + π)/2 + kπ`.
     pub fn minima_between(&self, lo: f64, hi: f64, out: &mut impl Extend<f64>) {
-        self.minima_between_with(lo, hi, out, Trig::Libm);
-    }
-
-    /// [`QuadForm::minima_between`], its `atan2` from `trig`.
-    pub(crate) fn minima_between_with(
-        &self,
-        lo: f64,
-        hi: f64,
-        out: &mut impl Extend<f64>,
-        trig: Trig,
-    ) {
         if self.is_constant() {
             return;
         }
-        let t0 = 0.5 * (trig.atan2(0.5 * self.r, 0.5 * (self.q - self.p)) + PI);
+        let t0 = 0.5 * ((0.5 * self.r).atan2(0.5 * (self.q - self.p)) + PI);
         let mut t = next_periodic(t0, PI, lo);
         while t < hi {
             out.extend([t]);
@@ -378,7 +343,7 @@ mod tests {
     fn zeros_between_finds_both_zeros_per_turn() {
         let f = Sinusoid::new(1.0, 0.0); // sin θ
         let mut z = Vec::new();
-        f.zeros_between_with(-0.5, 2.0 * PI - 0.5, &mut z, Trig::Libm);
+        f.zeros_between(-0.5, 2.0 * PI - 0.5, &mut z);
         assert_eq!(z.len(), 2);
         assert_abs_diff_eq!(z[..], [0.0, PI][..], epsilon = 1e-15);
     }

@@ -4,7 +4,6 @@
 use crate::planar::analysis::{Analysis, Pieces};
 use crate::planar::frame::GraspFrame;
 use crate::planar::{Candidate, NoForceClosure, Recommendation};
-use crate::trig::Trig;
 use crate::{InvalidInput, Settings};
 
 /// What the batch answers for one planar grasp: what [`crate::planar::solve`] answers, with
@@ -14,13 +13,8 @@ pub type PlanarAnswer = Result<Result<Recommendation, NoForceClosure>, InvalidIn
 
 /// `planar::solve(c, settings)`, keeping the pieces' storage in `pieces` for the next grasp.
 pub(super) fn solve(c: &Candidate, settings: &Settings, pieces: &mut Pieces) -> PlanarAnswer {
-    let frame = GraspFrame::new_with(c, settings.friction_safety_factor, Trig::Inline)?;
-    match Analysis::reusing(
-        &frame,
-        settings.objective,
-        std::mem::take(pieces),
-        Trig::Inline,
-    ) {
+    let frame = GraspFrame::new(c, settings.friction_safety_factor)?;
+    match Analysis::reusing(&frame, settings.objective, std::mem::take(pieces)) {
         Ok(analysis) => {
             let r = analysis.recommend(&settings.range);
             *pieces = analysis.into_pieces();

@@ -19,7 +19,6 @@ use super::finger;
 use super::frame::GraspFrame;
 use super::paper::{self, FORCE_SCALE};
 use crate::sinusoid::{next_periodic, rising_zeros, wrap_angle, Angle, QuadForm, Sinusoid};
-use crate::trig::Trig;
 use crate::{AllowedRange, InvalidInput, Objective};
 use smallvec::{smallvec, SmallVec};
 use std::f64::consts::TAU;
@@ -55,12 +54,12 @@ struct Segment {
 }
 
 impl Segment {
-    fn new(lo: Angle, hi: Angle, shape: Curve, trig: Trig) -> Self {
+    fn new(lo: Angle, hi: Angle, shape: Curve) -> Self {
         let mut found = AtMostTwo::default();
-        shape.minima_between_with(lo.theta, hi.theta, &mut found, trig);
+        shape.minima_between(lo.theta, hi.theta, &mut found);
         let mut minima = [lo; 2];
         for (m, &t) in minima.iter_mut().zip(&found.values[..found.len]) {
-            *m = Angle::with(t, trig);
+            *m = Angle::new(t);
         }
         Self {
             lo,
@@ -126,8 +125,6 @@ pub struct Analysis {
     /// through `α_4` (eqs. 36, 42, 39 up to 2π; see `paper::candidate_angles`).
     crossings: [Option<f64>; 3],
     segments: Vec<Segment>,
-    /// Where the sines, cosines and arctangents come from (`trig.rs`).
-    trig: Trig,
 }
 
 /// The storage of an analysis's pieces, handed from one analysis to the next (a batch's).
@@ -137,16 +134,14 @@ pub(crate) struct Pieces(Vec<Segment>);
 impl Analysis {
     /// Checks force closure and builds the objective over the graspable range.
     pub(crate) fn new(frame: &GraspFrame, objective: Objective) -> Result<Self, NoForceClosure> {
-        Self::reusing(frame, objective, Pieces::default(), Trig::Libm)
+        Self::reusing(frame, objective, Pieces::default())
     }
 
-    /// [`Analysis::new`], its pieces stored in `pieces` (emptied first), its sines, cosines and
-    /// arctangents from `trig`: with [`Trig::Libm`] the same arithmetic.
+    /// [`Analysis::new`], its pieces stored in `pieces` (emptied first): the same arithmetic.
     pub(crate) fn reusing(
         frame: &GraspFrame,
         objective: Objective,
         Pieces(mut segments): Pieces,
-        trig: Trig,
     ) -> Result<Self, NoForceClosure> {
         let misses = paper::closure_misses(frame);
         if misses.iter().any(Option::is_some) {
@@ -169,7 +164,7 @@ impl Analysis {
         // slower path for blocks over 1 kB on every grasp. (Storage handed on keeps its room.)
         segments.clear();
         segments.reserve_exact(4);
-        let (graspable, from_above) = paper::ranges_with(frame, trig);
+        let (graspable, from_above) = paper::ranges(frame);
         let mut analysis = Self {
             frame: *frame,
             objective,
@@ -180,7 +175,6 @@ impl Analysis {
             from_above,
             crossings: [None; 3],
             segments,
-            trig,
         };
         analysis.build_segments();
         Ok(analysis)
@@ -259,7 +253,7 @@ impl Analysis {
         // funcs = [α3, α4, α5, α6, 0]: B, C, D are where α3 rises through α6, α4 through α3,
         // α5 through α4.
         self.crossings = [rise[3][0], rise[0][1], rise[1][2]];
-        let mut t = Angle::with(lo, self.trig);
+        let mut t = Angle::new(lo);
         let mut active = top_at(funcs, &t, tol);
         // Each step moves to a crossing of the active bound; there are at most two crossings per
         // pair in a range shorter than 2π, so this bound is never reached on real input.
@@ -269,7 +263,7 @@ impl Analysis {
                 .flatten()
                 .map(|&r| next_periodic(r, TAU, t.theta))
                 .fold(f64::INFINITY, f64::min);
-            let end = Angle::with(next.min(hi), self.trig);
+            let end = Angle::new(next.min(hi));
             if end.theta > t.theta {
                 self.push_piece(t, end, &funcs[active]);
             }
@@ -292,35 +286,28 @@ impl Analysis {
                     lo,
                     hi,
                     Curve::Quad(QuadForm::sum_of_squares(&terms)),
-                    self.trig,
                 ));
             }
-            Objective::InternalForce => {
-                let segment = Segment::new(lo, hi, Curve::Sin(*f), self.trig);
-                self.segments.push(segment);
-            }
+            Objective::InternalForce => self.segments.push(Segment::new(lo, hi, Curve::Sin(*f))),
             Objective::Norm1 => {
                 // Breakpoints inside the piece: where a friction force at α = f changes sign,
                 // and where the two friction zeros cross (r1 = r2 ⇔ c2 T_F1 - c1 T_F2 = 0).
                 let (l, h) = (lo.theta, hi.theta);
                 let mut cuts = Vec::with_capacity(8);
-                let trig = self.trig;
-                t[1].plus_scaled(w[1], f)
-                    .zeros_between_with(l, h, &mut cuts, trig);
-                t[3].plus_scaled(w[3], f)
-                    .zeros_between_with(l, h, &mut cuts, trig);
+                t[1].plus_scaled(w[1], f).zeros_between(l, h, &mut cuts);
+                t[3].plus_scaled(w[3], f).zeros_between(l, h, &mut cuts);
                 if w[1] != 0.0 && w[3] != 0.0 {
                     t[1].scaled(w[3])
                         .minus(&t[3].scaled(w[1]))
-                        .zeros_between_with(l, h, &mut cuts, trig);
+                        .zeros_between(l, h, &mut cuts);
                 }
                 cuts.sort_by(f64::total_cmp);
-                let inner = cuts.iter().map(|&c| Angle::with(c, trig));
+                let inner = cuts.iter().map(|&c| Angle::new(c));
                 let mut a = lo;
                 for b in inner.chain(std::iter::once(hi)) {
                     if b.theta > a.theta {
                         let shape = Curve::Sin(self.norm1_piece(f, 0.5 * (a.theta + b.theta)));
-                        self.segments.push(Segment::new(a, b, shape, trig));
+                        self.segments.push(Segment::new(a, b, shape));
                         a = b;
                     }
                 }
@@ -360,7 +347,7 @@ impl Analysis {
 
     /// The 1-norm as one sinusoid on a stretch where signs and choices do not change.
     fn norm1_piece(&self, f: &Sinusoid, mid: f64) -> Sinusoid {
-        let at = Angle::with(mid, self.trig);
+        let at = Angle::new(mid);
         let (_, alpha) = self.norm1_alpha(f, &at);
         (0..4).fold(Sinusoid::ZERO, |acc, i| {
             let term = self.particular[i].plus_scaled(self.internal[i], &alpha);
@@ -566,7 +553,7 @@ impl Analysis {
             if theta.to_bits() == end.theta.to_bits() {
                 *end
             } else {
-                Angle::with(theta, self.trig)
+                Angle::new(theta)
             }
         };
         for seg in &self.segments {
@@ -580,7 +567,7 @@ impl Analysis {
                 let plateau = seg
                     .shape
                     .is_constant()
-                    .then(|| Angle::with(current.clamp(lo, hi), self.trig));
+                    .then(|| Angle::new(current.clamp(lo, hi)));
                 for at in [lo_at, hi_at]
                     .into_iter()
                     .chain(inside.copied())
@@ -592,7 +579,7 @@ impl Analysis {
             }
         }
         // The allowed intervals lie inside the graspable range, which the segments cover.
-        let (at, _) = best.unwrap_or_else(|| (Angle::with(allowed[0].0, self.trig), f64::NAN));
+        let (at, _) = best.unwrap_or_else(|| (Angle::new(allowed[0].0), f64::NAN));
         Ok(self.report(&at, current, &allowed))
     }
 
@@ -601,7 +588,7 @@ impl Analysis {
         let f = &self.frame;
         let theta = best.theta;
         let at_best = self.evaluate_at(best);
-        let at_current = self.evaluate_at(&Angle::with(current, self.trig));
+        let at_current = self.evaluate(current);
         let labels = self.labelled_angles();
         let minima = self.local_minima(&labels);
         let recommended_label = self.label_of(&labels, theta);

@@ -9,7 +9,6 @@
 
 use super::answer::{LocalMinimum, PaperCandidate};
 use crate::sinusoid::{next_periodic, Angle, QuadForm, Sinusoid};
-use crate::trig::Trig;
 use std::f64::consts::{PI, TAU};
 
 /// Two local minima closer than this, rad, are one.
@@ -67,20 +66,9 @@ impl Curve {
 
     /// Stationary minima strictly inside `(lo, hi)`, appended to `out`.
     pub(crate) fn minima_between(&self, lo: f64, hi: f64, out: &mut impl Extend<f64>) {
-        self.minima_between_with(lo, hi, out, Trig::Libm);
-    }
-
-    /// [`Curve::minima_between`], its `atan2` from `trig`.
-    pub(crate) fn minima_between_with(
-        &self,
-        lo: f64,
-        hi: f64,
-        out: &mut impl Extend<f64>,
-        trig: Trig,
-    ) {
         match self {
-            Curve::Quad(q) => q.minima_between_with(lo, hi, out, trig),
-            Curve::Sin(s) => s.minima_between_with(lo, hi, out, trig),
+            Curve::Quad(q) => q.minima_between(lo, hi, out),
+            Curve::Sin(s) => s.minima_between(lo, hi, out),
         }
     }
 

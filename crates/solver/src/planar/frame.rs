@@ -8,7 +8,6 @@ use crate::limits::{
     MAX_COORDINATE, MAX_FRICTION, MAX_GRAVITY, MAX_MASS, MAX_NORMAL_COMPONENT, MAX_SAFETY_FACTOR,
     MIN_FRICTION, MIN_WEIGHT,
 };
-use crate::trig::Trig;
 use nalgebra::{SVector, Vector2};
 
 /// Contacts closer than this fraction of their distance to the centre of mass coincide.
@@ -313,31 +312,21 @@ pub(crate) fn friction(field: &'static str, v: f64) -> Result<f64, InvalidInput>
 impl GraspFrame {
     /// Validates `c` and maps it into the paper frame, dividing friction by `safety`.
     pub fn new(c: &Candidate, safety: f64) -> Result<Self, InvalidInput> {
-        Self::new_with(c, safety, Trig::Libm)
-    }
-
-    /// [`GraspFrame::new`], the current gravity angle's `atan2` from `trig`.
-    pub(crate) fn new_with(c: &Candidate, safety: f64, trig: Trig) -> Result<Self, InvalidInput> {
         if !(1.0..=MAX_SAFETY_FACTOR).contains(&safety) {
             return Err(InvalidInput::SafetyFactor { value: safety });
         }
         let measured = validate(c)?;
-        Ok(Self::from_measured(c, &measured, safety, trig))
+        Ok(Self::from_measured(c, &measured, safety))
     }
 
     /// The map of [`GraspFrame::new`] for a candidate [`validate`] accepts and a safety factor
     /// in `[1, MAX_SAFETY_FACTOR]`, without checking them again (the spatial reduction has checked the 3D input).
     pub(crate) fn from_valid(c: &Candidate, safety: f64) -> Self {
-        Self::from_valid_with(c, safety, Trig::Libm)
-    }
-
-    /// [`GraspFrame::from_valid`], the current gravity angle's `atan2` from `trig`.
-    pub(crate) fn from_valid_with(c: &Candidate, safety: f64, trig: Trig) -> Self {
-        Self::from_measured(c, &Measured::of_valid(c), safety, trig)
+        Self::from_measured(c, &Measured::of_valid(c), safety)
     }
 
     /// The map itself, from the measures of `c`.
-    fn from_measured(c: &Candidate, m: &Measured, safety: f64, trig: Trig) -> Self {
+    fn from_measured(c: &Candidate, m: &Measured, safety: f64) -> Self {
         let (mut p1, mut p2, mut n1, mut n2) = (c.contact_1, c.contact_2, m.n1, m.n2);
         let (mut mu1, mut mu2) = (c.friction_1 / safety, c.friction_2 / safety);
         let com = c.center_of_mass;
@@ -377,7 +366,7 @@ impl GraspFrame {
             mu1,
             mu2,
             friction_safety_factor: safety,
-            current_theta: trig.atan2(gp.x, -gp.y),
+            current_theta: gp.x.atan2(-gp.y),
             weight: m.weight,
             contact_distance: d,
             swapped,

@@ -15,7 +15,6 @@
 
 use super::frame::GraspFrame;
 use crate::sinusoid::Sinusoid;
-use crate::trig::Trig;
 
 /// `Mg / (2 (x1 + x2))` in units where `Mg = 1` and `x1 + x2 = 1`.
 pub const FORCE_SCALE: f64 = 0.5;
@@ -137,13 +136,8 @@ pub fn candidate_angles(f: &GraspFrame) -> CandidateAngles {
 /// straight below contact 1 or contact 2, at the graspable range's ends it stands straight above
 /// contact 2 or contact 1.
 pub fn ranges(f: &GraspFrame) -> ((f64, f64), (f64, f64)) {
-    ranges_with(f, Trig::Libm)
-}
-
-/// [`ranges`], its `atan2` from `trig`.
-pub(crate) fn ranges_with(f: &GraspFrame, trig: Trig) -> ((f64, f64), (f64, f64)) {
     use std::f64::consts::PI;
-    let (t1, t2) = (trig.atan2(f.x2, f.y), trig.atan2(f.x1, f.y));
+    let (t1, t2) = (f.x2.atan2(f.y), f.x1.atan2(f.y));
     ((-PI + t1, PI - t2), (-t2, t1))
 }
 

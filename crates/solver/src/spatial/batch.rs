@@ -8,7 +8,6 @@ use super::plane::{Basis, Geometry, PlaneSolve};
 use super::{on_axis, Candidate, NEAR_AXIS, ON_AXIS};
 use crate::planar::analysis::{Analysis, Pieces};
 use crate::planar::frame::GraspFrame;
-use crate::trig::Trig;
 use crate::{InvalidInput, Settings};
 
 /// What the batch answers for one spatial grasp: what [`super::solve`] answers, with `Ok(Ok(r))`
@@ -37,13 +36,8 @@ pub(crate) fn solve(c: &Candidate, settings: &Settings, pieces: &mut Pieces) -> 
         Err(Err(invalid)) => return Err(invalid),
     };
     // `plane.solve` (`planar_outcome` in `plane.rs`), with the pieces handed on.
-    let frame = GraspFrame::from_valid_with(&plane.candidate, 1.0, Trig::Inline);
-    let planar = match Analysis::reusing(
-        &frame,
-        settings.objective,
-        std::mem::take(pieces),
-        Trig::Inline,
-    ) {
+    let frame = GraspFrame::from_valid(&plane.candidate, 1.0);
+    let planar = match Analysis::reusing(&frame, settings.objective, std::mem::take(pieces)) {
         Ok(analysis) => {
             let r = analysis.recommend(&settings.range);
             *pieces = analysis.into_pieces();
