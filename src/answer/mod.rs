@@ -25,15 +25,17 @@ mod pose;
 mod reply;
 mod sets;
 
+pub(crate) use answering::SetKind;
 pub use answering::{each, Answer, Answering, VisitAnswer};
 pub use candidate::{answer, answer_in_full};
 pub(crate) use candidate::{Answered, BEHIND_TANGENT_NOTE};
-pub(crate) use pose::{pose_set_without_geometry, uncast, without_geometry, Refused};
+pub(crate) use pose::{uncast, without_geometry, Refused};
 pub use pose::{PoseAnswerer, MESH_CACHE_BYTES};
+pub(crate) use sets::SetAnswer;
 pub use sets::{
     answer_one, answer_set, answer_set_on, answer_set_within, busy, rank, solver_pool,
     DefaultTolerances, GripperDrive, Halt, Interrupt, RankBy, Rules,
 };
 pub(crate) use sets::{
-    answer_one_in_full, cut_like, echo_set, is_sorted_by, DEFAULT_MAX_SET_SIZE, PARALLEL_FROM,
+    answer_one_in_full, cut_like, is_sorted_by, DEFAULT_MAX_SET_SIZE, PARALLEL_FROM,
 };

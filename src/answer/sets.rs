@@ -635,6 +635,46 @@ pub(crate) fn is_sorted_by(
     }))
 }
 
+/// A set's answer, of any set kind, as the node counts, logs and refuses it.
+pub(crate) trait SetAnswer: Send + 'static {
+    /// The set's id.
+    fn set_id(&self) -> &CompactString;
+    /// The set's status.
+    fn status(&self) -> u8;
+    /// Why, when the status is not OK.
+    fn message(&self) -> &str;
+    /// The members' recommendations, in order.
+    fn members(&self) -> Vec<&GripRecommendation>;
+    /// How many members are ranked, and by which field.
+    fn ranked(&self) -> (usize, &str);
+    /// The set refused whole: status 2 (`STATUS_INVALID_INPUT`) saying `why`, no members.
+    fn refuse(&mut self, why: &str);
+}
+
+impl SetAnswer for GripRecommendationSet {
+    fn set_id(&self) -> &CompactString {
+        &self.set_id
+    }
+    fn status(&self) -> u8 {
+        self.status
+    }
+    fn message(&self) -> &str {
+        &self.message
+    }
+    fn members(&self) -> Vec<&GripRecommendation> {
+        self.recommendations.iter().collect()
+    }
+    fn ranked(&self) -> (usize, &str) {
+        (self.ranking.len(), &self.ranked_by)
+    }
+    fn refuse(&mut self, why: &str) {
+        self.status = GripRecommendationSet::STATUS_INVALID_INPUT;
+        self.message = why.into();
+        self.recommendations.clear();
+        self.ranking.clear();
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

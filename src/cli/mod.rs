@@ -134,7 +134,7 @@ impl SolveOptions {
     ) -> anyhow::Result<(Config, Answering)> {
         let config = self.config()?;
         let poses = PoseAnswerer::from_env(closing_axis.unwrap_or(config.closing_axis));
-        let with = Answering::from_config(&config, poses)?;
+        let with = config.answering(poses)?;
         Ok((config, with))
     }
 }

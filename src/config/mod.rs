@@ -17,7 +17,7 @@ pub(crate) use error::ValueError;
 pub use params::Config;
 pub(crate) use params::PARAMETERS;
 
-use crate::answer::Rules;
+use crate::answer::{Answering, PoseAnswerer, Rules};
 use crate::solver::Settings;
 use std::path::Path;
 
@@ -207,6 +207,12 @@ impl Config {
             );
         }
         out
+    }
+
+    /// The answering object of these parameters (their solver settings checked here), pose
+    /// candidates by `poses`.
+    pub fn answering(&self, poses: PoseAnswerer) -> Result<Answering, ConfigError> {
+        Ok(Answering::new(self.solver_settings()?, self.rules(), poses))
     }
 
     /// The gripper and set rules: `gripper_drive`, `max_grip_force`, `rank_by`, `max_set_size`,

@@ -186,3 +186,36 @@ ros_message! {
         message: CompactString,
     }
 }
+
+/// `srv/RecommendPoses.srv`, request: the pose set to answer.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecommendPosesRequest {
+    /// The set.
+    pub pose_set: PoseCandidateSet,
+}
+
+/// `srv/RecommendPoses.srv`, response: the pose set's answer.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecommendPosesResponse {
+    /// The answer, as on `pose_recommendation_sets`.
+    pub recommendation_set: PoseRecommendationSet,
+}
+
+impl ros2_client::Message for RecommendPosesRequest {}
+impl ros2_client::Message for RecommendPosesResponse {}
+
+impl RecommendPosesRequest {
+    /// `(name, ROS type)` of each field, as in `srv/RecommendPoses.srv` above `---`.
+    pub fn fields() -> Vec<(&'static str, String)> {
+        vec![("pose_set", PoseCandidateSet::ros_type())]
+    }
+}
+
+impl RecommendPosesResponse {
+    /// `(name, ROS type)` of each field, as in `srv/RecommendPoses.srv` below `---`.
+    pub fn fields() -> Vec<(&'static str, String)> {
+        vec![("recommendation_set", PoseRecommendationSet::ros_type())]
+    }
+}

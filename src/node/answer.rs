@@ -7,9 +7,7 @@
 
 use super::params::Shared;
 use super::params::Version;
-pub(crate) use super::pose_work::{
-    inline_mesh_too_large, load_time, PoseWork, INLINE_OFF_THREAD_TRIANGLES,
-};
+pub(crate) use super::pose_work::{load_time, PoseWork, INLINE_OFF_THREAD_TRIANGLES};
 pub(crate) use super::set_io::{RecordedSet, SetInput, SetOutcome, SetReply};
 use crate::answer::markers;
 use crate::answer::Answered;

@@ -26,6 +26,7 @@ mod checks;
 mod refusal;
 
 use super::reply::no_closure;
+use super::sets::SetAnswer;
 use super::{answer_one, answer_set, Rules};
 use crate::msg::{
     invalid, CompactString, GraspCandidate, GraspCandidateSet, GraspObject, GripRecommendation,
@@ -539,6 +540,33 @@ fn feature_note(name: &str, c: &Contact) -> Option<String> {
         "{name} lies on {feature} of the object: its normal is the pseudo-normal there \
          (docs/poses.md)"
     ))
+}
+
+impl SetAnswer for PoseRecommendationSet {
+    fn set_id(&self) -> &CompactString {
+        &self.set_id
+    }
+    fn status(&self) -> u8 {
+        self.status
+    }
+    fn message(&self) -> &str {
+        &self.message
+    }
+    fn members(&self) -> Vec<&GripRecommendation> {
+        self.recommendations
+            .iter()
+            .map(|p| &p.recommendation)
+            .collect()
+    }
+    fn ranked(&self) -> (usize, &str) {
+        (self.ranking.len(), &self.ranked_by)
+    }
+    fn refuse(&mut self, why: &str) {
+        self.status = GripRecommendationSet::STATUS_INVALID_INPUT;
+        self.message = why.into();
+        self.recommendations.clear();
+        self.ranking.clear();
+    }
 }
 
 #[cfg(test)]
