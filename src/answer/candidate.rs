@@ -12,6 +12,7 @@ use super::reply::{no_closure, recommended, spatial_recommended};
 use crate::msg::convert::{invalid, planar_uncertainty, MessageLimits};
 use crate::msg::{CompactString, GraspCandidate, GripRecommendation};
 use crate::solver::{
+    batch::{PlanarAnswer, SpatialAnswer},
     planar::{self, analyse, Candidate, Recommendation, Verdict},
     spatial, InvalidInput, Settings, BEHIND_TANGENT, MAX_COORDINATE,
 };
@@ -120,6 +121,99 @@ fn planar_reply(m: &GraspCandidate, settings: &Settings) -> GripRecommendation {
     reply
 }
 
+/// A candidate as the batch path of the solver takes it (`solver::batch`): an exact planar one
+/// (no tolerance), or a spatial one without a centre-of-mass box (at most a mass tolerance, whose
+/// factor on the forces it keeps). Every other candidate (tolerances for the robust solvers, a
+/// field or model refused) is answered alone by [`answer`].
+pub(crate) enum ForBatch {
+    /// An exact planar candidate.
+    Planar(Candidate),
+    /// A spatial candidate and the factor `(m + Δm) / m` on its forces (`None`: no tolerance).
+    Spatial(spatial::Candidate, Option<f64>),
+}
+
+/// `m` as the batch path takes it, when it does ([`ForBatch`]).
+pub(crate) fn for_batch(m: &GraspCandidate) -> Option<ForBatch> {
+    match m.model {
+        GraspCandidate::MODEL_PLANAR if is_exact(m) => {
+            Candidate::try_from(m).ok().map(ForBatch::Planar)
+        }
+        GraspCandidate::MODEL_SPATIAL => {
+            let factor = match spatial_tolerance(m).ok()? {
+                SpatialTolerance::Exact => None,
+                SpatialTolerance::Mass(k) => Some(k),
+                SpatialTolerance::Box(_) => return None,
+            };
+            let candidate = spatial::Candidate::try_from(m).ok()?;
+            Some(ForBatch::Spatial(candidate, factor))
+        }
+        _ => None,
+    }
+}
+
+/// The answer to an exact planar candidate `m` from the batch path's answer for it: what
+/// [`answer`] gives, bit for bit (the batch's answer is `planar::solve`'s, `solver::batch`).
+pub(crate) fn planar_reply_of(
+    m: &GraspCandidate,
+    solved: PlanarAnswer,
+    settings: &Settings,
+) -> GripRecommendation {
+    // `solve_planar`'s arms for an exact candidate, then `planar_reply`'s.
+    let mut reply = match solved {
+        Ok(Ok(r)) => recommended(m, &r, &Forces::from(&r)),
+        Ok(Err(why)) => no_closure(m, &why),
+        Err(e) => invalid(m, &MessageLimits::from(e)),
+    };
+    if reply.objective.is_empty() {
+        reply.objective = CompactString::const_new(settings.objective.name());
+    }
+    note_behind_tangent(&mut reply, m);
+    reply
+}
+
+/// The answer to a spatial candidate `m` without a centre-of-mass box from the batch path's
+/// answer for it and its factor on the forces ([`ForBatch::Spatial`]): what [`answer`] gives, bit
+/// for bit.
+pub(crate) fn spatial_reply_of(
+    m: &GraspCandidate,
+    solved: SpatialAnswer,
+    factor: Option<f64>,
+    settings: &Settings,
+) -> GripRecommendation {
+    // `answer_spatial_unnoted`'s arms for a candidate without a box, then `answer_spatial`'s.
+    let under_objective = |mut reply: GripRecommendation| {
+        reply.objective = CompactString::const_new(settings.objective.name());
+        reply
+    };
+    let mut reply = match solved {
+        Ok(Ok(r)) => spatial_with_factor(m, &r, factor),
+        Ok(Err(why)) => under_objective(no_closure(m, &why)),
+        Err(e) => under_objective(invalid(m, &e)),
+    };
+    note_behind_tangent(&mut reply, m);
+    reply
+}
+
+/// The published answer to a spatial recommendation `r`, its forces (and the powers of its local
+/// minima) times `factor` for a mass tolerance.
+fn spatial_with_factor(
+    m: &GraspCandidate,
+    r: &spatial::Recommendation,
+    factor: Option<f64>,
+) -> GripRecommendation {
+    let forces = Forces::from(&r.planar);
+    match factor {
+        Some(k) => {
+            let mut reply = spatial_recommended(m, r, &forces.scaled(k));
+            for p in &mut reply.local_minima_power {
+                *p *= k;
+            }
+            reply
+        }
+        None => spatial_recommended(m, r, &forces),
+    }
+}
+
 /// The start of the note in `message` for a centre of mass behind the surface tangent at a
 /// contact; the contacts follow (`contact_1`, `contact_2`, or both joined by " and ").
 pub(crate) const BEHIND_TANGENT_NOTE: &str = "center_of_mass lies behind the surface tangent at ";
@@ -223,17 +317,11 @@ fn answer_spatial_unnoted(m: &GraspCandidate, settings: &Settings) -> Answered {
         }
         Ok((candidate, tolerance)) => match spatial::solve(&candidate, settings) {
             Ok(spatial::Verdict::Recommended(r)) => {
-                let forces = Forces::from(&r.planar);
-                let reply = match tolerance {
-                    SpatialTolerance::Mass(k) => {
-                        let mut reply = spatial_recommended(m, &r, &forces.scaled(k));
-                        for p in &mut reply.local_minima_power {
-                            *p *= k;
-                        }
-                        reply
-                    }
-                    _ => spatial_recommended(m, &r, &forces),
+                let factor = match tolerance {
+                    SpatialTolerance::Mass(k) => Some(k),
+                    _ => None,
                 };
+                let reply = spatial_with_factor(m, &r, factor);
                 return Answered {
                     reply,
                     spatial: Some(r),

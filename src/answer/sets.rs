@@ -403,8 +403,9 @@ fn answer_set_inner(
     out
 }
 
-/// Every candidate answered in order, on the threads of `pool` for a large set; once `interrupt`
-/// is raised, each candidate left is answered [`not_solved`] (one atomic load per candidate).
+/// Every candidate answered in order, on the threads of `pool` for a large set, in runs of
+/// [`RUN`] ([`answer_run`]); once `interrupt` is raised, each run left, and each candidate left
+/// that a run answers alone, is answered [`not_solved`].
 fn answer_all(
     candidates: &[GraspCandidate],
     settings: &Settings,
@@ -412,23 +413,120 @@ fn answer_all(
     pool: Option<&rayon::ThreadPool>,
     interrupt: Option<&Interrupt>,
 ) -> Vec<GripRecommendation> {
-    let one = |c: &GraspCandidate| match interrupt.and_then(Interrupt::halt) {
-        Some(halt) => not_solved(c, halt),
-        None => answer_one(c, settings, rules),
-    };
+    let halt = || interrupt.and_then(Interrupt::halt);
+    let mut out = Vec::with_capacity(candidates.len());
     match pool {
         Some(pool) if pool.current_num_threads() > 1 && candidates.len() >= PARALLEL_FROM => {
             use rayon::prelude::*;
-            // An indexed collect writes each answer in its place, in order.
-            pool.install(|| {
+            // Each run's answers in a vector of their own, moved into place after the last: a
+            // vector of placeholders to write into would be made before the first candidate is
+            // solved, and a set stopped early would pay for all of them.
+            let runs: Vec<Vec<GripRecommendation>> = pool.install(|| {
                 candidates
-                    .par_iter()
-                    .with_min_len(PARALLEL_FROM / 2)
-                    .map(one)
+                    .par_chunks(RUN)
+                    .with_min_len(PARALLEL_FROM / 2 / RUN)
+                    .map(|run| {
+                        let mut out = Vec::with_capacity(run.len());
+                        answer_run(run, settings, rules, &halt, &mut out);
+                        out
+                    })
                     .collect()
-            })
+            });
+            for run in runs {
+                out.extend(run);
+            }
         }
-        _ => candidates.iter().map(one).collect(),
+        _ => {
+            for run in candidates.chunks(RUN) {
+                answer_run(run, settings, rules, &halt, &mut out);
+            }
+        }
+    }
+    out
+}
+
+/// How many candidates of a set go to the solver's batch path in one call ([`answer_run`]):
+/// enough that the storage one answer hands to the next (`solver::batch`) is used again, few
+/// enough that a set stopped by its interrupt (`max_set_time`) answers at most a run's exact
+/// candidates, about 30 µs, after the raise.
+pub(crate) const RUN: usize = 32;
+
+/// How a member of a run is answered ([`answer_run`]): its candidate after the node's
+/// tolerances, and which path.
+enum Member<'a> {
+    /// Through the solver's batch path, planar.
+    Planar(Cow<'a, GraspCandidate>),
+    /// Through the solver's batch path, spatial, with the factor on its forces.
+    Spatial(Cow<'a, GraspCandidate>, Option<f64>),
+    /// By [`answer_one`] alone.
+    Alone,
+}
+
+/// Appends `answer_one(c, settings, rules)` for every `c` of `run` to `out`, in order, the same
+/// answers bit for bit: the exact planar candidates and the spatial ones without a
+/// centre-of-mass box (after the node's tolerances) through the solver's batch path on this
+/// thread (`solver::batch::planar_with`, `spatial_with`; `candidate::for_batch`), the others
+/// (the robust solvers, refusals) one by one. Once `halt` says so, nothing more is solved: the
+/// run whole, or each candidate answered alone, is [`not_solved`].
+fn answer_run(
+    run: &[GraspCandidate],
+    settings: &Settings,
+    rules: &Rules,
+    halt: &(dyn Fn() -> Option<Halt> + Sync),
+    out: &mut Vec<GripRecommendation>,
+) {
+    use super::candidate::{for_batch, planar_reply_of, spatial_reply_of, ForBatch};
+    use crate::solver::batch::{self, Threads};
+    if let Some(h) = halt() {
+        out.extend(run.iter().map(|c| not_solved(c, h)));
+        return;
+    }
+    let (mut planar, mut spatial) = (Vec::new(), Vec::new());
+    let members: Vec<Member<'_>> = run
+        .iter()
+        .map(|c| {
+            let m = rules.tolerances.apply(c);
+            match for_batch(&m) {
+                Some(ForBatch::Planar(p)) => {
+                    planar.push(p);
+                    Member::Planar(m)
+                }
+                Some(ForBatch::Spatial(p, factor)) => {
+                    spatial.push(p);
+                    Member::Spatial(m, factor)
+                }
+                None => Member::Alone,
+            }
+        })
+        .collect();
+    let mut planar_answers = Vec::with_capacity(planar.len());
+    batch::planar_with(&planar, settings, Threads::ONE, &mut planar_answers);
+    let mut spatial_answers = Vec::with_capacity(spatial.len());
+    batch::spatial_with(&spatial, settings, Threads::ONE, &mut spatial_answers);
+    let (mut planar_answers, mut spatial_answers) =
+        (planar_answers.into_iter(), spatial_answers.into_iter());
+    for (c, member) in run.iter().zip(members) {
+        // One answer of each batch per member of its kind, in order: the batches are as long as
+        // their kind's members.
+        let solved = match member {
+            Member::Planar(m) => planar_answers
+                .next()
+                .map(|solved| planar_reply_of(&m, solved, settings)),
+            Member::Spatial(m, factor) => spatial_answers
+                .next()
+                .map(|solved| spatial_reply_of(&m, solved, factor, settings)),
+            Member::Alone => None,
+        };
+        let Some(mut reply) = solved else {
+            // Alone (a batch never runs short: the fallback is answer_one's answer too).
+            out.push(match halt() {
+                Some(h) => not_solved(c, h),
+                None => answer_one(c, settings, rules),
+            });
+            continue;
+        };
+        apply_limit(&mut reply, rules.drive, rules.max_grip_force);
+        out.push(reply);
     }
 }
 
@@ -866,6 +964,103 @@ mod tests {
         let mut ranked = out.ranking.clone();
         ranked.sort_unstable();
         assert_eq!(ranked, [0, 3]);
+    }
+
+    /// Candidates of every kind the set path answers, varied so that no two are alike: planar
+    /// exact, planar with tolerances (robust), spatial in and off the x-y plane, with a mass
+    /// tolerance, with a centre-of-mass box, behind a tangent, without force closure, refused
+    /// for a field and for the model.
+    fn every_kind(n: usize) -> Vec<GraspCandidate> {
+        let cases = paper_cases();
+        (0..n)
+            .map(|i| {
+                let mut c = cases[i % 4].clone();
+                c.id = format!("c{i}").into();
+                let u = (i as f64 * 0.618_033_988_749_895).fract();
+                c.center_of_mass.x += 0.2 * (u - 0.5);
+                c.center_of_mass.y -= 0.3 * u;
+                match (i / 4) % 9 {
+                    0 => {}
+                    1 => c.center_of_mass_tolerance.x = 0.01,
+                    2 => {
+                        c.model = GraspCandidate::MODEL_SPATIAL;
+                        c.center_of_mass.z = 0.1 * u;
+                    }
+                    3 => {
+                        c.model = GraspCandidate::MODEL_SPATIAL;
+                        c.mass_tolerance = 0.3 * c.mass;
+                    }
+                    4 => {
+                        c.model = GraspCandidate::MODEL_SPATIAL;
+                        c.center_of_mass_tolerance.y = 0.01;
+                    }
+                    5 => c.center_of_mass.y = 5.0, // behind the tangents, or no closure
+                    6 => c.friction_1 = 0.05,      // no force closure
+                    7 => c.mass = -1.0,            // refused: the mass
+                    _ => c.model = 7,              // refused: the model
+                }
+                c
+            })
+            .collect()
+    }
+
+    /// The set path answers through the solver's batch path in runs (`answer_run`): every
+    /// member's answer is still `answer_one`'s bit for bit, over runs that mix every kind of
+    /// candidate, with the node's tolerances and a grip-force limit, on one thread and on pools.
+    #[test]
+    fn runs_through_the_batch_path_answer_as_one_by_one() {
+        let set = set_of(every_kind(5 * RUN + 3));
+        let settings = Settings::default();
+        // A limit half the held candidates exceed (status 3), so that the limit is checked on
+        // answers of the batch path as well.
+        let mut forces: Vec<f64> = set
+            .candidates
+            .iter()
+            .map(|c| answer_one(c, &settings, &Rules::default()))
+            .filter(|r| r.status == GripRecommendation::STATUS_OK)
+            .map(|r| r.internal_force)
+            .collect();
+        forces.sort_by(f64::total_cmp);
+        let with_tolerances = Rules {
+            tolerances: DefaultTolerances {
+                center_of_mass: [0.0; 3],
+                mass: 0.05,
+            },
+            max_grip_force: forces[forces.len() / 2],
+            ..Rules::default()
+        };
+        for rules in [Rules::default(), with_tolerances] {
+            let one: Vec<String> = set
+                .candidates
+                .iter()
+                .map(|c| format!("{:?}", answer_one(c, &settings, &rules)))
+                .collect();
+            let statuses: std::collections::BTreeSet<u8> = set
+                .candidates
+                .iter()
+                .map(|c| answer_one(c, &settings, &rules).status)
+                .collect();
+            assert!(statuses.len() >= 3, "{statuses:?}");
+            let limited = rules.max_grip_force > 0.0;
+            assert_eq!(
+                statuses.contains(&GripRecommendation::STATUS_EXCEEDS_GRIPPER),
+                limited
+            );
+            for threads in [1, 2, 3] {
+                let got = std::thread::scope(|s| {
+                    s.spawn(|| {
+                        let pool = solver_pool(threads).expect("threads");
+                        answer_set_on(&set, &settings, &rules, Some(&pool))
+                    })
+                    .join()
+                    .expect("no panic")
+                });
+                assert_eq!(got.recommendations.len(), one.len());
+                for (i, (r, want)) in got.recommendations.iter().zip(&one).enumerate() {
+                    assert_eq!(&format!("{r:?}"), want, "{threads} threads: candidate {i}");
+                }
+            }
+        }
     }
 
     #[test]
