@@ -1,8 +1,10 @@
 """The Python module (crates/python) against the Rust path on the same grasps, in one run:
 
-1. 1,000,000 planar grasps in one grasp_orient.solve call, against the same grasps answered one by
-   one through the root crate's answer layer (`Answering::answer::<Candidates>`, as
-   `grasp_orient solve` answers its lines) on one core, without Python;
+1. 1,000,000 planar grasps in one grasp_orient.solve call, against the same grasps answered
+   through the root crate's answer layer on one core, without Python: in slices of 64 through its
+   batch path (`Answering::answer_many::<Candidates>`, as the module answers them: the baseline of
+   the target) and one by one (`Answering::answer::<Candidates>`, as `grasp_orient solve` answers
+   its lines);
 2. 100,000 gripper poses on a 100,352-triangle torus in one grasp_orient.solve_poses call, against
    the same poses as one pose set through `Answering::answer::<PoseSets>` on one core (the path
    `cargo bench --bench poses` times), the mesh indexed in both.
@@ -143,7 +145,7 @@ def main() -> None:
     pose_ok = int((pose_out["status"] == 0).sum())
 
     exe = build_rust_path()
-    times = {k: [] for k in ("t_one", "t_all", "p_one", "p_all", "r_grasps", "r_poses")}
+    times = {k: [] for k in ("t_one", "t_all", "p_one", "p_all", "r_grasps", "r_batch", "r_poses")}
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         rows = np.concatenate([grasps["contact_1"], grasps["normal_1"], grasps["contact_2"], grasps["normal_2"],
@@ -162,16 +164,20 @@ def main() -> None:
                 times[key].append(timed(1, f)[0])
             rust = rust_round(exe, folder)
             times["r_grasps"].append(rust["grasps"][1])
+            times["r_batch"].append(rust["grasps_batch"][1])
             times["r_poses"].append(rust["poses"][1])
-    t_one, t_all, p_one, p_all, r_grasps, r_poses = (statistics.median(times[k]) for k in
-                                                     ("t_one", "t_all", "p_one", "p_all", "r_grasps", "r_poses"))
+    t_one, t_all, p_one, p_all, r_grasps, r_batch, r_poses = (
+        statistics.median(times[k]) for k in ("t_one", "t_all", "p_one", "p_all", "r_grasps", "r_batch", "r_poses"))
     n, m = rust["grasps"][0], rust["poses"][0]
     print(f"python {sys.version.split()[0]}, numpy {np.__version__}, {os.cpu_count()} cores; medians of {args.rounds} rounds")
     print(f"{n:,} planar grasps ({ok:,} solved), one solve call:")
     print(f"  module, threads=1:   {t_one:.3f} s ({t_one / n * 1e6:.3f} us a grasp)")
     print(f"  module, every core:  {t_all:.3f} s ({t_all / n * 1e6:.3f} us a grasp)")
     print(f"  Rust Answering (one candidate at a time), one core: {r_grasps:.3f} s ({r_grasps / n * 1e6:.3f} us a grasp)")
-    print(f"  ratio module / Rust: {t_one / r_grasps:.3f} on one thread (target <= 1.2), {t_all / r_grasps:.3f} on every core")
+    print(f"  Rust Answering::answer_many (the batch path, slices of 64), one core: {r_batch:.3f} s "
+          f"({r_batch / n * 1e6:.3f} us a grasp)")
+    print(f"  ratio module / Rust batch: {t_one / r_batch:.3f} on one thread (target <= 1.2), "
+          f"{t_all / r_batch:.3f} on every core; module / Rust one by one: {t_one / r_grasps:.3f}")
     print(f"{m:,} poses on a {len(triangles):,}-triangle torus ({pose_ok:,} solved), one solve_poses call:")
     print(f"  module, threads=1:   {p_one:.3f} s ({p_one / m * 1e6:.3f} us a pose)")
     print(f"  module, every core:  {p_all:.3f} s ({p_all / m * 1e6:.3f} us a pose)")

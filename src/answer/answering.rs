@@ -6,6 +6,7 @@
 //! through it by its [`Answer`] impl; [`Answering::answer`] is the one entry point.
 
 use super::pose::{pose_set_without_geometry, uncast};
+use super::runs::answer_each;
 use super::sets::{busy, echo_set, SetAnswer};
 use super::{
     answer_one, answer_one_in_full, answer_set, answer_set_on, answer_set_within, Answered,
@@ -15,7 +16,8 @@ use crate::geometry::ClosingAxis;
 use crate::geometry::Object;
 use crate::kind::{Candidates, Kind, PoseSets, Poses, Sets};
 use crate::msg::{
-    GraspCandidate, GraspCandidateSet, GripRecommendationSet, PoseCandidate, PoseRecommendation,
+    GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet, PoseCandidate,
+    PoseRecommendation,
 };
 use crate::solver::Settings;
 
@@ -81,6 +83,13 @@ impl Answering {
     /// The answer to a request of kind `K`.
     pub fn answer<K: Answer>(&self, request: &K::Request) -> K::Answer {
         K::answer(self, request)
+    }
+
+    /// The answers to many requests of kind `K`, in order, each the one [`Answering::answer`]
+    /// gives alone (bit for bit): for candidates, through the solver's batch path where it takes
+    /// them, which costs less per candidate than one by one.
+    pub fn answer_many<K: Answer>(&self, requests: &[K::Request]) -> Vec<K::Answer> {
+        K::answer_many(self, requests)
     }
 
     /// A candidate's answer with its 3D solution when spatial (for its markers).
@@ -150,6 +159,12 @@ pub(crate) fn each(visit: &mut impl VisitAnswer) {
 pub trait Answer: Kind {
     /// The answer to `request` made `with` these settings, rules and meshes.
     fn answer(with: &Answering, request: &Self::Request) -> Self::Answer;
+
+    /// The answers to `requests`, in order, each what [`Answer::answer`] gives for it alone; a
+    /// kind overrides it where many at once cost less than one by one.
+    fn answer_many(with: &Answering, requests: &[Self::Request]) -> Vec<Self::Answer> {
+        requests.iter().map(|r| Self::answer(with, r)).collect()
+    }
 }
 
 /// A candidate: the node's tolerances where it gives none, the solver, then the gripper's limit
@@ -157,6 +172,11 @@ pub trait Answer: Kind {
 impl Answer for Candidates {
     fn answer(with: &Answering, request: &Self::Request) -> Self::Answer {
         answer_one(request, &with.settings, &with.rules)
+    }
+
+    /// Through the solver's batch path in runs, the same answers bit for bit ([`answer_each`]).
+    fn answer_many(with: &Answering, requests: &[GraspCandidate]) -> Vec<GripRecommendation> {
+        answer_each(requests, &with.settings, &with.rules)
     }
 }
 

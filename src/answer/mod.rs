@@ -4,8 +4,10 @@
 //!
 //! - [`answer`] and [`answer_in_full`] (`candidate.rs`): which solver answers one candidate
 //!   (planar or spatial, nominal or robust), with which tolerances, and the refusals.
-//! - [`answer_one`], [`answer_set`] and [`rank`] (`sets.rs`): the grip force a gripper is set to,
-//!   the gripper's limit, the node's default tolerances, and sets answered and ranked.
+//! - [`answer_one`] and [`rank`] (`sets.rs`): the grip force a gripper is set to, the gripper's
+//!   limit, the node's default tolerances, a set's refusals and its ranking.
+//! - [`answer_set`] (`runs.rs`): a set, or many candidates, answered in runs through the solver's
+//!   batch path, on a pool's threads, stopped by an [`Interrupt`].
 //! - [`PoseAnswerer`] (`pose/`): a gripper pose on an object (a pose candidate or a set of
 //!   them) → contacts, normals and centre of mass (`grasp_orient_geometry`) → the spatial
 //!   candidate they make, answered and ranked as above.
@@ -23,6 +25,7 @@ mod forces;
 pub mod markers;
 mod pose;
 mod reply;
+mod runs;
 mod sets;
 
 pub(crate) use answering::SetKind;
@@ -35,12 +38,12 @@ pub(crate) use candidate::BEHIND_TANGENT_NOTE;
 pub use candidate::{answer_in_full, Answered};
 pub(crate) use pose::{uncast, without_geometry, Refused};
 pub use pose::{PoseAnswerer, MESH_CACHE_BYTES};
+pub(crate) use runs::{answer_set, answer_set_on, answer_set_within, PARALLEL_FROM};
+pub use runs::{Halt, Interrupt};
 pub(crate) use sets::SetAnswer;
 pub(crate) use sets::{
-    answer_one, answer_one_in_full, answer_set, answer_set_on, answer_set_within, cut_like,
-    is_sorted_by, DEFAULT_MAX_SET_SIZE, PARALLEL_FROM,
+    answer_one, answer_one_in_full, cut_like, is_sorted_by, DEFAULT_MAX_SET_SIZE,
 };
 pub use sets::{
-    busy, rank, solver_pool, DefaultTolerances, GripperDrive, Halt, Interrupt, PoolRefused, RankBy,
-    Rules,
+    busy, rank, solver_pool, DefaultTolerances, GripperDrive, PoolRefused, RankBy, Rules,
 };

@@ -19,7 +19,7 @@ from collections import defaultdict
 
 CRATES = ["src", "crates/solver/src", "crates/geometry/src", "crates/python/src"]
 MAX_LINES = 700
-MAX_LIBRARY_PUB = 150
+MAX_LIBRARY_PUB = 152
 MAX_BINARY_PUB = 10
 BINARY = ("src/node/", "src/cli/", "src/main.rs")
 PUB_ITEM = re.compile(

@@ -1,9 +1,11 @@
 //! The Rust path of `benches/bench_python.py`: the grasps and poses that the script gives the
 //! Python module, read from the raw files it writes, answered through the root crate's answer
 //! layer on the calling thread (one core), without Python: the grasps one by one with
-//! the answering object, as `grasp_orient solve` answers its lines, and the poses as one pose set
-//! through it, as `cargo bench --bench poses` times them. Prints one line each:
-//! `grasps N SECONDS` and `poses N SECONDS` (the median of `ROUNDS` rounds).
+//! the answering object, as `grasp_orient solve` answers its lines, and in slices of 64 through
+//! its batch path (`Answering::answer_many`), as the module answers them; the poses as one pose
+//! set through it, as `cargo bench --bench poses` times them. Prints one line each:
+//! `grasps N SECONDS`, `grasps_batch N SECONDS` and `poses N SECONDS` (the median of `ROUNDS`
+//! rounds).
 //!
 //! `cargo bench -p grasp_orient_python --bench rust_path -- DIR [ROUNDS]`, DIR holding
 //! `grasps.f64` (rows of 20 values: contact_1, normal_1, contact_2, normal_2, center_of_mass,
@@ -75,6 +77,9 @@ fn candidate(r: &[f64]) -> GraspCandidate {
     }
 }
 
+/// Candidates the module makes and answers at a time (`crates/python/src/grasps.rs`).
+const SLICE: usize = 64;
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
@@ -88,16 +93,26 @@ fn grasps(dir: &Path, rounds: usize) -> std::io::Result<()> {
         PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default()),
     );
     let rows: Vec<&[f64]> = values.chunks_exact(20).collect();
-    let times = (0..rounds)
-        .map(|_| {
-            let start = Instant::now();
-            for r in &rows {
-                black_box(with.answer::<Candidates>(&candidate(r)));
-            }
-            start.elapsed().as_secs_f64()
-        })
-        .collect();
-    println!("grasps {} {:.6}", rows.len(), median(times));
+    let mut one_by_one = Vec::with_capacity(rounds);
+    let mut batch = Vec::with_capacity(rounds);
+    let mut candidates = Vec::with_capacity(SLICE);
+    for _ in 0..rounds {
+        let start = Instant::now();
+        for r in &rows {
+            black_box(with.answer::<Candidates>(&candidate(r)));
+        }
+        one_by_one.push(start.elapsed().as_secs_f64());
+        // The module's way: slices of its size made into candidates, answered together.
+        let start = Instant::now();
+        for slice in rows.chunks(SLICE) {
+            candidates.clear();
+            candidates.extend(slice.iter().map(|r| candidate(r)));
+            black_box(with.answer_many::<Candidates>(&candidates));
+        }
+        batch.push(start.elapsed().as_secs_f64());
+    }
+    println!("grasps {} {:.6}", rows.len(), median(one_by_one));
+    println!("grasps_batch {} {:.6}", rows.len(), median(batch));
     Ok(())
 }
 

@@ -89,8 +89,12 @@ pub(crate) fn answer_candidates(
         *rules,
         PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default()),
     );
-    for (i, m) in candidates.iter().enumerate() {
-        each(i, &with.answer::<Candidates>(m));
+    for (i, r) in with
+        .answer_many::<Candidates>(candidates)
+        .iter()
+        .enumerate()
+    {
+        each(i, r);
     }
 }
 
