@@ -7,7 +7,7 @@
 //! recorded answer ([`Kind::request_key`], in [`crate::replay`]).
 //!
 //! To add a kind: its `.msg` files and wire structs (`src/msg/`), a unit struct with its
-//! `impl Kind`, its field in [`Streams`] and its line in [`each`]; `docs/architecture.md` shows
+//! `impl Kind`, its field in [`Streams`] and its line in `each`; `docs/architecture.md` shows
 //! the steps.
 
 use crate::msg::{
@@ -57,8 +57,8 @@ pub trait Kind: Sized + 'static {
     type Request: Wire;
     /// What is answered.
     type Answer: Wire;
-    /// Its place in [`each`]'s order; the recording's channels of the kind are
-    /// [`Channel::request`] and [`Channel::answer`] of it.
+    /// Its place in `each`'s order; the recording's channels of the kind are
+    /// `Channel::request` and `Channel::answer` of it.
     const INDEX: usize;
     /// The node's topics of its requests and answers, relative to the node's namespace.
     const TOPICS: [&'static str; 2];

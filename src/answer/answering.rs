@@ -119,7 +119,7 @@ impl Answering {
     }
 
     /// A set's answer on `pool`, stopped between two candidates once `interrupt` is raised
-    /// (`max_set_time`, s, is the budget its message names): [`answer_set_within`].
+    /// (`max_set_time`, s, is the budget its message names): `answer_set_within`.
     pub fn set_within(
         &self,
         set: &GraspCandidateSet,
@@ -168,20 +168,20 @@ pub trait Answer: Kind {
 }
 
 /// A candidate: the node's tolerances where it gives none, the solver, then the gripper's limit
-/// ([`answer_one`]).
+/// (`answer_one`).
 impl Answer for Candidates {
     fn answer(with: &Answering, request: &Self::Request) -> Self::Answer {
         answer_one(request, &with.settings, &with.rules)
     }
 
-    /// Through the solver's batch path in runs, the same answers bit for bit ([`answer_each`]).
+    /// Through the solver's batch path in runs, the same answers bit for bit (`answer_each`).
     fn answer_many(with: &Answering, requests: &[GraspCandidate]) -> Vec<GripRecommendation> {
         answer_each(requests, &with.settings, &with.rules)
     }
 }
 
 /// A set: each candidate as one is answered, with the set's own limit, then the ranking
-/// ([`answer_set`]).
+/// (`answer_set`).
 impl Answer for Sets {
     fn answer(with: &Answering, request: &Self::Request) -> Self::Answer {
         answer_set(request, &with.settings, &with.rules)
@@ -189,7 +189,7 @@ impl Answer for Sets {
 }
 
 /// A pose candidate: the fingers cast onto the object, then answered as a candidate
-/// ([`PoseAnswerer::answer`]).
+/// (`PoseAnswerer::answer`).
 impl Answer for Poses {
     fn answer(with: &Answering, request: &Self::Request) -> Self::Answer {
         with.poses.answer(request, &with.settings, &with.rules)
@@ -197,7 +197,7 @@ impl Answer for Poses {
 }
 
 /// A pose set: every pose cast onto the one object, then answered and ranked as a set
-/// ([`PoseAnswerer::answer_set`]).
+/// (`PoseAnswerer::answer_set`).
 impl Answer for PoseSets {
     fn answer(with: &Answering, request: &Self::Request) -> Self::Answer {
         with.poses.answer_set(request, &with.settings, &with.rules)

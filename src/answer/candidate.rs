@@ -39,7 +39,7 @@ pub(crate) fn answer(m: &GraspCandidate, settings: &Settings) -> GripRecommendat
     }
 }
 
-/// [`answer`], with the 3D solution of a spatial grasp.
+/// `answer`, with the 3D solution of a spatial grasp.
 pub fn answer_in_full(m: &GraspCandidate, settings: &Settings) -> Answered {
     match m.model {
         GraspCandidate::MODEL_PLANAR => answer_planar(m, settings),

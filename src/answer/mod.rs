@@ -2,18 +2,18 @@
 //! types (`crate::msg`) and the mathematics (`crate::solver`), below the node, the command line
 //! and replay, which all answer through it.
 //!
-//! - [`answer`] and [`answer_in_full`] (`candidate.rs`): which solver answers one candidate
+//! - `answer` and [`answer_in_full`] (`candidate.rs`): which solver answers one candidate
 //!   (planar or spatial, nominal or robust), with which tolerances, and the refusals.
-//! - [`answer_one`] and [`rank`] (`sets.rs`): the grip force a gripper is set to, the gripper's
+//! - `answer_one` and [`rank`] (`sets.rs`): the grip force a gripper is set to, the gripper's
 //!   limit, the node's default tolerances, a set's refusals and its ranking.
-//! - [`answer_set`] (`runs.rs`): a set, or many candidates, answered in runs through the solver's
+//! - `answer_set` (`runs.rs`): a set, or many candidates, answered in runs through the solver's
 //!   batch path, on a pool's threads, stopped by an [`Interrupt`].
 //! - [`PoseAnswerer`] (`pose/`): a gripper pose on an object (a pose candidate or a set of
 //!   them) → contacts, normals and centre of mass (`grasp_orient_geometry`) → the spatial
 //!   candidate they make, answered and ranked as above.
 //! - [`markers`]: an answer drawn for RViz and Foxglove.
 //!
-//! - [`Forces`] (`forces.rs`): the forces of an answer, whichever solver gave them, and the one
+//! - `Forces` (`forces.rs`): the forces of an answer, whichever solver gave them, and the one
 //!   place they become wire fields; `reply.rs` builds the published reply from a solver's answer.
 //!
 //! To add an output field: fill it here (or in the solver), declare it in `msg/*.msg` and the wire

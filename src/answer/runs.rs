@@ -258,9 +258,9 @@ pub enum Halt {
 }
 
 /// A flag that another thread raises to stop the solving of a set between two candidates
-/// ([`answer_set_within`]): the node's clock when a set's time runs out, its shutdown. A raised
+/// (`answer_set_within`): the node's clock when a set's time runs out, its shutdown. A raised
 /// [`Halt::Stopping`] stays raised; [`Halt::OutOfTime`] is lowered for the next set with
-/// [`Interrupt::lower_time`].
+/// `Interrupt::lower_time`.
 #[derive(Debug, Default)]
 pub struct Interrupt(AtomicU8);
 

@@ -218,7 +218,7 @@ pub(crate) fn answer_one_in_full(
     out
 }
 
-/// The indices of the answers with status 0, least [`Rules::ranked_by`] first; ties go to the
+/// The indices of the answers with status 0, least `Rules::ranked_by` first; ties go to the
 /// smaller `|wrist_rotation|`, then to the lower index.
 pub fn rank(recommendations: &[GripRecommendation], rules: &Rules) -> Vec<u32> {
     // Each float as the integer `f64::total_cmp` compares, computed once per answer rather than
@@ -356,7 +356,7 @@ pub(crate) fn cut_like<'a>(
 /// started once, named `solver-1` and on; the reason when the system refuses them.
 ///
 /// The calling thread is the pool's first worker (rayon's `use_current_thread`): when it asks the
-/// pool for a set ([`answer_set_on`]) it solves its share instead of sleeping until the others are
+/// pool for a set (`answer_set_on`) it solves its share instead of sleeping until the others are
 /// done, and the answers it makes are freed on the thread that made them. So a pool of two on two
 /// cores is one more thread, not two, and no thread waits to be woken at the end of a set.
 /// Measured in one process on two cores (`cargo bench --bench sets`, the two kinds of pool taking

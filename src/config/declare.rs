@@ -296,7 +296,7 @@ macro_rules! parameters {
         $name:ident $(($fixed:ident))?: $ty:ty = $default:expr, $unit:literal $(, in $domain:expr)?;
     )*) => {
         /// Every setting of grasp_orient, one field per ROS parameter, each value in its domain
-        /// once checked ([`Config::solver_settings`]). Declared in `src/config/params.rs`.
+        /// once checked (`Config::solver_settings`). Declared in `src/config/params.rs`.
         #[derive(Debug, Clone, PartialEq)]
         pub struct Config {
             $(

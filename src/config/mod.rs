@@ -1,6 +1,6 @@
-//! The settings: every parameter declared once (in `params.rs`, listed by [`PARAMETERS`]), read
+//! The settings: every parameter declared once (in `params.rs`, listed by `PARAMETERS`), read
 //! from ROS 2 params files (`grasp_orient: ros__parameters:`) and `-p name:=value`, and checked
-//! once ([`Config::solver_settings`]). `config/grasp_orient.yaml` is generated from the
+//! once (`Config::solver_settings`). `config/grasp_orient.yaml` is generated from the
 //! declarations and compiled in as the default.
 
 pub(crate) mod choices;

@@ -20,7 +20,7 @@ pub(crate) const MAX_TEXT_BYTES: usize = 1024;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum MessageLimits {
-    /// A text field is longer than [`MAX_TEXT_BYTES`].
+    /// A text field is longer than `MAX_TEXT_BYTES`.
     #[error("{field} is {len} bytes long; at most {MAX_TEXT_BYTES} are accepted")]
     TooLong {
         /// The field.

@@ -3,7 +3,7 @@
 //! [`read`] is strict: the file must be whole, every CRC it carries must verify (chunks, data
 //! section, summary), every length must fit, and anything else is an error naming the file and
 //! the byte offset ([`BagError::Damaged`]). A file that merely ends early is told apart, with a
-//! pointer to `recover` ([`super::recover`]). The records are walked by [`super::scan`], which
+//! pointer to `recover` ([`super::recover`]). The records are walked by `super::scan`, which
 //! checks every length against the file before anything is allocated; chunks are decompressed
 //! and decoded on all cores.
 

@@ -5,19 +5,19 @@
 //! encoding `cdr` with the 4-byte encapsulation header; channel metadata `offered_qos_profiles`;
 //! `log_time` the receive time, `publish_time` the send time; the settings in force as metadata
 //! ([`settings`]). Chunks are lz4-compressed and closed about once a second (on saturated cores
-//! a little later, [`pump`]), so a killed process loses about the last second ([`recover`] reads
+//! a little later, `pump`), so a killed process loses about the last second ([`recover`] reads
 //! the rest).
 //!
 //! Files are never truncated or shared: a recording is created new (`O_EXCL`) under a name
 //! carrying the node's name and the start time, with a numeric suffix on a clash
 //! ([`Recorder::start`]); commands write their outputs beside the destination and rename them
-//! into place when complete ([`output`]).
+//! into place when complete (`output`).
 //!
-//! Writing happens on threads of its own ([`pump`]: a writer at idle priority, and a rescuer for
+//! Writing happens on threads of its own (`pump`: a writer at idle priority, and a rescuer for
 //! when the cores are saturated): the answering loop only hands over messages, so a slow disk
 //! delays the file, never the answers. When a write fails (a full disk), the file is cut back to
 //! its last complete flush and closed there, so what it holds stays readable, and the recording
-//! stops with the cause ([`RecordError::Stopped`]). [`lifecycle`] starts and stops the files of
+//! stops with the cause ([`RecordError::Stopped`]). `lifecycle` starts and stops the files of
 //! a node run as its `record` parameters say.
 
 pub mod bag;
@@ -364,7 +364,7 @@ const CHANNELS: usize = kind::Channel::COUNT + 1;
 const MARKERS: usize = kind::Channel::COUNT;
 
 /// An MCAP writer with the channels of a grasp_orient recording. It never truncates a file:
-/// [`BagWriter::create`] makes a new one, [`BagWriter::on_file`] takes an open one (a temporary
+/// [`BagWriter::create`] makes a new one, `BagWriter::on_file` takes an open one (a temporary
 /// file beside the destination). When a write fails, the file is cut back to its last complete
 /// flush and closed there ([`RecordError::Stopped`]).
 pub struct BagWriter {
@@ -636,7 +636,7 @@ impl BagWriter {
     }
 }
 
-/// A recording being written by its own threads ([`pump`]).
+/// A recording being written by its own threads (`pump`).
 #[derive(Debug)]
 pub struct Recorder {
     path: PathBuf,
@@ -648,7 +648,7 @@ pub(crate) type OnStop = Arc<dyn Fn() + Send + Sync>;
 
 impl Recorder {
     /// Starts a recording in `dir` (created if missing) for node `node` (its full name): a new
-    /// file `<node>_<UTC start>.mcap` ([`node_stem`], [`stamp_name`]), `_1`, `_2`, ... added
+    /// file `<node>_<UTC start>.mcap` (`node_stem`, `stamp_name`), `_1`, `_2`, ... added
     /// when that name is taken. `on_stop` hears when writing fails.
     pub fn start(
         dir: &Path,

@@ -2,13 +2,13 @@
 //! MCAP file with the same profile, schemas, channels and metadata.
 //!
 //! Damage in one record never hides the records after it:
-//! - When the summary's CRC verifies ([`summary`]), its chunk, metadata and attachment
+//! - When the summary's CRC verifies (`summary`), its chunk, metadata and attachment
 //!   indexes say where each of those records lies and how long it is. Each is read at its place
 //!   on its own: one whose opcode, length, fields, decompression or CRC do not check out is
 //!   dropped, and the walk goes on at the next record the index places.
 //! - Elsewhere (no usable summary, or bytes between indexed records), the walk goes record by
 //!   record; at a record that does not read, it finds the next offset where a record that
-//!   verifies starts ([`resync`]) and goes on from there.
+//!   verifies starts (`resync`) and goes on from there.
 //!
 //! Only what verifies is kept: a chunk is kept whole or dropped whole, and so is a message whose
 //! channel no record defines. What is dropped is counted per topic: exactly, from the summary's

@@ -3,7 +3,7 @@
 //! and one at every parameter change, and `replay` solves each candidate with the settings in
 //! force at its `log_time`.
 //!
-//! A record is named [`METADATA_NAME`] and holds:
+//! A record is named `METADATA_NAME` and holds:
 //!
 //! | key | value |
 //! |---|---|

@@ -43,7 +43,7 @@ pub struct Summary {
     pub pose_sets: u64,
 
     /// Compared candidates recorded as refused for a centre of mass behind a surface tangent
-    /// ([`RECORDED_BEHIND_TANGENT`]) and answered now ([`answered_behind_tangent`]): counted as
+    /// ([`RECORDED_BEHIND_TANGENT`]) and answered now (`answered_behind_tangent`): counted as
     /// agreeing, and here.
     pub answered_behind_tangent: u64,
 }

@@ -1,6 +1,6 @@
 //! Replaying recordings: every recorded candidate is solved again, with the settings in force
 //! when it was recorded ([`Plan`]), and compared, field by field, with the recommendation
-//! recorded for it; every recorded set likewise ([`sets`]). Only the fields the recording has are
+//! recorded for it; every recorded set likewise (`sets`). Only the fields the recording has are
 //! compared: a recording made before a message grew decodes with the new trailing fields at their
 //! defaults, which say nothing.
 

@@ -4,7 +4,7 @@ use crate::record::bag::keep_example;
 use crate::record::scan::Damage;
 use std::collections::BTreeMap;
 
-/// What [`recover`] saved and what it could not.
+/// What `recover` saved and what it could not.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Recovered {
     /// The profile of the recording, e.g. `ros2`.
