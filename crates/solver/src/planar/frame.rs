@@ -283,7 +283,7 @@ fn validate(c: &Candidate) -> Result<Measured, InvalidInput> {
     })
 }
 
-/// A friction coefficient as the solver takes it ([`friction`]), the error naming `field` (a
+/// A friction coefficient as the solver takes it (`friction`), the error naming `field` (a
 /// pose candidate's `object.friction`, which becomes both `friction_1` and `friction_2`).
 pub fn check_friction(field: &'static str, v: f64) -> Result<f64, InvalidInput> {
     friction(field, v)

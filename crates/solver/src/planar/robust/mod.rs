@@ -53,7 +53,7 @@
 //! contacts (`e_x` along the contact line from contact 2 to contact 1, `e_y` so that the contacts
 //! have `y >= 0`): moving `c` moves the origin and keeps the axes, unless `c` crosses the contact
 //! line, where the labelling swaps. Every vertex's frame is therefore built here from the nominal
-//! frame ([`GraspFrame::new`] of the candidate) with the nominal's axes and labelling, only the
+//! frame (`GraspFrame::new` of the candidate) with the nominal's axes and labelling, only the
 //! coordinates moving: for a vertex at `c + δ`, with `(δx', δy') = (δ·e_x, δ·e_y) / d`,
 //! `x1' = x1 - δx'`, `x2' = x2 + δx'`, `y' = y - δy'`. Then one gravity angle θ is one
 //! orientation of the object for every vertex, and the answer maps back to the candidate frame

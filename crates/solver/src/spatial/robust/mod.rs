@@ -122,7 +122,7 @@
 //!   seen from each contact. If the ray from contact 2 along `−a` meets the region it is `−π/2`;
 //!   otherwise the region seen from the contact is a convex spherical polygon whose boundary is
 //!   made of the images of its edges (great-circle arcs), on which the least elevation is found
-//!   in closed form ([`region`]).
+//!   in closed form (`region`).
 //! - **Graspable**: `[−π/2, π/2]` (§1). **Bounds**: met with it, shifted by multiples of 2π.
 //! - An empty range is [`NoCommonOrientation`], naming the points that bound it.
 //!
