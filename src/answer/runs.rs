@@ -4,8 +4,10 @@
 //! stopped between two runs once an [`Interrupt`] is raised.
 
 use super::sets::{answer_one, apply_limit, empty_answer, rank, refusal, Rules};
-use crate::msg::{clip, CompactString, GraspCandidate, GripRecommendation};
-use crate::msg::{GraspCandidateSet, GripRecommendationSet};
+use crate::msg::{
+    clip, CompactString, GraspCandidate, GraspCandidateSet, GripRecommendation,
+    GripRecommendationSet,
+};
 use crate::solver::Settings;
 use std::borrow::Cow;
 use std::sync::atomic::{AtomicU8, Ordering as AtomicOrdering};

@@ -74,30 +74,6 @@ impl Grasps<'_> {
     }
 }
 
-/// The answers to `candidates`, each handed to `each` with its index in the slice, in order: the
-/// one place a slice of candidates is answered, so that a batch path of the solver can take it
-/// over. An answer is handed over as soon as it is made, so that it is still in the core's cache
-/// when it becomes columns.
-pub(crate) fn answer_candidates(
-    candidates: &[GraspCandidate],
-    settings: &Settings,
-    rules: &Rules,
-    mut each: impl FnMut(usize, &GripRecommendation),
-) {
-    let with = Answering::new(
-        *settings,
-        *rules,
-        PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default()),
-    );
-    for (i, r) in with
-        .answer_many::<Candidates>(candidates)
-        .iter()
-        .enumerate()
-    {
-        each(i, r);
-    }
-}
-
 /// The message a row's answer is reported with: a refusal of its input (status 2) names the
 /// row, as `solve` names the line.
 pub(crate) fn row_message(row: usize, r: &GripRecommendation) -> CompactString {
@@ -121,34 +97,40 @@ pub(crate) fn compact_str_row(row: usize, message: &str) -> CompactString {
 /// cache while it is answered.
 const SLICE: usize = 64;
 
-/// The rows of `range`, answered.
-fn answer_range(
-    g: &Grasps<'_>,
-    range: Range<usize>,
-    settings: &Settings,
-    rules: &Rules,
-) -> Columns {
+/// The rows of `range`, answered `with` the call's settings and rules, a slice at a time through
+/// the answer layer's batch path (`Answering::answer_many`).
+fn answer_range(with: &Answering, g: &Grasps<'_>, range: Range<usize>) -> Columns {
     let mut out = Columns::with_capacity(range.len());
     let mut candidates = Vec::with_capacity(SLICE);
     for start in range.clone().step_by(SLICE) {
         let rows = start..(start + SLICE).min(range.end);
         candidates.clear();
         candidates.extend(rows.clone().map(|i| g.candidate(i)));
-        answer_candidates(&candidates, settings, rules, |i, r| {
+        for (i, r) in with
+            .answer_many::<Candidates>(&candidates)
+            .iter()
+            .enumerate()
+        {
             out.push(r, row_message(start + i, r));
-        });
+        }
     }
     out
 }
 
-/// Every row of `g` answered, on `threads`.
+/// Every row of `g` answered, on `threads`, by one answering object (no mesh is involved: its
+/// pose answerer is never asked).
 pub(crate) fn solve(
     g: &Grasps<'_>,
     settings: &Settings,
     rules: &Rules,
     threads: &Threads,
 ) -> Columns {
+    let with = Answering::new(
+        *settings,
+        *rules,
+        PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default()),
+    );
     answer_in_chunks(g.len(), CHUNK, threads, |range| {
-        answer_range(g, range, settings, rules)
+        answer_range(&with, g, range)
     })
 }
