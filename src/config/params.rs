@@ -99,6 +99,13 @@ parameters! {
     /// (status 2).
     max_mesh_file_bytes (fixed): i64 = 256 << 20, "bytes",
         in Domain::Integer { min: 1, max: 1 << 40 };
+    /// The largest serialized message the node's readers take in; a larger one, sent in DDS
+    /// fragments, is dropped before any of it is held (a warning at most every 10 s per topic,
+    /// no answer) and the writer's later messages are taken as usual. The default is some ten
+    /// times an inline mesh of max_inline_mesh_triangles' default; 64 KiB or less is one
+    /// datagram, which the transport bounds anyway; the wire's sample size ends at 4 GiB.
+    max_message_bytes (fixed): i64 = 256 << 20, "bytes",
+        in Domain::Integer { min: 65_536, max: (1 << 32) - 1 };
 }
 
 impl super::choices::Choice for ClosingAxis {

@@ -161,7 +161,8 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
             .enable_rosout(true)
             .start_parameter_services(false),
     );
-    let mut session = start.open(&name, node_options)?;
+    let max_message_bytes = usize::try_from(config.max_message_bytes).unwrap_or(usize::MAX);
+    let mut session = start.open_bounded(&name, node_options, max_message_bytes)?;
     let endpoints = Endpoints::create(&mut session, config.qos_depth)?;
     let services = ParameterServices::offer(session.node_mut(), &shared)?;
     let topics = &endpoints.topics;

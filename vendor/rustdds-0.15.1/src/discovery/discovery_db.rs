@@ -198,6 +198,7 @@ impl DiscoveryDB {
     {
       self.ignored_reported_at = Some(now);
       warn!(
+        target: crate::LIMITS_LOG_TARGET,
         "Discovery keeps at most {} remote participants: {guid_prefix:?} ignored ({} new \
          participants ignored so far)",
         self.max_remote_participants, self.participants_ignored
