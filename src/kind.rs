@@ -39,7 +39,7 @@ impl<T> Wire for T where
 
 /// The key that pairs an answer with its request: the request's id and header, cut to the
 /// length an answer carries them at ([`clip`]).
-pub type Key<'a> = (&'a str, i32, u32, &'a str);
+pub(crate) type Key<'a> = (&'a str, i32, u32, &'a str);
 
 /// [`Key`] of an id and a header.
 pub(crate) fn key<'a>(id: &'a str, header: &'a Header) -> Key<'a> {
@@ -190,7 +190,7 @@ impl Kind for PoseSets {
 pub(crate) const COUNT: usize = 4;
 
 /// Something done once for every kind ([`each`]).
-pub trait Visit {
+pub(crate) trait Visit {
     /// Done for kind `K`.
     fn kind<K: Kind>(&mut self);
 }
@@ -368,9 +368,9 @@ pub(crate) enum Side {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub(crate) struct Channel {
     /// The kind's [`Kind::INDEX`].
-    pub kind: usize,
+    pub(crate) kind: usize,
     /// Which side.
-    pub side: Side,
+    pub(crate) side: Side,
 }
 
 impl Channel {

@@ -25,6 +25,7 @@ pub(crate) mod pose_work;
 pub(crate) mod ros_args;
 pub(crate) mod session;
 pub(crate) mod set_io;
+mod set_kinds;
 pub(crate) mod set_worker;
 pub(crate) mod sets;
 
@@ -34,7 +35,7 @@ use crate::msg::{
     short_id, GraspCandidate, GripRecommendation, MarkerArray, PoseCandidate, PoseRecommendation,
 };
 use crate::record::{now_ns, OnStop, Topics};
-use answer::{Answerer, SetInput};
+use answer::Answerer;
 use anyhow::Context as _;
 use demo::Demo;
 use endpoint::Endpoint;
@@ -77,10 +78,10 @@ const TOPICS: [&str; 9] = [
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct Options {
     /// Send the paper's four case studies from a second participant, print the answers, exit.
-    pub demo: bool,
+    pub(crate) demo: bool,
     /// Benchmark floor: answer every candidate with an empty recommendation (same header and
     /// id) without solving.
-    pub echo: bool,
+    pub(crate) echo: bool,
 }
 
 /// Reads the settings: the built-in defaults, then each `--params-file`, then each `-p`.
@@ -263,13 +264,13 @@ fn announce(session: &Session, topics: &Topics) {
             topics.requests::<Sets>().unwrap_or_default(),
             topics.answers::<Sets>().unwrap_or_default(),
             session.node().fully_qualified_name(),
-            sets::SERVICE,
+            <Sets as sets::NodeSet>::SERVICE,
             topics.requests::<Poses>().unwrap_or_default(),
             topics.answers::<Poses>().unwrap_or_default(),
             topics.requests::<PoseSets>().unwrap_or_default(),
             topics.answers::<PoseSets>().unwrap_or_default(),
             session.node().fully_qualified_name(),
-            sets::POSE_SERVICE,
+            <PoseSets as sets::NodeSet>::SERVICE,
         ),
     );
 }
@@ -320,11 +321,8 @@ async fn serve(
         loading,
     } = state;
     let mut stream = pin!(endpoints.candidates.requests.async_stream());
-    let mut set_stream = pin!(endpoints.sets.sets.requests.async_stream());
-    let mut calls = pin!(endpoints.sets.service.receive_request_stream());
     let mut poses = pin!(endpoints.poses.requests.async_stream());
-    let mut pose_sets = pin!(endpoints.sets.pose_sets.requests.async_stream());
-    let mut pose_calls = pin!(endpoints.sets.pose_service.receive_request_stream());
+    let mut arrivals = pin!(sets::arrivals(&endpoints.sets, &endpoints.topics).fuse());
     let mut demo_done = pin!(async {
         match demo {
             Some(d) => d.finished().await,
@@ -336,8 +334,8 @@ async fn serve(
     loop {
         // Biased, in this order: a stop request wins over whatever is queued, then the demo's
         // end, then a parameter set or a stopped writer (so that it applies to every candidate
-        // still queued), then candidates, then sets' answers back from the set thread, then new
-        // sets; each costs the node's thread microseconds to milliseconds (a set is solved on
+        // still queued), then candidates, then sets' answers back from the set thread, then pose
+        // candidates, then new sets of any kind (one stream, taken in turn); each costs the node's thread microseconds to milliseconds (a set is solved on
         // the set thread), so a signal is seen within one.
         futures::select_biased! {
             signal = shutdown.requested().fuse() => {
@@ -356,24 +354,6 @@ async fn serve(
             done = worker.done.select_next_some() => {
                 sets::answer_done(node, sets, markers, answerer, done).await;
             }
-            received = set_stream.select_next_some() => match received {
-                Ok((set, info)) => {
-                    let set = SetInput::Candidates(set);
-                    sets::take_topic(node, sets, markers, answerer, worker, set, &info).await;
-                }
-                Err(e) => {
-                    let topic = topics.requests::<Sets>().unwrap_or_default();
-                    let note = answerer.undecodable(topic, &e);
-                    tell(node, vec![note]);
-                }
-            },
-            call = calls.select_next_some() => match call {
-                Ok((id, request)) => {
-                    let set = SetInput::Candidates(request.candidate_set);
-                    sets::take_call(node, sets, markers, answerer, worker, id, set).await;
-                }
-                Err(e) => tell(node, vec![answerer.undecodable(sets::SERVICE, &e)]),
-            },
             received = poses.select_next_some() => match received {
                 Ok((candidate, info)) => {
                     take_pose(node, endpoints, answerer, loading, candidate, &info).await;
@@ -384,24 +364,9 @@ async fn serve(
                     tell(node, vec![note]);
                 }
             },
-            received = pose_sets.select_next_some() => match received {
-                Ok((set, info)) => {
-                    let set = SetInput::Poses(Box::new(set));
-                    sets::take_topic(node, sets, markers, answerer, worker, set, &info).await;
-                }
-                Err(e) => {
-                    let topic = topics.requests::<PoseSets>().unwrap_or_default();
-                    let note = answerer.undecodable(topic, &e);
-                    tell(node, vec![note]);
-                }
-            },
-            call = pose_calls.select_next_some() => match call {
-                Ok((id, request)) => {
-                    let set = SetInput::Poses(Box::new(request.pose_set));
-                    sets::take_call(node, sets, markers, answerer, worker, id, set).await;
-                }
-                Err(e) => tell(node, vec![answerer.undecodable(sets::POSE_SERVICE, &e)]),
-            },
+            arrival = arrivals.select_next_some() => {
+                sets::take(node, sets, markers, answerer, worker, arrival).await;
+            }
         }
     }
 }
