@@ -85,8 +85,10 @@ parameters! {
     /// nor than its max_set_time.
     max_mesh_load_time: f64 = 3.0, "s", in Domain::Real { min: 0.001, max: 3600.0 };
     /// The most triangles an inline mesh (object.inline_mesh) may have, and a third of the most
-    /// vertices; a larger one is refused (status 2) without being indexed. Indexing takes about
-    /// 0.4 kB a triangle while it runs, and up to 8 of them may run at once.
+    /// vertices; a larger one is refused (status 2) without being indexed, and the node decodes
+    /// no more of it than this and one more triangle (the decoding bound is the largest value
+    /// set while the node runs). Indexing takes about 0.4 kB a triangle while it runs, and up
+    /// to 8 of them may run at once; solve, rank, plot and replay apply it too.
     max_inline_mesh_triangles: i64 = 250_000, "triangles",
         in Domain::Integer { min: 1, max: 100_000_000 };
     /// The directories under which the node reads file:// and plain-path mesh resources,

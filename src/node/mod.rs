@@ -155,6 +155,9 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
     let name = start.node_name(NODE_NAME);
     start.ros.check_distinct(&TOPICS, &name)?;
     let (config, settings) = load_config(&start.ros, &name)?;
+    // Inline meshes are decoded no further than the node would answer them (later values too:
+    // `Live::push`).
+    crate::msg::limit_inline_mesh_decoding(config.max_inline_mesh_triangles);
     log::debug!("settings: {config:?}");
     let shared = Shared::new(config.clone(), settings);
     let node_options = shared.declare(
