@@ -41,9 +41,14 @@ enum Command {
 }
 
 /// What the libraries log without `RUST_LOG`: RustDDS warns about every unreachable locator; its
-/// errors still show. Everything else logs from `info` on.
-const LIBRARY_LEVELS: [(&str, LevelFilter); 4] = [
+/// errors still show, and so do its warnings of input dropped by a resource bound (at most one
+/// every 10 s per reader or bound). Everything else logs from `info` on.
+const LIBRARY_LEVELS: [(&str, LevelFilter); 5] = [
     ("rustdds", LevelFilter::Error),
+    (
+        ros2_client::dds::rustdds::LIMITS_LOG_TARGET,
+        LevelFilter::Warn,
+    ),
     ("rustdds::network::udp_listener", LevelFilter::Off),
     ("ros2_client", LevelFilter::Warn),
     ("ros2_client::distributions", LevelFilter::Error),

@@ -210,8 +210,9 @@ impl Config {
     }
 
     /// The answering object of these parameters (their solver settings checked here), pose
-    /// candidates by `poses`.
+    /// candidates by `poses`, their inline meshes bounded by `max_inline_mesh_triangles`.
     pub fn answering(&self, poses: PoseAnswerer) -> Result<Answering, ConfigError> {
+        let poses = poses.bounding_inline(self.max_inline_mesh_triangles);
         Ok(Answering::new(self.solver_settings()?, self.rules(), poses))
     }
 

@@ -85,8 +85,10 @@ parameters! {
     /// nor than its max_set_time.
     max_mesh_load_time: f64 = 3.0, "s", in Domain::Real { min: 0.001, max: 3600.0 };
     /// The most triangles an inline mesh (object.inline_mesh) may have, and a third of the most
-    /// vertices; a larger one is refused (status 2) without being indexed. Indexing takes about
-    /// 0.4 kB a triangle while it runs, and up to 8 of them may run at once.
+    /// vertices; a larger one is refused (status 2) without being indexed, and the node decodes
+    /// no more of it than this and one more triangle (the decoding bound is the largest value
+    /// set while the node runs). Indexing takes about 0.4 kB a triangle while it runs, and up
+    /// to 8 of them may run at once; solve, rank, plot and replay apply it too.
     max_inline_mesh_triangles: i64 = 250_000, "triangles",
         in Domain::Integer { min: 1, max: 100_000_000 };
     /// The directories under which the node reads file:// and plain-path mesh resources,
@@ -99,6 +101,13 @@ parameters! {
     /// (status 2).
     max_mesh_file_bytes (fixed): i64 = 256 << 20, "bytes",
         in Domain::Integer { min: 1, max: 1 << 40 };
+    /// The largest serialized message the node's readers take in; a larger one, sent in DDS
+    /// fragments, is dropped before any of it is held (a warning at most every 10 s per topic,
+    /// no answer) and the writer's later messages are taken as usual. The default is some ten
+    /// times an inline mesh of max_inline_mesh_triangles' default; 64 KiB or less is one
+    /// datagram, which the transport bounds anyway; the wire's sample size ends at 4 GiB.
+    max_message_bytes (fixed): i64 = 256 << 20, "bytes",
+        in Domain::Integer { min: 65_536, max: (1 << 32) - 1 };
 }
 
 impl super::choices::Choice for ClosingAxis {

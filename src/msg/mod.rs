@@ -92,6 +92,7 @@ pub use candidates::{
     RecommendResponse,
 };
 
+pub(crate) use poses::limit_inline_mesh_decoding;
 mod poses;
 pub use poses::{
     GraspObject, GraspPose, Mesh, MeshTriangle, PoseCandidate, PoseCandidateSet,

@@ -12,6 +12,8 @@ use super::{
     CompactString, GripRecommendation, Header, Point, Pose, RosFields, RosMessage, RosType, Vector3,
 };
 use serde::{Deserialize, Serialize};
+use std::marker::PhantomData;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 ros_message! {
     /// `msg/MeshTriangle.msg`: one triangle of a [`Mesh`].
@@ -24,13 +26,110 @@ ros_message! {
 ros_message! {
     /// `msg/Mesh.msg`: a triangle mesh given inline (shape_msgs/Mesh's fields).
     Mesh = grasp_orient/Mesh [] {
-        /// The triangles; empty: no inline mesh.
-        #[serde(default)]
+        /// The triangles; empty: no inline mesh. At most [`limit_inline_mesh_decoding`]'s
+        /// bound and one more are kept.
+        #[serde(default, deserialize_with = "bounded_triangles")]
         triangles: Vec<MeshTriangle>,
-        /// The vertices, object frame, the mesh's units.
-        #[serde(default)]
+        /// The vertices, object frame, the mesh's units. At most three times
+        /// [`limit_inline_mesh_decoding`]'s bound and one more are kept.
+        #[serde(default, deserialize_with = "bounded_vertices")]
         vertices: Vec<Point>,
     }
+}
+
+/// The most triangles of an inline mesh decoded and kept (vertices: three times as many), and
+/// one more, so that a mesh beyond the bound is still seen to be beyond it; 0 until
+/// [`limit_inline_mesh_decoding`] sets one: no bound.
+static INLINE_MESH_DECODE_BOUND: AtomicUsize = AtomicUsize::new(0);
+
+/// Bounds what decoding keeps of every later inline mesh in this process to `triangles`
+/// triangles (and `3 × triangles` vertices) and one more of each, or to a larger bound set
+/// before: the bound only grows. The elements beyond it are still read, to reach the message's
+/// later fields, and dropped one by one, so that a message of millions of triangles is refused
+/// without being decoded into memory whole (a serde `Deserialize` has no other way to learn a
+/// bound than a static).
+///
+/// A bound for the whole process, and who sets it:
+///
+/// - **The node** sets it to `max_inline_mesh_triangles` at start, before its readers exist,
+///   and to every later value in `Live::push`, before that value's version is stamped with the
+///   time it is in force from. A message is answered under the version in force when it was
+///   received (`Live::version_at`), and its received time is the one RustDDS stamps on arrival,
+///   before the message is taken and decoded (a service call's is when it is taken, on the
+///   thread that decoded it with nothing run in between: the node's tasks, its parameter
+///   services among them, share one thread). So the value it is answered under was set before
+///   it was decoded, and the bound when it was decoded was at least that value: a mesh cut at
+///   `b + 1` elements is answered under a value of at most `b`, and refused
+///   (`PoseAnswerer::bounding_inline`) with words that name no count, the same whether the mesh
+///   was cut or not. That is why the bound never shrinks: lowering the parameter lowers what is
+///   answered, not what is decoded (the largest value ever set).
+/// - **A recording** holds the candidate as the node decoded it, cut meshes cut; `replay`, which
+///   never sets the bound and decodes whole, refuses them under the recorded value with the same
+///   words, so the answers agree.
+/// - **`solve`, `rank`, `plot`, `replay`, `play` and the Python module** never set it: they
+///   decode whole (a local user's own input); the commands refuse by count under the config's
+///   bound as the node does (`Config::answering`), the Python module has none.
+/// - **Tests** share one process: a test that sets the bound runs in a child process of its own
+///   (`tests::decoding_beyond_the_bound_keeps_one_more`), so that it cuts no other test's mesh.
+pub(crate) fn limit_inline_mesh_decoding(triangles: i64) {
+    let triangles = usize::try_from(triangles).unwrap_or(0);
+    INLINE_MESH_DECODE_BOUND.fetch_max(triangles, Ordering::SeqCst);
+}
+
+/// How many triangles of an inline mesh decoding keeps ([`limit_inline_mesh_decoding`]).
+fn triangles_kept() -> usize {
+    match INLINE_MESH_DECODE_BOUND.load(Ordering::SeqCst) {
+        0 => usize::MAX,
+        bound => bound.saturating_add(1),
+    }
+}
+
+/// A sequence of which at most `keep` elements are kept; the others are decoded and dropped.
+struct BoundedSeq<T> {
+    keep: usize,
+    of: PhantomData<T>,
+}
+
+impl<'de, T: Deserialize<'de>> serde::de::Visitor<'de> for BoundedSeq<T> {
+    type Value = Vec<T>;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a sequence")
+    }
+
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Vec<T>, A::Error> {
+        // serde's own cap on a size hint: a hostile length preallocates nothing big.
+        let hint = seq.size_hint().unwrap_or(0).min(self.keep).min(1 << 16);
+        let mut kept = Vec::with_capacity(hint);
+        while let Some(element) = seq.next_element::<T>()? {
+            if kept.len() < self.keep {
+                kept.push(element);
+            }
+        }
+        Ok(kept)
+    }
+}
+
+fn bounded_triangles<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<Vec<MeshTriangle>, D::Error> {
+    let keep = triangles_kept();
+    d.deserialize_seq(BoundedSeq {
+        keep,
+        of: PhantomData,
+    })
+}
+
+fn bounded_vertices<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<Point>, D::Error> {
+    // Three per triangle kept, and one more: `3 × bound + 1`.
+    let keep = match triangles_kept() {
+        usize::MAX => usize::MAX,
+        t => (t - 1).saturating_mul(3).saturating_add(1),
+    };
+    d.deserialize_seq(BoundedSeq {
+        keep,
+        of: PhantomData,
+    })
 }
 
 ros_message! {
@@ -219,5 +318,156 @@ impl RosFields for RecommendPosesResponse {
     /// `(name, ROS type)` of each field, as in `srv/RecommendPoses.srv` below `---`.
     fn fields() -> Vec<(&'static str, String)> {
         vec![("recommendation_set", PoseRecommendationSet::ros_type())]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::msg::{cdr, Quaternion};
+
+    /// A pose candidate whose inline mesh has `n` distinct triangles and `3 n` distinct vertices,
+    /// and fields of its own after the mesh, in the object and in the candidate.
+    fn candidate(n: u32) -> PoseCandidate {
+        let triangles = (0..n)
+            .map(|i| MeshTriangle {
+                vertex_indices: [3 * i, 3 * i + 1, 3 * i + 2],
+            })
+            .collect();
+        let vertices = (0..3 * n)
+            .map(|i| Point {
+                x: f64::from(i),
+                y: 0.5 + f64::from(i),
+                z: -f64::from(i),
+            })
+            .collect();
+        PoseCandidate {
+            id: "cut".into(),
+            width: 0.09,
+            grasp_pose: Pose {
+                orientation: Quaternion {
+                    w: 1.0,
+                    ..Quaternion::default()
+                },
+                ..Pose::default()
+            },
+            object: GraspObject {
+                inline_mesh: Mesh {
+                    triangles,
+                    vertices,
+                },
+                scale: Vector3 {
+                    x: 2.0,
+                    y: 3.0,
+                    z: 4.0,
+                },
+                mass: 0.25,
+                friction: 0.5,
+                has_center_of_mass: true,
+                center_of_mass: Point {
+                    x: 0.125,
+                    y: 0.25,
+                    z: 0.375,
+                },
+                ..GraspObject::default()
+            },
+            gravity: Vector3 {
+                x: 0.0,
+                y: 0.0,
+                z: -9.81,
+            },
+            ..PoseCandidate::default()
+        }
+    }
+
+    /// `c` with its inline mesh cut to `triangles` triangles and `vertices` vertices.
+    fn cut(c: &PoseCandidate, triangles: usize, vertices: usize) -> PoseCandidate {
+        let mut c = c.clone();
+        c.object.inline_mesh.triangles.truncate(triangles);
+        c.object.inline_mesh.vertices.truncate(vertices);
+        c
+    }
+
+    /// `c` through CDR and through JSON: both decoders go through the same bound.
+    fn decoded(c: &PoseCandidate) -> [PoseCandidate; 2] {
+        let bytes = cdr::encode(c).expect("encodes");
+        let text = serde_json::to_string(c).expect("encodes");
+        [
+            cdr::decode(&bytes).expect("decodes"),
+            serde_json::from_str(&text).expect("decodes"),
+        ]
+    }
+
+    /// What [`decoding_beyond_the_bound_keeps_one_more`] checks, in a process of its own (the
+    /// bound is the process's): nothing without `GRASP_ORIENT_DECODE_BOUND_CHILD`.
+    #[test]
+    #[ignore = "run by decoding_beyond_the_bound_keeps_one_more in a process of its own"]
+    fn bounded_decoding_child() {
+        if std::env::var_os("GRASP_ORIENT_DECODE_BOUND_CHILD").is_none() {
+            return;
+        }
+        let big = candidate(1000);
+        let small = candidate(150);
+        // No bound set: decoded whole.
+        for d in decoded(&big) {
+            assert_eq!(d, big, "decoded whole without a bound");
+        }
+        limit_inline_mesh_decoding(200);
+        // One more than the bound of each, in order; every later field decoded as sent.
+        for d in decoded(&big) {
+            assert_eq!(d.object.inline_mesh.triangles.len(), 201);
+            assert_eq!(d.object.inline_mesh.vertices.len(), 601);
+            assert_eq!(
+                d,
+                cut(&big, 201, 601),
+                "the first 201 and 601, then the rest"
+            );
+        }
+        // Within the bound: whole.
+        for d in decoded(&small) {
+            assert_eq!(d, small, "a mesh within the bound decoded whole");
+        }
+        // A lower value leaves the bound where it was; a higher one raises it.
+        limit_inline_mesh_decoding(100);
+        for d in decoded(&big) {
+            assert_eq!(d, cut(&big, 201, 601), "the bound never shrinks");
+        }
+        limit_inline_mesh_decoding(400);
+        for d in decoded(&big) {
+            assert_eq!(d, cut(&big, 401, 1201), "a higher bound");
+        }
+        // Many more vertices than triangles: the vertices are cut at three per triangle kept.
+        let mut soup = candidate(10);
+        soup.object.inline_mesh.vertices = candidate(1000).object.inline_mesh.vertices;
+        for d in decoded(&soup) {
+            assert_eq!(d, cut(&soup, 10, 1201), "vertices cut on their own");
+        }
+        println!("BOUNDED-DECODING held");
+    }
+
+    /// An inline mesh beyond the bound [`limit_inline_mesh_decoding`] sets is decoded to one
+    /// more triangle than the bound (and one more vertex than three per triangle), the message's
+    /// later fields as sent; a mesh within it is whole; the bound only grows. Checked in a child
+    /// process, since the bound is the process's and would cut other tests' meshes.
+    #[test]
+    fn decoding_beyond_the_bound_keeps_one_more() {
+        let out = std::process::Command::new(std::env::current_exe().expect("this test"))
+            .args([
+                "--exact",
+                "msg::poses::tests::bounded_decoding_child",
+                "--ignored",
+                "--nocapture",
+                "--test-threads=1",
+            ])
+            .env("GRASP_ORIENT_DECODE_BOUND_CHILD", "1")
+            .output()
+            .expect("the child runs");
+        let text = String::from_utf8_lossy(&out.stdout).into_owned()
+            + &String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{text}");
+        assert!(
+            text.contains("BOUNDED-DECODING held"),
+            "the child checked nothing: {text}"
+        );
     }
 }

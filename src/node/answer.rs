@@ -343,8 +343,6 @@ impl Answerer {
             markers_on: self.draws(version.config.publish_markers, audience),
             echo: self.echo,
             load_time: load_time(version.config.max_mesh_load_time),
-            max_inline: usize::try_from(version.config.max_inline_mesh_triangles)
-                .unwrap_or(usize::MAX),
         }
     }
 
@@ -876,6 +874,32 @@ pub(crate) mod tests {
             r#"{{"header": {{"frame_id": "base_link"}}, "id": "{id}", "grasp_pose": {{"position": {{"x": 0.0, "y": 0.0, "z": 0.0}}, "orientation": {{"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}}}, "width": 0.09, "object": {{"pose": {{"position": {{"x": 0.0, "y": 0.0, "z": 0.0}}, "orientation": {{"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}}}, {shape}, "mass": 0.25, "friction": 0.5}}, "gravity": {{"x": 0.0, "y": 0.0, "z": -9.81}}}}"#
         );
         serde_json::from_str(&line).expect("a PoseCandidate")
+    }
+
+    /// A 10 MiB `object.mesh` is refused in an answer and a log line of a few hundred bytes
+    /// (before, the resource was echoed whole into both: 21 MB each).
+    #[test]
+    fn a_mesh_resource_of_10_mib_is_echoed_neither_in_the_answer_nor_in_the_log() {
+        let mut a = answerer(no_recording(), false);
+        let resource = format!("package://pkg/{}.stl", "a".repeat(10 << 20));
+        let mut candidate = pose_on("long", r#""mesh": "x.stl""#);
+        candidate.object.mesh = resource.as_str().into();
+        let out = a.handle_pose(candidate, 10, 5, true);
+        let m = &out.reply.recommendation.message;
+        assert_eq!(
+            out.reply.recommendation.status,
+            2,
+            "{}",
+            &m[..m.len().min(300)]
+        );
+        assert!(m.len() < 400, "{} bytes: {}", m.len(), &m[..400]);
+        assert!(m.contains("longer than 4096 bytes"), "{m}");
+        assert_eq!(out.notes.len(), 1);
+        for (_, line) in &out.notes {
+            assert!(line.len() < 600, "{} bytes: {}", line.len(), &line[..600]);
+        }
+        let bytes = crate::msg::cdr::encode(&out.reply).expect("encodes");
+        assert!(bytes.len() < 2048, "an answer of {} bytes", bytes.len());
     }
 
     /// Pose candidates are answered, counted and drawn as candidates are; a mesh file not yet

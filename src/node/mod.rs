@@ -155,6 +155,9 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
     let name = start.node_name(NODE_NAME);
     start.ros.check_distinct(&TOPICS, &name)?;
     let (config, settings) = load_config(&start.ros, &name)?;
+    // Inline meshes are decoded no further than the node would answer them (later values too:
+    // `Live::push`).
+    crate::msg::limit_inline_mesh_decoding(config.max_inline_mesh_triangles);
     log::debug!("settings: {config:?}");
     let shared = Shared::new(config.clone(), settings);
     let node_options = shared.declare(
@@ -162,7 +165,8 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
             .enable_rosout(true)
             .start_parameter_services(false),
     );
-    let mut session = start.open(&name, node_options)?;
+    let max_message_bytes = usize::try_from(config.max_message_bytes).unwrap_or(usize::MAX);
+    let mut session = start.open_bounded(&name, node_options, max_message_bytes)?;
     let endpoints = Endpoints::create(&mut session, config.qos_depth)?;
     let services = ParameterServices::offer(session.node_mut(), &shared)?;
     let topics = &endpoints.topics;

@@ -85,9 +85,11 @@ pub(crate) struct Version {
 
 impl Version {
     /// What answers with these parameters: their settings and gripper rules, pose candidates
-    /// closing along their `closing_axis`, on the node's `meshes`.
+    /// closing along their `closing_axis`, on the node's `meshes`, inline meshes up to their
+    /// `max_inline_mesh_triangles`.
     pub(crate) fn answering(&self, meshes: &Arc<grasp_orient_geometry::MeshCache>) -> Answering {
-        let poses = PoseAnswerer::sharing(self.config.closing_axis, meshes.clone());
+        let poses = PoseAnswerer::sharing(self.config.closing_axis, meshes.clone())
+            .bounding_inline(self.config.max_inline_mesh_triangles);
         Answering::new(self.settings, self.config.rules(), poses)
     }
 }
@@ -145,6 +147,7 @@ impl Live {
 
     /// A new version from now on.
     fn push(&mut self, changed: &str, config: Config, settings: Settings) {
+        crate::msg::limit_inline_mesh_decoding(config.max_inline_mesh_triangles);
         let since = crate::record::now_ns().max(self.versions.back().map_or(0, |v| v.since));
         self.versions.push_back(Version {
             seq: self.last_seq() + 1,

@@ -1,6 +1,5 @@
 //! A pose candidate's answer apart from the node's counts and recording ([`PoseWork`]), so that
-//! it can run on a loader thread (`loads.rs`), and the refusal of an inline mesh too large to
-//! index.
+//! it can run on a loader thread (`loads.rs`).
 
 use crate::answer::{markers, Answering};
 use crate::msg::{
@@ -32,31 +31,6 @@ pub(crate) struct PoseWork {
     pub(super) echo: bool,
     /// `max_mesh_load_time`.
     pub(super) load_time: std::time::Duration,
-    /// `max_inline_mesh_triangles`.
-    pub(super) max_inline: usize,
-}
-
-/// Why an inline mesh is refused before it is indexed: more than `max_triangles` triangles
-/// (parameter `max_inline_mesh_triangles`), or more than three vertices per triangle allowed
-/// (a triangle soup has three; more are vertices no triangle uses, held all the same).
-pub(crate) fn inline_mesh_too_large(
-    object: &crate::msg::GraspObject,
-    max_triangles: usize,
-) -> Option<String> {
-    let mesh = &object.inline_mesh;
-    if mesh.triangles.len() > max_triangles {
-        return Some(format!(
-            "object.inline_mesh has {} triangles, more than max_inline_mesh_triangles ({max_triangles}); send a coarser mesh",
-            mesh.triangles.len()
-        ));
-    }
-    let max_vertices = max_triangles.saturating_mul(3);
-    (mesh.vertices.len() > max_vertices).then(|| {
-        format!(
-            "object.inline_mesh has {} vertices, more than 3 x max_inline_mesh_triangles ({max_vertices})",
-            mesh.vertices.len()
-        )
-    })
 }
 
 impl PoseWork {
@@ -71,8 +45,10 @@ impl PoseWork {
         if self.echo {
             return None;
         }
-        inline_mesh_too_large(&candidate.object, self.max_inline)
-            .map(|why| refused(candidate, &why))
+        self.with
+            .poses()
+            .inline_too_large(&candidate.object)
+            .map(|why| refused(candidate, &why.to_string()))
     }
 
     /// The answer, and its markers when they are on and wanted and the answer has status 0.

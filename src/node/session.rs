@@ -248,9 +248,13 @@ impl Graph {
         }
     }
 
-    fn context(&self) -> anyhow::Result<Context> {
+    /// The ROS context over this range's participant, whose user readers take in samples of at
+    /// most `max_message_bytes` (larger ones, in fragments, are dropped before anything is
+    /// held: `patches/rustdds-0.15.1/0015-bounded-fragment-assembly.patch`).
+    fn context(&self, max_message_bytes: usize) -> anyhow::Result<Context> {
         let participant = self
             .participant_builder()
+            .max_sample_size(max_message_bytes)
             .build()
             .context("cannot start DDS")?;
         Context::from_domain_participant(participant).context("cannot start the ROS context")
@@ -318,11 +322,34 @@ impl Start {
     }
 
     /// Joins the graph as node `name` in the namespace of `-r __ns:=`, and watches it for
-    /// another node of the same full name ([`Session::watch_namesakes`]).
+    /// another node of the same full name ([`Session::watch_namesakes`]); its readers take in
+    /// messages of up to RustDDS's default bound.
     pub(crate) fn open(self, name: &str, options: NodeOptions) -> anyhow::Result<Session> {
+        self.open_bounded(
+            name,
+            options,
+            DomainParticipantBuilder::DEFAULT_MAX_SAMPLE_SIZE,
+        )
+    }
+
+    /// [`Start::open`] with readers that take in serialized messages of at most
+    /// `max_message_bytes` (the node's parameter of that name).
+    pub(crate) fn open_bounded(
+        self,
+        name: &str,
+        options: NodeOptions,
+        max_message_bytes: usize,
+    ) -> anyhow::Result<Session> {
         let graph = Graph::from_env()?;
         let namespace = self.ros.namespace();
-        let mut session = Session::open(graph, &namespace, name, options, self.shutdown, self.ros)?;
+        let mut session = Session::open(
+            graph,
+            &namespace,
+            name,
+            options,
+            (self.shutdown, self.ros),
+            max_message_bytes,
+        )?;
         session.watch_namesakes();
         Ok(session)
     }
@@ -370,8 +397,8 @@ impl Session {
             namespace,
             name,
             options,
-            Shutdown(None),
-            RosArgs::default(),
+            (Shutdown(None), RosArgs::default()),
+            DomainParticipantBuilder::DEFAULT_MAX_SAMPLE_SIZE,
         )
     }
 
@@ -380,10 +407,10 @@ impl Session {
         namespace: &str,
         name: &str,
         options: NodeOptions,
-        shutdown: Shutdown,
-        ros: RosArgs,
+        (shutdown, ros): (Shutdown, RosArgs),
+        max_message_bytes: usize,
     ) -> anyhow::Result<Self> {
-        let context = graph.context()?;
+        let context = graph.context(max_message_bytes)?;
         let mut node = context
             .new_node(
                 NodeName::new(namespace, name).context("invalid node name or namespace")?,

@@ -7,7 +7,7 @@
 
 use super::endpoint::Endpoint;
 use super::loads::{too_slow, Loaders, LOAD_PANICKED};
-use super::pose_work::{inline_mesh_too_large, INLINE_OFF_THREAD_TRIANGLES};
+use super::pose_work::INLINE_OFF_THREAD_TRIANGLES;
 use super::session::qos;
 use crate::answer::{answer_in_full, markers, Answering, Halt, Interrupt, Refused, SetKind};
 use crate::kind::{PoseSets, Sets};
@@ -42,8 +42,6 @@ pub(crate) struct Solving<'a> {
     pub(super) loaders: &'a Loaders,
     /// `max_mesh_load_time`.
     pub(super) load_time: Duration,
-    /// `max_inline_mesh_triangles`.
-    pub(super) max_inline: usize,
 }
 
 impl Solving<'_> {
@@ -250,8 +248,8 @@ const LOAD_POLL: Duration = Duration::from_millis(20);
 /// background and fills the cache.
 fn object_within(s: &Solving, o: &crate::msg::GraspObject) -> Result<Object, Refused> {
     let answerer = s.with.poses();
-    if let Some(why) = inline_mesh_too_large(o, s.max_inline) {
-        return Err(refusal(why));
+    if let Some(why) = answerer.inline_too_large(o) {
+        return Err(Refused::from(why));
     }
     let scale = [o.scale.x, o.scale.y, o.scale.z];
     let loads = !o.mesh.is_empty() && !s.meshes.holds(&o.mesh, scale);

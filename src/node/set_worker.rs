@@ -244,8 +244,6 @@ struct InForce {
     budget: f64,
     /// `max_mesh_load_time`.
     load_time: Duration,
-    /// `max_inline_mesh_triangles`.
-    max_inline: usize,
 }
 
 impl Solver {
@@ -322,8 +320,6 @@ impl Solver {
                 threads: version.config.solver_threads,
                 budget: version.config.max_set_time,
                 load_time: load_time(version.config.max_mesh_load_time),
-                max_inline: usize::try_from(version.config.max_inline_mesh_triangles)
-                    .unwrap_or(usize::MAX),
             }
         }
     }
@@ -350,7 +346,6 @@ impl Solver {
             meshes: &self.meshes,
             loaders: &self.loaders,
             load_time: now.load_time,
-            max_inline: now.max_inline,
         })
     }
 

@@ -247,6 +247,17 @@ pub(crate) fn compare_one(
         summary.answered_behind_tangent += 1;
         return false;
     }
+    let reworded;
+    let theirs = match inline_refusal_today(&theirs.message) {
+        Some(message) => {
+            reworded = GripRecommendation {
+                message: message.into(),
+                ..theirs.clone()
+            };
+            &reworded
+        }
+        None => theirs,
+    };
     let diffs = differences_in(ours, theirs, fields);
     for (field, gap) in &diffs {
         summary.note_gap(field, *gap);
@@ -268,6 +279,26 @@ pub(crate) fn compare_one(
         )
     });
     true
+}
+
+/// A recorded refusal of an inline mesh beyond `max_inline_mesh_triangles` in 0.1.0's words,
+/// which gave the mesh's count (`object.inline_mesh has 300000 triangles, more than
+/// max_inline_mesh_triangles (250000); send a coarser mesh`, `… has 900001 vertices, more than 3 x
+/// max_inline_mesh_triangles (750000)`), in today's, which name only the bound (the node no
+/// longer decodes a mesh beyond it whole, so it does not know the count): the same refusal.
+/// `None` for any other message.
+fn inline_refusal_today(message: &str) -> Option<String> {
+    let rest = message.strip_prefix("invalid input: object.inline_mesh has ")?;
+    let (count, rest) = rest.split_once(' ')?;
+    if count.is_empty() || !count.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    ["triangles", "vertices"].iter().find_map(|what| {
+        let bound = rest.strip_prefix(what)?.strip_prefix(", more than ")?;
+        Some(format!(
+            "invalid input: object.inline_mesh has more {what} than {bound}"
+        ))
+    })
 }
 
 /// How recordings made before objects needed not be convex refused a candidate whose centre of

@@ -208,6 +208,56 @@ mod tests {
         );
     }
 
+    /// `docs/recordings.md`, *Refusals answered now*: a recorded refusal of an inline mesh
+    /// beyond `max_inline_mesh_triangles` in 0.1.0's words (with the mesh's count) is today's
+    /// refusal under the same bound, and not one under another bound nor other words.
+    #[test]
+    fn a_recorded_inline_refusal_in_older_words_is_todays_under_the_same_bound() {
+        let m = GraspCandidate {
+            id: "inline".into(),
+            ..GraspCandidate::default()
+        };
+        let refusal = |why: &str| crate::msg::convert::invalid(&m, &why);
+        let fields = RecordedFields::default();
+        let pairs = [
+            (
+                "object.inline_mesh has more triangles than max_inline_mesh_triangles (200); send a coarser mesh",
+                "object.inline_mesh has 220 triangles, more than max_inline_mesh_triangles (200); send a coarser mesh",
+                false,
+            ),
+            (
+                "object.inline_mesh has more vertices than 3 x max_inline_mesh_triangles (600)",
+                "object.inline_mesh has 5000000 vertices, more than 3 x max_inline_mesh_triangles (600)",
+                false,
+            ),
+            (
+                "object.inline_mesh has more triangles than max_inline_mesh_triangles (200); send a coarser mesh",
+                "object.inline_mesh has 220 triangles, more than max_inline_mesh_triangles (300); send a coarser mesh",
+                true,
+            ),
+            (
+                "object.inline_mesh has more triangles than max_inline_mesh_triangles (200); send a coarser mesh",
+                "object.inline_mesh has 220 vertices, more than max_inline_mesh_triangles (200); send a coarser mesh",
+                true,
+            ),
+            (
+                "object.inline_mesh has more triangles than max_inline_mesh_triangles (200); send a coarser mesh",
+                "object.inline_mesh has many triangles, more than max_inline_mesh_triangles (200); send a coarser mesh",
+                true,
+            ),
+        ];
+        for (today, recorded, differs) in pairs {
+            let mut summary = Summary::default();
+            let (ours, theirs) = (refusal(today), refusal(recorded));
+            assert_eq!(
+                compare_one(String::new, &ours, &theirs, &fields, &mut summary),
+                differs,
+                "{recorded}"
+            );
+            assert_eq!(summary.differing, u64::from(differs));
+        }
+    }
+
     /// `docs/recordings.md`, *Refusals answered now*: today's answer stands for exactly the
     /// recorded refusal of a centre of mass behind a tangent, and for nothing else.
     #[test]

@@ -47,8 +47,9 @@ pub type Override = (String, Value);
 /// Command-line overrides apply over both.
 #[derive(Debug, Clone)]
 pub struct Plan {
-    /// From which `log_time` on each applies, in time order: settings, gripper rules and the
-    /// closing axis of pose candidates, one mesh cache shared by all.
+    /// From which `log_time` on each applies, in time order: settings, gripper rules, the
+    /// closing axis of pose candidates and their inline meshes' bound, one mesh cache shared by
+    /// all.
     timeline: Vec<(u64, Answering)>,
     /// For a recording without settings records.
     fallback: Answering,
@@ -88,8 +89,11 @@ impl Plan {
         }
         // In time order; records of one time keep their file order, the last one winning.
         recorded.sort_by_key(|r| r.since);
+        // Inline meshes bounded as the node bounded them: a mesh it decoded only up to its
+        // bound (`msg::limit_inline_mesh_decoding`) is refused here with the node's words.
         let answering = |config: &Config, settings| {
-            let poses = PoseAnswerer::sharing(config.closing_axis, meshes.clone());
+            let poses = PoseAnswerer::sharing(config.closing_axis, meshes.clone())
+                .bounding_inline(config.max_inline_mesh_triangles);
             Answering::new(settings, config.rules(), poses)
         };
         let mut timeline = Vec::with_capacity(recorded.len());

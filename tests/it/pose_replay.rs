@@ -177,3 +177,94 @@ fn a_mesh_missing_at_replay_is_an_error() {
         "{text}"
     );
 }
+
+/// An inline mesh the node refused as beyond `max_inline_mesh_triangles` is recorded as the node
+/// decoded it, cut to one triangle beyond the bound (`max_inline_mesh_triangles` 200: 201
+/// triangles, 601 vertices, all at the origin). `replay` refuses it under the recorded bound
+/// with the node's words, alone and as a set's object, instead of casting poses onto the cut
+/// mesh (which refuses it for another cause).
+#[test]
+fn a_recorded_refusal_of_a_cut_inline_mesh_replays_unchanged() {
+    let dir = temp_dir("pose_replay_cut_inline");
+    let bag = dir.path().join("cut.mcap");
+    let config = Config {
+        max_inline_mesh_triangles: 200,
+        ..Config::default()
+    };
+    let with = config
+        .answering(PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default()))
+        .expect("valid");
+    let cut = |text: &str| {
+        let mut v: serde_json::Value = serde_json::from_str(text).expect("json");
+        v["object"] = serde_json::json!({
+            "pose": {"position": {"x": 0.5, "y": 0.0, "z": 0.1},
+                     "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}},
+            "inline_mesh": {
+                "triangles": vec![serde_json::json!({"vertex_indices": [0, 1, 2]}); 201],
+                "vertices": vec![serde_json::json!({"x": 0.0, "y": 0.0, "z": 0.0}); 601],
+            },
+            "mass": 0.25, "friction": 0.5
+        });
+        v
+    };
+    let single: PoseCandidate = serde_json::from_value(cut(&serde_json::to_string(&candidate(
+        0, CYLINDER, 0.1, 0.09,
+    ))
+    .expect("json")))
+    .expect("a PoseCandidate");
+    let pose_set: PoseCandidateSet = serde_json::from_value(cut(&serde_json::to_string(&set(
+        "cut", CYLINDER,
+    ))
+    .expect("json")))
+    .expect("a PoseCandidateSet");
+    let answer = with.answer::<grasp_orient::kind::Poses>(&single);
+    assert_eq!(answer.recommendation.status, 2);
+    assert!(
+        answer
+            .recommendation
+            .message
+            .contains("more triangles than max_inline_mesh_triangles (200)"),
+        "{}",
+        answer.recommendation.message
+    );
+    let set_answer = with.answer::<grasp_orient::kind::PoseSets>(&pose_set);
+    // Without the bound the cut mesh is refused for another cause: what a replay that did not
+    // apply the recorded bound would answer.
+    let unbounded = Config::default()
+        .answering(PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default()))
+        .expect("valid")
+        .answer::<grasp_orient::kind::Poses>(&single);
+    assert_ne!(
+        unbounded.recommendation.message,
+        answer.recommendation.message
+    );
+    let mut w = BagWriter::create(&bag, &crate::util::pose_bag_topics(), 100).expect("create");
+    let entries = [
+        Payload::settings(SettingsRecord {
+            since: 0,
+            node: "/grasp_orient".into(),
+            reason: "start".into(),
+            config,
+        }),
+        Payload::request::<grasp_orient::kind::Poses>(single),
+        Payload::answer::<grasp_orient::kind::Poses>(answer),
+        Payload::request::<grasp_orient::kind::PoseSets>(pose_set),
+        Payload::answer::<grasp_orient::kind::PoseSets>(set_answer),
+    ];
+    for (k, payload) in entries.into_iter().enumerate() {
+        let t = 1_000_000_000 + k as u64 * 1000;
+        w.write(&Entry {
+            payload,
+            log_time: t,
+            publish_time: t,
+        })
+        .expect("write");
+    }
+    w.finish().expect("finish");
+    let (code, text) = replay(&bag, false);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(
+        text.contains("5 compared") && text.contains(" 0 differ"),
+        "{text}"
+    );
+}

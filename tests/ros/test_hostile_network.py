@@ -5,6 +5,9 @@ ports (the node's processes run on this host; nothing here sends to any address 
   to the SPDP reader and to the user readers: the node stays alive, its RSS within 100 MB of before, and it
   answers a GraspCandidate.
 - Eight DATA_FRAGs claiming 1 GiB each, from eight GUID prefixes: RSS within 200 MB, answering.
+- With max_message_bytes 1 MiB, a GraspCandidate of 2 MiB (a long id) from the client's own reliable
+  publisher is dropped with a warning naming the bound, and the next candidates from that publisher are
+  answered at once (the dropped sequence number does not hold them back).
 - 20,000 fake SPDP participants (distinct GUID prefixes, as fast as the socket takes them): RSS bounded, a
   candidate answered promptly during and after, and SIGINT ends the node within about a second.
 
@@ -23,7 +26,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import DOMAIN_ID, GraspClient, probe_candidate
+from conftest import DOMAIN_ID, GraspClient, candidate_msg, probe_candidate
 
 # ---------------------------------------------------------------------------------------------------
 # RTPS on the wire
@@ -235,6 +238,33 @@ def test_eight_datagrams_claiming_1gib_from_eight_guids(grasp_node, client):
     took = answers_promptly(client, "after")
     print(f"8 x 1 GiB: RSS {before:.1f} -> {after:.1f} MB, answer in {took * 1000:.0f} ms")
     assert after - before < 200, f"RSS grew from {before:.1f} to {after:.1f} MB on 8 DATA_FRAGs"
+
+
+def test_a_message_above_max_message_bytes_is_dropped(start_node, peer):
+    ns = "/hostile_big"
+    node = start_node("--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false",
+                      "-p", f"max_message_bytes:={1 << 20}", name="node (max_message_bytes 1 MiB)")
+    client = GraspClient(peer, ns)
+    client.ensure_roundtrip()
+    pid = node.proc.pid
+    before = rss_mb(pid)
+    seen = len(node.all_lines())
+    big = probe_candidate("big-" + "x" * (2 << 20))  # a 2 MiB id: about 33 DATA_FRAGs of 64 KiB
+    n = len(client.order)
+    client.pub.publish(candidate_msg(big))
+    line = node.wait_for_line(r"claims a sample of \d+ bytes, more than the 1048576", timeout=10.0, after=seen)
+    # The next candidates of the same reliable publisher: answered within a second each, not after the
+    # writer gives up on the dropped one.
+    took = [answers_promptly(client, f"after-{k}", timeout=5.0) for k in range(3)]
+    client.peer.spin_for(0.5)
+    dropped = [a.candidate_id[:20] for a in client.order[n:] if a.candidate_id.startswith("big-")]
+    after = rss_mb(pid)
+    print(f"2 MiB candidate against max_message_bytes 1 MiB: {line.strip()[:160]}; answers after it "
+          f"{[round(t * 1000) for t in took]} ms; RSS {before:.1f} -> {after:.1f} MB")
+    assert not dropped, f"the 2 MiB candidate was answered: {dropped}"
+    assert max(took) < 1.0, f"answers after the dropped message took {took} s"
+    assert node.proc.poll() is None
+    node.stop_and_check()
 
 
 FAKE_PARTICIPANTS = 20_000

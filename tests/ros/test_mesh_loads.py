@@ -6,7 +6,9 @@
   within 5 s, while contact candidates and parameter requests are answered at once, and SIGINT is honoured
   within a second;
 - an inline mesh beyond max_inline_mesh_triangles is refused at once, and several just under it at once leave
-  contact candidates answered within 300 ms and the node's RSS under 1.5 GB.
+  contact candidates answered within 300 ms and the node's RSS under 1.5 GB;
+- a 120 MB candidate (an inline mesh of 5M triangles) is refused within 5 s without being decoded whole: contact
+  candidates answered within 300 ms meanwhile, peak RSS under 1.5 GB.
 
 Timed: run alone (tests/run.sh lists it among TIMED). See conftest.py for how to run.
 """
@@ -15,6 +17,7 @@ from __future__ import annotations
 import math
 import os
 import signal
+import struct
 import time
 from pathlib import Path
 
@@ -211,3 +214,86 @@ def test_inline_meshes_are_bounded(start_node, peer):
     assert worst < 0.3, worst
     assert peak < 1500, peak
     node.stop_and_check()
+
+
+def huge_inline_candidate(cid: str, triangles: int, vertices: int) -> bytes:
+    """The CDR of a PoseCandidate (as test_inline_meshes_are_bounded's) whose inline mesh has `triangles`
+    triangles and `vertices` vertices: a one-triangle mesh serialized by rclpy, its two sequences replaced by
+    zero-filled ones of those lengths (built in bytes: millions of Python messages would take minutes).
+    `triangles` is odd, so the doubles after the triangles keep rclpy's alignment (12 x odd = 4 mod 8)."""
+    from rclpy.serialization import serialize_message
+    assert triangles % 2 == 1
+    base = pc.singles()[0]
+    marks = [0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875, 1.125, 1.25]
+    mesh = {"triangles": [{"vertex_indices": [0, 1, 2]}],
+            "vertices": [{"x": marks[3 * i], "y": marks[3 * i + 1], "z": marks[3 * i + 2]} for i in range(3)]}
+    small = dict(base, id=cid, object={"pose": pc.pose(0, 0, 0), "scale": pc.ONE, "mass": 0.25,
+                                       "friction": 0.5, "inline_mesh": mesh})
+    raw = serialize_message(pc.fill(PoseCandidate(), small))
+    tri = struct.pack("<I3I", 1, 0, 1, 2)
+    start = raw.index(tri)
+    doubles = struct.pack("<9d", *marks)
+    end = raw.index(doubles, start) + len(doubles)
+    # Between them: the vertex count and the padding that aligns the doubles to 8.
+    gap = raw[start + len(tri):end - len(doubles)]
+    assert gap[:4] == struct.pack("<I", 3), gap
+    return (raw[:start] + struct.pack("<I", triangles) + bytes(12 * triangles)
+            + struct.pack("<I", vertices) + gap[4:] + bytes(24 * vertices) + raw[end:])
+
+
+def test_a_huge_inline_mesh_is_refused_without_being_decoded_whole(start_node, peer):
+    """A 120 MB candidate (an inline mesh of 5M triangles), refused by max_inline_mesh_triangles within 5 s: the
+    node's peak RSS stays under 1.5 GB and contact candidates are answered within 300 ms meanwhile. What the node
+    still holds after it is printed: the sample stays in RustDDS's history of the topic (KeepLast qos_depth)."""
+    ns = "/mesh_huge"
+    node = start_node("--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false", name="grasp_orient node (huge inline)")
+    single = GraspClient(peer, ns)
+    single.ensure_roundtrip()
+    from conftest import reliable_qos
+    from grasp_orient.msg import PoseRecommendation
+    pub = peer.node.create_publisher(PoseCandidate, f"{ns}/pose_candidates", reliable_qos(10))
+    answers: dict = {}
+    sub = peer.node.create_subscription(PoseRecommendation, f"{ns}/pose_recommendations",
+                                        lambda m: answers.setdefault(m.recommendation.candidate_id,
+                                                                     (m, time.monotonic())),
+                                        reliable_qos(10))
+    assert peer.spin_until(lambda: pub.get_subscription_count() > 0 and sub.get_publisher_count() > 0, 15.0)
+    pid = node.proc.pid
+    case = load_paper_cases()[0]
+    for k in range(3):  # warm: the first answers' allocations are part of "before"
+        case["id"] = f"warm-{k}"
+        assert single.send_one(case, timeout=10).status == 0
+    before, _ = rss_mb(pid)
+    raw = huge_inline_candidate("huge", 5_000_001, 2_500_000)
+    t0 = time.monotonic()
+    pub.publish(raw)
+    worst = 0.0
+    k = 0
+    deadline = time.monotonic() + 120
+    while "huge" not in answers and time.monotonic() < deadline:
+        case["id"] = f"during-{k}"
+        k += 1
+        t = time.monotonic()
+        assert single.send_one(case, timeout=10).status == 0
+        worst = max(worst, time.monotonic() - t)
+        peer.spin_for(0.2)
+    assert "huge" in answers, "the 5M-triangle candidate was not answered within 120 s"
+    m, at = answers["huge"]
+    a = m.recommendation
+    assert a.status == 2 and "more triangles than max_inline_mesh_triangles (250000)" in a.message, a.message
+    took = at - t0
+    _, peak = rss_mb(pid)
+    settled = []
+    for _ in range(6):  # what the node still holds, over the next 6 s
+        peer.spin_for(1.0)
+        settled.append(rss_mb(pid)[0])
+    case["id"] = "after"
+    assert single.send_one(case, timeout=10).status == 0
+    print(f"{len(raw) / 1e6:.0f} MB inline mesh refused after {took:.2f} s: RSS {before:.0f} MB before, peak "
+          f"{peak:.0f} MB, then {[round(r) for r in settled]} MB; {k} contact candidates during it, longest "
+          f"{1e3 * worst:.0f} ms")
+    assert took < 5.0, took
+    assert peak < 1500, peak
+    assert worst < 0.3, worst
+    node.stop_and_check()
+

@@ -530,7 +530,7 @@ def test_parameters_are_described_listed_and_set_atomically(peer, client):
             "record", "record_dir", "record_markers", "gripper_drive", "max_grip_force", "rank_by", "max_set_size",
             "solver_threads", "max_set_time", "max_queued_sets",
             "center_of_mass_tolerance", "mass_tolerance", "closing_axis", "max_mesh_load_time",
-            "max_inline_mesh_triangles", "mesh_roots", "max_mesh_file_bytes", "use_sim_time"}
+            "max_inline_mesh_triangles", "mesh_roots", "max_mesh_file_bytes", "max_message_bytes", "use_sim_time"}
     assert set(listed) == want, sorted(listed)
     types = peer.call(peer.node.create_client(GetParameterTypes, f"{node}/get_parameter_types"),
                       GetParameterTypes.Request(names=["qos_depth", "record", "mesh_roots", "nothing"])).types

@@ -54,6 +54,8 @@ pub const MESH_CACHE_BYTES: usize = 512 << 20;
 pub struct PoseAnswerer {
     closing_axis: ClosingAxis,
     meshes: Arc<MeshCache>,
+    /// `max_inline_mesh_triangles` ([`PoseAnswerer::bounding_inline`]); no bound by default.
+    max_inline: usize,
 }
 
 impl PoseAnswerer {
@@ -71,7 +73,32 @@ impl PoseAnswerer {
         Self {
             closing_axis,
             meshes,
+            max_inline: usize::MAX,
         }
+    }
+
+    /// An inline mesh of more than `max_triangles` triangles, or more than three vertices per
+    /// allowed triangle, refused before anything of it is indexed or even checked
+    /// (parameter `max_inline_mesh_triangles`: `Config::answering`, the node's versions and
+    /// `replay`'s settings records apply it, so that the node, `solve` and `replay` answer
+    /// alike; a `PoseAnswerer` made without a config has no bound). The words name
+    /// the bound, not the mesh's count, so that a mesh the node decoded only up to the bound
+    /// (`msg::limit_inline_mesh_decoding`) is refused with the same words, and a recording of it
+    /// replays to the same answer.
+    pub(crate) fn bounding_inline(mut self, max_triangles: i64) -> Self {
+        self.max_inline = usize::try_from(max_triangles).unwrap_or(usize::MAX);
+        self
+    }
+
+    /// Why `o`'s inline mesh is refused before it is indexed ([`PoseAnswerer::bounding_inline`]).
+    pub(crate) fn inline_too_large(&self, o: &GraspObject) -> Option<PoseRefusal> {
+        let mesh = &o.inline_mesh;
+        let max = self.max_inline;
+        if mesh.triangles.len() > max {
+            return Some(PoseRefusal::InlineTriangles { max });
+        }
+        let max_vertices = max.saturating_mul(3);
+        (mesh.vertices.len() > max_vertices).then_some(PoseRefusal::InlineVertices { max_vertices })
     }
 
     /// Closing along `closing_axis`, `package://` through `AMENT_PREFIX_PATH`.
@@ -268,6 +295,9 @@ impl PoseAnswerer {
 
     /// The object's pose and shape, checked: for the markers that draw it.
     pub(crate) fn object(&self, o: &GraspObject) -> Result<Object, PoseRefusal> {
+        if let Some(why) = self.inline_too_large(o) {
+            return Err(why);
+        }
         let pose = isometry(&o.pose, &"object.pose")?;
         let scale = [o.scale.x, o.scale.y, o.scale.z];
         let mesh_given = !o.mesh.is_empty()
@@ -729,5 +759,85 @@ mod tests {
         assert_eq!(r.recommendation.status, 0, "{}", r.recommendation.message);
         assert!((r.contact_2.y - 0.04).abs() < 1e-15);
         assert_eq!((r.normal_1.y, r.normal_2.y), (1.0, -1.0));
+    }
+
+    /// An inline mesh beyond `max_inline_mesh_triangles` is refused before it is looked at, one
+    /// triangle beyond or thousands, with the same words (the node decodes no more than one
+    /// beyond: `msg::limit_inline_mesh_decoding`), alone and in a set; at the bound it is
+    /// answered; vertices beyond three per allowed triangle are refused too; no bound without a
+    /// config, and `Config::answering` applies the config's.
+    #[test]
+    fn an_inline_mesh_beyond_the_bound_is_refused_in_words_without_its_count() {
+        let mut set = set_on("", 2);
+        let (corners, triangles) = cube_mm();
+        set.object.inline_mesh.vertices =
+            corners.iter().map(|&[x, y, z]| Point { x, y, z }).collect();
+        set.object.inline_mesh.triangles = triangles
+            .into_iter()
+            .map(|vertex_indices| MeshTriangle { vertex_indices })
+            .collect();
+        let single = |object: &GraspObject| PoseCandidate {
+            id: "inline".into(),
+            grasp_pose: set.poses[0].grasp_pose.clone(),
+            width: 0.1,
+            object: object.clone(),
+            gravity: set.gravity.clone(),
+            ..PoseCandidate::default()
+        };
+        let (settings, rules) = (Settings::default(), Rules::default());
+        let n = set.object.inline_mesh.triangles.len();
+        let unbounded = PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default());
+        let at = unbounded.clone().bounding_inline(n as i64);
+        for answerer in [&unbounded, &at] {
+            let r = answerer.answer(&single(&set.object), &settings, &rules);
+            assert_eq!(r.recommendation.status, 0, "{}", r.recommendation.message);
+        }
+        let words = format!(
+            "invalid input: object.inline_mesh has more triangles than max_inline_mesh_triangles \
+             ({}); send a coarser mesh",
+            n - 1
+        );
+        let below = unbounded.clone().bounding_inline(n as i64 - 1);
+        let mut many = set.object.clone();
+        let copies: Vec<MeshTriangle> = (0..500)
+            .flat_map(|_| many.inline_mesh.triangles.iter().cloned())
+            .collect();
+        many.inline_mesh.triangles = copies;
+        for object in [&set.object, &many] {
+            let r = below.answer(&single(object), &settings, &rules);
+            assert_eq!(r.recommendation.status, 2);
+            assert_eq!(r.recommendation.message, words);
+            assert!(r.contact_1.x.is_nan());
+            let mut in_set = set.clone();
+            in_set.object = object.clone();
+            let a = below.answer_set(&in_set, &settings, &rules);
+            assert!(a.ranking.is_empty());
+            for r in &a.recommendations {
+                assert_eq!(r.recommendation.status, 2);
+                assert_eq!(r.recommendation.message, words);
+            }
+        }
+        // Vertices: three per allowed triangle at most.
+        let mut soup = set.object.clone();
+        let extra = soup.inline_mesh.vertices[0].clone();
+        soup.inline_mesh.vertices.resize(3 * n + 1, extra);
+        let r = at.answer(&single(&soup), &settings, &rules);
+        assert_eq!(r.recommendation.status, 2);
+        assert_eq!(
+            r.recommendation.message,
+            format!(
+                "invalid input: object.inline_mesh has more vertices than 3 x \
+                 max_inline_mesh_triangles ({})",
+                3 * n
+            )
+        );
+        // The config's bound, through Config::answering.
+        let config = crate::config::Config {
+            max_inline_mesh_triangles: n as i64 - 1,
+            ..Default::default()
+        };
+        let with = config.answering(unbounded.clone()).expect("valid");
+        let r = with.answer::<crate::kind::Poses>(&single(&set.object));
+        assert_eq!(r.recommendation.message, words);
     }
 }

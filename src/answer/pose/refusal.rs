@@ -122,6 +122,26 @@ pub(crate) enum PoseRefusal {
         /// Whether `object.scale` is 1 on every axis.
         unit_scale: bool,
     },
+    /// An inline mesh of more triangles than `max_inline_mesh_triangles`, refused before it is
+    /// indexed. No count in the words: the node decodes no more than the bound and one more
+    /// (`msg::limit_inline_mesh_decoding`), so it does not know the count of a larger mesh.
+    #[error(
+        "object.inline_mesh has more triangles than max_inline_mesh_triangles ({max}); send a \
+         coarser mesh"
+    )]
+    InlineTriangles {
+        /// `max_inline_mesh_triangles`.
+        max: usize,
+    },
+    /// An inline mesh of more vertices than three per allowed triangle (a triangle soup has
+    /// three; more are vertices no triangle uses, held all the same).
+    #[error(
+        "object.inline_mesh has more vertices than 3 x max_inline_mesh_triangles ({max_vertices})"
+    )]
+    InlineVertices {
+        /// Three times `max_inline_mesh_triangles`.
+        max_vertices: usize,
+    },
     /// `center_of_mass` given without `has_center_of_mass`.
     #[error(
         "object.center_of_mass is given but object.has_center_of_mass is false: set it true, or \

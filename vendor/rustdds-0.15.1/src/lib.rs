@@ -237,6 +237,11 @@ pub use structure::{
   duration::Duration, entity::RTPSEntity, guid::GUID, rpc::SampleIdentity,
   sequence_number::SequenceNumber, time::Timestamp,
 };
+/// The log target of the warnings about input dropped by a resource bound (a DATA_FRAG above
+/// `max_sample_size`, a participant beyond `max_remote_participants`, discovery data beyond
+/// its byte bounds), so that an application can show them while it keeps RustDDS's other
+/// warnings quiet. Patched for grasp_orient (0017-oversize-sample-skipped.patch).
+pub const LIMITS_LOG_TARGET: &str = "rustdds::limits";
 // re-export from a helper crate
 /// Helper pacakge to compute the CDR-serialized size of data
 pub use cdr_encoding_size;

@@ -79,6 +79,9 @@ pub(crate) struct DiscoveryReach {
   /// The most remote participants discovery keeps (patched for grasp_orient,
   /// 0016-bounded-remote-participants.patch).
   pub max_remote_participants: usize,
+  /// The most bytes discovery's records of remote participants, endpoints and topics hold
+  /// (patched for grasp_orient, 0018-bounded-discovery-bytes.patch).
+  pub max_discovery_bytes: usize,
 }
 
 /// Builder object to create a [`DomainParticipant`] with non-default
@@ -101,6 +104,7 @@ pub struct DomainParticipantBuilder {
   discover_others: bool,          // take in other participants found by SPDP
   max_sample_size: usize,         // the largest sample a user reader assembles from DATA_FRAGs
   max_remote_participants: usize, // the most remote participants discovery keeps
+  max_discovery_bytes: usize,     // the most bytes discovery's records of them hold
 
   socket_receive_buffer_size: usize,
   socket_send_buffer_size: usize,
@@ -123,6 +127,7 @@ impl DomainParticipantBuilder {
       discover_others: true,
       max_sample_size: Self::DEFAULT_MAX_SAMPLE_SIZE,
       max_remote_participants: Self::DEFAULT_MAX_REMOTE_PARTICIPANTS,
+      max_discovery_bytes: Self::DEFAULT_MAX_DISCOVERY_BYTES,
       socket_receive_buffer_size: Self::DEFAULT_SOCKET_RECEIVE_BUFFER_SIZE,
       socket_send_buffer_size: Self::DEFAULT_SOCKET_SEND_BUFFER_SIZE,
       #[cfg(feature = "security")]
@@ -227,6 +232,25 @@ impl DomainParticipantBuilder {
   /// leaves (or whose lease expires) makes room again.
   pub fn max_remote_participants(mut self, count: usize) -> Self {
     self.max_remote_participants = count;
+    self
+  }
+
+  /// The default of [`Self::max_discovery_bytes`]: 64 MiB. A ROS 2 node announces about 30
+  /// endpoints of about a kilobyte each as discovery keeps them, so this holds
+  /// [`Self::DEFAULT_MAX_REMOTE_PARTICIPANTS`] such nodes twice over.
+  pub const DEFAULT_MAX_DISCOVERY_BYTES: usize = 64 << 20;
+
+  /// The most bytes discovery's records of remote participants, their readers and writers
+  /// and the topics they name may hold together (default
+  /// [`Self::DEFAULT_MAX_DISCOVERY_BYTES`]), counted as each record's size and the heap it
+  /// owns (locator lists, names, user data) plus a fixed amount per map entry. A record
+  /// that does not fit is ignored (one warning every 10 s says how many were), after the
+  /// endpoints of participants whose lease expired were dropped to make room. The count of
+  /// participants alone bounds no memory: each one may announce any number of endpoints,
+  /// with names and locator lists up to a sample's size, and endpoints are kept whether or
+  /// not their participant was taken in.
+  pub fn max_discovery_bytes(mut self, bytes: usize) -> Self {
+    self.max_discovery_bytes = bytes;
     self
   }
 
@@ -455,6 +479,7 @@ impl DomainParticipantBuilder {
         discover_others: self.discover_others,
         max_sample_size: self.max_sample_size,
         max_remote_participants: self.max_remote_participants,
+        max_discovery_bytes: self.max_discovery_bytes,
       },
       dp_waker,
       discovery_sample_sender,
@@ -1511,6 +1536,7 @@ impl DomainParticipantInner {
       status_sender.clone(),
     );
     discovery_db.set_max_remote_participants(reach.max_remote_participants);
+    discovery_db.set_max_discovery_bytes(reach.max_discovery_bytes);
     let discovery_db = Arc::new(RwLock::new(discovery_db));
 
     let (stop_poll_sender, stop_poll_receiver) = wake_channel_unbounded(&dp_waker);

@@ -1076,7 +1076,10 @@ impl Discovery {
     if !self.domain_participant.discovers_others()
       && participant_data.participant_guid.prefix != self.domain_participant.guid().prefix
     {
-      trace!("spdp_receive: ignoring {:?}", participant_data.participant_guid);
+      trace!(
+        "spdp_receive: ignoring {:?}",
+        participant_data.participant_guid
+      );
       return;
     }
     let guid_prefix = participant_data.participant_guid.prefix;
@@ -1087,7 +1090,13 @@ impl Discovery {
       if !db.admits_participant(guid_prefix) {
         return;
       }
-      db.update_participant(participant_data)
+      let was_new = db.update_participant(participant_data);
+      // Patched for grasp_orient (0018-bounded-discovery-bytes.patch): a new participant whose
+      // data does not fit within max_discovery_bytes is not taken in either.
+      if db.find_participant_proxy(guid_prefix).is_none() {
+        return;
+      }
+      was_new
     };
 
     // Send notification to dp_event_loop. It will update local reader/writer
@@ -1244,7 +1253,11 @@ impl Discovery {
         match d {
           Sample::Value(d) => {
             trace!("sedp_receive_subscription - {d:?}");
-            let drd = discovery_db_write(&self.discovery_db).update_subscription(&d);
+            // Patched for grasp_orient (0018-bounded-discovery-bytes.patch): a reader the
+            // database has no room for is ignored.
+            let Some(drd) = discovery_db_write(&self.discovery_db).update_subscription(&d) else {
+              continue;
+            };
             debug!(
               "sedp_receive_subscription - send_discovery_notification ReaderUpdated  {:?}",
               drd
@@ -1323,8 +1336,13 @@ impl Discovery {
         match d {
           Sample::Value(dwd) => {
             trace!("sedp_receive_publication discovered {:?}", dwd);
-            let discovered_writer_data =
-              discovery_db_write(&self.discovery_db).update_publication(&dwd);
+            // Patched for grasp_orient (0018-bounded-discovery-bytes.patch): a writer the
+            // database has no room for is ignored.
+            let Some(discovered_writer_data) =
+              discovery_db_write(&self.discovery_db).update_publication(&dwd)
+            else {
+              continue;
+            };
             self.send_discovery_notification(DiscoveryNotificationType::WriterUpdated {
               discovered_writer_data,
             });
@@ -1714,7 +1732,11 @@ impl Discovery {
           Sample::Value(sec_sub) => {
             // Currently we use only the DiscoveredReaderData field, no DataTag
             let drd_from_topic = sec_sub.discovered_reader_data;
-            let drd = discovery_db_write(&self.discovery_db).update_subscription(&drd_from_topic);
+            let Some(drd) =
+              discovery_db_write(&self.discovery_db).update_subscription(&drd_from_topic)
+            else {
+              continue;
+            };
             self.send_discovery_notification(DiscoveryNotificationType::ReaderUpdated {
               discovered_reader_data: drd,
             });
@@ -1761,7 +1783,11 @@ impl Discovery {
           Sample::Value(se_pub) => {
             // Currently we use only the DiscoveredWriterData field, no DataTag
             let dwd_from_topic = se_pub.discovered_writer_data;
-            let dwd = discovery_db_write(&self.discovery_db).update_publication(&dwd_from_topic);
+            let Some(dwd) =
+              discovery_db_write(&self.discovery_db).update_publication(&dwd_from_topic)
+            else {
+              continue;
+            };
             self.send_discovery_notification(DiscoveryNotificationType::WriterUpdated {
               discovered_writer_data: dwd,
             });

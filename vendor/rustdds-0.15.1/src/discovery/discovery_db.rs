@@ -53,6 +53,34 @@ const PARTICIPANT_LEASE_DURATION_TOLERANCE: Duration = Duration::from_secs(0);
 const MAX_HONOURED_LEASE_DURATION: Duration = Duration::from_secs(300);
 // How often, at most, the participants ignored for want of room are reported at warn level.
 const REFUSAL_WARNING_INTERVAL: std::time::Duration = std::time::Duration::from_secs(10);
+// Patched for grasp_orient (0018-bounded-discovery-bytes.patch): what a map entry costs beyond
+// its record (its key and its share of a B-tree node, whose entries are the record's size plus
+// the key's), counted with the record in DiscoveryDB::held_bytes.
+const ENTRY_OVERHEAD_BYTES: usize = 64;
+
+fn participant_bytes(d: &SpdpDiscoveredParticipantData) -> usize {
+  // The record, and its entry in participant_last_life_signs.
+  d.held_bytes() + 2 * ENTRY_OVERHEAD_BYTES
+}
+
+fn reader_bytes(d: &DiscoveredReaderData) -> usize {
+  d.held_bytes() + ENTRY_OVERHEAD_BYTES
+}
+
+fn writer_bytes(d: &DiscoveredWriterData) -> usize {
+  d.held_bytes() + ENTRY_OVERHEAD_BYTES
+}
+
+fn topic_entry_bytes(d: &DiscoveredTopicData) -> usize {
+  d.held_bytes() + ENTRY_OVERHEAD_BYTES
+}
+
+// A topic's own entry in `topics`: its name (the key) and the map of its sources.
+fn topic_name_bytes(name: &str) -> usize {
+  name.len()
+    + std::mem::size_of::<BTreeMap<GUID, (DiscoveredVia, DiscoveredTopicData)>>()
+    + ENTRY_OVERHEAD_BYTES
+}
 
 // TODO: Let DiscoveryDB itself become thread-safe and support smaller-scope
 // lock
@@ -66,6 +94,14 @@ pub(crate) struct DiscoveryDB {
   max_remote_participants: usize,
   participants_ignored: u64,
   ignored_reported_at: Option<Instant>,
+  // Patched for grasp_orient (0018-bounded-discovery-bytes.patch): the most bytes the records
+  // of participant_proxies, external_topic_readers and _writers (and their attics) and topics
+  // may hold together, what they hold, how many records were refused for want of room, and
+  // when that was last reported at warn level.
+  max_discovery_bytes: usize,
+  held_bytes: usize,
+  records_refused: u64,
+  refused_reported_at: Option<Instant>,
 
   // Authentication statuses of participants
   #[cfg(feature = "security")]
@@ -105,15 +141,21 @@ pub(crate) enum DiscoveredVia {
   SelfDefined,  // not discovered, but defined by the local DomainParticipant
 }
 
+// Returns the bytes (as `bytes` counts them) of the records in `to` that moved ones replaced.
 fn move_by_guid_prefix<D>(
   guid_prefix: GuidPrefix,
   from: &mut BTreeMap<GUID, D>,
   to: &mut BTreeMap<GUID, D>,
-) {
+  bytes: impl Fn(&D) -> usize,
+) -> usize {
   let to_move: Vec<GUID> = from.range(guid_prefix.range()).map(|(g, _)| *g).collect();
+  let mut replaced = 0;
   for guid in to_move {
-    from.remove(&guid).map(|d| to.insert(guid, d));
+    if let Some(d) = from.remove(&guid) {
+      replaced += to.insert(guid, d).map_or(0, |old| bytes(&old));
+    }
   }
+  replaced
 }
 
 pub(crate) fn discovery_db_read(
@@ -147,6 +189,10 @@ impl DiscoveryDB {
       max_remote_participants: crate::DomainParticipantBuilder::DEFAULT_MAX_REMOTE_PARTICIPANTS,
       participants_ignored: 0,
       ignored_reported_at: None,
+      max_discovery_bytes: crate::DomainParticipantBuilder::DEFAULT_MAX_DISCOVERY_BYTES,
+      held_bytes: 0,
+      records_refused: 0,
+      refused_reported_at: None,
       #[cfg(feature = "security")]
       authentication_statuses: BTreeMap::new(),
       local_topic_writers: BTreeMap::new(),
@@ -174,6 +220,96 @@ impl DiscoveryDB {
     self.max_remote_participants = count;
   }
 
+  /// The most bytes the records of remote participants, endpoints and topics may hold
+  /// together (participant-builder `max_discovery_bytes`).
+  pub fn set_max_discovery_bytes(&mut self, bytes: usize) {
+    self.max_discovery_bytes = bytes;
+  }
+
+  /// What the records of participants, external endpoints (and their attics) and topics hold,
+  /// in bytes: their sizes, the heap they own, and ENTRY_OVERHEAD_BYTES per map entry.
+  #[cfg(test)]
+  fn held_bytes(&self) -> usize {
+    self.held_bytes
+  }
+
+  // held_bytes counted again from the maps: the count kept as they change must equal it.
+  #[cfg(test)]
+  fn recounted_bytes(&self) -> usize {
+    self
+      .participant_proxies
+      .values()
+      .map(participant_bytes)
+      .sum::<usize>()
+      + self
+        .external_topic_readers
+        .values()
+        .map(reader_bytes)
+        .sum::<usize>()
+      + self
+        .external_topic_readers_attic
+        .values()
+        .map(reader_bytes)
+        .sum::<usize>()
+      + self
+        .external_topic_writers
+        .values()
+        .map(writer_bytes)
+        .sum::<usize>()
+      + self
+        .external_topic_writers_attic
+        .values()
+        .map(writer_bytes)
+        .sum::<usize>()
+      + self
+        .topics
+        .iter()
+        .map(|(name, t)| {
+          topic_name_bytes(name) + t.values().map(|(_, d)| topic_entry_bytes(d)).sum::<usize>()
+        })
+        .sum::<usize>()
+  }
+
+  /// Whether a record of `needed` bytes, replacing one of `freed` bytes, fits within
+  /// max_discovery_bytes. Endpoints in the attics (of participants whose lease expired) are
+  /// dropped first, oldest GUIDs first, to make room: they only speed up a rediscovery, and
+  /// would otherwise hold the room for good.
+  fn make_room(&mut self, freed: usize, needed: usize) -> bool {
+    loop {
+      if self.held_bytes.saturating_sub(freed) + needed <= self.max_discovery_bytes {
+        return true;
+      }
+      if let Some((_, d)) = self.external_topic_readers_attic.pop_first() {
+        self.held_bytes = self.held_bytes.saturating_sub(reader_bytes(&d));
+      } else if let Some((_, d)) = self.external_topic_writers_attic.pop_first() {
+        self.held_bytes = self.held_bytes.saturating_sub(writer_bytes(&d));
+      } else {
+        return false;
+      }
+    }
+  }
+
+  // Counts a record refused by make_room, and says so at warn level at most every
+  // REFUSAL_WARNING_INTERVAL.
+  fn refuse_for_room(&mut self, what: &str, guid: GUID, needed: usize) {
+    self.records_refused += 1;
+    let now = Instant::now();
+    if self
+      .refused_reported_at
+      .is_none_or(|at| now.duration_since(at) >= REFUSAL_WARNING_INTERVAL)
+    {
+      self.refused_reported_at = Some(now);
+      warn!(
+        target: crate::LIMITS_LOG_TARGET,
+        "Discovery holds at most {} bytes ({} held): {what} {guid:?} of {needed} bytes ignored \
+         ({} records ignored so far)",
+        self.max_discovery_bytes, self.held_bytes, self.records_refused
+      );
+    } else {
+      debug!("Discovery record {what} {guid:?} ignored: no room");
+    }
+  }
+
   fn remote_participant_count(&self) -> usize {
     self.participant_proxies.len()
       - usize::from(self.participant_proxies.contains_key(&self.my_guid.prefix))
@@ -198,6 +334,7 @@ impl DiscoveryDB {
     {
       self.ignored_reported_at = Some(now);
       warn!(
+        target: crate::LIMITS_LOG_TARGET,
         "Discovery keeps at most {} remote participants: {guid_prefix:?} ignored ({} new \
          participants ignored so far)",
         self.max_remote_participants, self.participants_ignored
@@ -210,7 +347,10 @@ impl DiscoveryDB {
 
   // Returns if participant was previously unknown. Patched for grasp_orient
   // (0016-bounded-remote-participants.patch): a new participant the database has no room for
-  // (admits_participant) is not taken in, and false is returned.
+  // (admits_participant) is not taken in, and false is returned. And
+  // (0018-bounded-discovery-bytes.patch): data of a remote participant that does not fit within
+  // max_discovery_bytes is not taken in either (a known participant keeps its earlier data
+  // and is marked alive).
   pub fn update_participant(&mut self, data: &SpdpDiscoveredParticipantData) -> bool {
     debug!("update_participant: {:?}", data);
     let guid = data.participant_guid;
@@ -235,6 +375,17 @@ impl DiscoveryDB {
     //   return
     // }
 
+    let needed = participant_bytes(data);
+    let freed = self
+      .participant_proxies
+      .get(&guid.prefix)
+      .map_or(0, participant_bytes);
+    if guid.prefix != self.my_guid.prefix && !self.make_room(freed, needed) {
+      self.refuse_for_room("participant", guid, needed);
+      self.participant_is_alive(guid.prefix);
+      return false;
+    }
+
     let mut new_participant = false;
     if !self.participant_proxies.contains_key(&guid.prefix) {
       info!("New remote participant: {:?}", data);
@@ -247,20 +398,23 @@ impl DiscoveryDB {
       // This may be a rediscovery: Participant lease time timed out, but then
       // came back, e.g. by network outage. We then restore readers/writers from
       // attic to discovery DB.
-      move_by_guid_prefix(
+      let replaced = move_by_guid_prefix(
         guid.prefix,
         &mut self.external_topic_readers_attic,
         &mut self.external_topic_readers,
-      );
-      move_by_guid_prefix(
+        reader_bytes,
+      ) + move_by_guid_prefix(
         guid.prefix,
         &mut self.external_topic_writers_attic,
         &mut self.external_topic_writers,
+        writer_bytes,
       );
+      self.held_bytes = self.held_bytes.saturating_sub(replaced);
     }
 
     // In any case:
     // Update SpdpDiscoveredParticipantData to DB
+    self.held_bytes = self.held_bytes.saturating_sub(freed) + needed;
     self.participant_proxies.insert(guid.prefix, data.clone());
     // Timestamp last life sign fro participant
     self
@@ -290,7 +444,9 @@ impl DiscoveryDB {
   // participant timed out.
   pub fn remove_participant(&mut self, guid_prefix: GuidPrefix, active_disposal: bool) {
     info!("removing participant {guid_prefix:?}");
-    self.participant_proxies.remove(&guid_prefix);
+    if let Some(d) = self.participant_proxies.remove(&guid_prefix) {
+      self.held_bytes = self.held_bytes.saturating_sub(participant_bytes(&d));
+    }
     self.participant_last_life_signs.remove(&guid_prefix);
     #[cfg(feature = "security")]
     self.authentication_statuses.remove(&guid_prefix);
@@ -300,16 +456,18 @@ impl DiscoveryDB {
       self.remove_topic_writer_with_prefix(guid_prefix);
     } else {
       // move to attic
-      move_by_guid_prefix(
+      let replaced = move_by_guid_prefix(
         guid_prefix,
         &mut self.external_topic_readers,
         &mut self.external_topic_readers_attic,
-      );
-      move_by_guid_prefix(
+        reader_bytes,
+      ) + move_by_guid_prefix(
         guid_prefix,
         &mut self.external_topic_writers,
         &mut self.external_topic_writers_attic,
+        writer_bytes,
       );
+      self.held_bytes = self.held_bytes.saturating_sub(replaced);
     }
   }
 
@@ -329,13 +487,15 @@ impl DiscoveryDB {
       .map(|(g, _)| *g)
       .collect();
     for guid in to_remove {
-      self.external_topic_readers.remove(&guid);
+      self.remove_topic_reader(guid);
     }
   }
 
   pub fn remove_topic_reader(&mut self, guid: GUID) {
     info!("remove_topic_reader {guid:?}");
-    self.external_topic_readers.remove(&guid);
+    if let Some(d) = self.external_topic_readers.remove(&guid) {
+      self.held_bytes = self.held_bytes.saturating_sub(reader_bytes(&d));
+    }
   }
 
   #[cfg(feature = "security")]
@@ -357,12 +517,14 @@ impl DiscoveryDB {
       .map(|(g, _)| *g)
       .collect();
     for guid in to_remove {
-      self.external_topic_writers.remove(&guid);
+      self.remove_topic_writer(guid);
     }
   }
 
   pub fn remove_topic_writer(&mut self, guid: GUID) {
-    self.external_topic_writers.remove(&guid);
+    if let Some(d) = self.external_topic_writers.remove(&guid) {
+      self.held_bytes = self.held_bytes.saturating_sub(writer_bytes(&d));
+    }
   }
 
   // Delete participant proxies, if we have not heard of them within
@@ -459,7 +621,11 @@ impl DiscoveryDB {
       .cloned()
       .collect();
     for dt in &dead_topics {
-      self.topics.remove(dt);
+      if let Some(t) = self.topics.remove(dt) {
+        let bytes =
+          topic_name_bytes(dt) + t.values().map(|(_, d)| topic_entry_bytes(d)).sum::<usize>();
+        self.held_bytes = self.held_bytes.saturating_sub(bytes);
+      }
     }
   }
 
@@ -485,7 +651,13 @@ impl DiscoveryDB {
   // them from the remote participant.
   //
   // The topic is updated to the topics table.
-  pub fn update_subscription(&mut self, data: &DiscoveredReaderData) -> DiscoveredReaderData {
+  //
+  // Patched for grasp_orient (0018-bounded-discovery-bytes.patch): a reader whose record (and
+  // its topic's) does not fit within max_discovery_bytes is not taken in, and None is returned.
+  pub fn update_subscription(
+    &mut self,
+    data: &DiscoveredReaderData,
+  ) -> Option<DiscoveredReaderData> {
     let guid = data.reader_proxy.remote_reader_guid;
 
     // fill in the default locators from participant, in case DRD did not provide
@@ -523,26 +695,38 @@ impl DiscoveryDB {
       ..data.clone()
     };
 
+    let topic = DiscoveredTopicData::new(Utc::now(), data.subscription_topic_data.to_topic_data());
+    let needed = reader_bytes(&enriched) + self.topic_bytes_needed(&topic, guid);
+    let freed = self
+      .external_topic_readers
+      .get(&guid)
+      .map_or(0, reader_bytes);
+    if !self.make_room(freed, needed) {
+      self.refuse_for_room("reader", guid, needed);
+      return None;
+    }
+    self.held_bytes = self.held_bytes.saturating_sub(freed) + reader_bytes(&enriched);
     self.external_topic_readers.insert(guid, enriched.clone());
     debug!("External reader: {enriched:?}");
 
     // Now the topic update:
-    let dtd = data.subscription_topic_data.to_topic_data();
-    self.update_topic_data(
-      &DiscoveredTopicData::new(Utc::now(), dtd),
-      guid,
-      DiscoveredVia::Subscription,
-    );
+    self.update_topic_data(&topic, guid, DiscoveredVia::Subscription);
 
     // TODO: Lookup the topic in DB, data sent by the same participant that sent the
     // reader update. If there is a DiscoveredVia::Topic record, use QosPolicies
     // from that record and modify by QoS given in the DRD.
 
-    enriched
+    Some(enriched)
   }
 
   // TODO: This is silly. Returns one of the parameters cloned, or None
-  pub fn update_publication(&mut self, data: &DiscoveredWriterData) -> DiscoveredWriterData {
+  //
+  // Patched for grasp_orient (0018-bounded-discovery-bytes.patch): a writer whose record (and
+  // its topic's) does not fit within max_discovery_bytes is not taken in, and None is returned.
+  pub fn update_publication(
+    &mut self,
+    data: &DiscoveredWriterData,
+  ) -> Option<DiscoveredWriterData> {
     let guid = data.writer_proxy.remote_writer_guid;
 
     // fill in the default locators from participant, in case DRD did not provide
@@ -580,18 +764,35 @@ impl DiscoveryDB {
       ..data.clone()
     };
 
+    let topic = DiscoveredTopicData::new(Utc::now(), data.publication_topic_data.to_topic_data());
+    let needed = writer_bytes(&enriched) + self.topic_bytes_needed(&topic, guid);
+    let freed = self
+      .external_topic_writers
+      .get(&guid)
+      .map_or(0, writer_bytes);
+    if !self.make_room(freed, needed) {
+      self.refuse_for_room("writer", guid, needed);
+      return None;
+    }
+    self.held_bytes = self.held_bytes.saturating_sub(freed) + writer_bytes(&enriched);
     self.external_topic_writers.insert(guid, enriched.clone());
     debug!("External writer: {enriched:?}");
 
     // Now the topic update:
-    let dtd = data.publication_topic_data.to_topic_data();
-    self.update_topic_data(
-      &DiscoveredTopicData::new(Utc::now(), dtd),
-      guid,
-      DiscoveredVia::Publication,
-    );
+    self.update_topic_data(&topic, guid, DiscoveredVia::Publication);
 
-    enriched
+    Some(enriched)
+  }
+
+  // The bytes update_topic_data(dtd, updater, ..) adds when it makes a new entry: the entry,
+  // and the topic's own when the name is new. An entry it replaces (its updater's, which only
+  // DiscoveredVia::Topic replaces) is not counted.
+  fn topic_bytes_needed(&self, dtd: &DiscoveredTopicData, updater: GUID) -> usize {
+    match self.topics.get(&dtd.topic_data.name) {
+      Some(t) if t.contains_key(&updater) => 0,
+      Some(_) => topic_entry_bytes(dtd),
+      None => topic_entry_bytes(dtd) + topic_name_bytes(&dtd.topic_data.name),
+    }
   }
 
   // This is for local participant updating the topic table
@@ -618,6 +819,13 @@ impl DiscoveryDB {
     discovered_via: DiscoveredVia,
   ) {
     trace!("Update topic data: {:?}", dtd);
+    // Patched for grasp_orient (0018-bounded-discovery-bytes.patch): a new entry from a remote
+    // updater that does not fit within max_discovery_bytes is not taken in.
+    let needed = self.topic_bytes_needed(dtd, updater);
+    if updater.prefix != self.my_guid.prefix && !self.make_room(0, needed) {
+      self.refuse_for_room("topic entry", updater, needed);
+      return;
+    }
     let topic_name = dtd.topic_data.name.clone();
     let mut notify = false;
     let mut inconsistency_event_to_send = None;
@@ -630,6 +838,10 @@ impl DiscoveryDB {
           // TODO: Why do we have this logic? Where is the spec? Or ant reason for it?
           // Is it even triggered ever?
           if discovered_via == DiscoveredVia::Topic {
+            self.held_bytes = self
+              .held_bytes
+              .saturating_sub(topic_entry_bytes(&old_dtd.1))
+              + topic_entry_bytes(dtd);
             *old_dtd = (discovered_via, dtd.clone()); // update QoS
             notify = true;
           } else {
@@ -673,6 +885,7 @@ impl DiscoveryDB {
         // We have to topic, but not from this participant
         // TODO: Check that there is agreement about topic type name (at least)
         t.insert(updater, (discovered_via, dtd.clone())); // this should return None
+        self.held_bytes += needed;
         notify = true;
       }
     } else {
@@ -680,6 +893,7 @@ impl DiscoveryDB {
       let mut b = BTreeMap::new();
       b.insert(updater, (discovered_via, dtd.clone()));
       self.topics.insert(topic_name, b);
+      self.held_bytes += needed;
       self.send_participant_status(DomainParticipantStatusEvent::TopicDetected {
         name: dtd.topic_data.name.clone(),
         type_name: dtd.topic_data.type_name.clone(),
@@ -981,8 +1195,105 @@ mod tests {
       .participant_last_life_signs
       .insert(data.participant_guid.prefix, long_ago);
     let removed = discoverydb.participant_cleanup();
-    assert_eq!(removed.len(), 1, "a lease of 100,000 s was honoured past 5 minutes");
+    assert_eq!(
+      removed.len(),
+      1,
+      "a lease of 100,000 s was honoured past 5 minutes"
+    );
     assert!(discoverydb.admits_participant(GuidPrefix::new(&[20; 12])));
+  }
+
+  // A remote reader on `prefix` with key `i`, on a topic named "t<i>-" and `name_len` x's.
+  fn remote_reader(prefix: GuidPrefix, i: u32, name_len: usize) -> DiscoveredReaderData {
+    let mut sub = subscription_builtin_topic_data().unwrap();
+    sub.topic_name = format!("t{i}-{}", "x".repeat(name_len));
+    let mut proxy = reader_proxy_data().unwrap();
+    let [_, a, b, c] = i.to_be_bytes();
+    proxy.remote_reader_guid = GUID::new(
+      prefix,
+      EntityId::new([a, b, c], EntityKind::READER_NO_KEY_USER_DEFINED),
+    );
+    DiscoveredReaderData {
+      reader_proxy: proxy,
+      subscription_topic_data: sub,
+      content_filter: None,
+      user_data: Vec::new(),
+    }
+  }
+
+  #[test]
+  fn discovery_records_beyond_the_byte_bound_are_ignored() {
+    // 0018-bounded-discovery-bytes.patch.
+    let (discovery_db_event_sender, _discovery_db_event_receiver) =
+      std::sync::mpsc::sync_channel::<()>(4);
+    let (status_sender, _status_receiver) = sync_status_channel(1024).unwrap();
+    let mut db = DiscoveryDB::new(
+      GUID::new_participant_guid(),
+      discovery_db_event_sender,
+      status_sender,
+    );
+    let mut participant = spdp_participant_data().unwrap();
+    let prefix = GuidPrefix::new(&[7; 12]);
+    participant.participant_guid = GUID::new(prefix, EntityId::PARTICIPANT);
+    db.update_participant(&participant);
+    assert_eq!(db.held_bytes(), db.recounted_bytes());
+    // Room for the participant and three readers on topics of 10 kB names (each holds its
+    // name three times: in its record, its topic's entry and the topic's key).
+    let bound = db.held_bytes() + 100_000;
+    db.set_max_discovery_bytes(bound);
+    let taken = (0..1000)
+      .filter(|&i| {
+        db.update_subscription(&remote_reader(prefix, i, 10_000))
+          .is_some()
+      })
+      .count();
+    assert!(
+      db.held_bytes() <= bound,
+      "discovery holds {} bytes, more than its bound of {bound} ({taken} of 1000 readers taken)",
+      db.held_bytes()
+    );
+    assert_eq!(taken, 3, "readers of about 30 kB each within 100 kB");
+    assert_eq!(db.external_topic_readers.len(), 3);
+    assert_eq!(db.records_refused, 997);
+    assert_eq!(db.held_bytes(), db.recounted_bytes());
+    // A known reader's update replaces its record within the bound.
+    assert!(db
+      .update_subscription(&remote_reader(prefix, 1, 10_000))
+      .is_some());
+    assert_eq!(db.held_bytes(), db.recounted_bytes());
+    // A reader disposed, and its topic cleaned up, gives its room back.
+    db.remove_topic_reader(remote_reader(prefix, 0, 0).reader_proxy.remote_reader_guid);
+    db.topic_cleanup();
+    assert_eq!(db.held_bytes(), db.recounted_bytes());
+    assert!(db
+      .update_subscription(&remote_reader(prefix, 2000, 10_000))
+      .is_some());
+    assert_eq!(db.held_bytes(), db.recounted_bytes());
+    // The participant's lease expires: its readers go to the attic, their topics away. The
+    // attic's readers make room for another participant's.
+    db.remove_participant(prefix, false);
+    db.topic_cleanup();
+    assert_eq!(db.external_topic_readers_attic.len(), 3);
+    assert_eq!(db.held_bytes(), db.recounted_bytes());
+    let other = GuidPrefix::new(&[8; 12]);
+    participant.participant_guid = GUID::new(other, EntityId::PARTICIPANT);
+    db.update_participant(&participant);
+    for i in 0..3 {
+      assert!(
+        db.update_subscription(&remote_reader(other, i, 10_000))
+          .is_some(),
+        "the attic's readers held the room of a live participant's reader {i}"
+      );
+    }
+    assert!(db.external_topic_readers_attic.is_empty());
+    assert!(db.held_bytes() <= bound);
+    assert_eq!(db.held_bytes(), db.recounted_bytes());
+    // Readers of a participant not taken in are bounded too.
+    let unknown = GuidPrefix::new(&[9; 12]);
+    assert!(db
+      .update_subscription(&remote_reader(unknown, 0, 10_000))
+      .is_none());
+    assert!(db.held_bytes() <= bound);
   }
 
   #[test]

@@ -50,6 +50,80 @@ use crate::{
 use crate::security::EndpointSecurityInfo;
 #[cfg(not(feature = "security"))]
 use crate::no_security::EndpointSecurityInfo;
+
+// Patched for grasp_orient (0018-bounded-discovery-bytes.patch): what a record kept by the
+// discovery database holds, in bytes: its own size and the heap it owns (strings, locator lists,
+// user data, by length: a clone, which is what the database keeps, allocates no more). The map
+// entries that hold it are counted by DiscoveryDB.
+pub(crate) fn string_held_bytes(s: &String) -> usize {
+  s.len()
+}
+
+pub(crate) fn option_string_held_bytes(s: &Option<String>) -> usize {
+  s.as_ref().map_or(0, string_held_bytes)
+}
+
+pub(crate) fn strings_held_bytes(v: &Option<Vec<String>>) -> usize {
+  v.as_ref().map_or(0, |v| {
+    v.len() * std::mem::size_of::<String>() + v.iter().map(string_held_bytes).sum::<usize>()
+  })
+}
+
+pub(crate) fn locators_held_bytes(v: &Vec<Locator>) -> usize {
+  v.len() * std::mem::size_of::<Locator>()
+}
+
+impl DiscoveredReaderData {
+  /// Bytes this record holds (its size and its heap), as DiscoveryDB counts them.
+  pub(crate) fn held_bytes(&self) -> usize {
+    let t = &self.subscription_topic_data;
+    std::mem::size_of::<Self>()
+      + locators_held_bytes(&self.reader_proxy.unicast_locator_list)
+      + locators_held_bytes(&self.reader_proxy.multicast_locator_list)
+      + string_held_bytes(&t.topic_name)
+      + string_held_bytes(&t.type_name)
+      + option_string_held_bytes(&t.service_instance_name)
+      + strings_held_bytes(&t.topic_aliases)
+      + self.content_filter.as_ref().map_or(0, |f| {
+        string_held_bytes(&f.content_filtered_topic_name)
+          + string_held_bytes(&f.related_topic_name)
+          + string_held_bytes(&f.filter_class_name)
+          + string_held_bytes(&f.filter_expression)
+          + f.expression_parameters.len() * std::mem::size_of::<String>()
+          + f
+            .expression_parameters
+            .iter()
+            .map(string_held_bytes)
+            .sum::<usize>()
+      })
+      + self.user_data.len()
+  }
+}
+
+impl DiscoveredWriterData {
+  /// Bytes this record holds (its size and its heap), as DiscoveryDB counts them.
+  pub(crate) fn held_bytes(&self) -> usize {
+    let t = &self.publication_topic_data;
+    std::mem::size_of::<Self>()
+      + locators_held_bytes(&self.writer_proxy.unicast_locator_list)
+      + locators_held_bytes(&self.writer_proxy.multicast_locator_list)
+      + string_held_bytes(&t.topic_name)
+      + string_held_bytes(&t.type_name)
+      + option_string_held_bytes(&t.service_instance_name)
+      + strings_held_bytes(&t.topic_aliases)
+      + self.user_data.len()
+  }
+}
+
+impl DiscoveredTopicData {
+  /// Bytes this record holds (its size and its heap), as DiscoveryDB counts them.
+  pub(crate) fn held_bytes(&self) -> usize {
+    std::mem::size_of::<Self>()
+      + string_held_bytes(&self.topic_data.name)
+      + string_held_bytes(&self.topic_data.type_name)
+  }
+}
+
 #[cfg(test)]
 use crate::structure::guid::EntityKind;
 

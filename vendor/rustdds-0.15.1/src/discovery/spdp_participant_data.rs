@@ -81,6 +81,19 @@ pub struct SpdpDiscoveredParticipantData {
 }
 
 impl SpdpDiscoveredParticipantData {
+  /// Bytes this record holds (its size and its heap: locator lists, name), as DiscoveryDB counts
+  /// them (patched for grasp_orient, 0018-bounded-discovery-bytes.patch). The security plugin's
+  /// tokens and properties are not counted.
+  pub(crate) fn held_bytes(&self) -> usize {
+    use super::sedp_messages::{locators_held_bytes, option_string_held_bytes};
+    std::mem::size_of::<Self>()
+      + locators_held_bytes(&self.metatraffic_unicast_locators)
+      + locators_held_bytes(&self.metatraffic_multicast_locators)
+      + locators_held_bytes(&self.default_unicast_locators)
+      + locators_held_bytes(&self.default_multicast_locators)
+      + option_string_held_bytes(&self.entity_name)
+  }
+
   #[cfg(feature = "security")]
   pub(crate) fn supports_security(&self) -> bool {
     // TODO: Is this logic correct? Or maybe we could come up with a more accurate

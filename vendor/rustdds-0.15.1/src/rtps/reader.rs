@@ -1106,11 +1106,13 @@ impl Reader {
         self.max_sample_size, self.topic_name
       );
       if quiet {
-        debug!("{message}");
+        debug!(target: crate::LIMITS_LOG_TARGET, "{message}");
       } else {
         self.oversize_warned_at = Some(now);
-        warn!("{message}");
+        warn!(target: crate::LIMITS_LOG_TARGET, "{message}");
       }
+      // Patched for grasp_orient (0017-oversize-sample-skipped.patch).
+      self.skip_sample(writer_guid, datafrag.writer_sn);
       return None;
     }
     let held: usize = self
@@ -1119,6 +1121,33 @@ impl Reader {
       .map(FragmentAssembler::held_bytes)
       .sum();
     Some(self.assembly_budget.saturating_sub(held))
+  }
+
+  // A sample this reader never assembles (above max_sample_size), from a writer it matched: its
+  // sequence number is taken as irrelevant, as a GAP would say (8.3.7.4), so that a reliable
+  // stream goes on with the writer's next samples. Otherwise the writer proxy keeps the hole:
+  // the reader asks for the sample again and again (each repair dropped the same way) and
+  // delivers nothing later from that writer until the sample leaves the writer's history.
+  // Patched for grasp_orient (0017-oversize-sample-skipped.patch).
+  fn skip_sample(&mut self, writer_guid: GUID, seq: SequenceNumber) {
+    if self.like_stateless {
+      return;
+    }
+    let Some(writer_proxy) = self.matched_writer_mut(writer_guid) else {
+      return;
+    };
+    writer_proxy.set_irrelevant_change(seq);
+    let all_ackable_before = writer_proxy.all_ackable_before();
+    if let Some(assembler) = self.fragment_assemblers.get_mut(&writer_guid) {
+      assembler.discard(seq);
+    }
+    let marker_moved = self.reliability != policy::Reliability::BestEffort
+      && self
+        .acquire_the_topic_cache_guard()
+        .mark_reliably_received_before(writer_guid, all_ackable_before);
+    if marker_moved {
+      self.notify_cache_change();
+    }
   }
 
   // One FragmentGc timeout pending while any assembly is incomplete: assemblies are dropped
@@ -2942,9 +2971,10 @@ mod tests {
       "a DATA_FRAG from a writer the reader has not matched opened an assembly"
     );
 
-    // A claim above the reader's max_sample_size: dropped, nothing held.
+    // A claim above the reader's max_sample_size: dropped, nothing held (sequence number 9: the
+    // dropped sample's number is skipped, 0017-oversize-sample-skipped.patch).
     reader.set_max_sample_size(1 << 20);
-    feed(&mut reader, 1, 1, u32::MAX);
+    feed(&mut reader, 9, 1, u32::MAX);
     assert_eq!(
       assembly_bytes(&reader),
       0,
@@ -3003,6 +3033,38 @@ mod tests {
         .is_some(),
       "the sample within the bound was not assembled"
     );
+  }
+
+  #[test]
+  fn an_oversize_sample_from_a_matched_writer_is_skipped() {
+    // 0017-oversize-sample-skipped.patch. A reliable writer sends sample 1 above the reader's
+    // max_sample_size, then sample 2 within it (one fragment).
+    let (mut reader, writer_guid, _socket, _timer) = reader_answering_to_a_socket();
+    let reader_id = reader.my_guid.entity_id;
+    let flags = BitFlags::<DATAFRAG_Flags>::from_flag(DATAFRAG_Flags::Endianness);
+    let matched = MessageReceiverState {
+      source_guid_prefix: writer_guid.prefix,
+      ..Default::default()
+    };
+    reader.set_max_sample_size(1 << 20);
+    let oversize = claiming_fragment(reader_id, writer_guid, 1, 1, 2 << 20);
+    reader.handle_datafrag_msg(&oversize, flags, &matched);
+    let ackable = |reader: &Reader| {
+      reader
+        .matched_writer(writer_guid)
+        .map(RtpsWriterProxy::all_ackable_before)
+    };
+    assert_eq!(
+      ackable(&reader),
+      Some(SequenceNumber::new(2)),
+      "the dropped oversize sample 1 still holds back the writer's stream"
+    );
+    let mut small = claiming_fragment(reader_id, writer_guid, 2, 1, 1024);
+    small.serialized_payload = bytes::Bytes::from([[0x00, 0x01, 0x00, 0x00].as_slice(), &[7; 1020]].concat());
+    reader.handle_datafrag_msg(&small, flags, &matched);
+    assert_eq!(ackable(&reader), Some(SequenceNumber::new(3)));
+    assert!(reader.history_cache_change_data(SequenceNumber::new(2)).is_some());
+    assert_eq!(assembly_bytes(&reader), 0);
   }
 
   #[test]
