@@ -89,6 +89,9 @@ pub use poses::{
     PoseRecommendation, PoseRecommendationSet, SolidPrimitive,
 };
 
+mod tf;
+pub use tf::{TfMessage, Transform, TransformStamped};
+
 mod visualization;
 pub use visualization::{
     ColorRgba, CompressedImage, Duration, Marker, MarkerArray, MeshFile, Pose, UvCoordinate,

@@ -27,6 +27,7 @@ pub(crate) mod session;
 pub(crate) mod set_io;
 pub(crate) mod set_worker;
 pub(crate) mod sets;
+mod tf;
 
 use crate::config::Config;
 use crate::kind::{Candidates, PoseSets, Poses, Sets};
