@@ -5,17 +5,19 @@
 //! the poses' answerer (the closing axis and the mesh cache). Each message kind is answered
 //! through it by its [`Answer`] impl; [`Answering::answer`] is the one entry point.
 
+use super::sets::invalid_set;
 use super::{
-    answer_one, answer_one_in_full, answer_set, answer_set_within, Answered, Interrupt,
-    PoseAnswerer, Refused, Rules,
+    answer_one, answer_one_in_full, answer_set, answer_set_within, pose_set_without_geometry,
+    uncast, without_geometry, Answered, Interrupt, PoseAnswerer, Refused, Rules,
 };
+
 use crate::config::{Config, ConfigError};
 use crate::geometry::ClosingAxis;
 use crate::geometry::Object;
 use crate::kind::{Candidates, Kind, PoseSets, Poses, Sets};
 use crate::msg::{
-    GraspCandidate, GraspCandidateSet, GripRecommendationSet, PoseCandidate, PoseCandidateSet,
-    PoseRecommendation, PoseRecommendationSet,
+    invalid, GraspCandidate, GraspCandidateSet, GripRecommendationSet, PoseCandidate,
+    PoseCandidateSet, PoseRecommendation, PoseRecommendationSet,
 };
 use crate::solver::Settings;
 
@@ -156,6 +158,11 @@ pub fn each(visit: &mut impl VisitAnswer) {
 pub trait Answer: Kind {
     /// The answer to `request` made `with` these settings, rules and meshes.
     fn answer(with: &Answering, request: &Self::Request) -> Self::Answer;
+    /// The answer refusing `request` as a whole with status 2 (invalid input) and the message
+    /// `invalid input: {why}`, nothing solved: what the node answers when a transform the
+    /// request needs cannot be had (`docs/node.md#tf`). A set's members are left out, as for
+    /// any set refused whole.
+    fn refused(with: &Answering, request: &Self::Request, why: &str) -> Self::Answer;
 }
 
 /// A candidate: the node's tolerances where it gives none, the solver, then the gripper's limit
@@ -163,6 +170,9 @@ pub trait Answer: Kind {
 impl Answer for Candidates {
     fn answer(with: &Answering, request: &Self::Request) -> Self::Answer {
         answer_one(request, &with.settings, &with.rules)
+    }
+    fn refused(_: &Answering, request: &Self::Request, why: &str) -> Self::Answer {
+        invalid(request, &why)
     }
 }
 
@@ -172,6 +182,9 @@ impl Answer for Sets {
     fn answer(with: &Answering, request: &Self::Request) -> Self::Answer {
         answer_set(request, &with.settings, &with.rules)
     }
+    fn refused(with: &Answering, request: &Self::Request, why: &str) -> Self::Answer {
+        invalid_set(request, &with.rules, why)
+    }
 }
 
 /// A pose candidate: the fingers cast onto the object, then answered as a candidate
@@ -180,6 +193,14 @@ impl Answer for Poses {
     fn answer(with: &Answering, request: &Self::Request) -> Self::Answer {
         with.poses.answer(request, &with.settings, &with.rules)
     }
+    fn refused(_: &Answering, request: &Self::Request, why: &str) -> Self::Answer {
+        let stub = GraspCandidate {
+            header: request.header.clone(),
+            id: request.id.clone(),
+            ..GraspCandidate::default()
+        };
+        without_geometry(invalid(&stub, &why))
+    }
 }
 
 /// A pose set: every pose cast onto the one object, then answered and ranked as a set
@@ -187,6 +208,9 @@ impl Answer for Poses {
 impl Answer for PoseSets {
     fn answer(with: &Answering, request: &Self::Request) -> Self::Answer {
         with.poses.answer_set(request, &with.settings, &with.rules)
+    }
+    fn refused(with: &Answering, request: &Self::Request, why: &str) -> Self::Answer {
+        pose_set_without_geometry(request, invalid_set(&uncast(request), &with.rules, why))
     }
 }
 

@@ -22,11 +22,13 @@ mod apply;
 mod cache;
 mod error;
 mod lookup;
+mod request;
 #[cfg(test)]
 mod tests;
 
 pub(crate) use apply::{gravity_in, pose_in, TfFailure};
 pub(crate) use error::TfError;
+pub(crate) use request::{needs, resolve, Gravity};
 
 use crate::msg::{TfMessage, Time, TransformStamped};
 use crate::solver::MAX_COORDINATE;
