@@ -35,8 +35,6 @@ pub mod kind;
 pub mod msg;
 pub mod record;
 pub mod replay;
-// The node's answering loop does not call the buffer yet: until it does, much of it is unused.
-#[allow(dead_code, unused_imports)]
 pub(crate) mod tf;
 /// The mathematics, from the `grasp_orient_solver` crate (`crates/solver`).
 pub use grasp_orient_geometry as geometry;

@@ -28,6 +28,8 @@ pub(crate) mod set_io;
 pub(crate) mod set_worker;
 pub(crate) mod sets;
 mod tf;
+mod tf_serve;
+mod tf_wait;
 
 use crate::config::Config;
 use crate::kind::{Candidates, PoseSets, Poses, Sets};
@@ -44,13 +46,14 @@ use loads::{Loaded, Loaders, PoseLoads};
 use markers_out::MarkersOut;
 use param_services::ParameterServices;
 use params::Shared;
-use ros2_client::{MessageInfo, Node, NodeOptions};
+use ros2_client::{Node, NodeOptions};
 use ros_args::RosArgs;
 use session::{create_topic, message_times, qos, say, tell, Session, Shutdown, Start};
 use set_worker::SetWorker;
 use sets::SetEndpoints;
 use std::pin::pin;
 use std::time::Duration;
+use tf_wait::{Request, TfWait};
 
 /// After a stop request, how long the node waits for the answers of the sets it holds (the one
 /// being solved stops between two candidates; those waiting are answered unsolved) before it
@@ -126,6 +129,8 @@ struct Endpoints {
     markers: MarkersOut,
     sets: SetEndpoints,
     poses: Endpoint<Poses>,
+    /// `/tf` and `/tf_static`.
+    tf: tf::TfListener,
 }
 
 impl Endpoints {
@@ -134,12 +139,15 @@ impl Endpoints {
         let topics = Topics::named(|base| session.topic_name(base))
             .with_markers(session.topic_name("grip_markers"));
         let markers_name = topics.markers.clone().unwrap_or_default();
+        let tf_name = session.topic_name(tf::TF_TOPIC);
+        let tf_static_name = session.topic_name(tf::TF_STATIC_TOPIC);
         let node = session.node_mut();
         let markers = create_topic::<MarkerArray>(node, &markers_name, &qos)?;
         Ok(Self {
             candidates: Endpoint::create(node, &topics, &qos)?,
             sets: SetEndpoints::create(node, &topics, qos_depth)?,
             poses: Endpoint::create(node, &topics, &qos)?,
+            tf: tf::TfListener::create(node, &tf_name, &tf_static_name)?,
             markers: MarkersOut::new(
                 node.create_publisher(&markers, None)
                     .context("cannot publish markers")?,
@@ -212,11 +220,13 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
         let _services = local.spawn(services.serve(node));
         let _markers_watch = local.spawn(endpoints.markers.watch(node));
         let mut loading = PoseLoads::new(loaders);
+        let mut tf = TfWait::new();
         let mut loop_state = Loop {
             answerer: &mut answerer,
             worker: &mut worker,
             woken: &mut woken,
             loading: &mut loading,
+            tf: &mut tf,
         };
         let outcome = local
             .run(serve(
@@ -227,6 +237,7 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
                 demo.as_ref(),
             ))
             .await;
+        tf_serve::finish(node, &endpoints, &mut loop_state).await;
         finish_sets(node, &endpoints, &mut answerer, &mut worker).await;
         finish_loads(node, &endpoints, &mut answerer, &mut loading).await;
         tell(node, answerer.finish());
@@ -291,12 +302,14 @@ fn wake_on_change(shared: &Shared) -> (OnStop, futures::channel::mpsc::Unbounded
     (on_stop, woken)
 }
 
-/// What the answering loop changes: the answerer, the set thread, and what wakes the loop.
+/// What the answering loop changes: the answerer, the set thread, what wakes the loop, the pose
+/// candidates loading their meshes and the requests waiting for transforms.
 struct Loop<'a> {
     answerer: &'a mut Answerer,
     worker: &'a mut SetWorker,
     woken: &'a mut futures::channel::mpsc::UnboundedReceiver<()>,
     loading: &'a mut Loading,
+    tf: &'a mut TfWait,
 }
 
 /// Single pose candidates answered off the node's thread because their mesh was not loaded yet
@@ -304,8 +317,9 @@ struct Loop<'a> {
 type Loading = PoseLoads;
 
 /// Answers every candidate until a signal, or until the demo is done; acts on parameter sets
-/// and on a recording that stopped as soon as `woken` says so. Sets are handed to the set thread
-/// and their answers sent as they come back.
+/// and on a recording that stopped as soon as `woken` says so. Every request goes through
+/// [`tf_serve::admit`] (turned by TF, or waiting for its transforms); sets are handed to the set
+/// thread and their answers sent as they come back.
 async fn serve(
     node: &Node,
     shutdown: &mut Shutdown,
@@ -313,18 +327,14 @@ async fn serve(
     state: &mut Loop<'_>,
     demo: Option<&Demo>,
 ) -> anyhow::Result<()> {
-    let Loop {
-        answerer,
-        worker,
-        woken,
-        loading,
-    } = state;
     let mut stream = pin!(endpoints.candidates.requests.async_stream());
     let mut set_stream = pin!(endpoints.sets.sets.requests.async_stream());
     let mut calls = pin!(endpoints.sets.service.receive_request_stream());
     let mut poses = pin!(endpoints.poses.requests.async_stream());
     let mut pose_sets = pin!(endpoints.sets.pose_sets.requests.async_stream());
     let mut pose_calls = pin!(endpoints.sets.pose_service.receive_request_stream());
+    let mut tf_dynamic = pin!(endpoints.tf.dynamic.async_stream());
+    let mut tf_static = pin!(endpoints.tf.fixed.async_stream());
     let mut demo_done = pin!(async {
         match demo {
             Some(d) => d.finished().await,
@@ -336,72 +346,82 @@ async fn serve(
     loop {
         // Biased, in this order: a stop request wins over whatever is queued, then the demo's
         // end, then a parameter set or a stopped writer (so that it applies to every candidate
-        // still queued), then candidates, then sets' answers back from the set thread, then new
-        // sets; each costs the node's thread microseconds to milliseconds (a set is solved on
-        // the set thread), so a signal is seen within one.
+        // still queued), then the requests waiting for transforms that are due, then
+        // candidates, then sets' answers back from the set thread, then new sets, then
+        // transforms (each request drains those already in before it is looked at); each costs
+        // the node's thread microseconds to milliseconds (a set is solved on the set thread),
+        // so a signal is seen within one.
+        let wake = state.tf.next_wake();
         futures::select_biased! {
             signal = shutdown.requested().fuse() => {
                 say(node, log::Level::Info, &format!("{signal}: leaving the ROS graph"));
                 return Ok(());
             }
             result = demo_done => return result,
-            () = woken.select_next_some() => tell(node, answerer.refresh()),
+            () = state.woken.select_next_some() => tell(node, state.answerer.refresh()),
+            () = tf_serve::at(wake).fuse() => tf_serve::due(node, endpoints, state).await,
             received = stream.select_next_some() => match received {
                 Ok((candidate, info)) => {
-                    answer_one(node, endpoints, answerer, candidate, &info).await;
+                    let request = Request::Candidate(candidate);
+                    tf_serve::admit(node, endpoints, state, request, message_times(&info)).await;
                 }
-                Err(e) => tell(node, vec![answerer.undecodable(topics.requests::<Candidates>().unwrap_or_default(), &e)]),
+                Err(e) => tell(node, vec![state.answerer.undecodable(topics.requests::<Candidates>().unwrap_or_default(), &e)]),
             },
-            loaded = loading.next().fuse() => send_loaded(node, endpoints, answerer, loaded).await,
-            done = worker.done.select_next_some() => {
-                sets::answer_done(node, sets, markers, answerer, done).await;
+            loaded = state.loading.next().fuse() => send_loaded(node, endpoints, state.answerer, loaded).await,
+            done = state.worker.done.select_next_some() => {
+                sets::answer_done(node, sets, markers, state.answerer, done).await;
             }
             received = set_stream.select_next_some() => match received {
                 Ok((set, info)) => {
-                    let set = SetInput::Candidates(set);
-                    sets::take_topic(node, sets, markers, answerer, worker, set, &info).await;
+                    let request = Request::Set(SetInput::Candidates(set), None);
+                    tf_serve::admit(node, endpoints, state, request, message_times(&info)).await;
                 }
                 Err(e) => {
                     let topic = topics.requests::<Sets>().unwrap_or_default();
-                    let note = answerer.undecodable(topic, &e);
+                    let note = state.answerer.undecodable(topic, &e);
                     tell(node, vec![note]);
                 }
             },
             call = calls.select_next_some() => match call {
                 Ok((id, request)) => {
                     let set = SetInput::Candidates(request.candidate_set);
-                    sets::take_call(node, sets, markers, answerer, worker, id, set).await;
+                    let now = now_ns();
+                    tf_serve::admit(node, endpoints, state, Request::Set(set, Some(id)), (now, now)).await;
                 }
-                Err(e) => tell(node, vec![answerer.undecodable(sets::SERVICE, &e)]),
+                Err(e) => tell(node, vec![state.answerer.undecodable(sets::SERVICE, &e)]),
             },
             received = poses.select_next_some() => match received {
                 Ok((candidate, info)) => {
-                    take_pose(node, endpoints, answerer, loading, candidate, &info).await;
+                    let request = Request::Pose(Box::new(candidate));
+                    tf_serve::admit(node, endpoints, state, request, message_times(&info)).await;
                 }
                 Err(e) => {
                     let topic = topics.requests::<Poses>().unwrap_or_default();
-                    let note = answerer.undecodable(topic, &e);
+                    let note = state.answerer.undecodable(topic, &e);
                     tell(node, vec![note]);
                 }
             },
             received = pose_sets.select_next_some() => match received {
                 Ok((set, info)) => {
-                    let set = SetInput::Poses(Box::new(set));
-                    sets::take_topic(node, sets, markers, answerer, worker, set, &info).await;
+                    let request = Request::Set(SetInput::Poses(Box::new(set)), None);
+                    tf_serve::admit(node, endpoints, state, request, message_times(&info)).await;
                 }
                 Err(e) => {
                     let topic = topics.requests::<PoseSets>().unwrap_or_default();
-                    let note = answerer.undecodable(topic, &e);
+                    let note = state.answerer.undecodable(topic, &e);
                     tell(node, vec![note]);
                 }
             },
             call = pose_calls.select_next_some() => match call {
                 Ok((id, request)) => {
                     let set = SetInput::Poses(Box::new(request.pose_set));
-                    sets::take_call(node, sets, markers, answerer, worker, id, set).await;
+                    let now = now_ns();
+                    tf_serve::admit(node, endpoints, state, Request::Set(set, Some(id)), (now, now)).await;
                 }
-                Err(e) => tell(node, vec![answerer.undecodable(sets::POSE_SERVICE, &e)]),
+                Err(e) => tell(node, vec![state.answerer.undecodable(sets::POSE_SERVICE, &e)]),
             },
+            received = tf_static.select_next_some() => tf_serve::keep(state.tf, received, true),
+            received = tf_dynamic.select_next_some() => tf_serve::keep(state.tf, received, false),
         }
     }
 }
@@ -446,9 +466,8 @@ async fn answer_one(
     endpoints: &Endpoints,
     answerer: &mut Answerer,
     candidate: GraspCandidate,
-    info: &MessageInfo,
+    (received, sent): (u64, u64),
 ) {
-    let (received, sent) = message_times(info);
     let audience = endpoints.markers.heard(node);
     let outcome = answerer.handle(candidate, received, sent, audience);
     let answers = &endpoints.candidates.answers;
@@ -470,9 +489,8 @@ async fn take_pose(
     answerer: &mut Answerer,
     loading: &mut Loading,
     candidate: PoseCandidate,
-    info: &MessageInfo,
+    (received, sent): (u64, u64),
 ) {
-    let (received, sent) = message_times(info);
     let audience = endpoints.markers.heard(node);
     let work = answerer.pose_work(received, audience);
     if work.refusal(&candidate).is_none() && answerer.answers_off_thread(&candidate) {

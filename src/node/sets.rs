@@ -10,7 +10,7 @@
 use super::answer::{Answerer, SetInput, SetOutcome, SetReply};
 use super::endpoint::Endpoint;
 use super::markers_out::MarkersOut;
-use super::session::{message_times, qos, say, tell};
+use super::session::{qos, say, tell};
 use super::set_worker::{SetDone, SetJob, SetWorker, Via};
 use crate::kind::{PoseSets, Sets};
 use crate::msg::{
@@ -18,7 +18,7 @@ use crate::msg::{
 };
 use crate::record::{now_ns, Topics};
 use anyhow::Context as _;
-use ros2_client::{MessageInfo, Name, Node, RmwRequestId, Server, ServiceMapping, ServiceTypeName};
+use ros2_client::{Name, Node, RmwRequestId, Server, ServiceMapping, ServiceTypeName};
 use std::time::{Duration, Instant};
 
 /// The service's name under the node (`~/recommend`).
@@ -90,9 +90,8 @@ pub(crate) async fn take_topic(
     answerer: &mut Answerer,
     worker: &SetWorker,
     set: SetInput,
-    info: &MessageInfo,
+    (received, sent): (u64, u64),
 ) {
-    let (received, sent) = message_times(info);
     // From the sample's arrival in the DDS reader (the last fragment) to here: the node's
     // thread waking, and the set decoded.
     let taken = Duration::from_nanos(now_ns().saturating_sub(received));
@@ -111,18 +110,17 @@ pub(crate) async fn take_topic(
     }
 }
 
-/// Takes one call of `~/recommend` or `~/recommend_poses` (its times are when it was taken), as
-/// [`take_topic`] does.
+/// Takes one call of `~/recommend` or `~/recommend_poses` (its times are when it was taken,
+/// `received`), as [`take_topic`] does.
 pub(crate) async fn take_call(
     node: &Node,
     endpoints: &SetEndpoints,
     markers: &MarkersOut,
     answerer: &mut Answerer,
     worker: &SetWorker,
-    id: RmwRequestId,
-    set: SetInput,
+    (id, set): (RmwRequestId, SetInput),
+    received: u64,
 ) {
-    let received = now_ns();
     let (record, record_markers) = answerer.records_sets();
     let job = SetJob {
         set,

@@ -6,15 +6,11 @@
 //! `StaticListenerQoS` the same but transient-local, so that a node started after a static
 //! broadcaster still receives the static transforms it latched.
 
-// The answering loop does not drain these yet: until it does, they are unused.
-#![allow(dead_code)]
-
 use super::session::create_topic;
 use crate::msg::TfMessage;
 use crate::tf::TfBuffer;
 use ros2_client::qos::{Durability, History};
 use ros2_client::{Node, QosProfile, Subscription};
-use std::time::{Duration, Instant};
 
 /// The dynamic transforms' topic, as tf2_ros names it (before remapping).
 pub(crate) const TF_TOPIC: &str = "/tf";
@@ -38,8 +34,10 @@ pub(crate) fn static_qos() -> QosProfile {
 
 /// The two subscriptions.
 pub(crate) struct TfListener {
-    dynamic: Subscription<TfMessage>,
-    fixed: Subscription<TfMessage>,
+    /// `/tf`.
+    pub(crate) dynamic: Subscription<TfMessage>,
+    /// `/tf_static`.
+    pub(crate) fixed: Subscription<TfMessage>,
 }
 
 /// What one drain took.
@@ -83,31 +81,6 @@ impl TfListener {
     }
 }
 
-/// How often [`resolve`] looks again while it waits.
-const POLL: Duration = Duration::from_millis(2);
-
-/// `f` on the buffer, waiting up to `timeout` for the transforms it needs, as tf2_ros's
-/// `lookupTransform` with a timeout: `drain` (for the node, [`TfListener::drain`]) brings in what
-/// has arrived, then `f` is tried; on failure, again every [`POLL`] until `timeout` has passed
-/// since the start, and then the last failure is the answer. With `timeout` zero, one try.
-pub(crate) async fn resolve<T, E>(
-    buffer: &mut TfBuffer,
-    mut drain: impl FnMut(&mut TfBuffer),
-    timeout: Duration,
-    f: impl Fn(&TfBuffer) -> Result<T, E>,
-) -> Result<T, E> {
-    let deadline = Instant::now() + timeout;
-    loop {
-        drain(buffer);
-        let result = f(buffer);
-        let now = Instant::now();
-        if result.is_ok() || now >= deadline {
-            return result;
-        }
-        smol::Timer::at((now + POLL).min(deadline)).await;
-    }
-}
-
 /// Up to [`MAX_MESSAGES_PER_DRAIN`] messages of one subscription into `buffer`: how many were
 /// kept and how many could not be read.
 fn drain_one(
@@ -133,78 +106,7 @@ fn drain_one(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::msg::{Header, Time, TransformStamped};
-    use crate::tf::{gravity_in, TfFailure};
     use ros2_client::qos::Reliability;
-
-    fn header(frame: &str) -> Header {
-        Header {
-            stamp: Time { sec: 0, nanosec: 0 },
-            frame_id: frame.into(),
-        }
-    }
-
-    fn identity(parent: &str, child: &str) -> TransformStamped {
-        let mut t = TransformStamped::default();
-        t.header.frame_id = parent.into();
-        t.child_frame_id = child.into();
-        t.transform.rotation.w = 1.0;
-        t
-    }
-
-    fn gravity(b: &TfBuffer) -> Result<nalgebra::Vector3<f64>, TfFailure> {
-        gravity_in(b, "world", [0.0, 0.0, -9.8], &header("tool")).expect("gravity_frame set")
-    }
-
-    /// A transform that arrives while the candidate waits answers it; one that never comes
-    /// gives tf2's error once the timeout has passed, not before.
-    #[test]
-    fn resolve_waits_for_the_transform_up_to_the_timeout() {
-        let mut buffer = TfBuffer::new();
-        let mut drains = 0;
-        let start = Instant::now();
-        let g = smol::block_on(resolve(
-            &mut buffer,
-            |b| {
-                drains += 1;
-                if drains == 5 {
-                    b.insert(&identity("world", "tool"), true);
-                }
-            },
-            Duration::from_secs(5),
-            gravity,
-        ))
-        .expect("arrived on the fifth drain");
-        assert_eq!(g, nalgebra::Vector3::new(0.0, 0.0, -9.8));
-        assert_eq!(drains, 5);
-        assert!(start.elapsed() < Duration::from_secs(4));
-
-        let mut buffer = TfBuffer::new();
-        let start = Instant::now();
-        let e = smol::block_on(resolve(
-            &mut buffer,
-            |_| {},
-            Duration::from_millis(50),
-            gravity,
-        ))
-        .expect_err("never arrives");
-        assert!(start.elapsed() >= Duration::from_millis(50));
-        assert!(
-            e.to_string().contains(
-                "\"tool\" passed to lookupTransform argument target_frame does not exist"
-            ),
-            "{e}"
-        );
-        // Timeout zero: one try.
-        let mut tries = 0;
-        let _ = smol::block_on(resolve(
-            &mut buffer,
-            |_| tries += 1,
-            Duration::ZERO,
-            gravity,
-        ));
-        assert_eq!(tries, 1);
-    }
 
     /// tf2_ros's listener QoS: both reliable, keep-last 100; only /tf_static transient-local.
     #[test]

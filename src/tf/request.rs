@@ -82,9 +82,11 @@ mod tests {
 
     /// `child` in `parent` at `sec` (0 and static: always), at `t`, turned `angle` about x.
     fn about_x(parent: &str, child: &str, sec: i32, t: [f64; 3], angle: f64) -> TransformStamped {
-        let mut m = TransformStamped::default();
-        m.header = header(parent, sec);
-        m.child_frame_id = child.into();
+        let mut m = TransformStamped {
+            header: header(parent, sec),
+            child_frame_id: child.into(),
+            ..TransformStamped::default()
+        };
         m.transform.translation = Vector3 {
             x: t[0],
             y: t[1],
