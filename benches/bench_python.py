@@ -1,10 +1,10 @@
 """The Python module (crates/python) against the Rust path on the same grasps, in one run:
 
 1. 1,000,000 planar grasps in one grasp_orient.solve call, against the same grasps answered one by
-   one through the root crate's answer layer (`answer_one`, as `grasp_orient solve` answers its
-   lines) on one core, without Python;
+   one through the root crate's answer layer (`Answering::answer::<Candidates>`, as
+   `grasp_orient solve` answers its lines) on one core, without Python;
 2. 100,000 gripper poses on a 100,352-triangle torus in one grasp_orient.solve_poses call, against
-   the same poses as one pose set through `PoseAnswerer::answer_set` on one core (the path
+   the same poses as one pose set through `Answering::answer::<PoseSets>` on one core (the path
    `cargo bench --bench poses` times), the mesh indexed in both.
 
 The Rust path is crates/python/benches/rust_path.rs, built and run here by cargo on files this
@@ -170,12 +170,12 @@ def main() -> None:
     print(f"{n:,} planar grasps ({ok:,} solved), one solve call:")
     print(f"  module, threads=1:   {t_one:.3f} s ({t_one / n * 1e6:.3f} us a grasp)")
     print(f"  module, every core:  {t_all:.3f} s ({t_all / n * 1e6:.3f} us a grasp)")
-    print(f"  Rust answer_one, one core: {r_grasps:.3f} s ({r_grasps / n * 1e6:.3f} us a grasp)")
+    print(f"  Rust Answering (one candidate at a time), one core: {r_grasps:.3f} s ({r_grasps / n * 1e6:.3f} us a grasp)")
     print(f"  ratio module / Rust: {t_one / r_grasps:.3f} on one thread (target <= 1.2), {t_all / r_grasps:.3f} on every core")
     print(f"{m:,} poses on a {len(triangles):,}-triangle torus ({pose_ok:,} solved), one solve_poses call:")
     print(f"  module, threads=1:   {p_one:.3f} s ({p_one / m * 1e6:.3f} us a pose)")
     print(f"  module, every core:  {p_all:.3f} s ({p_all / m * 1e6:.3f} us a pose)")
-    print(f"  Rust PoseAnswerer::answer_set, one core: {r_poses:.3f} s ({r_poses / m * 1e6:.3f} us a pose)")
+    print(f"  Rust Answering (one pose set), one core: {r_poses:.3f} s ({r_poses / m * 1e6:.3f} us a pose)")
     print(f"  ratio module / Rust: {p_one / r_poses:.3f} on one thread (target <= 1.2), {p_all / r_poses:.3f} on every core")
 
 

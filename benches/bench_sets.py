@@ -166,7 +166,7 @@ def node_times(node, n: int, arrived_ns: list[int], skip: int) -> dict | None:
     clock, one per set the node answered, in order): the transport and rclpy, none if the counts differ.
     The first `skip` sets (the warm-up) are left out."""
     def lines():
-        # Builds before 2026-12-05 do not say when they handed the answer to DDS (None).
+        # Older builds do not say when they handed the answer to DDS (None).
         return [(*map(float, m.groups()[1:5]), m.group(6) and int(m.group(6))) for line in node.all_lines()
                 for m in [SET_LINE.search(line)] if m and int(m.group(1)) == n]
 

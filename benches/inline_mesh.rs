@@ -13,8 +13,9 @@
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
-use grasp_orient::answer::{PoseAnswerer, Rules};
+use grasp_orient::answer::{Answering, PoseAnswerer, Rules};
 use grasp_orient::geometry::{AmentIndex, ClosingAxis};
+use grasp_orient::kind::Poses;
 use grasp_orient::msg::{GraspObject, Pose, PoseCandidate, SolidPrimitive, Vector3};
 use grasp_orient::solver::Settings;
 use std::hint::black_box;
@@ -84,7 +85,11 @@ fn main() {
         .find_map(|a| a.parse().ok())
         .unwrap_or(31);
     let (settings, rules) = (Settings::default(), Rules::default());
-    let answerer = PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default());
+    let with = Answering::new(
+        settings,
+        rules,
+        PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default()),
+    );
     let on_box = candidate(GraspObject {
         primitive: SolidPrimitive {
             kind: 1,
@@ -92,10 +97,7 @@ fn main() {
         },
         ..GraspObject::default()
     });
-    let status = answerer
-        .answer(&on_box, &settings, &rules)
-        .recommendation
-        .status;
+    let status = with.answer::<Poses>(&on_box).recommendation.status;
     assert_eq!(status, 0, "the box is gripped");
     let sizes: [(u32, u32); 11] = [
         (4, 3),
@@ -120,7 +122,7 @@ fn main() {
         })
         .collect();
     for p in &poses {
-        let reply = answerer.answer(p, &settings, &rules);
+        let reply = with.answer::<Poses>(p);
         assert_eq!(
             reply.recommendation.status, 0,
             "{:?}",
@@ -131,9 +133,9 @@ fn main() {
     let mut meshes = vec![Vec::new(); poses.len()];
     for _ in 0..rounds {
         hops.push(timed(|| smol::block_on(smol::unblock(|| black_box(1)))));
-        boxes.push(timed(|| answerer.answer(&on_box, &settings, &rules)));
+        boxes.push(timed(|| with.answer::<Poses>(&on_box)));
         for (p, times) in poses.iter().zip(&mut meshes) {
-            times.push(timed(|| answerer.answer(p, &settings, &rules)));
+            times.push(timed(|| with.answer::<Poses>(p)));
         }
     }
     let (hop, on_box) = (median(hops), median(boxes));

@@ -1,7 +1,7 @@
 //! A set of 1,000 gripper poses on a 100,000-triangle mesh answered through the answer layer
-//! (`PoseAnswerer::answer_set`: the fingers cast, the 3D solve, the grip force, the ranking, the
+//! (`Answering::answer::<PoseSets>`: the fingers cast, the 3D solve, the grip force, the ranking, the
 //! wire answers, as `rank` and a node's set do), against the same 1,000 grasps given as a set of
-//! contact candidates through the same layer (`answer::answer_set`): the spatial candidates the
+//! contact candidates through the same layer (`Answering::answer::<Sets>`): the spatial candidates the
 //! poses make, taken from the pose path itself. Target: the poses at most 3 times the contacts,
 //! once the mesh is loaded. Also printed: the time to parse the mesh file alone, and to load and
 //! index it (the first set on a resource, through the answerer's cache, which keeps it within
@@ -18,8 +18,9 @@ static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 #[path = "../crates/geometry/benches/shared/torus.rs"]
 mod torus;
 
-use grasp_orient::answer::{answer_set, PoseAnswerer, Rules, MESH_CACHE_BYTES};
+use grasp_orient::answer::{Answering, PoseAnswerer, Rules, MESH_CACHE_BYTES};
 use grasp_orient::geometry::{parse, AmentIndex, ClosingAxis, GripperPose, MeshCache};
+use grasp_orient::kind::{PoseSets, Sets};
 use grasp_orient::msg::{
     GraspCandidate, GraspCandidateSet, GraspObject, GraspPose, GripRecommendation, Pose,
     PoseCandidate, PoseCandidateSet, Vector3,
@@ -169,12 +170,17 @@ fn main() {
     let grippers = torus::poses(&mut rng, &frame);
     let poses = pose_set(&resource, &frame, &grippers);
     let (settings, rules) = (Settings::default(), Rules::default());
-    let answerer = PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default());
+    let with = Answering::new(
+        settings,
+        rules,
+        PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default()),
+    );
+    let answerer = with.poses();
     let first = Instant::now();
-    let answered = answerer.answer_set(&poses, &settings, &rules);
+    let answered = with.answer::<PoseSets>(&poses);
     let first = first.elapsed();
-    let contacts = contact_set(&answerer, &poses);
-    let same = answer_set(&contacts, &settings, &rules);
+    let contacts = contact_set(answerer, &poses);
+    let same = with.answer::<Sets>(&contacts);
     let status = |r: &GripRecommendation| r.status;
     assert_eq!(
         answered
@@ -194,10 +200,8 @@ fn main() {
 
     let (mut pose_times, mut contact_times) = (Vec::new(), Vec::new());
     for _ in 0..rounds {
-        pose_times.push(timed_both(|| {
-            answerer.answer_set(&poses, &settings, &rules)
-        }));
-        contact_times.push(timed_both(|| answer_set(&contacts, &settings, &rules)));
+        pose_times.push(timed_both(|| with.answer::<PoseSets>(&poses)));
+        contact_times.push(timed_both(|| with.answer::<Sets>(&contacts)));
     }
     let walls = |t: &[(Duration, Option<Duration>)]| median(t.iter().map(|p| p.0).collect());
     let cpus = |t: &[(Duration, Option<Duration>)]| {

@@ -9,7 +9,8 @@
 #[allow(dead_code, unused_imports)] // a benchmark uses a part of the tests' helpers
 mod common;
 
-use grasp_orient::answer::answer;
+use grasp_orient::answer::Answering;
+use grasp_orient::kind::Candidates;
 use grasp_orient::msg::{GraspCandidate, Header, Point, Time, Vector3};
 use grasp_orient::record::{bag, BagWriter, Entry, Payload, Recorder, Topics};
 use grasp_orient::replay::{replay, Plan};
@@ -77,12 +78,13 @@ fn main() {
 
 /// The answering path with and without a live recording, alternated, best of 5.
 fn recording_cost(pool: &[GraspCandidate], settings: &Settings, dir: &std::path::Path) {
+    let with = Answering::from_env().with_settings(*settings);
     let rounds = 200_000;
     let (mut off, mut on) = (f64::INFINITY, f64::INFINITY);
     for _ in 0..5 {
         let t = Instant::now();
         for i in 0..rounds {
-            black_box(answer(&pool[i % pool.len()], settings));
+            black_box(with.answer::<Candidates>(&pool[i % pool.len()]));
         }
         off = off.min(t.elapsed().as_secs_f64());
         let recorder = Recorder::start(
@@ -96,7 +98,7 @@ fn recording_cost(pool: &[GraspCandidate], settings: &Settings, dir: &std::path:
         let t = Instant::now();
         for i in 0..rounds {
             let c = &pool[i % pool.len()];
-            let a = answer(c, settings);
+            let a = with.answer::<Candidates>(c);
             let now = i as u64;
             recorder.record(Entry {
                 payload: Payload::request::<grasp_orient::kind::Candidates>(c.clone()),
@@ -125,6 +127,7 @@ fn recording_cost(pool: &[GraspCandidate], settings: &Settings, dir: &std::path:
 
 /// A bag of `n` candidates with their answers, then replay it.
 fn bag_and_replay(pool: &[GraspCandidate], settings: &Settings, dir: &std::path::Path, n: usize) {
+    let with = Answering::from_env().with_settings(*settings);
     let path = dir.join("big.mcap");
     std::fs::remove_file(&path).ok();
     let t = Instant::now();
@@ -132,7 +135,7 @@ fn bag_and_replay(pool: &[GraspCandidate], settings: &Settings, dir: &std::path:
     for i in 0..n {
         let mut c = pool[i % pool.len()].clone();
         c.id = format!("g{i}").into();
-        let a = answer(&c, settings);
+        let a = with.answer::<Candidates>(&c);
         let time = 1_000_000_000 + i as u64 * 1000;
         writer
             .write(&Entry {

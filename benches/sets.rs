@@ -1,12 +1,12 @@
 //! A set of 1,000 candidates answered and ranked in-process, against the same 1,000 candidates
 //! answered one by one, in one process on one core: what a set costs over single candidates
 //! (targets: at most 1.1 times the singles, and at most 1 ms). Both answer with
-//! `answer::answer_one` under the default rules (the set adds its ranking); both build the full
+//! the answering object (`Answering`) under the default rules (the set adds its ranking); both build the full
 //! wire answers, as the node publishes them. Also printed, to show where a set's extra time goes:
 //! the singles' answers kept in a list (as a set keeps them until it is published), and the
 //! ranking alone; and, to show what more cores buy, the set on a pool of every core
 //! (`answer::solver_pool`, what the node answers large sets on), against a pool of as many started
-//! threads that the calling thread waits on (the node's pool before 2026-12-01, night); and the
+//! threads that the calling thread waits on (how the node's pool was once built); and the
 //! set on one thread and on the pool right after the process idled 0, 2 and 10 ms, as a node's
 //! sets come, which on a virtual machine whose cores slow down when idle is slower, and gains
 //! little from the second core (`docs/performance.md`).
@@ -24,7 +24,8 @@ mod common;
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 use common::random_grasp;
-use grasp_orient::answer::{answer_one, answer_set, answer_set_on, Rules};
+use grasp_orient::answer::{Answering, Rules};
+use grasp_orient::kind::{Candidates, Sets};
 use grasp_orient::msg::{GraspCandidate, GraspCandidateSet, Point, Vector3};
 use grasp_orient::solver::Settings;
 use rand::SeedableRng;
@@ -92,13 +93,14 @@ fn main() {
         ..GraspCandidateSet::default()
     };
     let (settings, rules) = (Settings::default(), Rules::default());
+    let with = common::answering(&settings, &rules);
     // Warm up both paths, then alternate them so that both see the same machine.
     for _ in 0..20 {
-        black_box(answer_set(&set, &settings, &rules));
+        black_box(with.answer::<Sets>(&set));
     }
     let runs = 201;
-    let (single, kept, whole) = one_core(&set, &settings, &rules, runs);
-    let answers = answer_set(&set, &settings, &rules);
+    let (single, kept, whole) = one_core(&set, &with, runs);
+    let answers = with.answer::<Sets>(&set);
     // The node's pool (`answer::solver_pool`: this thread and cores - 1 started), here with every
     // core: what more cores buy. Against it, a pool of as many started threads, which this thread
     // waits on (how the node's pool was built before). The two take turns set by set, so that each
@@ -111,11 +113,11 @@ fn main() {
     let node_pool = grasp_orient::answer::solver_pool(cores).ok();
     let pooled = node_pool
         .as_ref()
-        .map(|pool| pools_in_turns(&set, &settings, &rules, pool, started.as_ref(), runs));
+        .map(|pool| pools_in_turns(&set, &with, pool, started.as_ref(), runs));
     let idled: Vec<(u64, Idled)> = node_pool.as_ref().map_or_else(Vec::new, |pool| {
         [0, 2, 10]
             .into_iter()
-            .map(|ms| (ms, after_idle(&set, &settings, &rules, pool, ms, 100)))
+            .map(|ms| (ms, after_idle(&set, &with, pool, ms, 100)))
             .collect()
     });
     let ranking = median_secs(runs, || {
@@ -179,29 +181,24 @@ fn main() {
 
 /// One core, the middle of 5 medians of `runs` each: the set's candidates answered one by one, the
 /// same with the answers kept in a list, and the set answered and ranked, s.
-fn one_core(
-    set: &GraspCandidateSet,
-    settings: &Settings,
-    rules: &Rules,
-    runs: usize,
-) -> (f64, f64, f64) {
+fn one_core(set: &GraspCandidateSet, with: &Answering, runs: usize) -> (f64, f64, f64) {
     let (mut singles, mut kept, mut sets) = (Vec::new(), Vec::new(), Vec::new());
     for _ in 0..5 {
         singles.push(median_secs(runs, || {
             for c in &set.candidates {
-                black_box(answer_one(black_box(c), settings, rules));
+                black_box(with.answer::<Candidates>(black_box(c)));
             }
         }));
         kept.push(median_secs(runs, || {
             let answers: Vec<_> = set
                 .candidates
                 .iter()
-                .map(|c| answer_one(black_box(c), settings, rules))
+                .map(|c| with.answer::<Candidates>(black_box(c)))
                 .collect();
             black_box(answers);
         }));
         sets.push(median_secs(runs, || {
-            black_box(answer_set(black_box(set), settings, rules));
+            black_box(with.answer::<Sets>(black_box(set)));
         }));
     }
     for v in [&mut singles, &mut kept, &mut sets] {
@@ -214,15 +211,14 @@ fn one_core(
 /// that this thread waits on, taking turns set by set: the medians of `5 * runs` sets each, s.
 fn pools_in_turns(
     set: &GraspCandidateSet,
-    settings: &Settings,
-    rules: &Rules,
+    with: &Answering,
     pool: &rayon::ThreadPool,
     started: Option<&rayon::ThreadPool>,
     runs: usize,
 ) -> (f64, Option<f64>) {
     let time = |pool: &rayon::ThreadPool| {
         let t = Instant::now();
-        black_box(answer_set_on(black_box(set), settings, rules, Some(pool)));
+        black_box(with.set_on(black_box(set), Some(pool)));
         t.elapsed().as_secs_f64()
     };
     let (mut ours, mut theirs) = (Vec::new(), Vec::new());
@@ -249,8 +245,7 @@ struct Idled {
 /// little a second core helps within the millisecond the set takes (`docs/performance.md`).
 fn after_idle(
     set: &GraspCandidateSet,
-    settings: &Settings,
-    rules: &Rules,
+    with: &Answering,
     pool: &rayon::ThreadPool,
     idle_ms: u64,
     rounds: usize,
@@ -262,7 +257,7 @@ fn after_idle(
             .map(|_| {
                 std::thread::sleep(idle);
                 let t = Instant::now();
-                black_box(answer_set_on(black_box(set), settings, rules, on));
+                black_box(with.set_on(black_box(set), on));
                 t.elapsed().as_secs_f64()
             })
             .collect()

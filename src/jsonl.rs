@@ -224,7 +224,7 @@ impl LineAnswer {
 }
 
 /// The top-level fields that make a line a `PoseCandidate` (`grasp_pose`) or a
-/// `PoseCandidateSet` (`poses`) rather than a `GraspCandidate`.
+/// pose set (`poses`) rather than a `GraspCandidate`.
 #[derive(serde::Deserialize)]
 struct Kind {
     #[serde(default)]
@@ -246,7 +246,7 @@ pub(crate) fn is_pose_candidate(text: &str) -> bool {
         && serde_json::from_str::<Kind>(text).is_ok_and(|k| k.grasp_pose.is_some())
 }
 
-/// Whether a JSON text is an object with a `poses` field (a `PoseCandidateSet`).
+/// Whether a JSON text is an object with a `poses` field (a pose set).
 pub(crate) fn is_pose_set(text: &str) -> bool {
     serde_json::from_str::<Kind>(text).is_ok_and(|k| k.poses.is_some())
 }

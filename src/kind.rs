@@ -40,7 +40,7 @@ impl<T> Wire for T where
 
 /// The key that pairs an answer with its request: the request's id and header, cut to the
 /// length an answer carries them at ([`clip`]).
-pub type Key<'a> = (&'a str, i32, u32, &'a str);
+pub(crate) type Key<'a> = (&'a str, i32, u32, &'a str);
 
 /// [`Key`] of an id and a header.
 pub(crate) fn key<'a>(id: &'a str, header: &'a Header) -> Key<'a> {
@@ -79,28 +79,32 @@ pub trait Kind: Sized + 'static {
     fn request_key(request: &Self::Request) -> Key<'_>;
     /// The key of the request it answers.
     fn answer_key(answer: &Self::Answer) -> Key<'_>;
+}
+
+/// Where a kind's requests hold their frames: what the node turns by TF (`crate::tf::resolve`),
+/// through this one trait for every kind.
+pub(crate) trait Framing: Kind {
     /// Hands `visit` every part of `request` that holds its own gravity, with the header it is
     /// given against, and its object where it has one: one for a candidate and a pose
     /// candidate, one per member of a candidate set (each member has its own header), one for a
-    /// pose set (its header, gravity and object). The node turns them by TF through this one
-    /// method for every kind (`crate::tf::resolve`).
+    /// pose set (its header, gravity and object).
     fn framed(request: &mut Self::Request, visit: &mut dyn FnMut(Framed<'_>));
     /// The frame the request's object pose is given in (`object.frame_id`); empty for a kind
     /// without an object, and for an object given in the header frame.
     fn object_frame(request: &Self::Request) -> &str;
 }
 
-/// One part of a request as [`Kind::framed`] hands it out: a gravity and, where the kind has
+/// One part of a request as [`Framing::framed`] hands it out: a gravity and, where the kind has
 /// one, an object, both given against `header`.
 #[derive(Debug)]
-pub struct Framed<'a> {
+pub(crate) struct Framed<'a> {
     /// The frame and stamp the gravity (and the object's pose, once in the header frame) are
     /// expressed at.
-    pub header: &'a Header,
+    pub(crate) header: &'a Header,
     /// Gravitational acceleration, m/s², in `header.frame_id`.
-    pub gravity: &'a mut Vector3,
+    pub(crate) gravity: &'a mut Vector3,
     /// The object, whose pose is in `object.frame_id` (empty: `header.frame_id`).
-    pub object: Option<&'a mut GraspObject>,
+    pub(crate) object: Option<&'a mut GraspObject>,
 }
 
 /// A grasp candidate (`GraspCandidate`) and its answer (`GripRecommendation`).
@@ -141,16 +145,6 @@ impl Kind for Candidates {
     fn answer_key(a: &GripRecommendation) -> Key<'_> {
         key(&a.candidate_id, &a.header)
     }
-    fn framed(r: &mut GraspCandidate, visit: &mut dyn FnMut(Framed<'_>)) {
-        visit(Framed {
-            header: &r.header,
-            gravity: &mut r.gravity,
-            object: None,
-        });
-    }
-    fn object_frame(_: &GraspCandidate) -> &str {
-        ""
-    }
 }
 
 impl Kind for Sets {
@@ -172,14 +166,6 @@ impl Kind for Sets {
     }
     fn answer_key(a: &GripRecommendationSet) -> Key<'_> {
         key(&a.set_id, &a.header)
-    }
-    fn framed(r: &mut GraspCandidateSet, visit: &mut dyn FnMut(Framed<'_>)) {
-        for c in &mut r.candidates {
-            Candidates::framed(c, visit);
-        }
-    }
-    fn object_frame(_: &GraspCandidateSet) -> &str {
-        ""
     }
 }
 
@@ -203,16 +189,6 @@ impl Kind for Poses {
     fn answer_key(a: &PoseRecommendation) -> Key<'_> {
         key(&a.recommendation.candidate_id, &a.recommendation.header)
     }
-    fn framed(r: &mut PoseCandidate, visit: &mut dyn FnMut(Framed<'_>)) {
-        visit(Framed {
-            header: &r.header,
-            gravity: &mut r.gravity,
-            object: Some(&mut r.object),
-        });
-    }
-    fn object_frame(r: &PoseCandidate) -> &str {
-        &r.object.frame_id
-    }
 }
 
 impl Kind for PoseSets {
@@ -235,6 +211,46 @@ impl Kind for PoseSets {
     fn answer_key(a: &PoseRecommendationSet) -> Key<'_> {
         key(&a.set_id, &a.header)
     }
+}
+
+impl Framing for Candidates {
+    fn framed(r: &mut GraspCandidate, visit: &mut dyn FnMut(Framed<'_>)) {
+        visit(Framed {
+            header: &r.header,
+            gravity: &mut r.gravity,
+            object: None,
+        });
+    }
+    fn object_frame(_: &GraspCandidate) -> &str {
+        ""
+    }
+}
+
+impl Framing for Sets {
+    fn framed(r: &mut GraspCandidateSet, visit: &mut dyn FnMut(Framed<'_>)) {
+        for c in &mut r.candidates {
+            Candidates::framed(c, visit);
+        }
+    }
+    fn object_frame(_: &GraspCandidateSet) -> &str {
+        ""
+    }
+}
+
+impl Framing for Poses {
+    fn framed(r: &mut PoseCandidate, visit: &mut dyn FnMut(Framed<'_>)) {
+        visit(Framed {
+            header: &r.header,
+            gravity: &mut r.gravity,
+            object: Some(&mut r.object),
+        });
+    }
+    fn object_frame(r: &PoseCandidate) -> &str {
+        &r.object.frame_id
+    }
+}
+
+impl Framing for PoseSets {
     fn framed(r: &mut PoseCandidateSet, visit: &mut dyn FnMut(Framed<'_>)) {
         visit(Framed {
             header: &r.header,
@@ -251,7 +267,7 @@ impl Kind for PoseSets {
 pub(crate) const COUNT: usize = 4;
 
 /// Something done once for every kind ([`each`]).
-pub trait Visit {
+pub(crate) trait Visit {
     /// Done for kind `K`.
     fn kind<K: Kind>(&mut self);
 }
@@ -429,9 +445,9 @@ pub(crate) enum Side {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub(crate) struct Channel {
     /// The kind's [`Kind::INDEX`].
-    pub kind: usize,
+    pub(crate) kind: usize,
     /// Which side.
-    pub side: Side,
+    pub(crate) side: Side,
 }
 
 impl Channel {

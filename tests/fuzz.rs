@@ -39,10 +39,10 @@
 //! FILE before running it, to keep the one that aborted.
 
 use cap::Cap;
-use grasp_orient::answer::{answer, answer_in_full};
-use grasp_orient::answer::{answer_set, Rules};
+use grasp_orient::answer::{answer_in_full, Answering};
 use grasp_orient::geometry::{parse_bytes, GeometryError, Mesh};
 use grasp_orient::jsonl::answer_lines;
+use grasp_orient::kind::{Candidates, Sets};
 use grasp_orient::msg::{
     cdr, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet, MarkerArray,
 };
@@ -284,11 +284,11 @@ fn cdr_seeds<T: serde::Serialize>(messages: &[T]) -> Vec<Vec<u8>> {
 fn answers() -> Vec<GripRecommendation> {
     let mut out: Vec<_> = all_cases()
         .iter()
-        .map(|c| answer(c, &Settings::default()))
+        .map(|c| Answering::from_env().answer::<Candidates>(c))
         .collect();
     let mut bad = paper_cases()[0].clone();
     bad.mass = f64::NAN;
-    out.push(answer(&bad, &Settings::default()));
+    out.push(Answering::from_env().answer::<Candidates>(&bad));
     out
 }
 
@@ -314,7 +314,7 @@ fn sets() -> (Vec<GraspCandidateSet>, Vec<GripRecommendationSet>) {
         .collect();
     let answers = sets
         .iter()
-        .map(|s| answer_set(s, &Settings::default(), &Rules::default()))
+        .map(|s| Answering::from_env().answer::<Sets>(s))
         .collect();
     (sets, answers)
 }
@@ -343,7 +343,7 @@ fn mcap_seeds() -> Vec<Vec<u8>> {
         let path = dir.join(format!("seed_{n}.mcap"));
         let mut w = BagWriter::create(&path, &topics, 100).expect("create");
         for (i, c) in all_cases().into_iter().take(n).enumerate() {
-            let a = answer(&c, &Settings::default());
+            let a = Answering::from_env().answer::<Candidates>(&c);
             let t = 1_000 + i as u64;
             let entry = |payload| Entry {
                 payload,

@@ -39,6 +39,8 @@ phase "vendor/rustdds-0.15.1 is crates.io's RustDDS 0.15.1 with patches/rustdds-
 bash patches/vendor-rustdds.sh --check
 phase "cargo fmt --check"
 cargo fmt --check
+phase "the code's shape: no import circle, no file over 700 lines before its tests, the front door's size"
+python3 tests/shape/check.py
 phase "ROS 2 Jazzy peer: rclpy + Fast DDS + this package's messages"
 ENV_SH=$(bash tests/peer/setup.sh | tail -n 1)
 phase "Foxglove's MCAP decoders: Node.js + @mcap/core, @foxglove/rosmsg, @foxglove/rosmsg2-serialization"

@@ -5,19 +5,18 @@
 //! the poses' answerer (the closing axis and the mesh cache). Each message kind is answered
 //! through it by its [`Answer`] impl; [`Answering::answer`] is the one entry point.
 
-use super::sets::invalid_set;
+use super::pose::{pose_set_without_geometry, uncast, without_geometry};
+use super::sets::{busy, echo_set, invalid_set, SetAnswer};
 use super::{
-    answer_one, answer_one_in_full, answer_set, answer_set_within, pose_set_without_geometry,
-    uncast, without_geometry, Answered, Interrupt, PoseAnswerer, Refused, Rules,
+    answer_one, answer_one_in_full, answer_set, answer_set_on, answer_set_within, Answered,
+    Interrupt, PoseAnswerer, Rules,
 };
-
-use crate::config::{Config, ConfigError};
 use crate::geometry::ClosingAxis;
 use crate::geometry::Object;
 use crate::kind::{Candidates, Kind, PoseSets, Poses, Sets};
 use crate::msg::{
     invalid, GraspCandidate, GraspCandidateSet, GripRecommendationSet, PoseCandidate,
-    PoseCandidateSet, PoseRecommendation, PoseRecommendationSet,
+    PoseRecommendation,
 };
 use crate::solver::Settings;
 
@@ -49,11 +48,6 @@ impl Answering {
         )
     }
 
-    /// What `config` says (its settings are checked here), pose candidates by `poses`.
-    pub fn from_config(config: &Config, poses: PoseAnswerer) -> Result<Self, ConfigError> {
-        Ok(Self::new(config.solver_settings()?, config.rules(), poses))
-    }
-
     /// The solver's settings.
     pub fn settings(&self) -> &Settings {
         &self.settings
@@ -78,7 +72,7 @@ impl Answering {
     }
 
     /// The same, with `rules`.
-    pub fn with_rules(&self, rules: Rules) -> Self {
+    pub(crate) fn with_rules(&self, rules: Rules) -> Self {
         Self {
             rules,
             ..self.clone()
@@ -104,9 +98,21 @@ impl Answering {
             .answer_with_object(m, &self.settings, &self.rules)
     }
 
+    /// A set's answer with its candidates shared among the threads of `pool` (the calling
+    /// thread among them) when there is one, and sets smaller than a few hundred candidates
+    /// answered on the calling thread whatever the pool: the same answer as
+    /// [`Answering::answer`]'s.
+    pub fn set_on(
+        &self,
+        set: &GraspCandidateSet,
+        pool: Option<&rayon::ThreadPool>,
+    ) -> GripRecommendationSet {
+        answer_set_on(set, &self.settings, &self.rules, pool)
+    }
+
     /// A set's answer on `pool`, stopped between two candidates once `interrupt` is raised
     /// (`max_set_time`, s, is the budget its message names): [`answer_set_within`].
-    pub(crate) fn set_within(
+    pub fn set_within(
         &self,
         set: &GraspCandidateSet,
         pool: Option<&rayon::ThreadPool>,
@@ -122,32 +128,19 @@ impl Answering {
             max_set_time,
         )
     }
-
-    /// A pose set's answer on `object` (already loaded, or refused), its candidates answered as
-    /// [`Answering::set_within`] answers a set; with the object cast onto.
-    pub(crate) fn pose_set_within(
-        &self,
-        set: &PoseCandidateSet,
-        object: Option<Result<Object, Refused>>,
-        pool: Option<&rayon::ThreadPool>,
-        interrupt: &Interrupt,
-        max_set_time: f64,
-    ) -> (PoseRecommendationSet, Option<Object>) {
-        self.poses.answer_set_on(set, object, |candidates| {
-            self.set_within(candidates, pool, interrupt, max_set_time)
-        })
-    }
 }
 
 /// Something done once for every kind, knowing how it is answered ([`each`]).
-pub trait VisitAnswer {
+#[cfg(test)]
+pub(crate) trait VisitAnswer {
     /// Done for kind `K`.
     fn kind<K: Answer>(&mut self);
 }
 
 /// Calls `visit` for every kind, in [`Kind::INDEX`] order, as [`crate::kind::each`] does, where
 /// what is done needs the answer (a test holds the two lists to the same kinds).
-pub fn each(visit: &mut impl VisitAnswer) {
+#[cfg(test)]
+pub(crate) fn each(visit: &mut impl VisitAnswer) {
     visit.kind::<Candidates>();
     visit.kind::<Sets>();
     visit.kind::<Poses>();
@@ -211,6 +204,51 @@ impl Answer for PoseSets {
     }
     fn refused(with: &Answering, request: &Self::Request, why: &str) -> Self::Answer {
         pose_set_without_geometry(request, invalid_set(&uncast(request), &with.rules, why))
+    }
+}
+
+/// A kind whose requests are sets: answered on the node's set thread within `max_set_time`,
+/// or refused whole at once when too many wait.
+pub(crate) trait SetKind: Answer<Answer: SetAnswer, Request: Send> {
+    /// The set's id.
+    fn set_id(set: &Self::Request) -> &str;
+    /// How many members it has.
+    fn members(set: &Self::Request) -> usize;
+    /// `STATUS_BUSY` (or the set's own refusal, when it has one), nothing solved.
+    fn busy(set: &Self::Request, rules: &Rules, max_queued: usize) -> Self::Answer;
+    /// An empty answer per member, nothing solved (the node's echo mode).
+    fn echo(set: &Self::Request) -> Self::Answer;
+}
+
+/// A candidate set.
+impl SetKind for Sets {
+    fn set_id(set: &Self::Request) -> &str {
+        &set.id
+    }
+    fn members(set: &Self::Request) -> usize {
+        set.candidates.len()
+    }
+    fn busy(set: &Self::Request, rules: &Rules, max_queued: usize) -> Self::Answer {
+        busy(set, rules, max_queued)
+    }
+    fn echo(set: &Self::Request) -> Self::Answer {
+        echo_set(set)
+    }
+}
+
+/// A pose set: refused and echoed as the candidate set of its poses, without geometry.
+impl SetKind for PoseSets {
+    fn set_id(set: &Self::Request) -> &str {
+        &set.id
+    }
+    fn members(set: &Self::Request) -> usize {
+        set.poses.len()
+    }
+    fn busy(set: &Self::Request, rules: &Rules, max_queued: usize) -> Self::Answer {
+        pose_set_without_geometry(set, busy(&uncast(set), rules, max_queued))
+    }
+    fn echo(set: &Self::Request) -> Self::Answer {
+        pose_set_without_geometry(set, echo_set(&uncast(set)))
     }
 }
 

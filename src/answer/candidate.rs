@@ -29,7 +29,7 @@ pub struct Answered {
 
 /// Solves one candidate message and builds its answer: status 0 with the recommendation, 1 when
 /// no orientation holds the grasp, 2 when the input is bad.
-pub fn answer(m: &GraspCandidate, settings: &Settings) -> GripRecommendation {
+pub(crate) fn answer(m: &GraspCandidate, settings: &Settings) -> GripRecommendation {
     // A planar answer is returned as it is built: through `Answered` it was moved twice more,
     // which a set of 1,000 paid for in copies of the whole message.
     match m.model {

@@ -11,22 +11,22 @@ use crate::solver::{planar, spatial};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Forces {
     /// The objective at the recommendation (for a robust answer, its worst case), N.
-    pub gripping_power: f64,
+    pub(crate) gripping_power: f64,
     /// The squeeze each finger adds along the contact line there (robust: worst case), N.
-    pub internal_force: f64,
+    pub(crate) internal_force: f64,
     /// `(N1, F1, N2, F2)` there, N, in the candidate's labelling (robust: the nominal object's).
-    pub contact_forces: [f64; 4],
+    pub(crate) contact_forces: [f64; 4],
     /// The larger push along the contact line either finger gives there (robust: worst case), N.
-    pub finger_force: f64,
+    pub(crate) finger_force: f64,
     /// The objective at the current pose, N (`+∞` where the pose cannot hold the grasp).
-    pub gripping_power_current: f64,
+    pub(crate) gripping_power_current: f64,
     /// The squeeze at the current pose, N.
-    pub internal_force_current: f64,
+    pub(crate) internal_force_current: f64,
     /// The finger force at the current pose, N.
-    pub finger_force_current: f64,
+    pub(crate) finger_force_current: f64,
     /// The nominal object's objective at the recommendation, N (`gripping_power` when there
     /// are no tolerances).
-    pub gripping_power_nominal: f64,
+    pub(crate) gripping_power_nominal: f64,
 }
 
 impl Forces {

@@ -25,15 +25,22 @@ mod pose;
 mod reply;
 mod sets;
 
-pub use answering::{each, Answer, Answering, VisitAnswer};
-pub use candidate::{answer, answer_in_full};
-pub(crate) use candidate::{Answered, BEHIND_TANGENT_NOTE};
-pub(crate) use pose::{pose_set_without_geometry, uncast, without_geometry, Refused};
+pub(crate) use answering::SetKind;
+#[cfg(test)]
+pub(crate) use answering::{each, VisitAnswer};
+pub use answering::{Answer, Answering};
+#[cfg(test)]
+pub(crate) use candidate::answer;
+pub(crate) use candidate::BEHIND_TANGENT_NOTE;
+pub use candidate::{answer_in_full, Answered};
+pub(crate) use pose::{uncast, without_geometry, Refused};
 pub use pose::{PoseAnswerer, MESH_CACHE_BYTES};
-pub use sets::{
-    answer_one, answer_set, answer_set_on, answer_set_within, busy, rank, solver_pool,
-    DefaultTolerances, GripperDrive, Halt, Interrupt, RankBy, Rules,
-};
+pub(crate) use sets::SetAnswer;
 pub(crate) use sets::{
-    answer_one_in_full, cut_like, echo_set, is_sorted_by, DEFAULT_MAX_SET_SIZE, PARALLEL_FROM,
+    answer_one, answer_one_in_full, answer_set, answer_set_on, answer_set_within, cut_like,
+    is_sorted_by, DEFAULT_MAX_SET_SIZE, PARALLEL_FROM,
+};
+pub use sets::{
+    busy, rank, solver_pool, DefaultTolerances, GripperDrive, Halt, Interrupt, PoolRefused, RankBy,
+    Rules,
 };

@@ -198,7 +198,11 @@ pub(crate) fn apply_limit(r: &mut GripRecommendation, drive: GripperDrive, max_g
 
 /// The answer to one candidate under `rules`: the node's tolerances where the candidate gives
 /// none, [`answer`], then the gripper's limit.
-pub fn answer_one(m: &GraspCandidate, settings: &Settings, rules: &Rules) -> GripRecommendation {
+pub(crate) fn answer_one(
+    m: &GraspCandidate,
+    settings: &Settings,
+    rules: &Rules,
+) -> GripRecommendation {
     let mut r = answer(&rules.tolerances.apply(m), settings);
     apply_limit(&mut r, rules.drive, rules.max_grip_force);
     r
@@ -301,7 +305,7 @@ fn empty_answer(set: &GraspCandidateSet, rules: &Rules) -> GripRecommendationSet
 /// The answer to a set: each candidate as [`answer_one`] answers it, with the set's own
 /// `max_grip_force` when above 0, and the ranking. A set refused as a whole (too large, or with
 /// bad fields of its own) gets its status and no recommendations.
-pub fn answer_set(
+pub(crate) fn answer_set(
     set: &GraspCandidateSet,
     settings: &Settings,
     rules: &Rules,
@@ -318,7 +322,7 @@ pub(crate) const PARALLEL_FROM: usize = 128;
 /// ([`solver_pool`], parameter `solver_threads`); a thread started for each set would begin with
 /// an empty heap, and the pages it faulted in cost more than its share of the solving.
 /// The library's [`answer_set`] stays on the calling thread.
-pub fn answer_set_on(
+pub(crate) fn answer_set_on(
     set: &GraspCandidateSet,
     settings: &Settings,
     rules: &Rules,
@@ -335,7 +339,7 @@ pub fn answer_set_on(
 ///
 /// On a pool the solved candidates need not be the first ones: each thread stops where it is.
 /// A candidate is never stopped in the middle: one that takes long holds its thread until done.
-pub fn answer_set_within(
+pub(crate) fn answer_set_within(
     set: &GraspCandidateSet,
     settings: &Settings,
     rules: &Rules,
@@ -646,6 +650,46 @@ pub(crate) fn is_sorted_by(
             None => false,
         }
     }))
+}
+
+/// A set's answer, of any set kind, as the node counts, logs and refuses it.
+pub(crate) trait SetAnswer: Send + 'static {
+    /// The set's id.
+    fn set_id(&self) -> &CompactString;
+    /// The set's status.
+    fn status(&self) -> u8;
+    /// Why, when the status is not OK.
+    fn message(&self) -> &str;
+    /// The members' recommendations, in order.
+    fn members(&self) -> Vec<&GripRecommendation>;
+    /// How many members are ranked, and by which field.
+    fn ranked(&self) -> (usize, &str);
+    /// The set refused whole: status 2 (`STATUS_INVALID_INPUT`) saying `why`, no members.
+    fn refuse(&mut self, why: &str);
+}
+
+impl SetAnswer for GripRecommendationSet {
+    fn set_id(&self) -> &CompactString {
+        &self.set_id
+    }
+    fn status(&self) -> u8 {
+        self.status
+    }
+    fn message(&self) -> &str {
+        &self.message
+    }
+    fn members(&self) -> Vec<&GripRecommendation> {
+        self.recommendations.iter().collect()
+    }
+    fn ranked(&self) -> (usize, &str) {
+        (self.ranking.len(), &self.ranked_by)
+    }
+    fn refuse(&mut self, why: &str) {
+        self.status = GripRecommendationSet::STATUS_INVALID_INPUT;
+        self.message = why.into();
+        self.recommendations.clear();
+        self.ranking.clear();
+    }
 }
 
 #[cfg(test)]

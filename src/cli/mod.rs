@@ -39,38 +39,38 @@ pub(crate) struct SolveOptions {
     /// ROS 2 params file to read settings from (`grasp_orient: ros__parameters:`, or `/**:`);
     /// the built-in config/grasp_orient.yaml otherwise.
     #[arg(long, value_name = "FILE")]
-    pub config: Option<PathBuf>,
+    pub(crate) config: Option<PathBuf>,
     /// What to minimise: norm2, norm1 or internal_force.
     #[arg(long, value_parser = parse_objective)]
-    pub objective: Option<Objective>,
+    pub(crate) objective: Option<Objective>,
     /// Where the recommendation may lie: from_above, graspable, or LO:HI (finite gravity-angle
     /// bounds in the paper's object frame, rad, LO < HI; a turn or more apart allows every angle).
     #[arg(long, allow_hyphen_values = true, value_parser = parse_range)]
-    pub range: Option<AllowedRange>,
+    pub(crate) range: Option<AllowedRange>,
     /// Divides both friction coefficients (in [1, 1000]; 1 reproduces the paper).
     #[arg(long, value_name = "S", allow_negative_numbers = true,
           value_parser = parameter::<f64>("friction_safety_factor"))]
-    pub friction_safety_factor: Option<f64>,
+    pub(crate) friction_safety_factor: Option<f64>,
     /// The most grip force the gripper gives, N (>= 0; 0: no limit). A grasp that needs more
     /// gets status 3.
     #[arg(long, value_name = "N", allow_negative_numbers = true,
           value_parser = parameter::<f64>("max_grip_force"))]
-    pub max_grip_force: Option<f64>,
+    pub(crate) max_grip_force: Option<f64>,
     /// How the fingers are driven, which picks the grip force: coupled (internal_force) or
     /// independent (finger_force).
     #[arg(long, value_name = "DRIVE", value_parser = parse_name::<GripperDrive>)]
-    pub gripper_drive: Option<GripperDrive>,
+    pub(crate) gripper_drive: Option<GripperDrive>,
     /// Half-widths of a box around the centre of mass along the candidate frame's axes, m
     /// (each >= 0), for candidates whose own center_of_mass_tolerance is zero: the answer is the
     /// worst case over the box.
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true,
           value_parser = parse_center_of_mass_tolerance)]
-    pub center_of_mass_tolerance: Option<[f64; 3]>,
+    pub(crate) center_of_mass_tolerance: Option<[f64; 3]>,
     /// The mass lies in mass ± this, kg (>= 0), for candidates whose own mass_tolerance is zero:
     /// the answer is the worst case over it.
     #[arg(long, value_name = "KG", allow_negative_numbers = true,
           value_parser = parameter::<f64>("mass_tolerance"))]
-    pub mass_tolerance: Option<f64>,
+    pub(crate) mass_tolerance: Option<f64>,
 }
 
 impl SolveOptions {
@@ -134,7 +134,7 @@ impl SolveOptions {
     ) -> anyhow::Result<(Config, Answering)> {
         let config = self.config()?;
         let poses = PoseAnswerer::from_env(closing_axis.unwrap_or(config.closing_axis));
-        let with = Answering::from_config(&config, poses)?;
+        let with = config.answering(poses)?;
         Ok((config, with))
     }
 }

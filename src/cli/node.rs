@@ -8,11 +8,11 @@ use crate::node::{self, Options};
 pub(crate) struct Args {
     /// Also send the paper's four case studies to the node over DDS, print the answers, and exit.
     #[arg(long)]
-    pub demo: bool,
+    pub(crate) demo: bool,
     /// Benchmark floor: answer every candidate with an empty recommendation (same header and id)
     /// without solving.
     #[arg(long)]
-    pub echo: bool,
+    pub(crate) echo: bool,
 }
 
 /// The parameters, for `node --help`.

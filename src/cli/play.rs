@@ -15,19 +15,19 @@ use std::path::PathBuf;
 pub(crate) struct Args {
     /// A recording with grasp_orient requests: candidates, candidate sets, pose candidates or
     /// pose sets.
-    pub bag: PathBuf,
+    pub(crate) bag: PathBuf,
     /// Speed relative to the recording (2 = twice as fast), from 0.001 to 1000; 0 sends as fast
     /// as possible.
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true, value_parser = rate)]
-    pub rate: f64,
+    pub(crate) rate: f64,
     /// Seconds to wait for a subscriber before starting, from 0 to 86400.
     #[arg(long, default_value_t = 10.0, allow_negative_numbers = true,
           value_parser = super::real_in(0.0, 86_400.0))]
-    pub wait: f64,
+    pub(crate) wait: f64,
     /// QoS history depth of the publisher (reliable, volatile), as qos_depth: 1 to 100000.
     #[arg(long, default_value_t = 1000, allow_negative_numbers = true,
           value_parser = super::parameter::<i64>("qos_depth"))]
-    pub depth: i64,
+    pub(crate) depth: i64,
 }
 
 /// `--rate`: 0, or a speed-up from 0.001 to 1000.

@@ -37,20 +37,20 @@ pub(crate) struct Args {
     /// One GraspCandidate as JSON (a single object; the fields of msg/GraspCandidate.msg), or one
     /// PoseCandidate (msg/PoseCandidate.msg: an object with grasp_pose; docs/poses.md), drawn as
     /// the spatial candidate its fingers make.
-    pub candidate: PathBuf,
+    pub(crate) candidate: PathBuf,
     /// The axis of the gripper's tool frame that the fingers of a pose candidate close along:
     /// x, y or z (parameter closing_axis, default y).
     #[arg(long, value_name = "AXIS", value_parser = super::parse_name::<ClosingAxis>)]
-    pub closing_axis: Option<ClosingAxis>,
+    pub(crate) closing_axis: Option<ClosingAxis>,
     /// Where to write the SVG.
     #[arg(short, long)]
-    pub output: PathBuf,
+    pub(crate) output: PathBuf,
     /// Samples per curve, from 10 to 100000.
     #[arg(long, default_value_t = 2000, allow_negative_numbers = true,
           value_parser = super::integer_in(10, 100_000))]
-    pub samples: i64,
+    pub(crate) samples: i64,
     #[command(flatten)]
-    pub options: SolveOptions,
+    pub(crate) options: SolveOptions,
 }
 
 const COLOURS: [RGBColor; 6] = [

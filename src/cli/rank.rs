@@ -1,15 +1,15 @@
 //! `grasp_orient rank [FILE]`: JSON lines of candidates answered as one set, ranked by the force
 //! they need; a table a person reads at a glance, or (`--json`) the set's answer. The lines are
-//! GraspCandidates and PoseCandidates, or one PoseCandidateSet (`docs/poses.md`).
+//! GraspCandidates and PoseCandidates, or one pose set (`docs/poses.md`).
 
 use super::SolveOptions;
 use crate::answer::{PoseAnswerer, RankBy, Rules};
 use crate::geometry::ClosingAxis;
 use crate::jsonl::{is_pose_candidate, is_pose_set};
-use crate::kind::{PoseSets, Sets};
+use crate::kind::{Kind, PoseSets, Sets};
 use crate::msg::{
     invalid, short_id, GraspCandidate, GraspCandidateSet, GripRecommendation,
-    GripRecommendationSet, PoseCandidate, PoseCandidateSet,
+    GripRecommendationSet, PoseCandidate,
 };
 use anyhow::{bail, Context};
 use std::fmt::Write as _;
@@ -20,26 +20,26 @@ use std::path::PathBuf;
 #[derive(Debug, Clone, clap::Args)]
 pub(crate) struct Args {
     /// File of JSON lines, one GraspCandidate or PoseCandidate per line (as `solve` reads them),
-    /// taken as one set; or a single line holding a PoseCandidateSet (msg/PoseCandidateSet.msg),
+    /// taken as one set; or a single line holding a pose set (docs/poses.md),
     /// whose --json answer is a PoseRecommendationSet. Standard input when absent or "-".
-    pub file: Option<PathBuf>,
+    pub(crate) file: Option<PathBuf>,
     /// The axis of the gripper's tool frame that the fingers of a pose candidate close along:
     /// x, y or z (parameter closing_axis, default y).
     #[arg(long, value_name = "AXIS", value_parser = super::parse_name::<ClosingAxis>)]
-    pub closing_axis: Option<ClosingAxis>,
+    pub(crate) closing_axis: Option<ClosingAxis>,
     /// Print the set's answer (a GripRecommendationSet, one JSON line) instead of the table.
     #[arg(long)]
-    pub json: bool,
+    pub(crate) json: bool,
     /// What ranks the candidates, least first: grip_force (the one --gripper-drive picks) or
     /// objective (gripping_power).
     #[arg(long, value_name = "WHAT", value_parser = super::parse_name::<RankBy>)]
-    pub rank_by: Option<RankBy>,
+    pub(crate) rank_by: Option<RankBy>,
     /// The most candidates the set may hold (>= 1); a larger one is refused.
     #[arg(long, value_name = "N", allow_negative_numbers = true,
           value_parser = super::parameter::<i64>("max_set_size"))]
-    pub max_set_size: Option<i64>,
+    pub(crate) max_set_size: Option<i64>,
     #[command(flatten)]
-    pub options: SolveOptions,
+    pub(crate) options: SolveOptions,
 }
 
 /// Longest id the table shows, characters.
@@ -126,7 +126,7 @@ fn print(reply: &impl serde::Serialize, status: u8, message: &str) -> anyhow::Re
 /// candidate, by index), or one pose set.
 enum Input {
     Candidates(GraspCandidateSet, Vec<(usize, GripRecommendation)>),
-    PoseSet(Box<PoseCandidateSet>),
+    PoseSet(Box<<PoseSets as Kind>::Request>),
 }
 
 /// The candidates of the file, or its pose set.
@@ -152,12 +152,12 @@ fn read_input(args: &Args, poses: &PoseAnswerer) -> anyhow::Result<Input> {
     if let Some((number, _)) = lines.iter().find(|(_, l)| is_pose_set(l)) {
         if lines.len() != 1 {
             bail!(
-                "line {number} is a PoseCandidateSet: rank reads one, alone in its input, or \
+                "line {number} is a pose set: rank reads one, alone in its input, or \
                  candidate lines"
             );
         }
-        let set = crate::jsonl::parse::<PoseCandidateSet>(&lines[0].1)
-            .with_context(|| format!("line {number}: not a PoseCandidateSet"))?;
+        let set = crate::jsonl::parse::<<PoseSets as Kind>::Request>(&lines[0].1)
+            .with_context(|| format!("line {number}: not a pose set"))?;
         return Ok(Input::PoseSet(Box::new(set)));
     }
     let mut set = GraspCandidateSet {

@@ -14,11 +14,11 @@ use std::path::PathBuf;
 #[derive(Debug, Clone, clap::Args)]
 pub(crate) struct Args {
     /// A recording that was cut short (killed process, full disk) or damaged.
-    pub broken: PathBuf,
+    pub(crate) broken: PathBuf,
     /// Where to write the recovered recording: written beside it and renamed into place when
     /// complete (a failure leaves what was there); never BROKEN itself.
     #[arg(short, long)]
-    pub output: PathBuf,
+    pub(crate) output: PathBuf,
 }
 
 /// Recovers and says what was saved and what was lost.

@@ -23,20 +23,20 @@ pub(crate) struct Args {
     /// MCAP files (ours, or any rosbag2 MCAP with a grasp_orient/msg/GraspCandidate or
     /// GraspCandidateSet topic).
     #[arg(required = true)]
-    pub bags: Vec<PathBuf>,
+    pub(crate) bags: Vec<PathBuf>,
     /// Also write a fresh recording of the replay: the candidates, the new recommendations and
     /// the settings used. Written beside OUT.mcap and renamed into place when complete; never
     /// one of the BAGs.
     #[arg(long, value_name = "OUT.mcap")]
-    pub write: Option<PathBuf>,
+    pub(crate) write: Option<PathBuf>,
     /// Solve the candidates without comparing, for bags that hold no recorded answers (with
     /// --write, to make them). Without it, a candidate with no recorded answer fails the replay.
     #[arg(long)]
-    pub no_compare: bool,
+    pub(crate) no_compare: bool,
     /// Each candidate is solved with the settings the bag recorded for its time; these options
     /// override them (and the built-in config, for bags that recorded none).
     #[command(flatten)]
-    pub options: SolveOptions,
+    pub(crate) options: SolveOptions,
 }
 
 /// Replays every bag and prints a summary.

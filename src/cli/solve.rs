@@ -13,13 +13,13 @@ pub(crate) struct Args {
     /// File of JSON lines, one GraspCandidate per line (fields as in msg/GraspCandidate.msg,
     /// snake_case; header and z optional), or one PoseCandidate (msg/PoseCandidate.msg: a line
     /// with grasp_pose; docs/poses.md). Standard input when absent or "-".
-    pub file: Option<PathBuf>,
+    pub(crate) file: Option<PathBuf>,
     /// The axis of the gripper's tool frame that the fingers of a pose candidate close along:
     /// x, y or z (parameter closing_axis, default y).
     #[arg(long, value_name = "AXIS", value_parser = super::parse_name::<ClosingAxis>)]
-    pub closing_axis: Option<ClosingAxis>,
+    pub(crate) closing_axis: Option<ClosingAxis>,
     #[command(flatten)]
-    pub options: SolveOptions,
+    pub(crate) options: SolveOptions,
 }
 
 /// Solves every line; a bad line gets status 2 with its line number and the run goes on.

@@ -142,9 +142,9 @@ named_choice!(RankBy, [RankBy::GripForce, RankBy::Objective]);
 #[non_exhaustive]
 pub(crate) struct InvalidBounds {
     /// Lower bound given, rad.
-    pub lo: f64,
+    pub(crate) lo: f64,
     /// Upper bound given, rad.
-    pub hi: f64,
+    pub(crate) hi: f64,
 }
 
 /// The one place where gravity-angle bounds (rad, paper frame) become an [`AllowedRange`].

@@ -126,18 +126,18 @@ impl fmt::Display for Real {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Parameter {
     /// The ROS parameter name, and the field of [`Config`](super::Config).
-    pub name: &'static str,
+    pub(crate) name: &'static str,
     /// The ROS type.
-    pub ros_type: RosType,
+    pub(crate) ros_type: RosType,
     /// The unit (SI), or empty when it has none.
-    pub unit: &'static str,
+    pub(crate) unit: &'static str,
     /// What it does, its doc comment's lines joined (each with its leading space; see
     /// [`Parameter::summary`]).
-    pub doc: &'static str,
+    pub(crate) doc: &'static str,
     /// The values it may take.
-    pub domain: Domain,
+    pub(crate) domain: Domain,
     /// Whether it is fixed while the node runs (it shapes the node's endpoints).
-    pub fixed: bool,
+    pub(crate) fixed: bool,
 }
 
 impl Parameter {

@@ -17,7 +17,7 @@ pub(crate) use error::ValueError;
 pub use params::Config;
 pub(crate) use params::PARAMETERS;
 
-use crate::answer::Rules;
+use crate::answer::{Answering, PoseAnswerer, Rules};
 use crate::solver::Settings;
 use std::path::Path;
 
@@ -47,11 +47,11 @@ pub(crate) const DEFAULT_YAML: &str = include_str!("../../config/grasp_orient.ya
 
 /// The top-level sections of a params file: which there are, and which applied to the node.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct Sections {
+pub(crate) struct Sections {
     /// Every top-level key, in file order.
-    pub found: Vec<String>,
+    pub(crate) found: Vec<String>,
     /// The keys whose `ros__parameters` were applied (`/**`, `**`, the node's name, `/name`).
-    pub applied: Vec<String>,
+    pub(crate) applied: Vec<String>,
 }
 
 /// The parameters the params file `path` sets for `node` (under `/**`, `**`, `node` or `/node`), in
@@ -176,7 +176,7 @@ impl Config {
 
     /// Checks every value against its declared domain, and the range bounds against each other;
     /// the solver settings they give.
-    pub fn solver_settings(&self) -> Result<Settings, ConfigError> {
+    pub(crate) fn solver_settings(&self) -> Result<Settings, ConfigError> {
         self.check_domains()?;
         let range = self.range.allowed(self.range_min, self.range_max).map_err(
             |InvalidBounds { lo, hi }| ConfigError::Value {
@@ -209,9 +209,15 @@ impl Config {
         out
     }
 
+    /// The answering object of these parameters (their solver settings checked here), pose
+    /// candidates by `poses`.
+    pub fn answering(&self, poses: PoseAnswerer) -> Result<Answering, ConfigError> {
+        Ok(Answering::new(self.solver_settings()?, self.rules(), poses))
+    }
+
     /// The gripper and set rules: `gripper_drive`, `max_grip_force`, `rank_by`, `max_set_size`,
     /// and the default tolerances `center_of_mass_tolerance`, `mass_tolerance` (their domains are checked by [`Config::solver_settings`]).
-    pub fn rules(&self) -> Rules {
+    pub(crate) fn rules(&self) -> Rules {
         Rules {
             drive: self.gripper_drive,
             max_grip_force: self.max_grip_force,

@@ -59,7 +59,14 @@ pub trait RosMessage {
     fn constants() -> Vec<(&'static str, String, String)>;
 }
 
+/// A service's request or response: `(name, ROS type)` of its fields, as in its `srv/*.srv`
+/// file above (request) or below (response) the `---`.
+pub trait RosFields {
+    /// `(name, ROS type)` of every field, in order.
+    fn fields() -> Vec<(&'static str, String)>;
+}
+
 /// The type name ros2-client announces a topic of `M` under (`package/msg/Name`).
-pub fn message_type_name<M: RosMessage>() -> ros2_client::MessageTypeName {
+pub(crate) fn message_type_name<M: RosMessage>() -> ros2_client::MessageTypeName {
     ros2_client::MessageTypeName::new(M::PACKAGE, M::NAME)
 }

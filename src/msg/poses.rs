@@ -8,7 +8,9 @@
 //! leaves out shape_msgs' `polygon` (for `PRISM`, which is refused) and writes `dimensions`
 //! unbounded (shape_msgs: `float64[<=3]`).
 
-use super::{CompactString, GripRecommendation, Header, Point, Pose, RosMessage, RosType, Vector3};
+use super::{
+    CompactString, GripRecommendation, Header, Point, Pose, RosFields, RosMessage, RosType, Vector3,
+};
 use serde::{Deserialize, Serialize};
 
 ros_message! {
@@ -188,5 +190,38 @@ ros_message! {
         status: u8,
         /// Why, when status is not OK; empty otherwise.
         message: CompactString,
+    }
+}
+
+/// `srv/RecommendPoses.srv`, request: the pose set to answer.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecommendPosesRequest {
+    /// The set.
+    pub pose_set: PoseCandidateSet,
+}
+
+/// `srv/RecommendPoses.srv`, response: the pose set's answer.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecommendPosesResponse {
+    /// The answer, as on `pose_recommendation_sets`.
+    pub recommendation_set: PoseRecommendationSet,
+}
+
+impl ros2_client::Message for RecommendPosesRequest {}
+impl ros2_client::Message for RecommendPosesResponse {}
+
+impl RosFields for RecommendPosesRequest {
+    /// `(name, ROS type)` of each field, as in `srv/RecommendPoses.srv` above `---`.
+    fn fields() -> Vec<(&'static str, String)> {
+        vec![("pose_set", PoseCandidateSet::ros_type())]
+    }
+}
+
+impl RosFields for RecommendPosesResponse {
+    /// `(name, ROS type)` of each field, as in `srv/RecommendPoses.srv` below `---`.
+    fn fields() -> Vec<(&'static str, String)> {
+        vec![("recommendation_set", PoseRecommendationSet::ros_type())]
     }
 }

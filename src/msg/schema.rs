@@ -80,10 +80,10 @@ enum Repeat {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct Field {
     /// The field name.
-    pub name: String,
+    pub(crate) name: String,
     /// The type as the `.msg` writes it, with `pkg/` in front of a message type written without
     /// one, and `pkg/msg/Name` as `pkg/Name`.
-    pub type_name: String,
+    pub(crate) type_name: String,
     element: Element,
     repeat: Repeat,
 }
@@ -92,9 +92,9 @@ pub(crate) struct Field {
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub(crate) struct Layout {
     /// `pkg/Name` of the type the definition is for.
-    pub root: String,
+    pub(crate) root: String,
     /// Fields of each type, in order.
-    pub types: BTreeMap<String, Vec<Field>>,
+    pub(crate) types: BTreeMap<String, Vec<Field>>,
 }
 
 /// A definition this module cannot read.

@@ -7,9 +7,7 @@
 
 use super::params::Shared;
 use super::params::Version;
-pub(crate) use super::pose_work::{
-    inline_mesh_too_large, load_time, PoseWork, INLINE_OFF_THREAD_TRIANGLES,
-};
+pub(crate) use super::pose_work::{load_time, PoseWork, INLINE_OFF_THREAD_TRIANGLES};
 pub(crate) use super::set_io::{RecordedSet, SetInput, SetOutcome, SetReply};
 use crate::answer::markers;
 use crate::answer::{Answered, Answering};
@@ -35,30 +33,30 @@ pub(crate) type Note = (Level, String);
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Counts {
     /// Candidates answered.
-    pub answered: u64,
+    pub(crate) answered: u64,
     /// Answered with status 2 (invalid input).
-    pub invalid: u64,
+    pub(crate) invalid: u64,
     /// Answered with status 1 (no force closure).
-    pub no_closure: u64,
+    pub(crate) no_closure: u64,
     /// Messages on the candidates topic that did not decode.
-    pub undecodable: u64,
+    pub(crate) undecodable: u64,
     /// Sets (on their topic or as service requests) that did not decode; not candidates.
-    pub undecodable_sets: u64,
+    pub(crate) undecodable_sets: u64,
     /// Answered with status 3 (more grip force than `max_grip_force`).
-    pub exceeds_gripper: u64,
+    pub(crate) exceeds_gripper: u64,
     /// Sets answered (on the topic or the service); their candidates count above too.
-    pub sets: u64,
+    pub(crate) sets: u64,
     /// Sets refused as a whole (too large, bad fields of their own, or the node busy).
-    pub sets_refused: u64,
+    pub(crate) sets_refused: u64,
     /// Sets answered in part: their time ran out, or the node was stopping.
-    pub sets_incomplete: u64,
+    pub(crate) sets_incomplete: u64,
     /// Candidates of those sets not solved (status 4); not counted as answered.
-    pub not_solved: u64,
+    pub(crate) not_solved: u64,
     /// Marker arrays built (for a subscriber of `grip_markers` or for a recording that takes
     /// them).
-    pub markers_built: u64,
+    pub(crate) markers_built: u64,
     /// Marker arrays published on `grip_markers` (only while it has a subscriber).
-    pub markers_published: u64,
+    pub(crate) markers_published: u64,
 }
 
 /// The answer to one candidate or pose candidate (`A`: its answer's type), to publish in this
@@ -66,13 +64,13 @@ pub(crate) struct Counts {
 #[derive(Debug)]
 pub(crate) struct Outcome<A> {
     /// The answer.
-    pub reply: A,
+    pub(crate) reply: A,
     /// The markers, when they are on, wanted ([`Answerer::draws`]) and the answer has status 0.
-    pub markers: Option<MarkerArray>,
+    pub(crate) markers: Option<MarkerArray>,
     /// Lines to log.
-    pub notes: Vec<Note>,
+    pub(crate) notes: Vec<Note>,
     /// What goes to the recording once the answer is out.
-    pub recorded: Recorded,
+    pub(crate) recorded: Recorded,
 }
 
 /// The messages of one answer for the recording (a candidate or a pose candidate, and its

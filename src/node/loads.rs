@@ -119,15 +119,15 @@ impl Loaders {
 #[derive(Debug)]
 pub(crate) struct Loaded {
     /// The candidate.
-    pub candidate: PoseCandidate,
+    pub(crate) candidate: PoseCandidate,
     /// Its answer.
-    pub reply: PoseRecommendation,
+    pub(crate) reply: PoseRecommendation,
     /// Its markers.
-    pub markers: Option<MarkerArray>,
+    pub(crate) markers: Option<MarkerArray>,
     /// When it was received, ns since the epoch.
-    pub received: u64,
+    pub(crate) received: u64,
     /// When it was sent.
-    pub sent: u64,
+    pub(crate) sent: u64,
 }
 
 /// A pose candidate waiting for a loader thread.

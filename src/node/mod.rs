@@ -22,9 +22,11 @@ mod param_services;
 mod params;
 pub(crate) mod play;
 pub(crate) mod pose_work;
+mod requests;
 pub(crate) mod ros_args;
 pub(crate) mod session;
 pub(crate) mod set_io;
+mod set_kinds;
 pub(crate) mod set_worker;
 pub(crate) mod sets;
 mod tf;
@@ -33,24 +35,19 @@ mod tf_wait;
 
 use crate::config::Config;
 use crate::kind::{Candidates, PoseSets, Poses, Sets};
-use crate::msg::{
-    short_id, GraspCandidate, GripRecommendation, MarkerArray, PoseCandidate, PoseRecommendation,
-};
 use crate::record::{now_ns, OnStop, Topics};
-use answer::{Answerer, SetInput};
+use answer::Answerer;
 use anyhow::Context as _;
 use demo::Demo;
-use endpoint::Endpoint;
 use futures::{FutureExt, StreamExt};
-use loads::{Loaded, Loaders, PoseLoads};
-use markers_out::MarkersOut;
+use loads::{Loaders, PoseLoads};
 use param_services::ParameterServices;
 use params::Shared;
+use requests::{send_loaded, Endpoints, Loading, Loop};
 use ros2_client::{Node, NodeOptions};
 use ros_args::RosArgs;
-use session::{create_topic, message_times, qos, say, tell, Session, Shutdown, Start};
+use session::{message_times, say, tell, Session, Shutdown, Start};
 use set_worker::SetWorker;
-use sets::SetEndpoints;
 use std::pin::pin;
 use std::time::Duration;
 use tf_wait::{Request, TfWait};
@@ -81,10 +78,10 @@ const TOPICS: [&str; 9] = [
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct Options {
     /// Send the paper's four case studies from a second participant, print the answers, exit.
-    pub demo: bool,
+    pub(crate) demo: bool,
     /// Benchmark floor: answer every candidate with an empty recommendation (same header and
     /// id) without solving.
-    pub echo: bool,
+    pub(crate) echo: bool,
 }
 
 /// Reads the settings: the built-in defaults, then each `--params-file`, then each `-p`.
@@ -120,41 +117,6 @@ fn load_config(ros: &RosArgs, node: &str) -> anyhow::Result<(Config, crate::solv
     }
     let settings = config.solver_settings()?;
     Ok((config, settings))
-}
-
-/// The node's topics and their endpoints.
-struct Endpoints {
-    topics: Topics,
-    candidates: Endpoint<Candidates>,
-    markers: MarkersOut,
-    sets: SetEndpoints,
-    poses: Endpoint<Poses>,
-    /// `/tf` and `/tf_static`.
-    tf: tf::TfListener,
-}
-
-impl Endpoints {
-    fn create(session: &mut Session, qos_depth: i64) -> anyhow::Result<Self> {
-        let qos = qos(qos_depth);
-        let topics = Topics::named(|base| session.topic_name(base))
-            .with_markers(session.topic_name("grip_markers"));
-        let markers_name = topics.markers.clone().unwrap_or_default();
-        let tf_name = session.topic_name(tf::TF_TOPIC);
-        let tf_static_name = session.topic_name(tf::TF_STATIC_TOPIC);
-        let node = session.node_mut();
-        let markers = create_topic::<MarkerArray>(node, &markers_name, &qos)?;
-        Ok(Self {
-            candidates: Endpoint::create(node, &topics, &qos)?,
-            sets: SetEndpoints::create(node, &topics, qos_depth)?,
-            poses: Endpoint::create(node, &topics, &qos)?,
-            tf: tf::TfListener::create(node, &tf_name, &tf_static_name)?,
-            markers: MarkersOut::new(
-                node.create_publisher(&markers, None)
-                    .context("cannot publish markers")?,
-            ),
-            topics,
-        })
-    }
 }
 
 /// Runs the node until Ctrl-C or SIGTERM (or until the demo is done).
@@ -274,13 +236,13 @@ fn announce(session: &Session, topics: &Topics) {
             topics.requests::<Sets>().unwrap_or_default(),
             topics.answers::<Sets>().unwrap_or_default(),
             session.node().fully_qualified_name(),
-            sets::SERVICE,
+            <Sets as sets::NodeSet>::SERVICE,
             topics.requests::<Poses>().unwrap_or_default(),
             topics.answers::<Poses>().unwrap_or_default(),
             topics.requests::<PoseSets>().unwrap_or_default(),
             topics.answers::<PoseSets>().unwrap_or_default(),
             session.node().fully_qualified_name(),
-            sets::POSE_SERVICE,
+            <PoseSets as sets::NodeSet>::SERVICE,
         ),
     );
 }
@@ -302,20 +264,6 @@ fn wake_on_change(shared: &Shared) -> (OnStop, futures::channel::mpsc::Unbounded
     (on_stop, woken)
 }
 
-/// What the answering loop changes: the answerer, the set thread, what wakes the loop, the pose
-/// candidates loading their meshes and the requests waiting for transforms.
-struct Loop<'a> {
-    answerer: &'a mut Answerer,
-    worker: &'a mut SetWorker,
-    woken: &'a mut futures::channel::mpsc::UnboundedReceiver<()>,
-    loading: &'a mut Loading,
-    tf: &'a mut TfWait,
-}
-
-/// Single pose candidates answered off the node's thread because their mesh was not loaded yet
-/// or is a large inline mesh ([`loads`]).
-type Loading = PoseLoads;
-
 /// Answers every candidate until a signal, or until the demo is done; acts on parameter sets
 /// and on a recording that stopped as soon as `woken` says so. Every request goes through
 /// [`tf_serve::admit`] (turned by TF, or waiting for its transforms); sets are handed to the set
@@ -328,11 +276,8 @@ async fn serve(
     demo: Option<&Demo>,
 ) -> anyhow::Result<()> {
     let mut stream = pin!(endpoints.candidates.requests.async_stream());
-    let mut set_stream = pin!(endpoints.sets.sets.requests.async_stream());
-    let mut calls = pin!(endpoints.sets.service.receive_request_stream());
     let mut poses = pin!(endpoints.poses.requests.async_stream());
-    let mut pose_sets = pin!(endpoints.sets.pose_sets.requests.async_stream());
-    let mut pose_calls = pin!(endpoints.sets.pose_service.receive_request_stream());
+    let mut arrivals = pin!(sets::arrivals(&endpoints.sets, &endpoints.topics).fuse());
     let mut tf_dynamic = pin!(endpoints.tf.dynamic.async_stream());
     let mut tf_static = pin!(endpoints.tf.fixed.async_stream());
     let mut demo_done = pin!(async {
@@ -347,10 +292,10 @@ async fn serve(
         // Biased, in this order: a stop request wins over whatever is queued, then the demo's
         // end, then a parameter set or a stopped writer (so that it applies to every candidate
         // still queued), then the requests waiting for transforms that are due, then
-        // candidates, then sets' answers back from the set thread, then new sets, then
-        // transforms (each request drains those already in before it is looked at); each costs
-        // the node's thread microseconds to milliseconds (a set is solved on the set thread),
-        // so a signal is seen within one.
+        // candidates, then sets' answers back from the set thread, then pose candidates, then
+        // new sets of any kind (one stream, taken in turn), then transforms (each request drains
+        // those already in before it is looked at); each costs the node's thread microseconds to
+        // milliseconds (a set is solved on the set thread), so a signal is seen within one.
         let wake = state.tf.next_wake();
         futures::select_biased! {
             signal = shutdown.requested().fuse() => {
@@ -362,7 +307,7 @@ async fn serve(
             () = tf_serve::at(wake).fuse() => tf_serve::due(node, endpoints, state).await,
             received = stream.select_next_some() => match received {
                 Ok((candidate, info)) => {
-                    let request = Request::Candidate(candidate);
+                    let request = Request::Candidate(Box::new(candidate));
                     tf_serve::admit(node, endpoints, state, request, message_times(&info)).await;
                 }
                 Err(e) => tell(node, vec![state.answerer.undecodable(topics.requests::<Candidates>().unwrap_or_default(), &e)]),
@@ -371,25 +316,6 @@ async fn serve(
             done = state.worker.done.select_next_some() => {
                 sets::answer_done(node, sets, markers, state.answerer, done).await;
             }
-            received = set_stream.select_next_some() => match received {
-                Ok((set, info)) => {
-                    let request = Request::Set(SetInput::Candidates(set), None);
-                    tf_serve::admit(node, endpoints, state, request, message_times(&info)).await;
-                }
-                Err(e) => {
-                    let topic = topics.requests::<Sets>().unwrap_or_default();
-                    let note = state.answerer.undecodable(topic, &e);
-                    tell(node, vec![note]);
-                }
-            },
-            call = calls.select_next_some() => match call {
-                Ok((id, request)) => {
-                    let set = SetInput::Candidates(request.candidate_set);
-                    let now = now_ns();
-                    tf_serve::admit(node, endpoints, state, Request::Set(set, Some(id)), (now, now)).await;
-                }
-                Err(e) => tell(node, vec![state.answerer.undecodable(sets::SERVICE, &e)]),
-            },
             received = poses.select_next_some() => match received {
                 Ok((candidate, info)) => {
                     let request = Request::Pose(Box::new(candidate));
@@ -401,24 +327,18 @@ async fn serve(
                     tell(node, vec![note]);
                 }
             },
-            received = pose_sets.select_next_some() => match received {
-                Ok((set, info)) => {
-                    let request = Request::Set(SetInput::Poses(Box::new(set)), None);
+            arrival = arrivals.select_next_some() => match arrival {
+                sets::Arrival::Topic(set, info) => {
+                    let request = Request::Set(set, None);
                     tf_serve::admit(node, endpoints, state, request, message_times(&info)).await;
                 }
-                Err(e) => {
-                    let topic = topics.requests::<PoseSets>().unwrap_or_default();
-                    let note = state.answerer.undecodable(topic, &e);
-                    tell(node, vec![note]);
-                }
-            },
-            call = pose_calls.select_next_some() => match call {
-                Ok((id, request)) => {
-                    let set = SetInput::Poses(Box::new(request.pose_set));
+                sets::Arrival::Call(id, set) => {
                     let now = now_ns();
                     tf_serve::admit(node, endpoints, state, Request::Set(set, Some(id)), (now, now)).await;
                 }
-                Err(e) => tell(node, vec![state.answerer.undecodable(sets::POSE_SERVICE, &e)]),
+                sets::Arrival::Undecodable(topic, why) => {
+                    tell(node, vec![state.answerer.undecodable(&topic, &why)]);
+                }
             },
             received = tf_static.select_next_some() => tf_serve::keep(state.tf, received, true),
             received = tf_dynamic.select_next_some() => tf_serve::keep(state.tf, received, false),
@@ -460,56 +380,6 @@ async fn finish_sets(
     }
 }
 
-/// Answers one candidate: the answer goes out first; markers and the recording follow it.
-async fn answer_one(
-    node: &Node,
-    endpoints: &Endpoints,
-    answerer: &mut Answerer,
-    candidate: GraspCandidate,
-    (received, sent): (u64, u64),
-) {
-    let audience = endpoints.markers.heard(node);
-    let outcome = answerer.handle(candidate, received, sent, audience);
-    let answers = &endpoints.candidates.answers;
-    send_answer(node, endpoints, answerer, answers, outcome).await;
-}
-
-/// Takes one pose candidate: answered on the node's thread when its mesh is loaded already, or
-/// it names none and carries no inline mesh of [`answer::INLINE_OFF_THREAD_TRIANGLES`] triangles
-/// or more, or it is refused before any load (an inline mesh beyond `max_inline_mesh_triangles`);
-/// otherwise on a loader thread ([`loads`]), its answer sent when it is back or when
-/// `max_mesh_load_time` has passed, so that a first load or a large inline mesh's index (a tenth
-/// of a second and more for 100,000 triangles) holds up no other topic, and a load that never
-/// ends holds up nothing. Never on the node's thread: with every loader busy the candidate
-/// waits, and with the queue full it is refused at once. Answers may then come back in another
-/// order than their candidates.
-async fn take_pose(
-    node: &Node,
-    endpoints: &Endpoints,
-    answerer: &mut Answerer,
-    loading: &mut Loading,
-    candidate: PoseCandidate,
-    (received, sent): (u64, u64),
-) {
-    let audience = endpoints.markers.heard(node);
-    let work = answerer.pose_work(received, audience);
-    if work.refusal(&candidate).is_none() && answerer.answers_off_thread(&candidate) {
-        if let Err(refused) = loading.take(work, candidate, received, sent) {
-            send_loaded(node, endpoints, answerer, *refused).await;
-        }
-        return;
-    }
-    let (reply, markers) = work.run(&candidate);
-    let outcome = answerer.account_pose(candidate, reply, markers, received, sent);
-    send_answer(node, endpoints, answerer, &endpoints.poses.answers, outcome).await;
-}
-
-/// Counts, sends and records a pose candidate answered off the node's thread.
-async fn send_loaded(node: &Node, endpoints: &Endpoints, answerer: &mut Answerer, l: Loaded) {
-    let outcome = answerer.account_pose(l.candidate, l.reply, l.markers, l.received, l.sent);
-    send_answer(node, endpoints, answerer, &endpoints.poses.answers, outcome).await;
-}
-
 /// On a stop request: for at most [`STOP_GRACE`], sends the answers of the pose candidates still
 /// loading their meshes.
 async fn finish_loads(
@@ -531,70 +401,6 @@ async fn finish_loads(
             }
         }
     }
-}
-
-/// An answer to one candidate or pose candidate, as its log line names it.
-trait Recommends {
-    /// What it answers, for the log: "candidate", "pose candidate".
-    const WHAT: &'static str;
-    /// Its recommendation (a pose answer's is inside it).
-    fn recommendation(&self) -> &GripRecommendation;
-}
-
-impl Recommends for GripRecommendation {
-    const WHAT: &'static str = "candidate";
-    fn recommendation(&self) -> &GripRecommendation {
-        self
-    }
-}
-
-impl Recommends for PoseRecommendation {
-    const WHAT: &'static str = "pose candidate";
-    fn recommendation(&self) -> &GripRecommendation {
-        &self.recommendation
-    }
-}
-
-/// Sends one answer on `answers`: the answer goes out first; its markers, then the recording,
-/// follow it.
-async fn send_answer<A: Recommends + serde::Serialize + std::fmt::Debug>(
-    node: &Node,
-    endpoints: &Endpoints,
-    answerer: &mut Answerer,
-    answers: &ros2_client::Publisher<A>,
-    outcome: answer::Outcome<A>,
-) {
-    let r = outcome.reply.recommendation();
-    log::debug!(
-        "{} {:?}: status {}, gravity angle {}, {} {} N",
-        A::WHAT,
-        short_id(&r.candidate_id),
-        r.status,
-        r.gravity_angle,
-        r.objective,
-        r.gripping_power
-    );
-    tell(node, outcome.notes);
-    if let Err(e) = answers.async_publish(outcome.reply).await {
-        let why = format!("cannot publish the answer to a {}: {e:?}", A::WHAT);
-        say(node, log::Level::Error, &why);
-    }
-    markers_then_record(node, endpoints, answerer, outcome.markers, outcome.recorded).await;
-}
-
-/// After an answer went out: its markers (if `grip_markers` has a subscriber: they may have been
-/// built for the recording alone), then its record with the time the answer was sent.
-async fn markers_then_record(
-    node: &Node,
-    endpoints: &Endpoints,
-    answerer: &mut Answerer,
-    markers: Option<MarkerArray>,
-    recorded: answer::Recorded,
-) {
-    let answered = now_ns();
-    endpoints.markers.publish(node, answerer, markers).await;
-    let notes = answerer.record(recorded, answered);
-    tell(node, notes);
 }
 
 /// The node's mesh cache: files read only under `mesh_roots` and inside packages' share

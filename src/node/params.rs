@@ -72,15 +72,15 @@ pub(crate) enum ParameterRefused {
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Version {
     /// Counts the versions, from 0 for the start.
-    pub seq: u64,
+    pub(crate) seq: u64,
     /// From which receive time (ns since the epoch) on they apply; 0 for the start.
-    pub since: u64,
+    pub(crate) since: u64,
     /// The parameter whose set made this version; `None` for the start.
-    pub changed: Option<String>,
+    pub(crate) changed: Option<String>,
     /// Every parameter.
-    pub config: Config,
+    pub(crate) config: Config,
     /// The solver settings they imply.
-    pub settings: Settings,
+    pub(crate) settings: Settings,
 }
 
 impl Version {
@@ -103,9 +103,9 @@ pub(super) const RECORDING_PARAMETERS: [&str; 3] = ["record", "record_dir", "rec
 #[derive(Debug)]
 pub(crate) struct Live {
     /// Every parameter, as now.
-    pub config: Config,
+    pub(crate) config: Config,
     /// The solver settings they imply.
-    pub settings: Settings,
+    pub(crate) settings: Settings,
     /// The recent versions, oldest first; the last is `config` and `settings`.
     versions: std::collections::VecDeque<Version>,
     /// Sets of a [`RECORDING_PARAMETERS`] so far.

@@ -16,20 +16,20 @@ use std::time::{Duration, Instant};
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Pace {
     /// Speed relative to the recording; 0 sends as fast as possible.
-    pub rate: f64,
+    pub(crate) rate: f64,
     /// Seconds to wait for a subscriber before starting.
-    pub wait: f64,
+    pub(crate) wait: f64,
     /// QoS history depth of the publisher (reliable, volatile).
-    pub depth: i64,
+    pub(crate) depth: i64,
 }
 
 /// What a play sent of each kind, and where, by [`Kind::INDEX`].
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub(crate) struct Played {
     /// Requests sent.
-    pub sent: [usize; kind::COUNT],
+    pub(crate) sent: [usize; kind::COUNT],
     /// The requests' topic's absolute name.
-    pub topics: [String; kind::COUNT],
+    pub(crate) topics: [String; kind::COUNT],
 }
 
 /// The publisher of one kind's requests.

@@ -8,18 +8,18 @@ use std::path::PathBuf;
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub(crate) struct RosArgs {
     /// `-r __node:=NAME`.
-    pub node_name: Option<String>,
+    pub(crate) node_name: Option<String>,
     /// `-r __ns:=/NS`.
-    pub namespace: Option<String>,
+    pub(crate) namespace: Option<String>,
     /// `-r from:=to` for topics, in order.
-    pub remaps: Vec<(String, String)>,
+    pub(crate) remaps: Vec<(String, String)>,
     /// `-p name:=value`, the value as YAML text.
-    pub params: Vec<(String, String)>,
+    pub(crate) params: Vec<(String, String)>,
     /// `--params-file FILE`, in order.
-    pub params_files: Vec<PathBuf>,
+    pub(crate) params_files: Vec<PathBuf>,
     /// `--log-level LEVEL` (logger `None`: the default level) and `--log-level NAME:=LEVEL`
     /// (one logger), in order.
-    pub log_levels: Vec<(Option<String>, LogLevel)>,
+    pub(crate) log_levels: Vec<(Option<String>, LogLevel)>,
 }
 
 /// A ROS log level, as `--log-level` takes it (any case).

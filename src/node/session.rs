@@ -84,9 +84,9 @@ const MAX_STATIC_PEERS: usize = 64;
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Graph {
     /// `ROS_DOMAIN_ID`.
-    pub domain_id: u16,
+    pub(crate) domain_id: u16,
     /// `ROS_AUTOMATIC_DISCOVERY_RANGE`, or LOCALHOST by the deprecated `ROS_LOCALHOST_ONLY=1`.
-    pub range: DiscoveryRange,
+    pub(crate) range: DiscoveryRange,
     /// `ROS_STATIC_PEERS` resolved, when the range uses them.
     peers: StaticPeers,
 }
@@ -293,7 +293,7 @@ impl Shutdown {
 pub(crate) struct Start {
     shutdown: Shutdown,
     /// The ROS arguments.
-    pub ros: RosArgs,
+    pub(crate) ros: RosArgs,
 }
 
 impl Start {
@@ -331,9 +331,9 @@ impl Start {
 /// One DDS participant with one node and its spinner.
 pub(crate) struct Session {
     /// The domain and its scope.
-    pub graph: Graph,
+    pub(crate) graph: Graph,
     /// The ROS arguments (empty for a helper participant).
-    pub ros: RosArgs,
+    pub(crate) ros: RosArgs,
     name: String,
     shutdown: Shutdown,
     // Fields drop in this order when a session is dropped without `close` (a command refused

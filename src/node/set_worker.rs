@@ -21,72 +21,51 @@
 //! set gets status 2 "internal error", the panic is logged, and the set thread goes on with the
 //! next, so that the count of sets in hand stays true and `STATUS_BUSY` means sets really wait.
 
-use super::answer::INLINE_OFF_THREAD_TRIANGLES;
-use super::answer::{
-    inline_mesh_too_large, load_time, RecordedSet, SetInput, SetOutcome, SetReply,
-};
-use super::loads::{too_slow, Loaders, LOAD_PANICKED};
+use super::answer::{load_time, RecordedSet, SetInput, SetOutcome, SetReply};
+use super::loads::Loaders;
 use super::params::Shared;
-use crate::answer::{answer_in_full, markers, Answering, Refused};
-use crate::answer::{busy, echo_set, solver_pool, Halt, Interrupt};
-use crate::answer::{pose_set_without_geometry, uncast, PoseAnswerer, PARALLEL_FROM};
-use crate::msg::{
-    GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet, MarkerArray,
-    PoseCandidate, PoseCandidateSet,
-};
+pub(crate) use super::set_io::Via;
+use super::set_kinds::Solving;
+use crate::answer::{solver_pool, Answering, Halt, Interrupt, PARALLEL_FROM};
+use crate::msg::MarkerArray;
 use futures::channel::mpsc::{unbounded, UnboundedReceiver, UnboundedSender};
 use grasp_orient_geometry::MeshCache;
-use ros2_client::RmwRequestId;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{mpsc, Arc, Condvar, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
-
-/// Where a set came from, and so where its answer goes.
-#[derive(Debug, Clone, Copy)]
-pub(crate) enum Via {
-    /// The topic `grasp_candidate_sets`; `taken`: from the set's arrival in the DDS reader to the
-    /// node's thread taking it.
-    Topic {
-        /// From arrival to taken.
-        taken: Duration,
-    },
-    /// A call of `~/recommend` (a candidate set) or of `~/recommend_poses` (a pose set),
-    /// answered to this request.
-    Service(RmwRequestId),
-}
 
 /// One set for the set thread, with what its answer needs.
 #[derive(Debug)]
 pub(crate) struct SetJob {
     /// The set.
-    pub set: SetInput,
+    pub(crate) set: SetInput,
     /// When it was received and sent, ns since the epoch (its settings are those in force when
     /// it was received).
-    pub received: u64,
+    pub(crate) received: u64,
     /// When it was sent.
-    pub sent: u64,
+    pub(crate) sent: u64,
     /// Where the answer goes.
-    pub via: Via,
+    pub(crate) via: Via,
     /// Whether the recording was on when the set was taken: its answer is then cloned for it.
-    pub record: bool,
+    pub(crate) record: bool,
     /// Whether the recording takes markers.
-    pub record_markers: bool,
+    pub(crate) record_markers: bool,
     /// Whether `grip_markers` had a subscriber when the set was taken: the best candidate is
     /// drawn only for it or for the recording.
-    pub audience: bool,
+    pub(crate) audience: bool,
 }
 
 /// A set's answer, back from the set thread.
 #[derive(Debug)]
 pub(crate) struct SetDone {
     /// Where the answer goes.
-    pub via: Via,
+    pub(crate) via: Via,
     /// The answer, its markers and what to record.
-    pub outcome: SetOutcome,
+    pub(crate) outcome: SetOutcome,
     /// From the node's thread handing the set over to the set thread starting it.
-    pub waited: Duration,
+    pub(crate) waited: Duration,
     /// The solving, the ranking, the best candidate's markers and the recording's copy.
-    pub took: Duration,
+    pub(crate) took: Duration,
 }
 
 /// The set thread, its queue and its clock.
@@ -94,7 +73,7 @@ pub(crate) struct SetDone {
 pub(crate) struct SetWorker {
     jobs: Option<mpsc::Sender<(SetJob, Instant)>>,
     /// The answers, as they are ready.
-    pub done: UnboundedReceiver<SetDone>,
+    pub(crate) done: UnboundedReceiver<SetDone>,
     /// Sets handed over and not yet answered, the one being solved among them.
     in_hand: Arc<AtomicUsize>,
     interrupt: Arc<Interrupt>,
@@ -206,45 +185,14 @@ impl Drop for SetWorker {
 
 /// The answer to a set refused because the queue is full (or the node is stopping).
 fn refused(job: SetJob, max_queued: usize, rules: &crate::answer::Rules) -> SetDone {
-    let reply = busy_reply(&job.set, rules, max_queued);
+    let reply = job.set.busy(rules, max_queued);
     done_at_once(job, reply)
 }
 
 /// The answer to a set that cannot be answered: status 2 saying `why`, nothing solved.
 fn failed(job: SetJob, rules: &crate::answer::Rules, why: &str) -> SetDone {
-    let reply = failed_reply(&job.set, rules, why);
+    let reply = job.set.failed(rules, why);
     done_at_once(job, reply)
-}
-
-/// `STATUS_BUSY` (or the set's own refusal), nothing solved.
-fn busy_reply(set: &SetInput, rules: &crate::answer::Rules, max_queued: usize) -> SetReply {
-    match set {
-        SetInput::Candidates(set) => SetReply::Candidates(busy(set, rules, max_queued)),
-        SetInput::Poses(set) => {
-            let reply = busy(&uncast(set), rules, max_queued);
-            SetReply::Poses(pose_set_without_geometry(set, reply))
-        }
-    }
-}
-
-/// Status 2 (`STATUS_INVALID_INPUT`) saying `why`, nothing solved, no recommendations.
-fn failed_reply(set: &SetInput, rules: &crate::answer::Rules, why: &str) -> SetReply {
-    let mut reply = busy_reply(set, rules, 0);
-    match &mut reply {
-        SetReply::Candidates(r) => {
-            r.status = GripRecommendationSet::STATUS_INVALID_INPUT;
-            r.message = why.into();
-            r.recommendations.clear();
-            r.ranking.clear();
-        }
-        SetReply::Poses(r) => {
-            r.status = GripRecommendationSet::STATUS_INVALID_INPUT;
-            r.message = why.into();
-            r.recommendations.clear();
-            r.ranking.clear();
-        }
-    }
-    reply
 }
 
 /// What an internal error while answering a set says.
@@ -332,7 +280,7 @@ impl Solver {
                  status 2 and the set thread goes on"
             );
             // The solving's interrupt may be left raised for time: the next set lowers it.
-            (failed_reply(&job.set, now.with.rules(), SET_PANICKED), None)
+            (job.set.failed(now.with.rules(), SET_PANICKED), None)
         });
         let SetJob {
             set,
@@ -380,79 +328,30 @@ impl Solver {
         }
     }
 
-    /// A set's answer and its best candidate's markers.
+    /// A set's answer and its best member's markers: solved with the set's clock running, on
+    /// the pool when it is large ([`SetInput::solve`]); in echo mode, an empty answer per member.
     fn answer(&self, set: &SetInput, now: &InForce) -> (SetReply, Option<MarkerArray>) {
         #[cfg(test)]
-        if set_id(set) == tests::PANICS {
+        if set.id() == tests::PANICS {
             panic!("a panic injected by a test");
         }
-        match set {
-            SetInput::Candidates(set) => self.candidates(set, now),
-            SetInput::Poses(set) => self.poses(set, now),
+        if self.echo {
+            return (set.echo(), None);
         }
-    }
-
-    /// A pose set's object, made on a loader thread when its mesh must be loaded or a large
-    /// inline mesh indexed, waited for no longer than `max_mesh_load_time` nor than the set's
-    /// `max_set_time` (whose clock is watching); refused at once when the inline mesh is beyond
-    /// `max_inline_mesh_triangles` or no loader thread is free. A load not waited for goes on
-    /// in the background and fills the cache.
-    fn object_within(
-        &self,
-        answerer: &PoseAnswerer,
-        set: &PoseCandidateSet,
-        now: &InForce,
-    ) -> Result<grasp_orient_geometry::Object, Refused> {
-        let o = &set.object;
-        if let Some(why) = inline_mesh_too_large(o, now.max_inline) {
-            return Err(refusal(why));
-        }
-        let scale = [o.scale.x, o.scale.y, o.scale.z];
-        let loads = !o.mesh.is_empty() && !self.meshes.holds(&o.mesh, scale);
-        let indexes = o.inline_mesh.triangles.len() >= INLINE_OFF_THREAD_TRIANGLES;
-        if !loads && !indexes {
-            return answerer.object(o).map_err(Refused::from);
-        }
-        let (made, wait) = mpsc::sync_channel(1);
-        let (on_thread, object) = (answerer.clone(), o.clone());
-        let started = self.loaders.spawn(move || {
-            made.send(on_thread.object(&object).map_err(Refused::from))
-                .ok();
-        });
-        if !started {
-            return Err(refusal(format!(
-                "object: too many meshes loading ({} loader threads busy); send the set again \
-                 later",
-                self.loaders.max()
-            )));
-        }
-        let deadline = Instant::now() + now.load_time;
-        loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            match wait.recv_timeout(left.min(LOAD_POLL)) {
-                Ok(made) => return made,
-                Err(mpsc::RecvTimeoutError::Disconnected) => return Err(refusal(LOAD_PANICKED)),
-                Err(mpsc::RecvTimeoutError::Timeout) => {}
-            }
-            match self.interrupt.halt() {
-                Some(Halt::OutOfTime) => {
-                    return Err(refusal(format!(
-                        "object: its mesh was not loaded within max_set_time ({} s); the load \
-                         goes on in the background: send the set again later",
-                        now.budget
-                    )))
-                }
-                Some(Halt::Stopping) => {
-                    return Err(refusal(
-                        "object: its mesh was not loaded: the node is stopping",
-                    ))
-                }
-                None => {}
-            }
-            if Instant::now() >= deadline {
-                return Err(refusal(too_slow(now.load_time)));
-            }
-        }
+        let pool = self.pool_for(set.members(), now.threads);
+        self.interrupt.lower_time();
+        let _watched = self.clock.watch(now.budget);
+        set.solve(&Solving {
+            with: &now.with,
+            pool,
+            interrupt: &self.interrupt,
+            budget: now.budget,
+            markers_on: now.markers_on,
+            meshes: &self.meshes,
+            loaders: &self.loaders,
+            load_time: now.load_time,
+            max_inline: now.max_inline,
+        })
     }
 
     /// The pool for a set of `members`, when it is large (started with the first large set).
@@ -463,104 +362,6 @@ impl Solver {
         } else {
             None
         }
-    }
-
-    /// Whether the best member is drawn: markers on, not echoing, not stopping.
-    fn draws(&self, now: &InForce) -> bool {
-        now.markers_on && !self.echo && self.interrupt.halt() != Some(Halt::Stopping)
-    }
-
-    /// A candidate set's answer and its best candidate's markers.
-    fn candidates(
-        &self,
-        set: &GraspCandidateSet,
-        now: &InForce,
-    ) -> (SetReply, Option<MarkerArray>) {
-        let reply = if self.echo {
-            echo_set(set)
-        } else {
-            let pool = self.pool_for(set.candidates.len(), now.threads);
-            self.interrupt.lower_time();
-            let _watched = self.clock.watch(now.budget);
-            now.with.set_within(set, pool, &self.interrupt, now.budget)
-        };
-        let best = reply.ranking.first().map(|&i| i as usize);
-        let markers = best.filter(|_| self.draws(now)).and_then(|i| {
-            let candidate = set.candidates.get(i)?;
-            // A spatial best candidate is drawn in 3D: its 3D solution is solved again (one
-            // candidate; the set's answers keep only the message fields).
-            let spatial = (candidate.model == GraspCandidate::MODEL_SPATIAL)
-                .then(|| answer_in_full(candidate, now.with.settings()).spatial)
-                .flatten();
-            Some(markers::build(
-                &now.with.rules().tolerances.apply(candidate),
-                reply.recommendations.get(i)?,
-                spatial.as_deref(),
-            ))
-        });
-        (SetReply::Candidates(reply), markers)
-    }
-
-    /// A pose set's answer (its mesh loaded here when the cache does not hold it yet, within
-    /// the set's time) and its best pose's markers.
-    fn poses(&self, set: &PoseCandidateSet, now: &InForce) -> (SetReply, Option<MarkerArray>) {
-        let (reply, object) = if self.echo {
-            (pose_set_without_geometry(set, echo_set(&uncast(set))), None)
-        } else {
-            let pool = self.pool_for(set.poses.len(), now.threads);
-            self.interrupt.lower_time();
-            let _watched = self.clock.watch(now.budget);
-            let object = (set.poses.len() <= now.with.rules().max_set_size)
-                .then(|| self.object_within(now.with.poses(), set, now));
-            if object.as_ref().is_some_and(Result::is_err) {
-                // Refused, perhaps because max_set_time ran out while it loaded: each pose says
-                // why, and the set is answered whole (there is nothing left to solve).
-                self.interrupt.lower_time();
-            }
-            now.with
-                .pose_set_within(set, object, pool, &self.interrupt, now.budget)
-        };
-        let best = reply.ranking.first().map(|&i| i as usize);
-        let markers = best.filter(|_| self.draws(now)).and_then(|i| {
-            let pose = set.poses.get(i)?;
-            let candidate = PoseCandidate {
-                header: set.header.clone(),
-                id: pose.id.clone(),
-                grasp_pose: pose.grasp_pose.clone(),
-                width: pose.width,
-                object: set.object.clone(),
-                gravity: set.gravity.clone(),
-            };
-            Some(markers::build_pose(
-                &candidate,
-                object.as_ref(),
-                now.with.poses().closing_axis(),
-                reply.recommendations.get(i)?,
-                now.with.settings(),
-            ))
-        });
-        (SetReply::Poses(reply), markers)
-    }
-}
-
-/// How often the set thread, waiting for a pose set's mesh, looks whether the set's time ran out
-/// or the node is stopping.
-const LOAD_POLL: Duration = Duration::from_millis(20);
-
-/// A pose set's object refused with status 2, saying `why`.
-fn refusal(why: impl Into<String>) -> Refused {
-    Refused {
-        status: GripRecommendation::STATUS_INVALID_INPUT,
-        message: why.into(),
-    }
-}
-
-/// The set's id (the test hook's trigger).
-#[cfg(test)]
-fn set_id(set: &SetInput) -> &str {
-    match set {
-        SetInput::Candidates(s) => &s.id,
-        SetInput::Poses(s) => &s.id,
     }
 }
 
@@ -669,10 +470,15 @@ impl Clock {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::answer::PoseAnswerer;
     use crate::config::Config;
-    use crate::msg::{GripRecommendation, GripRecommendationSet};
+    use crate::kind::{PoseSets, Sets};
+    use crate::msg::{
+        GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
+    };
     use futures::StreamExt;
     use grasp_orient_geometry::ClosingAxis;
+    use grasp_orient_geometry::MeshCache;
 
     /// The id of a set whose answering panics (`Solver::answer`).
     pub(super) const PANICS: &str = "test: this set panics";
@@ -702,7 +508,7 @@ mod tests {
         let mut c = paper_case();
         c.center_of_mass_tolerance.x = 0.01;
         SetJob {
-            set: SetInput::Candidates(GraspCandidateSet {
+            set: SetInput::new::<Sets>(GraspCandidateSet {
                 id: id.into(),
                 candidates: vec![c; n],
                 ..GraspCandidateSet::default()
@@ -738,10 +544,8 @@ mod tests {
             max_set_time: 0.0,
             ..Config::default()
         });
-        let j = job("whole", 300);
-        let SetInput::Candidates(set) = &j.set else {
-            panic!("a candidate set")
-        };
+        let mut j = job("whole", 300);
+        let set = j.set.get_mut::<Sets>().expect("a candidate set");
         let want = crate::answer::answer_set(
             set,
             &Config::default().solver_settings().expect("valid"),
@@ -841,9 +645,8 @@ mod tests {
         // A pose set too, with one answer per pose (no geometry) and the poses' ids.
         let poses = pose_job("poses refused", &["a", "b"]);
         let refused = w.submit(poses).expect_err("a full queue");
-        let SetReply::Poses(reply) = &refused.outcome.reply else {
-            panic!("a pose set's answer")
-        };
+        let reply = refused.outcome.reply.get::<PoseSets>();
+        let reply = reply.expect("a pose set's answer");
         assert_eq!(reply.status, GripRecommendationSet::STATUS_BUSY);
         assert_eq!(reply.set_id, "poses refused");
         assert!(reply.recommendations.is_empty(), "{reply:?}");
@@ -893,7 +696,8 @@ mod tests {
         let line = format!(
             r#"{{"header": {{"frame_id": "base_link"}}, "id": "{id}", "object": {{"pose": {{"position": {{"x": 0.5, "y": 0.0, "z": 0.06}}, "orientation": {{"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}}}, "primitive": {{"type": 3, "dimensions": [0.12, 0.033]}}, "mass": 0.35, "friction": 0.5}}, "poses": [], "gravity": {{"x": 0.0, "y": 0.0, "z": -9.81}}}}"#
         );
-        let mut set: PoseCandidateSet = serde_json::from_str(&line).expect("a PoseCandidateSet");
+        let mut set = SetInput::new::<PoseSets>(serde_json::from_str(&line).expect("a pose set"));
+        let poses = &mut set.get_mut::<PoseSets>().expect("a pose set").poses;
         for (k, pose_id) in ids.iter().enumerate() {
             let mut pose = crate::msg::GraspPose {
                 id: (*pose_id).into(),
@@ -903,10 +707,10 @@ mod tests {
             pose.grasp_pose.position.x = 0.5;
             pose.grasp_pose.position.z = 0.05 + 0.01 * k as f64;
             pose.grasp_pose.orientation.w = 1.0;
-            set.poses.push(pose);
+            poses.push(pose);
         }
         SetJob {
-            set: SetInput::Poses(Box::new(set)),
+            set,
             received: crate::record::now_ns(),
             sent: 0,
             via: Via::Topic {
@@ -927,10 +731,8 @@ mod tests {
             ..Config::default()
         };
         let mut w = worker(config.clone());
-        let j = pose_job("can", &["low", "mid", "high"]);
-        let SetInput::Poses(set) = &j.set else {
-            panic!("a pose set")
-        };
+        let mut j = pose_job("can", &["low", "mid", "high"]);
+        let set = j.set.get_mut::<PoseSets>().expect("a pose set");
         let settings = config.solver_settings().expect("valid");
         let want = PoseAnswerer::sharing(ClosingAxis::Y, meshes()).answer_set(
             set,
@@ -939,9 +741,11 @@ mod tests {
         );
         w.submit(j).expect("taken");
         let done = next(&mut w);
-        let SetReply::Poses(reply) = &done.outcome.reply else {
-            panic!("a pose set's answer")
-        };
+        let reply = done
+            .outcome
+            .reply
+            .get::<PoseSets>()
+            .expect("a pose set's answer");
         assert_eq!(format!("{reply:?}"), format!("{want:?}"));
         assert_eq!(reply.ranking.len(), 3, "{reply:?}");
         let markers = done.outcome.markers.as_ref().expect("the best pose drawn");
@@ -1001,13 +805,12 @@ mod tests {
         let mut pose = pose_job(PANICS, &["a"]);
         pose.record = false;
         w.submit(pose).expect("taken");
-        let SetReply::Poses(reply) = answers_within(&mut w, 1, Duration::from_secs(5))
-            .remove(0)
+        let done = answers_within(&mut w, 1, Duration::from_secs(5)).remove(0);
+        let reply = done
             .outcome
             .reply
-        else {
-            panic!("a pose set's answer")
-        };
+            .get::<PoseSets>()
+            .expect("a pose set's answer");
         assert_eq!(reply.status, GripRecommendationSet::STATUS_INVALID_INPUT);
         w.submit(job("after", 3)).expect("not busy");
         w.submit(pose_job("poses after", &["low", "mid"]))
@@ -1041,17 +844,15 @@ mod tests {
             ..Config::default()
         });
         let mut set = pose_job("never", &["a", "b"]);
-        if let SetInput::Poses(p) = &mut set.set {
-            p.object.primitive = Default::default();
-            p.object.mesh = fifo.display().to_string().into();
-        }
+        let p = set.set.get_mut::<PoseSets>().expect("a pose set");
+        p.object.primitive = Default::default();
+        p.object.mesh = fifo.display().to_string().into();
         let since = Instant::now();
         w.submit(set).expect("taken");
         w.submit(pose_job("next", &["low"])).expect("taken");
         let done = answers_within(&mut w, 2, Duration::from_secs(2));
-        let SetReply::Poses(never) = &done[0].outcome.reply else {
-            panic!("a pose set's answer")
-        };
+        let never = done[0].outcome.reply.get::<PoseSets>();
+        let never = never.expect("a pose set's answer");
         assert_eq!(never.recommendations.len(), 2, "{never:?}");
         for r in &never.recommendations {
             assert_eq!(r.recommendation.status, 2, "{r:?}");

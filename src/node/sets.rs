@@ -8,77 +8,82 @@
 //! thread's queue is full is answered the same way, at once.
 
 use super::answer::{Answerer, SetInput, SetOutcome, SetReply};
-use super::endpoint::Endpoint;
 use super::markers_out::MarkersOut;
-use super::session::{qos, say, tell};
+use super::session::{say, tell};
+pub(crate) use super::set_kinds::NodeSet;
+pub(crate) use super::set_kinds::SetEndpoints;
+use super::set_kinds::{SetEndpoint, VisitSetEndpoint};
 use super::set_worker::{SetDone, SetJob, SetWorker, Via};
-use crate::kind::{PoseSets, Sets};
-use crate::msg::{
-    short_id, RecommendPosesRequest, RecommendPosesResponse, RecommendRequest, RecommendResponse,
-};
+use crate::msg::short_id;
 use crate::record::{now_ns, Topics};
-use anyhow::Context as _;
-use ros2_client::{Name, Node, RmwRequestId, Server, ServiceMapping, ServiceTypeName};
+use futures::stream::{LocalBoxStream, StreamExt as _};
+use ros2_client::{MessageInfo, Node, RmwRequestId};
 use std::time::{Duration, Instant};
 
-/// The service's name under the node (`~/recommend`).
-pub(crate) const SERVICE: &str = "recommend";
-
-/// The pose service's name under the node (`~/recommend_poses`).
-pub(crate) const POSE_SERVICE: &str = "recommend_poses";
-
-/// The set topics and the services.
-pub(crate) struct SetEndpoints {
-    /// `grasp_candidate_sets` and `grip_recommendation_sets`.
-    pub sets: Endpoint<Sets>,
-    /// `~/recommend`.
-    pub service: Server<RecommendRequest, RecommendResponse>,
-    /// `pose_candidate_sets` and `pose_recommendation_sets`.
-    pub pose_sets: Endpoint<PoseSets>,
-    /// `~/recommend_poses`.
-    pub pose_service: Server<RecommendPosesRequest, RecommendPosesResponse>,
+/// A set that arrived, of any set kind.
+pub(crate) enum Arrival {
+    /// On its topic.
+    Topic(SetInput, MessageInfo),
+    /// In a call of its service.
+    Call(RmwRequestId, SetInput),
+    /// A message on a set topic or service that did not decode: where, and why.
+    Undecodable(String, Why),
 }
 
-impl std::fmt::Debug for SetEndpoints {
+/// Why a message did not decode, as its decoder said it.
+pub(crate) struct Why(String);
+
+impl std::fmt::Debug for Why {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str("SetEndpoints")
+        f.write_str(&self.0)
     }
 }
 
-impl SetEndpoints {
-    /// Creates the endpoints of the set kinds on `topics` with QoS depth `qos_depth`.
-    pub(crate) fn create(node: &mut Node, topics: &Topics, qos_depth: i64) -> anyhow::Result<Self> {
-        let qos = qos(qos_depth);
-        Ok(Self {
-            pose_sets: Endpoint::create(node, topics, &qos)?,
-            pose_service: serve(node, POSE_SERVICE, "RecommendPoses", &qos)?,
-            sets: Endpoint::create(node, topics, &qos)?,
-            service: serve(node, SERVICE, "Recommend", &qos)?,
-        })
+/// Every set kind's sets as they arrive, on its topic and in calls of its service, as one stream.
+pub(crate) fn arrivals<'a>(
+    endpoints: &'a SetEndpoints,
+    topics: &'a Topics,
+) -> impl futures::Stream<Item = Arrival> + 'a {
+    struct Collect<'a> {
+        topics: &'a Topics,
+        streams: Vec<LocalBoxStream<'a, Arrival>>,
     }
-}
-
-/// Offers the service `~/<name>` of type `grasp_orient/srv/<type_name>`.
-fn serve<Q, P>(
-    node: &mut Node,
-    name: &str,
-    type_name: &str,
-    qos: &ros2_client::QosProfile,
-) -> anyhow::Result<Server<Q, P>>
-where
-    Q: ros2_client::Message + Clone + 'static,
-    P: ros2_client::Message + Clone + 'static,
-{
-    let fqn = node.fully_qualified_name();
-    let full = Name::new(&fqn, name).map_err(|e| anyhow::anyhow!("service {fqn}/{name}: {e:?}"))?;
-    node.create_server(
-        ServiceMapping::Enhanced,
-        &full,
-        &ServiceTypeName::new("grasp_orient", type_name),
-        qos.clone(),
-        qos.clone(),
-    )
-    .with_context(|| format!("cannot offer the service {fqn}/{name}"))
+    impl<'a> VisitSetEndpoint<'a> for Collect<'a> {
+        fn endpoint<K: NodeSet>(&mut self, endpoint: &'a SetEndpoint<K>) {
+            let topic = self.topics.requests::<K>().unwrap_or_default().to_string();
+            self.streams.push(
+                endpoint
+                    .topic
+                    .requests
+                    .async_stream()
+                    .map(move |received| match received {
+                        Ok((set, info)) => Arrival::Topic(SetInput::new::<K>(set), info),
+                        Err(e) => Arrival::Undecodable(topic.clone(), Why(format!("{e:?}"))),
+                    })
+                    .boxed_local(),
+            );
+            self.streams.push(
+                endpoint
+                    .service
+                    .receive_request_stream()
+                    .map(|call| match call {
+                        Ok((id, request)) => {
+                            Arrival::Call(id, SetInput::new::<K>(K::from_call(request)))
+                        }
+                        Err(e) => {
+                            Arrival::Undecodable(K::SERVICE.to_string(), Why(format!("{e:?}")))
+                        }
+                    })
+                    .boxed_local(),
+            );
+        }
+    }
+    let mut collect = Collect {
+        topics,
+        streams: Vec::new(),
+    };
+    endpoints.each(&mut collect);
+    futures::stream::select_all(collect.streams)
 }
 
 /// Takes one set (of candidates or of poses) from its topic: hands it to the set thread, or
@@ -163,7 +168,7 @@ pub(crate) async fn answer_done(
     };
     let line = AnswerLine::new(&reply, how, taken, took, waited);
     let sending = Instant::now();
-    let sent = send(endpoints, via, reply).await;
+    let sent = reply.send(endpoints, via).await;
     let answered = now_ns();
     line.log(sending.elapsed(), sent.is_ok(), answered);
     if let Err(e) = sent {
@@ -171,44 +176,6 @@ pub(crate) async fn answer_done(
     }
     markers.publish(node, answerer, array).await;
     tell(node, answerer.record_set(recorded, answered));
-}
-
-/// Sends a set's answer where its set came from: its topic, or the response to its call.
-async fn send(endpoints: &SetEndpoints, via: Via, reply: SetReply) -> Result<(), String> {
-    match (via, reply) {
-        (Via::Topic { .. }, SetReply::Candidates(reply)) => endpoints
-            .sets
-            .answers
-            .async_publish(reply)
-            .await
-            .map_err(|e| format!("cannot publish a set answer: {e:?}")),
-        (Via::Topic { .. }, SetReply::Poses(reply)) => endpoints
-            .pose_sets
-            .answers
-            .async_publish(reply)
-            .await
-            .map_err(|e| format!("cannot publish a pose set answer: {e:?}")),
-        (Via::Service(id), SetReply::Candidates(reply)) => {
-            let response = RecommendResponse {
-                recommendation_set: reply,
-            };
-            endpoints
-                .service
-                .async_send_response(id, response)
-                .await
-                .map_err(|e| format!("cannot send a {SERVICE} response: {e:?}"))
-        }
-        (Via::Service(id), SetReply::Poses(reply)) => {
-            let response = RecommendPosesResponse {
-                recommendation_set: reply,
-            };
-            endpoints
-                .pose_service
-                .async_send_response(id, response)
-                .await
-                .map_err(|e| format!("cannot send a {POSE_SERVICE} response: {e:?}"))
-        }
-    }
 }
 
 /// One line at debug per set answered, as for single candidates, written once the answer is out:

@@ -4,13 +4,13 @@
 //! thread. What is answered goes on to its kind's usual path ([`dispatch`]); that path records
 //! the request as answered, turned by TF, so that `replay` answers it alike without TF.
 
-use super::answer::{SetInput, SetReply};
+use super::requests::{answer_one, send_answer, take_pose, Endpoints, Loop};
 use super::session::say;
 use super::set_worker::{done_at_once, SetJob, Via};
+use super::sets;
 use super::tf_wait::{Arrival, Request, TfWait, Verdict};
-use super::{answer_one, send_answer, sets, take_pose, Endpoints, Loop};
 use crate::answer::Answer;
-use crate::kind::{Candidates, PoseSets, Poses, Sets};
+use crate::kind::{Candidates, Poses};
 use crate::msg::TfMessage;
 use ros2_client::{MessageInfo, Node};
 use std::time::{Duration, Instant};
@@ -72,6 +72,12 @@ pub(super) fn keep(
         Ok((message, _)) => {
             tf.buffer.insert_message(&message, is_static);
             tf.arrived(Instant::now());
+            log::debug!(
+                "TF: {} transforms in (static: {is_static}); {} frames known, {} dropped",
+                message.transforms.len(),
+                tf.buffer.frame_count(),
+                tf.buffer.dropped().total()
+            );
         }
         Err(e) => log::debug!("a TF message that does not decode: {e:?}"),
     }
@@ -121,7 +127,7 @@ async fn dispatch(node: &Node, endpoints: &Endpoints, state: &mut Loop<'_>, arri
     let (sets, markers) = (&endpoints.sets, &endpoints.markers);
     match request {
         Request::Candidate(c) => {
-            answer_one(node, endpoints, state.answerer, c, (received, sent)).await;
+            answer_one(node, endpoints, state.answerer, *c, (received, sent)).await;
         }
         Request::Pose(p) => {
             let loading = &mut *state.loading;
@@ -165,7 +171,7 @@ async fn refuse(
     match request {
         Request::Candidate(c) => {
             let reply = Candidates::refused(&with, &c, why);
-            let outcome = answerer.account_candidate(c, reply, received, sent);
+            let outcome = answerer.account_candidate(*c, reply, received, sent);
             let answers = &endpoints.candidates.answers;
             send_answer(node, endpoints, answerer, answers, outcome).await;
         }
@@ -176,10 +182,7 @@ async fn refuse(
             send_answer(node, endpoints, answerer, answers, outcome).await;
         }
         Request::Set(set, via) => {
-            let reply = match &set {
-                SetInput::Candidates(s) => SetReply::Candidates(Sets::refused(&with, s, why)),
-                SetInput::Poses(s) => SetReply::Poses(PoseSets::refused(&with, s, why)),
-            };
+            let reply = set.refused(&with, why);
             let (record, record_markers) = answerer.records_sets();
             let via = match via {
                 Some(id) => Via::Service(id),

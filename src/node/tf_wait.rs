@@ -9,7 +9,7 @@
 //! wait at once; one more is refused at once, saying so and why it would have waited.
 
 use super::answer::SetInput;
-use crate::kind::{Candidates, Kind, PoseSets, Poses, Sets};
+use crate::kind::{Candidates, Framing, Poses};
 use crate::msg::{GraspCandidate, PoseCandidate};
 use crate::tf::{self, Gravity, TfBuffer, TfFailure};
 use ros2_client::RmwRequestId;
@@ -26,10 +26,10 @@ pub(crate) const MAX_WAITING: usize = 64;
 pub(crate) const RETRY: Duration = Duration::from_millis(2);
 
 /// A request as it came, of any kind, and where its answer goes.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub(crate) enum Request {
     /// On `grasp_candidates`.
-    Candidate(GraspCandidate),
+    Candidate(Box<GraspCandidate>),
     /// On `pose_candidates`.
     Pose(Box<PoseCandidate>),
     /// A set on its topic (`None`) or in a call of its service.
@@ -37,7 +37,7 @@ pub(crate) enum Request {
 }
 
 /// A request and its times, ns since the epoch (a call's are both when it was taken).
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub(crate) struct Arrival {
     /// The request.
     pub request: Request,
@@ -53,29 +53,23 @@ impl Request {
         match self {
             Request::Candidate(c) => tf::needs::<Candidates>(gravity, c),
             Request::Pose(p) => tf::needs::<Poses>(gravity, p),
-            Request::Set(SetInput::Candidates(s), _) => tf::needs::<Sets>(gravity, s),
-            Request::Set(SetInput::Poses(s), _) => tf::needs::<PoseSets>(gravity, s),
+            Request::Set(s, _) => s.needs_tf(gravity),
         }
     }
 
     /// It turned by TF ([`tf::resolve`], for its kind), or the first transform missing.
     fn resolve(&self, buffer: &TfBuffer, gravity: &Gravity) -> Result<Request, TfFailure> {
         Ok(match self {
-            Request::Candidate(c) => Request::Candidate(resolve::<Candidates>(buffer, gravity, c)?),
-            Request::Pose(p) => Request::Pose(Box::new(resolve::<Poses>(buffer, gravity, p)?)),
-            Request::Set(SetInput::Candidates(s), via) => Request::Set(
-                SetInput::Candidates(resolve::<Sets>(buffer, gravity, s)?),
-                *via,
-            ),
-            Request::Set(SetInput::Poses(s), via) => {
-                let s = resolve::<PoseSets>(buffer, gravity, s)?;
-                Request::Set(SetInput::Poses(Box::new(s)), *via)
+            Request::Candidate(c) => {
+                Request::Candidate(Box::new(resolve::<Candidates>(buffer, gravity, c)?))
             }
+            Request::Pose(p) => Request::Pose(Box::new(resolve::<Poses>(buffer, gravity, p)?)),
+            Request::Set(s, via) => Request::Set(s.resolve(buffer, gravity)?, *via),
         })
     }
 }
 
-fn resolve<K: Kind>(
+fn resolve<K: Framing>(
     buffer: &TfBuffer,
     gravity: &Gravity,
     request: &K::Request,
@@ -237,14 +231,14 @@ mod tests {
 
     fn candidate(frame: &str, id: &str) -> Arrival {
         Arrival {
-            request: Request::Candidate(GraspCandidate {
+            request: Request::Candidate(Box::new(GraspCandidate {
                 header: Header {
                     stamp: Time { sec: 0, nanosec: 0 },
                     frame_id: frame.into(),
                 },
                 id: id.into(),
                 ..GraspCandidate::default()
-            }),
+            })),
             received: 0,
             sent: 0,
         }

@@ -92,7 +92,7 @@ pub(crate) fn keep_example(examples: &mut Vec<String>, example: impl FnOnce() ->
     }
 }
 
-pub use crate::kind::Recorded;
+pub(crate) use crate::kind::Recorded;
 
 /// The grasp_orient messages of one bag, in file order.
 #[derive(Debug, Default, PartialEq)]

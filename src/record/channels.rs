@@ -175,7 +175,7 @@ impl RecordedFields {
     }
 
     /// Adds what another part of the same recording has.
-    pub fn merge(&mut self, other: &RecordedFields) {
+    pub(crate) fn merge(&mut self, other: &RecordedFields) {
         for (name, count) in &other.counts {
             self.limit(name, *count);
         }

@@ -10,11 +10,11 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Wanted<'a> {
     /// Record at all (`record`).
-    pub record: bool,
+    pub(crate) record: bool,
     /// The folder for new files (`record_dir`).
-    pub dir: &'a Path,
+    pub(crate) dir: &'a Path,
     /// Record the markers too (`record_markers`); fixed for a file when it starts.
-    pub markers: bool,
+    pub(crate) markers: bool,
 }
 
 /// A change of the recording, for the log.

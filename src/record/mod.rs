@@ -34,7 +34,8 @@ mod sink;
 
 pub use channels::{IncompatibleChannel, RecordedFields};
 pub use output::OutputError;
-pub use scan::{decompressed_limit, Damage};
+pub use scan::chunk::decompressed_limit;
+pub use scan::frame::Damage;
 
 use crate::kind::{self, Kind, Visit};
 use crate::msg::{cdr, definitions, MarkerArray, RosMessage};

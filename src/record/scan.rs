@@ -22,19 +22,19 @@
 //! sections and CRCs), `table.rs` (the schemas and channels met). Why this reader is not the
 //! `mcap` crate's: `docs/recordings.md`, "Why the reader is our own where it is".
 
-mod chunk;
+pub(crate) mod chunk;
 mod fields;
-mod frame;
+pub(crate) mod frame;
 mod table;
 mod walk;
 
-pub use chunk::decompressed_limit;
+pub(crate) use chunk::decompressed_limit;
 pub(crate) use chunk::{chunk_fills_its_record, decompress, Undecompressable};
 pub(crate) use fields::{
     parse, parse_chunk_index, parse_record_index, Channel, Chunk, ChunkIndex, Message, Parsed,
     Schema,
 };
-pub use frame::Damage;
+pub(crate) use frame::Damage;
 pub(crate) use frame::{op, Record, Records, MAGIC};
 pub(crate) use table::{KnownSchema, Table};
 pub(crate) use walk::{header, scan, Item, Scan};

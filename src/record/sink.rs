@@ -123,37 +123,37 @@ impl Seek for Sink {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(super) struct SchemaDef {
     /// Its id.
-    pub id: u16,
+    pub(crate) id: u16,
     /// The type name.
-    pub name: String,
+    pub(crate) name: String,
     /// `ros2msg`.
-    pub encoding: String,
+    pub(crate) encoding: String,
     /// The definition.
-    pub data: Vec<u8>,
+    pub(crate) data: Vec<u8>,
 }
 
 /// A channel the recording defined.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(super) struct ChannelDef {
     /// Its id.
-    pub id: u16,
+    pub(crate) id: u16,
     /// Its schema's id.
-    pub schema_id: u16,
+    pub(crate) schema_id: u16,
     /// The topic.
-    pub topic: String,
+    pub(crate) topic: String,
     /// `cdr`.
-    pub encoding: String,
+    pub(crate) encoding: String,
     /// `offered_qos_profiles`.
-    pub metadata: BTreeMap<String, String>,
+    pub(crate) metadata: BTreeMap<String, String>,
 }
 
 /// The schemas and channels of a recording, as its writer made them: what a summary repeats.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub(super) struct Definitions {
     /// Schemas.
-    pub schemas: Vec<SchemaDef>,
+    pub(crate) schemas: Vec<SchemaDef>,
     /// Channels.
-    pub channels: Vec<ChannelDef>,
+    pub(crate) channels: Vec<ChannelDef>,
 }
 
 /// A file a recording is closed in: read, written, and cut to a length.

@@ -14,10 +14,10 @@ use super::compare::{compare_one, number_gap, pair, Summary, TOLERANCE};
 use super::plan::{Plan, ReplayError};
 use super::sets::{compare_set, rules_like};
 use crate::answer::{cut_like, uncast};
-use crate::kind::{PoseSets, Poses};
+use crate::kind::{Kind, PoseSets, Poses};
 use crate::msg::{
-    short_id, GraspObject, GripRecommendation, GripRecommendationSet, Point, PoseCandidateSet,
-    PoseRecommendation, PoseRecommendationSet, Vector3,
+    short_id, GraspObject, GripRecommendation, GripRecommendationSet, Point, PoseRecommendation,
+    PoseRecommendationSet, Vector3,
 };
 use crate::record::bag::{keep_example, Bag, Recorded};
 use grasp_orient_geometry::MeshCache;
@@ -27,9 +27,9 @@ use grasp_orient_geometry::MeshCache;
 #[derive(Debug, Default)]
 pub(crate) struct PoseAnswers {
     /// One per recorded pose candidate.
-    pub recommendations: Vec<Recorded<PoseRecommendation>>,
+    pub(crate) recommendations: Vec<Recorded<PoseRecommendation>>,
     /// One per recorded pose set.
-    pub sets: Vec<Recorded<PoseRecommendationSet>>,
+    pub(crate) sets: Vec<Recorded<PoseRecommendationSet>>,
 }
 
 /// Replays every pose candidate and pose set of `bag` with the meshes of `meshes`, keeping the
@@ -118,7 +118,7 @@ fn replay_pose_sets(
 /// Compares a pose set's new answer `ours` with its recorded one, `theirs` (`theirs_grip` as a
 /// candidate set's answer), into `summary`.
 fn compare_pose_set(
-    set: &Recorded<PoseCandidateSet>,
+    set: &Recorded<<PoseSets as Kind>::Request>,
     ours: &PoseRecommendationSet,
     theirs: &PoseRecommendationSet,
     theirs_grip: &GripRecommendationSet,

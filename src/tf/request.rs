@@ -1,9 +1,9 @@
-//! A request of any kind turned by TF, through [`Kind::framed`]: each part's gravity from the
+//! A request of any kind turned by TF, through [`Framing::framed`]: each part's gravity from the
 //! parameter `gravity` in `gravity_frame`, and its object's pose from `object.frame_id`, into the
 //! part's header frame at its stamp. One function for every kind.
 
 use super::{gravity_in, pose_in, TfBuffer, TfFailure};
-use crate::kind::{Framed, Kind};
+use crate::kind::{Framed, Framing};
 use crate::msg::Vector3;
 use compact_str::CompactString;
 
@@ -18,7 +18,7 @@ pub(crate) struct Gravity {
 
 /// Whether `request` needs TF at all: `gravity_frame` is set, or its object is given in a frame
 /// of its own.
-pub(crate) fn needs<K: Kind>(gravity: &Gravity, request: &K::Request) -> bool {
+pub(crate) fn needs<K: Framing>(gravity: &Gravity, request: &K::Request) -> bool {
     !gravity.frame.is_empty() || !K::object_frame(request).is_empty()
 }
 
@@ -28,7 +28,7 @@ pub(crate) fn needs<K: Kind>(gravity: &Gravity, request: &K::Request) -> bool {
 /// buffer cannot give. `request` itself is left as it came, so that a request waiting for its
 /// transforms is tried again whole. What comes back needs no TF: it is what the node records, and
 /// `replay` answers it alike.
-pub(crate) fn resolve<K: Kind>(
+pub(crate) fn resolve<K: Framing>(
     buffer: &TfBuffer,
     gravity: &Gravity,
     request: &K::Request,

@@ -794,7 +794,7 @@ fn malformed_collada_files_are_refused_and_solve_goes_on() {
 /// 134).
 #[test]
 fn replay_of_malformed_collada_files_finishes() {
-    use grasp_orient::answer::{PoseAnswerer, Rules};
+    use grasp_orient::answer::PoseAnswerer;
     use grasp_orient::config::Config;
     use grasp_orient::geometry::{AmentIndex, ClosingAxis};
     use grasp_orient::msg::PoseCandidate;
@@ -802,13 +802,12 @@ fn replay_of_malformed_collada_files_finishes() {
 
     let dir = temp_dir("cli_replay_malformed_collada");
     let mut entries = Vec::new();
-    let config = Config::default();
-    let settings = config.solver_settings().expect("valid");
-    let rules: Rules = config.rules();
-    let poses = PoseAnswerer::new(
-        ClosingAxis::Y,
-        AmentIndex::new(Vec::<std::path::PathBuf>::new()),
-    );
+    let with = Config::default()
+        .answering(PoseAnswerer::new(
+            ClosingAxis::Y,
+            AmentIndex::new(Vec::<std::path::PathBuf>::new()),
+        ))
+        .expect("valid");
     for (name, text) in [
         (
             "past.dae",
@@ -820,7 +819,7 @@ fn replay_of_malformed_collada_files_finishes() {
         std::fs::write(&path, text).expect("write");
         let c: PoseCandidate =
             serde_json::from_str(&pose_on(name, &path.display().to_string())).expect("a pose");
-        let a = poses.answer(&c, &settings, &rules);
+        let a = with.answer::<grasp_orient::kind::Poses>(&c);
         assert_eq!(a.recommendation.status, 2, "{a:?}");
         entries.push(Payload::request::<grasp_orient::kind::Poses>(c));
         entries.push(Payload::answer::<grasp_orient::kind::Poses>(a));

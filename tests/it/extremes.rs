@@ -4,7 +4,8 @@
 //! the field given the extreme value, as the message's own path (`object.friction`, not the
 //! `friction_1` of the spatial candidate a pose makes; `object.scale.x`, not `normal_1.x`).
 
-use grasp_orient::answer::{answer_one, PoseAnswerer, Rules};
+use grasp_orient::answer::{Answering, PoseAnswerer, Rules};
+use grasp_orient::kind::{Candidates, Poses};
 use grasp_orient::msg::{
     GraspCandidate, GraspObject, Mesh, MeshTriangle, Point, Pose, PoseCandidate, Quaternion,
     SolidPrimitive, Vector3,
@@ -274,21 +275,25 @@ fn every_extreme_value_is_refused_naming_its_own_field() {
     let settings = Settings::default();
     let rules = Rules::default();
     let mut wrong = Vec::new();
+    let with = Answering::new(
+        settings,
+        rules,
+        PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default()),
+    );
     for (base_name, base) in grasp_bases() {
-        let r = answer_one(&base, &settings, &rules);
+        let r = with.answer::<Candidates>(&base);
         assert_eq!(r.status, 0, "{base_name}: {}", r.message);
         for (field, at) in grasp_fields() {
             for value in EXTREMES {
                 let mut c = base.clone();
                 *at(&mut c) = value;
-                let r = answer_one(&c, &settings, &rules);
+                let r = with.answer::<Candidates>(&c);
                 wrong.extend(misnamed(base_name, field, value, &r, true));
             }
         }
     }
-    let answerer = PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default());
     for (base_name, base) in pose_bases() {
-        let r = answerer.answer(&base, &settings, &rules).recommendation;
+        let r = with.answer::<Poses>(&base).recommendation;
         assert_eq!(r.status, 0, "{base_name}: {}", r.message);
         for (field, at) in pose_fields() {
             // A primitive's scale must be 1: any other is refused naming `object.scale`.
@@ -300,7 +305,7 @@ fn every_extreme_value_is_refused_naming_its_own_field() {
             for value in EXTREMES {
                 let mut c = base.clone();
                 *at(&mut c) = value;
-                let r = answerer.answer(&c, &settings, &rules).recommendation;
+                let r = with.answer::<Poses>(&c).recommendation;
                 wrong.extend(misnamed(base_name, field_named, value, &r, false));
             }
         }

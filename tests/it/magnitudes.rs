@@ -5,9 +5,9 @@
 //! same for spatial candidates (`model` 1, every kind of `tests/it/util/spatial.rs`), whose answers
 //! also carry a unit `rotation_axis` and a `wrist_rotation` in [0, π].
 
+use crate::util::answer;
 use crate::util::random_grasp;
 use crate::util::spatial::{random_spatial_grasp, Kind};
-use grasp_orient::answer::answer;
 use grasp_orient::msg::{GraspCandidate, GripRecommendation, Point, Vector3};
 use grasp_orient::solver::{planar::Candidate, spatial, AllowedRange, Objective, Settings};
 use nalgebra::{Vector2, Vector3 as V3};

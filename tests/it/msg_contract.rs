@@ -11,6 +11,7 @@
 //! fail, saying how to install it.
 
 use grasp_orient::msg::definitions::{split_type_name, DEFINITIONS};
+use grasp_orient::msg::RosFields;
 use grasp_orient::msg::{
     ColorRgba, CompressedImage, Duration, GraspCandidate, GraspCandidateSet, GraspObject,
     GraspPose, GripRecommendation, GripRecommendationSet, Header, Marker, MarkerArray, Mesh,

@@ -43,7 +43,7 @@ fn test_domain() -> String {
 /// A recording of 3 candidates and 3 sets (the last with a `max_grip_force` of its own), with the
 /// sets' answers, as a node would have written it.
 fn write_candidates_and_sets(path: &std::path::Path) {
-    use grasp_orient::answer::{answer_set, Rules};
+    use grasp_orient::answer::Rules;
     use grasp_orient::msg::{GraspCandidate, GraspCandidateSet};
     use grasp_orient::record::{BagWriter, Entry, Payload, Topics};
     use grasp_orient::solver::Settings;
@@ -62,7 +62,8 @@ fn write_candidates_and_sets(path: &std::path::Path) {
             max_grip_force: if k == 2 { 1.0 } else { 0.0 },
             ..GraspCandidateSet::default()
         };
-        let answer = answer_set(&set, &Settings::default(), &Rules::default());
+        let answer = crate::util::answering(&Settings::default(), &Rules::default())
+            .answer::<grasp_orient::kind::Sets>(&set);
         let t = 1_000_000 * (k as u64 + 1);
         let entry = |payload, at| Entry {
             payload,
@@ -232,7 +233,7 @@ fn spatial_cases() -> Vec<grasp_orient::msg::GraspCandidate> {
 /// them in 3D, as the library does, and its recording replays unchanged.
 #[test]
 fn played_spatial_candidates_are_answered_in_3d_and_replay_unchanged() {
-    use grasp_orient::answer::answer;
+    use crate::util::answer;
     use grasp_orient::msg::{GraspCandidateSet, GripRecommendation};
     use grasp_orient::record::{BagWriter, Entry, Payload, Topics};
     use grasp_orient::solver::Settings;

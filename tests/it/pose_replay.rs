@@ -5,7 +5,7 @@
 //! found through `tests/prefix`, a test install prefix holding `meshes/`.
 
 use crate::util::run::{bin, temp_dir};
-use grasp_orient::answer::{PoseAnswerer, Rules};
+use grasp_orient::answer::PoseAnswerer;
 use grasp_orient::config::Config;
 use grasp_orient::geometry::{AmentIndex, ClosingAxis};
 use grasp_orient::msg::{PoseCandidate, PoseCandidateSet, PoseRecommendation};
@@ -68,9 +68,12 @@ fn set(id: &str, shape: &str) -> PoseCandidateSet {
 /// written.
 fn write_bag(path: &Path, change: impl Fn(&mut PoseRecommendation)) {
     let config = Config::default();
-    let settings = config.solver_settings().expect("valid");
-    let rules: Rules = config.rules();
-    let poses = PoseAnswerer::new(ClosingAxis::Y, AmentIndex::new([prefix()]));
+    let with = config
+        .answering(PoseAnswerer::new(
+            ClosingAxis::Y,
+            AmentIndex::new([prefix()]),
+        ))
+        .expect("valid");
     let topics = crate::util::pose_bag_topics();
     let mut w = BagWriter::create(path, &topics, 100).expect("create");
     let mut entries = vec![Payload::settings(SettingsRecord {
@@ -88,13 +91,13 @@ fn write_bag(path: &Path, change: impl Fn(&mut PoseRecommendation)) {
         candidate(5, BLOCK, 0.5, 0.09),
     ];
     for c in singles {
-        let mut a = poses.answer(&c, &settings, &rules);
+        let mut a = with.answer::<grasp_orient::kind::Poses>(&c);
         change(&mut a);
         entries.push(Payload::request::<grasp_orient::kind::Poses>(c));
         entries.push(Payload::answer::<grasp_orient::kind::Poses>(a));
     }
     for s in [set("block", BLOCK), set("cylinder", CYLINDER)] {
-        let a = poses.answer_set(&s, &settings, &rules);
+        let a = with.answer::<grasp_orient::kind::PoseSets>(&s);
         assert!(!a.ranking.is_empty(), "{a:?}");
         entries.push(Payload::request::<grasp_orient::kind::PoseSets>(s));
         entries.push(Payload::answer::<grasp_orient::kind::PoseSets>(a));

@@ -3,8 +3,8 @@
 //! trouble), errors that name the file and the byte offset, settings taken from the recording,
 //! and outputs that never replace an input or an existing file until they are complete.
 
+use crate::util::answer;
 use crate::util::run::{bin, paper_messages, temp_dir};
-use grasp_orient::answer::answer;
 use grasp_orient::config::{Config, RangeKind};
 use grasp_orient::msg::GraspCandidate;
 use grasp_orient::record::settings::SettingsRecord;
@@ -18,10 +18,18 @@ fn topics() -> Topics {
     Topics::new("/grasp_candidates", "/grip_recommendations")
 }
 
+/// A pose answerer that reads no mesh (the candidates here are contact ones).
+fn no_meshes() -> grasp_orient::answer::PoseAnswerer {
+    grasp_orient::answer::PoseAnswerer::new(
+        grasp_orient::geometry::ClosingAxis::Y,
+        grasp_orient::geometry::AmentIndex::default(),
+    )
+}
+
 /// A recording of `n` paper cases (ids made unique) with their answers under `config`,
 /// carrying `config` as its settings when `with_settings`.
 fn write_bag(path: &Path, n: usize, config: &Config, with_settings: bool) {
-    let settings = config.solver_settings().expect("valid");
+    let settings = *config.answering(no_meshes()).expect("valid").settings();
     let cases = paper_messages();
     let mut w = BagWriter::create(path, &topics(), 100).expect("create");
     if with_settings {
@@ -550,7 +558,10 @@ fn a_recording_of_spatial_candidates_replays_and_a_turned_axis_differs() {
     .lines()
     .map(|l| serde_json::from_str(l).expect("a candidate"))
     .collect();
-    let settings = Config::default().solver_settings().expect("valid");
+    let settings = *Config::default()
+        .answering(no_meshes())
+        .expect("valid")
+        .settings();
     let dir = temp_dir("spatial_replay");
     let write = |path: &Path, turn: bool| {
         let mut w = BagWriter::create(path, &topics(), 100).expect("create");

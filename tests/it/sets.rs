@@ -2,7 +2,7 @@
 //! gripper's limit, and recordings of sets written, replayed, tampered with and rewritten.
 
 use crate::util::run::{bin, json_lines, paper_lines, paper_messages, run_fed, temp_dir};
-use grasp_orient::answer::{answer_set, Rules};
+use grasp_orient::answer::Rules;
 use grasp_orient::msg::{GraspCandidateSet, GripRecommendation, GripRecommendationSet};
 use grasp_orient::record::{bag, BagWriter, Entry, Payload, Topics};
 use grasp_orient::solver::Settings;
@@ -213,7 +213,8 @@ fn write_these_sets(
     let mut w = BagWriter::create(path, &topics(), 100).expect("create");
     let n = sets.len() as u64;
     for (k, set) in sets.into_iter().enumerate() {
-        let mut answer = answer_set(&set, &Settings::default(), &Rules::default());
+        let mut answer = crate::util::answering(&Settings::default(), &Rules::default())
+            .answer::<grasp_orient::kind::Sets>(&set);
         edit(k, &mut answer);
         let t = 1_000 * (k as u64 + 1);
         w.write(&Entry {
@@ -428,7 +429,7 @@ fn a_set_member_answering_another_candidate_fails_the_replay() {
 /// was solved, as the node answers them: replay compares what was solved, and passes.
 #[test]
 fn busy_and_cut_sets_replay_as_recorded() {
-    use grasp_orient::answer::{answer_set_within, busy, Halt, Interrupt};
+    use grasp_orient::answer::{busy, Halt, Interrupt};
     let dir = temp_dir("busy_sets");
     let path = dir.path().join("busy.mcap");
     let sets = three_sets();
@@ -440,7 +441,8 @@ fn busy_and_cut_sets_replay_as_recorded() {
         } else if k == 1 {
             let late = Interrupt::default();
             late.raise(Halt::OutOfTime);
-            *a = answer_set_within(&second, &Settings::default(), &rules, None, &late, 0.5);
+            *a = crate::util::answering(&Settings::default(), &rules)
+                .set_within(&second, None, &late, 0.5);
         }
     });
     let recorded = bag::read(&path).expect("reads");

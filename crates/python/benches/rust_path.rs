@@ -1,8 +1,8 @@
 //! The Rust path of `benches/bench_python.py`: the grasps and poses that the script gives the
 //! Python module, read from the raw files it writes, answered through the root crate's answer
 //! layer on the calling thread (one core), without Python: the grasps one by one with
-//! `answer_one`, as `grasp_orient solve` answers its lines, and the poses as one pose set with
-//! `PoseAnswerer::answer_set`, as `cargo bench --bench poses` times them. Prints one line each:
+//! the answering object, as `grasp_orient solve` answers its lines, and the poses as one pose set
+//! through it, as `cargo bench --bench poses` times them. Prints one line each:
 //! `grasps N SECONDS` and `poses N SECONDS` (the median of `ROUNDS` rounds).
 //!
 //! `cargo bench -p grasp_orient_python --bench rust_path -- DIR [ROUNDS]`, DIR holding
@@ -14,8 +14,9 @@
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
-use grasp_orient::answer::{answer_one, PoseAnswerer, Rules};
+use grasp_orient::answer::{Answering, PoseAnswerer, Rules};
 use grasp_orient::geometry::{AmentIndex, ClosingAxis};
+use grasp_orient::kind::{Candidates, PoseSets};
 use grasp_orient::msg::{
     GraspCandidate, GraspObject, GraspPose, Mesh, MeshTriangle, Point, Pose, PoseCandidateSet,
     Quaternion, Vector3,
@@ -81,13 +82,17 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 fn grasps(dir: &Path, rounds: usize) -> std::io::Result<()> {
     let values = floats(&dir.join("grasps.f64"))?;
-    let (settings, rules) = (Settings::default(), Rules::default());
+    let with = Answering::new(
+        Settings::default(),
+        Rules::default(),
+        PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default()),
+    );
     let rows: Vec<&[f64]> = values.chunks_exact(20).collect();
     let times = (0..rounds)
         .map(|_| {
             let start = Instant::now();
             for r in &rows {
-                black_box(answer_one(&candidate(r), &settings, &rules));
+                black_box(with.answer::<Candidates>(&candidate(r)));
             }
             start.elapsed().as_secs_f64()
         })
@@ -151,12 +156,15 @@ fn poses(dir: &Path, rounds: usize) -> std::io::Result<()> {
         max_set_size: usize::MAX,
         ..Rules::default()
     };
-    let settings = Settings::default();
-    let answerer = PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default());
+    let with = Answering::new(
+        Settings::default(),
+        rules,
+        PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default()),
+    );
     let times = (0..rounds)
         .map(|_| {
             let start = Instant::now();
-            black_box(answerer.answer_set(&set, &settings, &rules));
+            black_box(with.answer::<PoseSets>(&set));
             start.elapsed().as_secs_f64()
         })
         .collect();

@@ -1,10 +1,12 @@
 //! `solve`: rows of contacts, normals, centre of mass, gravity, mass and friction, each row the
 //! `GraspCandidate` that `grasp_orient solve` reads from a JSON line, answered by the root
-//! crate's [`answer_one`] under the same settings and rules.
+//! crate's answering object (`Answering`) under the same settings and rules.
 
 use crate::chunks::{answer_in_chunks, Threads};
 use crate::columns::Columns;
-use grasp_orient::answer::{answer_one, Rules};
+use grasp_orient::answer::{Answering, PoseAnswerer, Rules};
+use grasp_orient::geometry::{AmentIndex, ClosingAxis};
+use grasp_orient::kind::Candidates;
 use grasp_orient::msg::{CompactString, GraspCandidate, GripRecommendation, Point, Vector3};
 use grasp_orient::solver::Settings;
 use std::ops::Range;
@@ -82,8 +84,13 @@ pub(crate) fn answer_candidates(
     rules: &Rules,
     mut each: impl FnMut(usize, &GripRecommendation),
 ) {
+    let with = Answering::new(
+        *settings,
+        *rules,
+        PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default()),
+    );
     for (i, m) in candidates.iter().enumerate() {
-        each(i, &answer_one(m, settings, rules));
+        each(i, &with.answer::<Candidates>(m));
     }
 }
 

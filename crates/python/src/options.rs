@@ -5,8 +5,9 @@
 //! means, exactly what the same flag does. A refusal is a `ValueError` naming the parameter.
 
 use crate::arrays::value_error;
-use grasp_orient::answer::{GripperDrive, Rules};
+use grasp_orient::answer::{GripperDrive, PoseAnswerer, Rules};
 use grasp_orient::config::{Config, RangeKind};
+use grasp_orient::geometry::{AmentIndex, ClosingAxis};
 use grasp_orient::solver::{Objective, Settings};
 use pyo3::prelude::*;
 use std::str::FromStr;
@@ -89,11 +90,13 @@ impl Options {
             mass_tolerance: self.mass_tolerance,
             ..Config::default()
         };
-        let settings = config
-            .solver_settings()
+        let with = config
+            .answering(PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default()))
             .map_err(|e| value_error(e.to_string()))?;
-        let mut rules = config.rules();
-        rules.max_set_size = usize::MAX;
-        Ok((settings, rules))
+        let rules = Rules {
+            max_set_size: usize::MAX,
+            ..*with.rules()
+        };
+        Ok((*with.settings(), rules))
     }
 }

@@ -1,13 +1,14 @@
 //! `solve_poses`: gripper poses as 4×4 homogeneous transforms (ACRONYM's and graspnetAPI's
 //! layout: the tool frame in the object's mesh frame) and openings on one mesh given as arrays,
-//! answered by the root crate's [`PoseAnswerer::answer_set`]: the object once, every pose cast
+//! answered by the root crate's answering object as a pose set: the object once, every pose cast
 //! onto it and answered as the spatial candidate its fingers make, exactly as a
 //! `PoseCandidate` line of `grasp_orient solve` with the same mesh inline is answered.
 
 use crate::chunks::{answer_in_chunks, Threads};
 use crate::columns::Columns;
 use crate::grasps::compact_str_row;
-use grasp_orient::answer::{PoseAnswerer, Rules};
+use grasp_orient::answer::{Answering, PoseAnswerer, Rules};
+use grasp_orient::kind::PoseSets;
 use grasp_orient::msg::{
     CompactString, GraspObject, GraspPose, GripRecommendation, Mesh, MeshTriangle, Point, Pose,
     PoseCandidateSet, PoseRecommendation, Quaternion, Vector3,
@@ -125,14 +126,7 @@ pub(crate) fn pose_of(m: &[f64], row: usize) -> Result<Pose, String> {
 
 /// The poses and openings of `range`, answered as one pose set on `object`; each refusal of the
 /// geometry names its row (the set's `poses[i].` made `row I: `).
-fn answer_range(
-    answerer: &PoseAnswerer,
-    object: &GraspObject,
-    p: &Poses,
-    range: Range<usize>,
-    settings: &Settings,
-    rules: &Rules,
-) -> Columns {
+fn answer_range(with: &Answering, object: &GraspObject, p: &Poses, range: Range<usize>) -> Columns {
     let Poses {
         poses,
         widths,
@@ -156,7 +150,7 @@ fn answer_range(
         },
         ..PoseCandidateSet::default()
     };
-    let answered = answerer.answer_set(&set, settings, rules);
+    let answered = with.answer::<PoseSets>(&set);
     let mut out = Columns::with_capacity(range.len());
     for (j, (row, p)) in range.zip(&answered.recommendations).enumerate() {
         out.push_pose(p, message(row, j, p), &poses[row].orientation);
@@ -195,7 +189,8 @@ pub(crate) fn solve(
     let n = p.poses.len();
     let object = p.object.message();
     let chunk = n.div_ceil(threads.count()).max(MIN_CHUNK);
+    let with = Answering::new(*settings, *rules, answerer.clone());
     answer_in_chunks(n, chunk, threads, |range| {
-        answer_range(answerer, &object, p, range, settings, rules)
+        answer_range(&with, &object, p, range)
     })
 }

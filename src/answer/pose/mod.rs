@@ -26,6 +26,7 @@ mod checks;
 mod refusal;
 
 use super::reply::no_closure;
+use super::sets::SetAnswer;
 use super::{answer_one, answer_set, Rules};
 use crate::msg::{
     invalid, CompactString, GraspCandidate, GraspCandidateSet, GraspObject, GripRecommendation,
@@ -89,7 +90,7 @@ impl PoseAnswerer {
     }
 
     /// The answer to one pose candidate under `rules`.
-    pub fn answer(
+    pub(crate) fn answer(
         &self,
         m: &PoseCandidate,
         settings: &Settings,
@@ -153,7 +154,7 @@ impl PoseAnswerer {
 
     /// The answer to a set: its object's shape once, each pose answered against it, ranked as a
     /// [`GraspCandidateSet`] is.
-    pub fn answer_set(
+    pub(crate) fn answer_set(
         &self,
         set: &PoseCandidateSet,
         settings: &Settings,
@@ -547,6 +548,33 @@ fn feature_note(name: &str, c: &Contact) -> Option<String> {
         "{name} lies on {feature} of the object: its normal is the pseudo-normal there \
          (docs/poses.md)"
     ))
+}
+
+impl SetAnswer for PoseRecommendationSet {
+    fn set_id(&self) -> &CompactString {
+        &self.set_id
+    }
+    fn status(&self) -> u8 {
+        self.status
+    }
+    fn message(&self) -> &str {
+        &self.message
+    }
+    fn members(&self) -> Vec<&GripRecommendation> {
+        self.recommendations
+            .iter()
+            .map(|p| &p.recommendation)
+            .collect()
+    }
+    fn ranked(&self) -> (usize, &str) {
+        (self.ranking.len(), &self.ranked_by)
+    }
+    fn refuse(&mut self, why: &str) {
+        self.status = GripRecommendationSet::STATUS_INVALID_INPUT;
+        self.message = why.into();
+        self.recommendations.clear();
+        self.ranking.clear();
+    }
 }
 
 #[cfg(test)]

@@ -176,9 +176,9 @@ impl PoseRefusal {
 #[derive(Debug, Clone)]
 pub(crate) struct Refused {
     /// The answer's status.
-    pub status: u8,
+    pub(crate) status: u8,
     /// Its message.
-    pub message: String,
+    pub(crate) message: String,
 }
 
 impl From<PoseRefusal> for Refused {

@@ -22,20 +22,20 @@ const SUMMARY_OFFSET_LEN: usize = 1 + 8 + 1 + 8 + 8;
 #[derive(Debug, Default)]
 pub(crate) struct Summary<'a> {
     /// Where it starts in this file: the data section ends here.
-    pub start: u64,
+    pub(crate) start: u64,
     /// How far it lies from where the footer says (bytes inserted, or removed when negative,
     /// before it).
-    pub shift: i64,
+    pub(crate) shift: i64,
     /// Its schemas.
-    pub schemas: Vec<Schema<'a>>,
+    pub(crate) schemas: Vec<Schema<'a>>,
     /// Its channels.
-    pub channels: Vec<Channel>,
+    pub(crate) channels: Vec<Channel>,
     /// Messages in the file, and per channel.
-    pub statistics: Option<(u64, BTreeMap<u16, u64>)>,
+    pub(crate) statistics: Option<(u64, BTreeMap<u16, u64>)>,
     /// Where each chunk lies, as recorded (before the shift).
-    pub chunks: Vec<ChunkIndex>,
+    pub(crate) chunks: Vec<ChunkIndex>,
     /// Offset and length of each metadata and attachment record, as recorded, with its opcode.
-    pub records: Vec<(u8, u64, u64)>,
+    pub(crate) records: Vec<(u8, u64, u64)>,
 }
 
 /// Why a file's summary is not used: `None` when it has none to use (no footer, which a cut

@@ -98,71 +98,71 @@ impl<'a> Fields<'a> {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct Schema<'a> {
     /// Its id (0 is not allowed).
-    pub id: u16,
+    pub(crate) id: u16,
     /// The type name, e.g. `grasp_orient/msg/GraspCandidate`.
-    pub name: String,
+    pub(crate) name: String,
     /// e.g. `ros2msg`.
-    pub encoding: String,
+    pub(crate) encoding: String,
     /// The definition.
-    pub data: &'a [u8],
+    pub(crate) data: &'a [u8],
 }
 
 /// A channel record.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct Channel {
     /// Its id.
-    pub id: u16,
+    pub(crate) id: u16,
     /// Its schema's id, 0 for none.
-    pub schema_id: u16,
+    pub(crate) schema_id: u16,
     /// The topic.
-    pub topic: String,
+    pub(crate) topic: String,
     /// e.g. `cdr`.
-    pub message_encoding: String,
+    pub(crate) message_encoding: String,
     /// e.g. `offered_qos_profiles`.
-    pub metadata: BTreeMap<String, String>,
+    pub(crate) metadata: BTreeMap<String, String>,
 }
 
 /// A message record.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Message<'a> {
     /// Its channel's id.
-    pub channel_id: u16,
+    pub(crate) channel_id: u16,
     /// Its sequence number.
-    pub sequence: u32,
+    pub(crate) sequence: u32,
     /// Receive time, ns.
-    pub log_time: u64,
+    pub(crate) log_time: u64,
     /// Send time, ns.
-    pub publish_time: u64,
+    pub(crate) publish_time: u64,
     /// The payload.
-    pub data: &'a [u8],
+    pub(crate) data: &'a [u8],
 }
 
 /// A chunk record, still compressed.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct Chunk<'a> {
     /// Size of its records once decompressed.
-    pub uncompressed_size: u64,
+    pub(crate) uncompressed_size: u64,
     /// CRC-32 of its decompressed records, 0 when not computed.
-    pub uncompressed_crc: u32,
+    pub(crate) uncompressed_crc: u32,
     /// `""`, `lz4` or `zstd`.
-    pub compression: String,
+    pub(crate) compression: String,
     /// The compressed records.
-    pub data: &'a [u8],
+    pub(crate) data: &'a [u8],
 }
 
 /// An attachment record.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct Attachment<'a> {
     /// When it was logged, ns.
-    pub log_time: u64,
+    pub(crate) log_time: u64,
     /// When it was created, ns.
-    pub create_time: u64,
+    pub(crate) create_time: u64,
     /// Its name.
-    pub name: String,
+    pub(crate) name: String,
     /// Its media type.
-    pub media_type: String,
+    pub(crate) media_type: String,
     /// Its bytes.
-    pub data: &'a [u8],
+    pub(crate) data: &'a [u8],
 }
 
 /// What one record holds, as far as grasp_orient reads it.
@@ -388,13 +388,13 @@ fn parse_statistics<'a>(record: &Record<'a>) -> Result<Parsed<'a>, Damage> {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct ChunkIndex {
     /// Offset of the chunk record's opcode.
-    pub chunk_start: u64,
+    pub(crate) chunk_start: u64,
     /// Length of the whole chunk record (opcode and length field included).
-    pub chunk_length: u64,
+    pub(crate) chunk_length: u64,
     /// Size of its compressed records.
-    pub compressed_size: u64,
+    pub(crate) compressed_size: u64,
     /// Size of its records once decompressed.
-    pub uncompressed_size: u64,
+    pub(crate) uncompressed_size: u64,
 }
 
 /// Reads a chunk index record.

@@ -41,11 +41,11 @@ impl fmt::Display for Damage {
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Record<'a> {
     /// Offset of its opcode (in the file, or in a chunk's records).
-    pub offset: u64,
+    pub(crate) offset: u64,
     /// The opcode.
-    pub opcode: u8,
+    pub(crate) opcode: u8,
     /// The body, exactly as long as the record says.
-    pub body: &'a [u8],
+    pub(crate) body: &'a [u8],
 }
 
 /// The records of a region, each length checked against what remains. Ends after the first

@@ -7,11 +7,11 @@ use super::frame::Damage;
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct KnownSchema {
     /// The type name.
-    pub name: String,
+    pub(crate) name: String,
     /// e.g. `ros2msg`.
-    pub encoding: String,
+    pub(crate) encoding: String,
     /// The definition.
-    pub data: Vec<u8>,
+    pub(crate) data: Vec<u8>,
 }
 
 /// The schemas and channels defined so far, by id. A second definition of an id must equal the
@@ -19,9 +19,9 @@ pub(crate) struct KnownSchema {
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Table {
     /// Schemas by id.
-    pub schemas: std::collections::HashMap<u16, KnownSchema>,
+    pub(crate) schemas: std::collections::HashMap<u16, KnownSchema>,
     /// Channels by id.
-    pub channels: std::collections::HashMap<u16, Channel>,
+    pub(crate) channels: std::collections::HashMap<u16, Channel>,
 }
 
 impl Table {

@@ -11,39 +11,39 @@ use std::collections::BTreeMap;
 #[derive(Debug, Clone)]
 pub(crate) struct Item<'a> {
     /// Offset of its opcode in the file.
-    pub offset: u64,
+    pub(crate) offset: u64,
     /// Its opcode.
-    pub opcode: u8,
+    pub(crate) opcode: u8,
     /// Its fields, or why they could not be read (the record's length was sound, so the walk
     /// went on past it).
-    pub parsed: Result<Parsed<'a>, Damage>,
+    pub(crate) parsed: Result<Parsed<'a>, Damage>,
 }
 
 /// A file walked from its magic to its end.
 #[derive(Debug, Default)]
 pub(crate) struct Scan<'a> {
     /// The records of the data section, in file order (the header excluded).
-    pub items: Vec<Item<'a>>,
+    pub(crate) items: Vec<Item<'a>>,
     /// Schemas and channels of the summary section, when the summary's CRC verified (or it has
     /// none).
-    pub summary_schemas: Vec<Schema<'a>>,
+    pub(crate) summary_schemas: Vec<Schema<'a>>,
     /// See `summary_schemas`.
-    pub summary_channels: Vec<Channel>,
+    pub(crate) summary_channels: Vec<Channel>,
     /// Messages per channel according to the summary's statistics, when the summary verified.
-    pub statistics: Option<(u64, BTreeMap<u16, u64>)>,
+    pub(crate) statistics: Option<(u64, BTreeMap<u16, u64>)>,
     /// Whether the summary's CRC was there and verified.
-    pub summary_verified: bool,
+    pub(crate) summary_verified: bool,
     /// Whether the data section's CRC was there and verified.
-    pub data_verified: bool,
+    pub(crate) data_verified: bool,
     /// Offset of the data end record, when the walk reached it.
-    pub data_end: Option<u64>,
+    pub(crate) data_end: Option<u64>,
     /// Where the walk stopped before a sound end (the length of a record ran past the end of
     /// the file, or the end is malformed).
-    pub stopped: Option<Damage>,
+    pub(crate) stopped: Option<Damage>,
     /// Damage of the data section as a whole: its CRC does not match, it has no end record.
-    pub damage: Vec<Damage>,
+    pub(crate) damage: Vec<Damage>,
     /// Damage of the summary section (which `recover` rebuilds, so nothing is lost by it).
-    pub summary_damage: Vec<Damage>,
+    pub(crate) summary_damage: Vec<Damage>,
 }
 
 impl Scan<'_> {

@@ -24,6 +24,31 @@ pub fn pose_bag_topics() -> grasp_orient::record::Topics {
         .with::<grasp_orient::kind::PoseSets>("/pose_candidate_sets", "/pose_recommendation_sets")
 }
 
+/// A candidate's answer through the library's front door, with `settings` and the default
+/// rules (no gripper limit, no default tolerances).
+pub fn answer(
+    m: &grasp_orient::msg::GraspCandidate,
+    settings: &grasp_orient::solver::Settings,
+) -> grasp_orient::msg::GripRecommendation {
+    answering(settings, &grasp_orient::answer::Rules::default())
+        .answer::<grasp_orient::kind::Candidates>(m)
+}
+
+/// The answering object of `settings` and `rules`; it reads no mesh.
+pub fn answering(
+    settings: &grasp_orient::solver::Settings,
+    rules: &grasp_orient::answer::Rules,
+) -> grasp_orient::answer::Answering {
+    grasp_orient::answer::Answering::new(
+        *settings,
+        *rules,
+        grasp_orient::answer::PoseAnswerer::new(
+            grasp_orient::geometry::ClosingAxis::Y,
+            grasp_orient::geometry::AmentIndex::default(),
+        ),
+    )
+}
+
 use grasp_orient::solver::planar::Candidate;
 use nalgebra::{Matrix3x4, Matrix4x3, Vector2, Vector3, Vector4};
 use rand::Rng;
