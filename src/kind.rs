@@ -11,8 +11,9 @@
 //! the steps.
 
 use crate::msg::{
-    clip, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet, Header,
-    PoseCandidate, PoseCandidateSet, PoseRecommendation, PoseRecommendationSet, RosMessage,
+    clip, GraspCandidate, GraspCandidateSet, GraspObject, GripRecommendation,
+    GripRecommendationSet, Header, PoseCandidate, PoseCandidateSet, PoseRecommendation,
+    PoseRecommendationSet, RosMessage, Vector3,
 };
 use serde::{de::DeserializeOwned, Serialize};
 use std::fmt::Debug;
@@ -78,6 +79,32 @@ pub trait Kind: Sized + 'static {
     fn request_key(request: &Self::Request) -> Key<'_>;
     /// The key of the request it answers.
     fn answer_key(answer: &Self::Answer) -> Key<'_>;
+}
+
+/// Where a kind's requests hold their frames: what the node turns by TF (`crate::tf::resolve`),
+/// through this one trait for every kind.
+pub(crate) trait Framing: Kind {
+    /// Hands `visit` every part of `request` that holds its own gravity, with the header it is
+    /// given against, and its object where it has one: one for a candidate and a pose
+    /// candidate, one per member of a candidate set (each member has its own header), one for a
+    /// pose set (its header, gravity and object).
+    fn framed(request: &mut Self::Request, visit: &mut dyn FnMut(Framed<'_>));
+    /// The frame the request's object pose is given in (`object.frame_id`); empty for a kind
+    /// without an object, and for an object given in the header frame.
+    fn object_frame(request: &Self::Request) -> &str;
+}
+
+/// One part of a request as [`Framing::framed`] hands it out: a gravity and, where the kind has
+/// one, an object, both given against `header`.
+#[derive(Debug)]
+pub(crate) struct Framed<'a> {
+    /// The frame and stamp the gravity (and the object's pose, once in the header frame) are
+    /// expressed at.
+    pub(crate) header: &'a Header,
+    /// Gravitational acceleration, m/s², in `header.frame_id`.
+    pub(crate) gravity: &'a mut Vector3,
+    /// The object, whose pose is in `object.frame_id` (empty: `header.frame_id`).
+    pub(crate) object: Option<&'a mut GraspObject>,
 }
 
 /// A grasp candidate (`GraspCandidate`) and its answer (`GripRecommendation`).
@@ -183,6 +210,56 @@ impl Kind for PoseSets {
     }
     fn answer_key(a: &PoseRecommendationSet) -> Key<'_> {
         key(&a.set_id, &a.header)
+    }
+}
+
+impl Framing for Candidates {
+    fn framed(r: &mut GraspCandidate, visit: &mut dyn FnMut(Framed<'_>)) {
+        visit(Framed {
+            header: &r.header,
+            gravity: &mut r.gravity,
+            object: None,
+        });
+    }
+    fn object_frame(_: &GraspCandidate) -> &str {
+        ""
+    }
+}
+
+impl Framing for Sets {
+    fn framed(r: &mut GraspCandidateSet, visit: &mut dyn FnMut(Framed<'_>)) {
+        for c in &mut r.candidates {
+            Candidates::framed(c, visit);
+        }
+    }
+    fn object_frame(_: &GraspCandidateSet) -> &str {
+        ""
+    }
+}
+
+impl Framing for Poses {
+    fn framed(r: &mut PoseCandidate, visit: &mut dyn FnMut(Framed<'_>)) {
+        visit(Framed {
+            header: &r.header,
+            gravity: &mut r.gravity,
+            object: Some(&mut r.object),
+        });
+    }
+    fn object_frame(r: &PoseCandidate) -> &str {
+        &r.object.frame_id
+    }
+}
+
+impl Framing for PoseSets {
+    fn framed(r: &mut PoseCandidateSet, visit: &mut dyn FnMut(Framed<'_>)) {
+        visit(Framed {
+            header: &r.header,
+            gravity: &mut r.gravity,
+            object: Some(&mut r.object),
+        });
+    }
+    fn object_frame(r: &PoseCandidateSet) -> &str {
+        &r.object.frame_id
     }
 }
 

@@ -35,6 +35,7 @@ pub mod kind;
 pub mod msg;
 pub mod record;
 pub mod replay;
+pub(crate) mod tf;
 /// The mathematics, from the `grasp_orient_solver` crate (`crates/solver`).
 pub use grasp_orient_geometry as geometry;
 pub use grasp_orient_solver as solver;

@@ -5,9 +5,9 @@
 //! the poses' answerer (the closing axis and the mesh cache). Each message kind is answered
 //! through it by its [`Answer`] impl; [`Answering::answer`] is the one entry point.
 
-use super::pose::{pose_set_without_geometry, uncast};
+use super::pose::{pose_set_without_geometry, uncast, without_geometry};
 use super::runs::answer_each;
-use super::sets::{busy, echo_set, SetAnswer};
+use super::sets::{busy, echo_set, invalid_set, SetAnswer};
 use super::{
     answer_one, answer_one_in_full, answer_set, answer_set_on, answer_set_within, Answered,
     Interrupt, PoseAnswerer, Rules,
@@ -16,8 +16,8 @@ use crate::geometry::ClosingAxis;
 use crate::geometry::Object;
 use crate::kind::{Candidates, Kind, PoseSets, Poses, Sets};
 use crate::msg::{
-    GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet, PoseCandidate,
-    PoseRecommendation,
+    invalid, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
+    PoseCandidate, PoseRecommendation,
 };
 use crate::solver::Settings;
 
@@ -165,6 +165,12 @@ pub trait Answer: Kind {
     fn answer_many(with: &Answering, requests: &[Self::Request]) -> Vec<Self::Answer> {
         requests.iter().map(|r| Self::answer(with, r)).collect()
     }
+
+    /// The answer refusing `request` as a whole with status 2 (invalid input) and the message
+    /// `invalid input: {why}`, nothing solved: what the node answers when a transform the
+    /// request needs cannot be had (`docs/node.md#tf`). A set's members are left out, as for
+    /// any set refused whole.
+    fn refused(with: &Answering, request: &Self::Request, why: &str) -> Self::Answer;
 }
 
 /// A candidate: the node's tolerances where it gives none, the solver, then the gripper's limit
@@ -178,6 +184,10 @@ impl Answer for Candidates {
     fn answer_many(with: &Answering, requests: &[GraspCandidate]) -> Vec<GripRecommendation> {
         answer_each(requests, &with.settings, &with.rules)
     }
+
+    fn refused(_: &Answering, request: &Self::Request, why: &str) -> Self::Answer {
+        invalid(request, &why)
+    }
 }
 
 /// A set: each candidate as one is answered, with the set's own limit, then the ranking
@@ -185,6 +195,9 @@ impl Answer for Candidates {
 impl Answer for Sets {
     fn answer(with: &Answering, request: &Self::Request) -> Self::Answer {
         answer_set(request, &with.settings, &with.rules)
+    }
+    fn refused(with: &Answering, request: &Self::Request, why: &str) -> Self::Answer {
+        invalid_set(request, &with.rules, why)
     }
 }
 
@@ -194,6 +207,14 @@ impl Answer for Poses {
     fn answer(with: &Answering, request: &Self::Request) -> Self::Answer {
         with.poses.answer(request, &with.settings, &with.rules)
     }
+    fn refused(_: &Answering, request: &Self::Request, why: &str) -> Self::Answer {
+        let stub = GraspCandidate {
+            header: request.header.clone(),
+            id: request.id.clone(),
+            ..GraspCandidate::default()
+        };
+        without_geometry(invalid(&stub, &why))
+    }
 }
 
 /// A pose set: every pose cast onto the one object, then answered and ranked as a set
@@ -201,6 +222,9 @@ impl Answer for Poses {
 impl Answer for PoseSets {
     fn answer(with: &Answering, request: &Self::Request) -> Self::Answer {
         with.poses.answer_set(request, &with.settings, &with.rules)
+    }
+    fn refused(with: &Answering, request: &Self::Request, why: &str) -> Self::Answer {
+        pose_set_without_geometry(request, invalid_set(&uncast(request), &with.rules, why))
     }
 }
 

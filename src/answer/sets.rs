@@ -320,6 +320,19 @@ pub fn busy(set: &GraspCandidateSet, rules: &Rules, max_queued: usize) -> GripRe
     out
 }
 
+/// The answer refusing `set` as a whole with status 2 (invalid input) and `why`, nothing solved:
+/// for a set the node cannot answer at all (a transform it needs is not there).
+pub(crate) fn invalid_set(
+    set: &GraspCandidateSet,
+    rules: &Rules,
+    why: &str,
+) -> GripRecommendationSet {
+    let mut out = empty_answer(set, rules);
+    out.status = GripRecommendationSet::STATUS_INVALID_INPUT;
+    out.message = compact_str::format_compact!("invalid input: {why}");
+    out
+}
+
 /// `ours`, the answer to a set solved whole, made comparable with `recorded`, the recorded answer
 /// to the same set when that was not solved whole: when it was cut short (`STATUS_INCOMPLETE`),
 /// the members `recorded` did not solve are taken as recorded, and so are its status and message,

@@ -350,6 +350,43 @@ mod tests {
         assert!(e.to_string().contains("qos_depth"), "{e}");
     }
 
+    /// The TF parameters' domains: gravity's components within ±5000 m/s² (so that in any frame
+    /// each is within the solver's 1e4), tf_timeout within [0, 10] s.
+    #[test]
+    fn tf_parameters_are_checked() {
+        let c = Config::default();
+        assert_eq!(
+            (c.gravity_frame.as_str(), c.gravity, c.tf_timeout),
+            ("", [0.0, 0.0, -9.80665], 0.1)
+        );
+        for (name, value, message) in [
+            (
+                "gravity",
+                "[0.0, 5000.5, 0.0]",
+                "parameter gravity: y: must be in [-5000, 5000], got 5000.5",
+            ),
+            (
+                "tf_timeout",
+                "-0.1",
+                "parameter tf_timeout: must be in [0, 10], got -0.1",
+            ),
+        ] {
+            let mut c = Config::default();
+            c.set_from_yaml(name, value).expect("the type is right");
+            let e = c.solver_settings().expect_err(value);
+            assert_eq!(e.to_string(), message);
+        }
+        let mut c = Config::default();
+        c.set_from_yaml("gravity_frame", "world").expect("a string");
+        c.set_from_yaml("gravity", "[-5000, 0, 9.8]")
+            .expect("doubles");
+        c.solver_settings().expect("in the domains");
+        assert_eq!(
+            (c.gravity_frame.as_str(), c.gravity),
+            ("world", [-5000.0, 0.0, 9.8])
+        );
+    }
+
     /// A tolerance every candidate would be refused for is refused when set: the domains end
     /// where the solver's limits do (a box half-width below 1e6 m, a mass tolerance below the
     /// largest mass a candidate may have).

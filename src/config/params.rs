@@ -11,7 +11,7 @@
 use super::choices::RangeKind;
 use super::declare::{parameters, Domain};
 use crate::answer::{GripperDrive, RankBy, DEFAULT_MAX_SET_SIZE};
-use crate::solver::{Objective, MAX_COORDINATE, MAX_SAFETY_FACTOR};
+use crate::solver::{Objective, MAX_COORDINATE, MAX_GRAVITY, MAX_SAFETY_FACTOR};
 use grasp_orient_geometry::ClosingAxis;
 use std::f64::consts::PI;
 
@@ -108,6 +108,18 @@ parameters! {
     /// datagram, which the transport bounds anyway; the wire's sample size ends at 4 GiB.
     max_message_bytes (fixed): i64 = 256 << 20, "bytes",
         in Domain::Integer { min: 65_536, max: (1 << 32) - 1 };
+    /// The TF frame in which gravity holds the value of the parameter gravity (docs/node.md#tf).
+    /// Empty (the default): each candidate's own gravity field is used.
+    gravity_frame: String = String::new(), "";
+    /// Gravitational acceleration [x, y, z] in gravity_frame, turned by TF into each candidate's
+    /// frame at its stamp when gravity_frame is set. Each component within ±5000, so that in
+    /// any frame each stays within the solver's 1e4.
+    gravity: [f64; 3] = [0.0, 0.0, -9.80665], "m/s²",
+        in Domain::Real { min: -MAX_GRAVITY / 2.0, max: MAX_GRAVITY / 2.0 };
+    /// The most time a candidate waits for the transforms it needs (from gravity_frame and an
+    /// object pose's frame to its own, at its stamp) to arrive on /tf or /tf_static; then it gets
+    /// status 2 naming both frames. 0: no wait.
+    tf_timeout: f64 = 0.1, "s", in Domain::Real { min: 0.0, max: 10.0 };
 }
 
 impl super::choices::Choice for ClosingAxis {

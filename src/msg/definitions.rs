@@ -40,23 +40,26 @@
 //! # One table
 //! [`DEFINITIONS`] holds each type's full name (the wire struct's [`RosMessage::TYPE_NAME`]) and
 //! its `.msg` text. Ours are the files in `msg/`; the standard ones are copies of the files ROS 2
-//! Jazzy installs (common_interfaces 5.3.6, rcl_interfaces 2.0.3; Apache-2.0), kept verbatim in
-//! `src/msg/jazzy/<pkg>/<Name>.msg`. `tests/it/msg_contract.rs` holds every row to the peer's real
-//! file (`share/<pkg>/msg/<Name>.msg`, found through `AMENT_PREFIX_PATH`) and every wire struct to
-//! its file, field for field; `tests/ros` compares the schemas of the node's recordings with an
+//! Jazzy installs (common_interfaces 5.3.6, rcl_interfaces 2.0.3; Apache-2.0; and `tf2_msgs` of
+//! geometry2 0.36.4, BSD), kept verbatim in `src/msg/jazzy/<pkg>/<Name>.msg`.
+//! `tests/it/msg_contract.rs` holds every row to the peer's real file
+//! (`share/<pkg>/msg/<Name>.msg`, found through `AMENT_PREFIX_PATH`; `tf2_msgs`, which PyPI
+//! carries no wheel of, to its copy here) and every wire struct to its file, field for field;
+//! `tests/ros` compares the schemas of the node's recordings with an
 //! independent Python port of rosbag2's algorithm over the peer's files.
 
 use super::{
     ColorRgba, CompressedImage, Duration, GraspCandidate, GraspCandidateSet, GraspObject,
     GraspPose, GripRecommendation, GripRecommendationSet, Header, Marker, MarkerArray, Mesh,
     MeshFile, MeshTriangle, Point, Pose, PoseCandidate, PoseCandidateSet, PoseRecommendation,
-    PoseRecommendationSet, Quaternion, RosMessage, SolidPrimitive, Time, UvCoordinate, Vector3,
+    PoseRecommendationSet, Quaternion, RosMessage, SolidPrimitive, TfMessage, Time, Transform,
+    TransformStamped, UvCoordinate, Vector3,
 };
 use std::collections::BTreeSet;
 
 /// Every message type this crate reads or writes, by full name, with its `.msg` text exactly as
 /// its package ships it.
-pub const DEFINITIONS: [(&str, &str); 26] = [
+pub const DEFINITIONS: [(&str, &str); 29] = [
     (
         GraspCandidate::TYPE_NAME,
         include_str!("../../msg/GraspCandidate.msg"),
@@ -134,6 +137,18 @@ pub const DEFINITIONS: [(&str, &str); 26] = [
     (
         Pose::TYPE_NAME,
         include_str!("jazzy/geometry_msgs/Pose.msg"),
+    ),
+    (
+        Transform::TYPE_NAME,
+        include_str!("jazzy/geometry_msgs/Transform.msg"),
+    ),
+    (
+        TransformStamped::TYPE_NAME,
+        include_str!("jazzy/geometry_msgs/TransformStamped.msg"),
+    ),
+    (
+        TfMessage::TYPE_NAME,
+        include_str!("jazzy/tf2_msgs/TFMessage.msg"),
     ),
     (
         CompressedImage::TYPE_NAME,
@@ -319,7 +334,8 @@ fn field_type_at(bytes: &[u8], start: usize) -> Option<(std::ops::Range<usize>, 
 mod tests {
     use super::*;
 
-    const TOP_LEVEL: [&str; 9] = [
+    const TOP_LEVEL: [&str; 10] = [
+        TfMessage::TYPE_NAME,
         GraspCandidate::TYPE_NAME,
         GripRecommendation::TYPE_NAME,
         GraspCandidateSet::TYPE_NAME,

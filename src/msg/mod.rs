@@ -84,7 +84,9 @@ macro_rules! wire_name {
 }
 
 mod standard;
-pub use standard::{Header, Point, Quaternion, Time, Vector3};
+pub use standard::{
+    Header, Point, Quaternion, TfMessage, Time, Transform, TransformStamped, Vector3,
+};
 
 mod candidates;
 pub use candidates::{

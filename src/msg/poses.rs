@@ -188,6 +188,10 @@ ros_message! {
         /// The centre of mass in the object frame, m, when `has_center_of_mass`.
         #[serde(default)]
         center_of_mass: Point,
+        /// The frame `pose` is given in; empty: the candidate's header frame. Only the node turns
+        /// it, by TF (`docs/node.md#tf`).
+        #[serde(default)]
+        frame_id: CompactString,
     }
 }
 

@@ -10,7 +10,7 @@ use super::params::Version;
 pub(crate) use super::pose_work::{load_time, PoseWork, INLINE_OFF_THREAD_TRIANGLES};
 pub(crate) use super::set_io::{RecordedSet, SetInput, SetOutcome, SetReply};
 use crate::answer::markers;
-use crate::answer::Answered;
+use crate::answer::{Answered, Answering};
 use crate::kind::{Candidates, Poses};
 use crate::msg::{
     short_id, GraspCandidate, GripRecommendation, GripRecommendationSet, MarkerArray,
@@ -19,10 +19,12 @@ use crate::msg::{
 use crate::record::lifecycle::{Change, Recording, Wanted};
 use crate::record::settings::SettingsRecord;
 use crate::record::{Entry, OnStop, Payload, RecordError, Topics};
+use crate::tf::Gravity;
 use grasp_orient_geometry::MeshCache;
 use log::Level;
 use std::path::Path;
 use std::sync::Arc;
+use std::time::Duration;
 
 /// A line for the log (stderr and `/rosout`).
 pub(crate) type Note = (Level, String);
@@ -288,6 +290,54 @@ impl Answerer {
         Outcome {
             reply,
             markers,
+            notes,
+            recorded,
+        }
+    }
+
+    /// What the node turns requests received at `received` by (the parameters `gravity_frame`
+    /// and `gravity`), and how long one waits for its transforms (`tf_timeout`).
+    pub(crate) fn tf_settings(&self, received: u64) -> (Gravity, Duration) {
+        let live = self.shared.lock();
+        let config = &live.version_at(received).config;
+        let gravity = Gravity {
+            frame: config.gravity_frame.as_str().into(),
+            vector: config.gravity,
+        };
+        // Within [0, 10] s, checked when set.
+        let timeout = Duration::try_from_secs_f64(config.tf_timeout).unwrap_or_default();
+        (gravity, timeout)
+    }
+
+    /// What requests received at `received` are answered with.
+    pub(crate) fn answering_at(&self, received: u64) -> Answering {
+        self.shared
+            .lock()
+            .version_at(received)
+            .answering(&self.meshes)
+    }
+
+    /// Counts a candidate's answer given without solving it (a refusal the node makes itself)
+    /// and readies what is recorded of it.
+    pub(crate) fn account_candidate(
+        &mut self,
+        candidate: GraspCandidate,
+        reply: GripRecommendation,
+        received: u64,
+        sent: u64,
+    ) -> Outcome<GripRecommendation> {
+        let mut notes = Vec::new();
+        self.count_one(&reply, &mut notes);
+        let recorded = self.readied(
+            Payload::request::<Candidates>(candidate),
+            || Payload::answer::<Candidates>(reply.clone()),
+            None,
+            received,
+            sent,
+        );
+        Outcome {
+            reply,
+            markers: None,
             notes,
             recorded,
         }

@@ -22,35 +22,35 @@ mod param_services;
 mod params;
 pub(crate) mod play;
 pub(crate) mod pose_work;
+mod requests;
 pub(crate) mod ros_args;
 pub(crate) mod session;
 pub(crate) mod set_io;
 mod set_kinds;
 pub(crate) mod set_worker;
 pub(crate) mod sets;
+mod tf;
+mod tf_serve;
+mod tf_wait;
 
 use crate::config::Config;
 use crate::kind::{Candidates, PoseSets, Poses, Sets};
-use crate::msg::{
-    short_id, GraspCandidate, GripRecommendation, MarkerArray, PoseCandidate, PoseRecommendation,
-};
 use crate::record::{now_ns, OnStop, Topics};
 use answer::Answerer;
 use anyhow::Context as _;
 use demo::Demo;
-use endpoint::Endpoint;
 use futures::{FutureExt, StreamExt};
-use loads::{Loaded, Loaders, PoseLoads};
-use markers_out::MarkersOut;
+use loads::{Loaders, PoseLoads};
 use param_services::ParameterServices;
 use params::Shared;
-use ros2_client::{MessageInfo, Node, NodeOptions};
+use requests::{send_loaded, Endpoints, Loading, Loop};
+use ros2_client::{Node, NodeOptions};
 use ros_args::RosArgs;
-use session::{create_topic, message_times, qos, say, tell, Session, Shutdown, Start};
+use session::{message_times, say, tell, Session, Shutdown, Start};
 use set_worker::SetWorker;
-use sets::SetEndpoints;
 use std::pin::pin;
 use std::time::Duration;
+use tf_wait::{Request, TfWait};
 
 /// After a stop request, how long the node waits for the answers of the sets it holds (the one
 /// being solved stops between two candidates; those waiting are answered unsolved) before it
@@ -117,36 +117,6 @@ fn load_config(ros: &RosArgs, node: &str) -> anyhow::Result<(Config, crate::solv
     }
     let settings = config.solver_settings()?;
     Ok((config, settings))
-}
-
-/// The node's topics and their endpoints.
-struct Endpoints {
-    topics: Topics,
-    candidates: Endpoint<Candidates>,
-    markers: MarkersOut,
-    sets: SetEndpoints,
-    poses: Endpoint<Poses>,
-}
-
-impl Endpoints {
-    fn create(session: &mut Session, qos_depth: i64) -> anyhow::Result<Self> {
-        let qos = qos(qos_depth);
-        let topics = Topics::named(|base| session.topic_name(base))
-            .with_markers(session.topic_name("grip_markers"));
-        let markers_name = topics.markers.clone().unwrap_or_default();
-        let node = session.node_mut();
-        let markers = create_topic::<MarkerArray>(node, &markers_name, &qos)?;
-        Ok(Self {
-            candidates: Endpoint::create(node, &topics, &qos)?,
-            sets: SetEndpoints::create(node, &topics, qos_depth)?,
-            poses: Endpoint::create(node, &topics, &qos)?,
-            markers: MarkersOut::new(
-                node.create_publisher(&markers, None)
-                    .context("cannot publish markers")?,
-            ),
-            topics,
-        })
-    }
 }
 
 /// Runs the node until Ctrl-C or SIGTERM (or until the demo is done).
@@ -216,11 +186,13 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
         let _services = local.spawn(services.serve(node));
         let _markers_watch = local.spawn(endpoints.markers.watch(node));
         let mut loading = PoseLoads::new(loaders);
+        let mut tf = TfWait::new();
         let mut loop_state = Loop {
             answerer: &mut answerer,
             worker: &mut worker,
             woken: &mut woken,
             loading: &mut loading,
+            tf: &mut tf,
         };
         let outcome = local
             .run(serve(
@@ -231,6 +203,7 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
                 demo.as_ref(),
             ))
             .await;
+        tf_serve::finish(node, &endpoints, &mut loop_state).await;
         finish_sets(node, &endpoints, &mut answerer, &mut worker).await;
         finish_loads(node, &endpoints, &mut answerer, &mut loading).await;
         tell(node, answerer.finish());
@@ -295,21 +268,10 @@ fn wake_on_change(shared: &Shared) -> (OnStop, futures::channel::mpsc::Unbounded
     (on_stop, woken)
 }
 
-/// What the answering loop changes: the answerer, the set thread, and what wakes the loop.
-struct Loop<'a> {
-    answerer: &'a mut Answerer,
-    worker: &'a mut SetWorker,
-    woken: &'a mut futures::channel::mpsc::UnboundedReceiver<()>,
-    loading: &'a mut Loading,
-}
-
-/// Single pose candidates answered off the node's thread because their mesh was not loaded yet
-/// or is a large inline mesh ([`loads`]).
-type Loading = PoseLoads;
-
 /// Answers every candidate until a signal, or until the demo is done; acts on parameter sets
-/// and on a recording that stopped as soon as `woken` says so. Sets are handed to the set thread
-/// and their answers sent as they come back.
+/// and on a recording that stopped as soon as `woken` says so. Every request goes through
+/// [`tf_serve::admit`] (turned by TF, or waiting for its transforms); sets are handed to the set
+/// thread and their answers sent as they come back.
 async fn serve(
     node: &Node,
     shutdown: &mut Shutdown,
@@ -317,15 +279,11 @@ async fn serve(
     state: &mut Loop<'_>,
     demo: Option<&Demo>,
 ) -> anyhow::Result<()> {
-    let Loop {
-        answerer,
-        worker,
-        woken,
-        loading,
-    } = state;
     let mut stream = pin!(endpoints.candidates.requests.async_stream());
     let mut poses = pin!(endpoints.poses.requests.async_stream());
     let mut arrivals = pin!(sets::arrivals(&endpoints.sets, &endpoints.topics).fuse());
+    let mut tf_dynamic = pin!(endpoints.tf.dynamic.async_stream());
+    let mut tf_static = pin!(endpoints.tf.fixed.async_stream());
     let mut demo_done = pin!(async {
         match demo {
             Some(d) => d.finished().await,
@@ -337,39 +295,57 @@ async fn serve(
     loop {
         // Biased, in this order: a stop request wins over whatever is queued, then the demo's
         // end, then a parameter set or a stopped writer (so that it applies to every candidate
-        // still queued), then candidates, then sets' answers back from the set thread, then pose
-        // candidates, then new sets of any kind (one stream, taken in turn); each costs the node's thread microseconds to milliseconds (a set is solved on
-        // the set thread), so a signal is seen within one.
+        // still queued), then the requests waiting for transforms that are due, then
+        // candidates, then sets' answers back from the set thread, then pose candidates, then
+        // new sets of any kind (one stream, taken in turn), then transforms (each request drains
+        // those already in before it is looked at); each costs the node's thread microseconds to
+        // milliseconds (a set is solved on the set thread), so a signal is seen within one.
+        let wake = state.tf.next_wake();
         futures::select_biased! {
             signal = shutdown.requested().fuse() => {
                 say(node, log::Level::Info, &format!("{signal}: leaving the ROS graph"));
                 return Ok(());
             }
             result = demo_done => return result,
-            () = woken.select_next_some() => tell(node, answerer.refresh()),
+            () = state.woken.select_next_some() => tell(node, state.answerer.refresh()),
+            () = tf_serve::at(wake).fuse() => tf_serve::due(node, endpoints, state).await,
             received = stream.select_next_some() => match received {
                 Ok((candidate, info)) => {
-                    answer_one(node, endpoints, answerer, candidate, &info).await;
+                    let request = Request::Candidate(Box::new(candidate));
+                    tf_serve::admit(node, endpoints, state, request, message_times(&info)).await;
                 }
-                Err(e) => tell(node, vec![answerer.undecodable(topics.requests::<Candidates>().unwrap_or_default(), &e)]),
+                Err(e) => tell(node, vec![state.answerer.undecodable(topics.requests::<Candidates>().unwrap_or_default(), &e)]),
             },
-            loaded = loading.next().fuse() => send_loaded(node, endpoints, answerer, loaded).await,
-            done = worker.done.select_next_some() => {
-                sets::answer_done(node, sets, markers, answerer, done).await;
+            loaded = state.loading.next().fuse() => send_loaded(node, endpoints, state.answerer, loaded).await,
+            done = state.worker.done.select_next_some() => {
+                sets::answer_done(node, sets, markers, state.answerer, done).await;
             }
             received = poses.select_next_some() => match received {
                 Ok((candidate, info)) => {
-                    take_pose(node, endpoints, answerer, loading, candidate, &info).await;
+                    let request = Request::Pose(Box::new(candidate));
+                    tf_serve::admit(node, endpoints, state, request, message_times(&info)).await;
                 }
                 Err(e) => {
                     let topic = topics.requests::<Poses>().unwrap_or_default();
-                    let note = answerer.undecodable(topic, &e);
+                    let note = state.answerer.undecodable(topic, &e);
                     tell(node, vec![note]);
                 }
             },
-            arrival = arrivals.select_next_some() => {
-                sets::take(node, sets, markers, answerer, worker, arrival).await;
-            }
+            arrival = arrivals.select_next_some() => match arrival {
+                sets::Arrival::Topic(set, info) => {
+                    let request = Request::Set(set, None);
+                    tf_serve::admit(node, endpoints, state, request, message_times(&info)).await;
+                }
+                sets::Arrival::Call(id, set) => {
+                    let now = now_ns();
+                    tf_serve::admit(node, endpoints, state, Request::Set(set, Some(id)), (now, now)).await;
+                }
+                sets::Arrival::Undecodable(topic, why) => {
+                    tell(node, vec![state.answerer.undecodable(&topic, &why)]);
+                }
+            },
+            received = tf_static.select_next_some() => tf_serve::keep(state.tf, received, true),
+            received = tf_dynamic.select_next_some() => tf_serve::keep(state.tf, received, false),
         }
     }
 }
@@ -408,58 +384,6 @@ async fn finish_sets(
     }
 }
 
-/// Answers one candidate: the answer goes out first; markers and the recording follow it.
-async fn answer_one(
-    node: &Node,
-    endpoints: &Endpoints,
-    answerer: &mut Answerer,
-    candidate: GraspCandidate,
-    info: &MessageInfo,
-) {
-    let (received, sent) = message_times(info);
-    let audience = endpoints.markers.heard(node);
-    let outcome = answerer.handle(candidate, received, sent, audience);
-    let answers = &endpoints.candidates.answers;
-    send_answer(node, endpoints, answerer, answers, outcome).await;
-}
-
-/// Takes one pose candidate: answered on the node's thread when its mesh is loaded already, or
-/// it names none and carries no inline mesh of [`answer::INLINE_OFF_THREAD_TRIANGLES`] triangles
-/// or more, or it is refused before any load (an inline mesh beyond `max_inline_mesh_triangles`);
-/// otherwise on a loader thread ([`loads`]), its answer sent when it is back or when
-/// `max_mesh_load_time` has passed, so that a first load or a large inline mesh's index (a tenth
-/// of a second and more for 100,000 triangles) holds up no other topic, and a load that never
-/// ends holds up nothing. Never on the node's thread: with every loader busy the candidate
-/// waits, and with the queue full it is refused at once. Answers may then come back in another
-/// order than their candidates.
-async fn take_pose(
-    node: &Node,
-    endpoints: &Endpoints,
-    answerer: &mut Answerer,
-    loading: &mut Loading,
-    candidate: PoseCandidate,
-    info: &MessageInfo,
-) {
-    let (received, sent) = message_times(info);
-    let audience = endpoints.markers.heard(node);
-    let work = answerer.pose_work(received, audience);
-    if work.refusal(&candidate).is_none() && answerer.answers_off_thread(&candidate) {
-        if let Err(refused) = loading.take(work, candidate, received, sent) {
-            send_loaded(node, endpoints, answerer, *refused).await;
-        }
-        return;
-    }
-    let (reply, markers) = work.run(&candidate);
-    let outcome = answerer.account_pose(candidate, reply, markers, received, sent);
-    send_answer(node, endpoints, answerer, &endpoints.poses.answers, outcome).await;
-}
-
-/// Counts, sends and records a pose candidate answered off the node's thread.
-async fn send_loaded(node: &Node, endpoints: &Endpoints, answerer: &mut Answerer, l: Loaded) {
-    let outcome = answerer.account_pose(l.candidate, l.reply, l.markers, l.received, l.sent);
-    send_answer(node, endpoints, answerer, &endpoints.poses.answers, outcome).await;
-}
-
 /// On a stop request: for at most [`STOP_GRACE`], sends the answers of the pose candidates still
 /// loading their meshes.
 async fn finish_loads(
@@ -481,70 +405,6 @@ async fn finish_loads(
             }
         }
     }
-}
-
-/// An answer to one candidate or pose candidate, as its log line names it.
-trait Recommends {
-    /// What it answers, for the log: "candidate", "pose candidate".
-    const WHAT: &'static str;
-    /// Its recommendation (a pose answer's is inside it).
-    fn recommendation(&self) -> &GripRecommendation;
-}
-
-impl Recommends for GripRecommendation {
-    const WHAT: &'static str = "candidate";
-    fn recommendation(&self) -> &GripRecommendation {
-        self
-    }
-}
-
-impl Recommends for PoseRecommendation {
-    const WHAT: &'static str = "pose candidate";
-    fn recommendation(&self) -> &GripRecommendation {
-        &self.recommendation
-    }
-}
-
-/// Sends one answer on `answers`: the answer goes out first; its markers, then the recording,
-/// follow it.
-async fn send_answer<A: Recommends + serde::Serialize + std::fmt::Debug>(
-    node: &Node,
-    endpoints: &Endpoints,
-    answerer: &mut Answerer,
-    answers: &ros2_client::Publisher<A>,
-    outcome: answer::Outcome<A>,
-) {
-    let r = outcome.reply.recommendation();
-    log::debug!(
-        "{} {:?}: status {}, gravity angle {}, {} {} N",
-        A::WHAT,
-        short_id(&r.candidate_id),
-        r.status,
-        r.gravity_angle,
-        r.objective,
-        r.gripping_power
-    );
-    tell(node, outcome.notes);
-    if let Err(e) = answers.async_publish(outcome.reply).await {
-        let why = format!("cannot publish the answer to a {}: {e:?}", A::WHAT);
-        say(node, log::Level::Error, &why);
-    }
-    markers_then_record(node, endpoints, answerer, outcome.markers, outcome.recorded).await;
-}
-
-/// After an answer went out: its markers (if `grip_markers` has a subscriber: they may have been
-/// built for the recording alone), then its record with the time the answer was sent.
-async fn markers_then_record(
-    node: &Node,
-    endpoints: &Endpoints,
-    answerer: &mut Answerer,
-    markers: Option<MarkerArray>,
-    recorded: answer::Recorded,
-) {
-    let answered = now_ns();
-    endpoints.markers.publish(node, answerer, markers).await;
-    let notes = answerer.record(recorded, answered);
-    tell(node, notes);
 }
 
 /// The node's mesh cache: files read only under `mesh_roots` and inside packages' share

@@ -4,9 +4,10 @@
 //! for every kind ([`NodeSet`]).
 
 use super::set_kinds::{NodeSet, SetEndpoints, Solving};
-use crate::answer::{Rules, SetAnswer};
+use crate::answer::{Answering, Rules, SetAnswer};
 use crate::msg::{CompactString, GripRecommendation, MarkerArray};
 use crate::record::Payload;
+use crate::tf::{self, Gravity, TfBuffer, TfFailure};
 use futures::future::LocalBoxFuture;
 use ros2_client::RmwRequestId;
 #[cfg(test)]
@@ -39,6 +40,9 @@ trait HeldSet: std::fmt::Debug + Send {
     fn busy(&self, rules: &Rules, max_queued: usize) -> SetReply;
     fn echo(&self) -> SetReply;
     fn solve(&self, s: &Solving) -> (SetReply, Option<MarkerArray>);
+    fn needs_tf(&self, gravity: &Gravity) -> bool;
+    fn resolve(&self, buffer: &TfBuffer, gravity: &Gravity) -> Result<SetInput, TfFailure>;
+    fn refused(&self, with: &Answering, why: &str) -> SetReply;
     fn payload(self: Box<Self>) -> Payload;
     #[cfg(test)]
     fn as_any_mut(&mut self) -> &mut dyn Any;
@@ -70,6 +74,15 @@ impl<K: NodeSet> HeldSet for Held<K> {
     fn solve(&self, s: &Solving) -> (SetReply, Option<MarkerArray>) {
         let (reply, markers) = K::solve(s, &self.0);
         (SetReply::new::<K>(reply), markers)
+    }
+    fn needs_tf(&self, gravity: &Gravity) -> bool {
+        tf::needs::<K>(gravity, &self.0)
+    }
+    fn resolve(&self, buffer: &TfBuffer, gravity: &Gravity) -> Result<SetInput, TfFailure> {
+        tf::resolve::<K>(buffer, gravity, &self.0).map(SetInput::new::<K>)
+    }
+    fn refused(&self, with: &Answering, why: &str) -> SetReply {
+        SetReply::new::<K>(K::refused(with, &self.0, why))
     }
     fn payload(self: Box<Self>) -> Payload {
         Payload::request::<K>(self.0)
@@ -117,6 +130,26 @@ impl SetInput {
     /// The set's answer, solved, and its best member's markers ([`NodeSet::solve`]).
     pub(crate) fn solve(&self, s: &Solving) -> (SetReply, Option<MarkerArray>) {
         self.0.solve(s)
+    }
+
+    /// Whether it needs TF ([`tf::needs`]).
+    pub(crate) fn needs_tf(&self, gravity: &Gravity) -> bool {
+        self.0.needs_tf(gravity)
+    }
+
+    /// It turned by TF ([`tf::resolve`]), or the first transform missing.
+    pub(crate) fn resolve(
+        &self,
+        buffer: &TfBuffer,
+        gravity: &Gravity,
+    ) -> Result<SetInput, TfFailure> {
+        self.0.resolve(buffer, gravity)
+    }
+
+    /// The set refused whole with status 2, `invalid input: {why}`, nothing solved
+    /// ([`crate::answer::Answer::refused`]).
+    pub(crate) fn refused(&self, with: &Answering, why: &str) -> SetReply {
+        self.0.refused(with, why)
     }
 
     /// The message for the recording.

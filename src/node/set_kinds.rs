@@ -10,7 +10,7 @@ use super::loads::{too_slow, Loaders, LOAD_PANICKED};
 use super::pose_work::INLINE_OFF_THREAD_TRIANGLES;
 use super::session::qos;
 use crate::answer::{answer_in_full, markers, Answering, Halt, Interrupt, Refused, SetKind};
-use crate::kind::{PoseSets, Sets};
+use crate::kind::{Framing, PoseSets, Sets};
 use crate::msg::{
     GraspCandidate, GripRecommendation, MarkerArray, PoseCandidate, RecommendPosesRequest,
     RecommendPosesResponse, RecommendRequest, RecommendResponse,
@@ -52,7 +52,7 @@ impl Solving<'_> {
 }
 
 /// A set kind as the node serves it.
-pub(crate) trait NodeSet: SetKind {
+pub(crate) trait NodeSet: SetKind + Framing {
     /// Its service's request and response.
     type Call: Message + Clone + 'static;
     /// Its service's response.

@@ -201,7 +201,7 @@ const SET_PANICKED: &str =
      report it with the set";
 
 /// A set's answer given at once (refused), nothing solved.
-fn done_at_once(job: SetJob, reply: SetReply) -> SetDone {
+pub(crate) fn done_at_once(job: SetJob, reply: SetReply) -> SetDone {
     SetDone {
         via: job.via,
         outcome: SetOutcome {

@@ -9,7 +9,7 @@
 
 use super::answer::{Answerer, SetInput, SetOutcome, SetReply};
 use super::markers_out::MarkersOut;
-use super::session::{message_times, say, tell};
+use super::session::{say, tell};
 pub(crate) use super::set_kinds::NodeSet;
 pub(crate) use super::set_kinds::SetEndpoints;
 use super::set_kinds::{SetEndpoint, VisitSetEndpoint};
@@ -86,27 +86,6 @@ pub(crate) fn arrivals<'a>(
     futures::stream::select_all(collect.streams)
 }
 
-/// Takes a set that arrived ([`take_topic`], [`take_call`]); one that did not decode is counted
-/// and said.
-pub(crate) async fn take(
-    node: &Node,
-    endpoints: &SetEndpoints,
-    markers: &MarkersOut,
-    answerer: &mut Answerer,
-    worker: &SetWorker,
-    arrival: Arrival,
-) {
-    match arrival {
-        Arrival::Topic(set, info) => {
-            take_topic(node, endpoints, markers, answerer, worker, set, &info).await;
-        }
-        Arrival::Call(id, set) => {
-            take_call(node, endpoints, markers, answerer, worker, id, set).await;
-        }
-        Arrival::Undecodable(topic, why) => tell(node, vec![answerer.undecodable(&topic, &why)]),
-    }
-}
-
 /// Takes one set (of candidates or of poses) from its topic: hands it to the set thread, or
 /// answers it at once when the set thread's queue is full.
 pub(crate) async fn take_topic(
@@ -116,9 +95,8 @@ pub(crate) async fn take_topic(
     answerer: &mut Answerer,
     worker: &SetWorker,
     set: SetInput,
-    info: &MessageInfo,
+    (received, sent): (u64, u64),
 ) {
-    let (received, sent) = message_times(info);
     // From the sample's arrival in the DDS reader (the last fragment) to here: the node's
     // thread waking, and the set decoded.
     let taken = Duration::from_nanos(now_ns().saturating_sub(received));
@@ -137,18 +115,17 @@ pub(crate) async fn take_topic(
     }
 }
 
-/// Takes one call of `~/recommend` or `~/recommend_poses` (its times are when it was taken), as
-/// [`take_topic`] does.
+/// Takes one call of `~/recommend` or `~/recommend_poses` (its times are when it was taken,
+/// `received`), as [`take_topic`] does.
 pub(crate) async fn take_call(
     node: &Node,
     endpoints: &SetEndpoints,
     markers: &MarkersOut,
     answerer: &mut Answerer,
     worker: &SetWorker,
-    id: RmwRequestId,
-    set: SetInput,
+    (id, set): (RmwRequestId, SetInput),
+    received: u64,
 ) {
-    let received = now_ns();
     let (record, record_markers) = answerer.records_sets();
     let job = SetJob {
         set,

@@ -141,6 +141,61 @@ fn the_pose_bag_the_node_recorded_replays() {
     );
 }
 
+/// `bags/node_tf.mcap`, recorded from `grasp_orient node` with `gravity_frame:=world` by
+/// `bags/record_node_tf.py`: every request was turned by TF before it was answered, and is
+/// recorded so (its gravity the parameter's 9.80665 m/s² turned into its frame, its object's pose
+/// in its header frame), so that replay, which has no TF, solves each again without a difference.
+#[test]
+fn the_tf_bag_the_node_recorded_replays_without_tf() {
+    use grasp_orient::msg::Vector3;
+    use grasp_orient::record::bag;
+    let path = format!("{}/bags/node_tf.mcap", env!("CARGO_MANIFEST_DIR"));
+    let recorded = bag::read(std::path::Path::new(&path)).expect("the TF bag reads");
+    let s = &recorded.streams;
+    let norm = |g: &Vector3| (g.x * g.x + g.y * g.y + g.z * g.z).sqrt();
+    let turned = |g: &Vector3| (norm(g) - 9.80665).abs() < 1e-9 && g.z != -9.80665;
+    let gravities: Vec<&Vector3> = s
+        .candidates
+        .requests
+        .iter()
+        .map(|r| &r.message.gravity)
+        .chain(
+            s.sets
+                .requests
+                .iter()
+                .flat_map(|r| r.message.candidates.iter().map(|c| &c.gravity)),
+        )
+        .chain(s.poses.requests.iter().map(|r| &r.message.gravity))
+        .chain(s.pose_sets.requests.iter().map(|r| &r.message.gravity))
+        .collect();
+    assert_eq!(gravities.len(), 12 + 8 + 6 + 1);
+    assert!(gravities.iter().all(|g| turned(g)), "{gravities:?}");
+    assert!(s
+        .poses
+        .requests
+        .iter()
+        .map(|r| &r.message.object)
+        .chain(s.pose_sets.requests.iter().map(|r| &r.message.object))
+        .all(|o| o.frame_id.is_empty()));
+    let settings = recorded
+        .metadata
+        .iter()
+        .find(|(name, _)| name == "grasp_orient.settings")
+        .map(|(_, entries)| entries);
+    assert!(
+        settings.is_some_and(|e| e.values().any(|v| v.contains("world"))),
+        "{settings:?}"
+    );
+    let (ok, text) = replay("node_tf.mcap");
+    assert!(ok, "{text}");
+    assert!(
+        text.contains("30 compared with a recorded recommendation, 0 differ")
+            && text.contains("2 compared with a recorded answer, 0 differ")
+            && text.contains("0 recorded recommendations unmatched"),
+        "{text}"
+    );
+}
+
 #[test]
 fn the_bag_the_node_recorded_replays_with_its_settings() {
     let (ok, text) = replay("node_recorded.mcap");
@@ -291,6 +346,7 @@ fn every_golden_bag_round_trips_through_replay_write() {
         ("node_recorded.mcap", &[]),
         ("rosbags_written.mcap", &["--no-compare"]),
         ("node_poses.mcap", &[]),
+        ("node_tf.mcap", &[]),
     ] {
         let fresh = dir.path().join(name);
         let fresh = fresh.to_str().expect("utf-8");

@@ -17,7 +17,8 @@ use grasp_orient::msg::{
     GraspPose, GripRecommendation, GripRecommendationSet, Header, Marker, MarkerArray, Mesh,
     MeshFile, MeshTriangle, Point, Pose, PoseCandidate, PoseCandidateSet, PoseRecommendation,
     PoseRecommendationSet, Quaternion, RecommendPosesRequest, RecommendPosesResponse,
-    RecommendRequest, RecommendResponse, RosMessage, SolidPrimitive, Time, UvCoordinate, Vector3,
+    RecommendRequest, RecommendResponse, RosMessage, SolidPrimitive, TfMessage, Time, Transform,
+    TransformStamped, UvCoordinate, Vector3,
 };
 use std::collections::BTreeSet;
 use std::path::PathBuf;
@@ -46,6 +47,9 @@ fn msg_file(type_name: &str) -> String {
     let (package, name) = split_type_name(type_name).expect("a message type name");
     let path = if package == "grasp_orient" {
         PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("msg/{name}.msg"))
+    } else if package == NOT_IN_THE_PEER {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join(format!("src/msg/jazzy/{package}/{name}.msg"))
     } else {
         let prefixes = prefixes();
         let prefix = prefixes
@@ -66,6 +70,11 @@ fn msg_file(type_name: &str) -> String {
     };
     std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
+
+/// The one standard package the peer lacks: PyPI carries no `ros-tf2-msgs` wheel. Its file is
+/// held to the copy in `src/msg/jazzy/` (geometry2 0.36.4, the Jazzy branch's), which
+/// `tf_message_is_geometry2s_file` checks line by line.
+const NOT_IN_THE_PEER: &str = "tf2_msgs";
 
 struct Parsed {
     /// `(name, type)`, relative types qualified with the package.
@@ -182,6 +191,17 @@ fn pose_messages_match_their_msg_files() {
     for (_, check) in check_pose_messages() {
         check();
     }
+}
+
+/// `tf2_msgs/TFMessage` against its Jazzy file (no peer needed: the file is the copy here), and
+/// the copy is geometry2's text: its one field, its comment-free line.
+#[test]
+fn tf_message_is_geometry2s_file() {
+    check::<TfMessage>();
+    assert_eq!(
+        msg_file(TfMessage::TYPE_NAME),
+        "geometry_msgs/TransformStamped[] transforms\n"
+    );
 }
 
 #[test]
@@ -310,6 +330,9 @@ fn peer_standard_structs_match_the_jazzy_msg_files() {
         (Vector3::TYPE_NAME, check::<Vector3>),
         (Quaternion::TYPE_NAME, check::<Quaternion>),
         (Pose::TYPE_NAME, check::<Pose>),
+        (Transform::TYPE_NAME, check::<Transform>),
+        (TransformStamped::TYPE_NAME, check::<TransformStamped>),
+        (TfMessage::TYPE_NAME, check::<TfMessage>),
         (CompressedImage::TYPE_NAME, check::<CompressedImage>),
         (UvCoordinate::TYPE_NAME, check::<UvCoordinate>),
         (MeshFile::TYPE_NAME, check::<MeshFile>),

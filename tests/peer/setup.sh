@@ -138,9 +138,10 @@ MSG_HASH="$(
     cd "$REPO_ROOT"
     {
         echo "req=$REQ_HASH peer=$PEER_DIR"
-        for f in CMakeLists.txt package.xml msg/*.msg srv/*.srv meshes/*; do
+        for f in CMakeLists.txt package.xml msg/*.msg srv/*.srv meshes/* src/msg/jazzy/tf2_msgs/*.msg; do
             if [ -f "$f" ]; then printf '%s %s\n' "$f" "$(sha256sum <"$f" | cut -d' ' -f1)"; fi
         done
+        echo "tf2_msgs=TFMessage"   # what build_tf2_msgs below builds
     } | sha256sum | cut -d' ' -f1
 )"
 PREFIX="$PEER_DIR/install-${MSG_HASH:0:16}"
@@ -157,6 +158,60 @@ BUILD_ENV=(
     "CMAKE_PREFIX_PATH=$VENV"
     "LD_LIBRARY_PATH=$VENV/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
 )
+
+# tf2_msgs for the TF tests (tests/ros/test_tf.py), built here from its Jazzy definition rather than
+# taken from a wheel: TFMessage.msg as geometry2's jazzy branch has it (src/msg/jazzy/tf2_msgs/, the
+# text the node's own definition is checked against), with tf2_msgs' CMakeLists.txt and package.xml
+# cut to that one message (its action LookupTransform needs action_msgs, which the wheels above lack,
+# and nothing here uses TF2Error or FrameGraph). Same package name, type name and fields: a peer
+# publishing tf2_msgs/msg/TFMessage from it is what a tf2_ros broadcaster puts on the wire.
+build_tf2_msgs() {
+    local src="$(dirname "$SRC")/tf2_msgs" build="$BUILD-tf2_msgs"
+    rm -rf "$src" "$build"
+    mkdir -p "$src/msg" "$build"
+    cp "$REPO_ROOT/src/msg/jazzy/tf2_msgs/TFMessage.msg" "$src/msg/"
+    cat >"$src/CMakeLists.txt" <<'CMAKE'
+cmake_minimum_required(VERSION 3.5)
+project(tf2_msgs)
+find_package(ament_cmake)
+find_package(rosidl_default_generators REQUIRED)
+find_package(builtin_interfaces REQUIRED)
+find_package(geometry_msgs REQUIRED)
+rosidl_generate_interfaces(${PROJECT_NAME}
+  "msg/TFMessage.msg"
+  DEPENDENCIES builtin_interfaces geometry_msgs
+)
+ament_package()
+CMAKE
+    cat >"$src/package.xml" <<'XML'
+<?xml version="1.0"?>
+<package format="3">
+  <name>tf2_msgs</name>
+  <version>0.36.4</version>
+  <description>tf2_msgs (Jazzy), TFMessage only, for grasp_orient's tests</description>
+  <maintainer email="none@example.invalid">grasp_orient tests</maintainer>
+  <license>BSD</license>
+  <buildtool_depend>ament_cmake</buildtool_depend>
+  <buildtool_depend>rosidl_default_generators</buildtool_depend>
+  <depend>builtin_interfaces</depend>
+  <depend>geometry_msgs</depend>
+  <exec_depend>rosidl_default_runtime</exec_depend>
+  <member_of_group>rosidl_interface_packages</member_of_group>
+  <export><build_type>ament_cmake</build_type></export>
+</package>
+XML
+    run_logged tf2-msgs-configure "${BUILD_ENV[@]}" "$VENV/bin/cmake" -S "$src" -B "$build" \
+        -G "Unix Makefiles" \
+        -DCMAKE_BUILD_TYPE=Release \
+        -DCMAKE_PREFIX_PATH="$VENV" \
+        -DCMAKE_INSTALL_PREFIX="$PREFIX" \
+        -DPython3_EXECUTABLE="$VENV/bin/python" \
+        -DPYTHON_EXECUTABLE="$VENV/bin/python" \
+        -DBUILD_TESTING=OFF
+    run_logged tf2-msgs-build "${BUILD_ENV[@]}" "$VENV/bin/cmake" --build "$build" --parallel "$(nproc 2>/dev/null || echo 2)"
+    run_logged tf2-msgs-install "${BUILD_ENV[@]}" "$VENV/bin/cmake" --install "$build"
+    rm -rf "$build"
+}
 
 if [ -f "$MSG_STAMP" ] && [ "$(cat "$MSG_STAMP")" = "$MSG_HASH" ] && [ -d "$PREFIX" ]; then
     log "grasp_orient interfaces up to date: $PREFIX"
@@ -180,6 +235,7 @@ else
         -DBUILD_TESTING=OFF
     run_logged cmake-build "${BUILD_ENV[@]}" "$VENV/bin/cmake" --build "$BUILD" --parallel "$(nproc 2>/dev/null || echo 2)"
     run_logged cmake-install "${BUILD_ENV[@]}" "$VENV/bin/cmake" --install "$BUILD"
+    build_tf2_msgs
     echo "$MSG_HASH" >"$MSG_STAMP"
     rm -rf "$BUILD" "$(dirname "$SRC")"   # only the install is needed from here on
 fi
@@ -253,7 +309,7 @@ mv "$ENV_SH.tmp" "$ENV_SH"
 # 6. Check that the result imports
 # ---------------------------------------------------------------------------------------------------
 # shellcheck disable=SC1090
-if ! ( source "$ENV_SH" && python -c 'import rclpy; from grasp_orient.msg import GraspCandidate, GripRecommendation, GraspCandidateSet, GripRecommendationSet, PoseCandidate, PoseRecommendation, PoseCandidateSet, PoseRecommendationSet; from grasp_orient.srv import Recommend, RecommendPoses' ) >"$LOGS/import-check.log" 2>&1; then
+if ! ( source "$ENV_SH" && python -c 'import rclpy; from grasp_orient.msg import GraspCandidate, GripRecommendation, GraspCandidateSet, GripRecommendationSet, PoseCandidate, PoseRecommendation, PoseCandidateSet, PoseRecommendationSet; from grasp_orient.srv import Recommend, RecommendPoses; from tf2_msgs.msg import TFMessage' ) >"$LOGS/import-check.log" 2>&1; then
     cat "$LOGS/import-check.log" >&2
     die "rclpy / grasp_orient.msg import check failed with $ENV_SH"
 fi

@@ -507,7 +507,8 @@ def test_parameters_are_described_listed_and_set_atomically(peer, client):
 
     node = "/grasp_orient"
     describe = peer.node.create_client(DescribeParameters, f"{node}/describe_parameters")
-    names = ["friction_safety_factor", "qos_depth", "objective", "range_min", "use_sim_time", "no_such_parameter"]
+    names = ["friction_safety_factor", "qos_depth", "objective", "range_min", "use_sim_time", "no_such_parameter",
+             "gravity", "gravity_frame", "tf_timeout"]
     ds = peer.call(describe, DescribeParameters.Request(names=names)).descriptors
     assert [d.name for d in ds] == names, [d.name for d in ds]
     by = dict(zip(names, ds))
@@ -530,8 +531,15 @@ def test_parameters_are_described_listed_and_set_atomically(peer, client):
             "record", "record_dir", "record_markers", "gripper_drive", "max_grip_force", "rank_by", "max_set_size",
             "solver_threads", "max_set_time", "max_queued_sets",
             "center_of_mass_tolerance", "mass_tolerance", "closing_axis", "max_mesh_load_time",
-            "max_inline_mesh_triangles", "mesh_roots", "max_mesh_file_bytes", "max_message_bytes", "use_sim_time"}
+            "max_inline_mesh_triangles", "mesh_roots", "max_mesh_file_bytes", "max_message_bytes", "gravity_frame",
+            "gravity", "tf_timeout", "use_sim_time"}
     assert set(listed) == want, sorted(listed)
+    g = by["gravity"]
+    assert g.type == ParameterType.PARAMETER_DOUBLE_ARRAY and "[m/s²]" in g.description, g
+    assert [(r.from_value, r.to_value) for r in g.floating_point_range] == [(-5000.0, 5000.0)], g
+    assert by["gravity_frame"].type == ParameterType.PARAMETER_STRING, by["gravity_frame"]
+    t = by["tf_timeout"]
+    assert [(r.from_value, r.to_value) for r in t.floating_point_range] == [(0.0, 10.0)], t
     types = peer.call(peer.node.create_client(GetParameterTypes, f"{node}/get_parameter_types"),
                       GetParameterTypes.Request(names=["qos_depth", "record", "mesh_roots", "nothing"])).types
     assert list(types) == [ParameterType.PARAMETER_INTEGER, ParameterType.PARAMETER_BOOL,

@@ -298,6 +298,14 @@ impl PoseAnswerer {
         if let Some(why) = self.inline_too_large(o) {
             return Err(why);
         }
+        // Only the node has TF, and it turns the pose into the header frame (emptying
+        // frame_id) before the answer; here a pose in another frame would be taken as one in the
+        // header frame, a wrong answer given as a right one.
+        if !o.frame_id.is_empty() {
+            return Err(PoseRefusal::ObjectFrame {
+                frame: o.frame_id.to_string(),
+            });
+        }
         let pose = isometry(&o.pose, &"object.pose")?;
         let scale = [o.scale.x, o.scale.y, o.scale.z];
         let mesh_given = !o.mesh.is_empty()

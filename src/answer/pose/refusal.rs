@@ -148,6 +148,17 @@ pub(crate) enum PoseRefusal {
          leave center_of_mass at zero for the shape's centroid"
     )]
     CenterOfMassFlag,
+    /// The object's pose given in a frame of its own, where no TF turns it into the header
+    /// frame (anything but the node).
+    #[error(
+        "object.frame_id is \"{frame}\": only the node turns an object pose from another frame \
+         into the header frame, by TF; here give object.pose in the header frame and leave \
+         frame_id empty"
+    )]
+    ObjectFrame {
+        /// The frame given.
+        frame: String,
+    },
 }
 
 /// A ratio to about three significant digits, as a plain number (`1000`, `2500`, `15000`).
