@@ -170,8 +170,12 @@ class PoseClient:
 
 @pytest.fixture(scope="module")
 def tf_node(start_node):
-    return start_node("--ros-args", "-p", "gravity_frame:=world", "-p", f"tf_timeout:={TF_TIMEOUT}",
-                      "-p", "record:=false", name="grasp_orient node (gravity_frame world)")
+    """A node of its own, stopped at the module's end: left running, it would answer the candidates of the
+    session's later files too."""
+    n = start_node("--ros-args", "-p", "gravity_frame:=world", "-p", f"tf_timeout:={TF_TIMEOUT}",
+                   "-p", "record:=false", name="grasp_orient node (gravity_frame world)")
+    yield n
+    n.stop_and_check()
 
 
 @pytest.fixture(scope="module")
