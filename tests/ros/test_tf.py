@@ -43,6 +43,8 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from tf2_msgs.msg import TFMessage  # noqa: E402
 
 TF_TIMEOUT = 0.5
+# The namespace of the module's node: its topics and services are NODE_NS/grasp_candidates, NODE_NS/grasp_orient/recommend...
+NODE_NS = "/tf_case"
 TREES = 220
 BOX = {"type": 1, "dimensions": [0.04, 0.06, 0.08]}
 
@@ -139,10 +141,10 @@ def wait_known(client: "GraspClient", rng: random.Random, frame: str):
 class PoseClient:
     def __init__(self, peer: Peer):
         self.peer = peer
-        self.pub = peer.node.create_publisher(PoseCandidate, "pose_candidates", reliable_qos(100))
+        self.pub = peer.node.create_publisher(PoseCandidate, f"{NODE_NS}/pose_candidates", reliable_qos(100))
         self.answers: dict[str, object] = {}
         self.order: list[str] = []
-        self.sub = peer.node.create_subscription(PoseRecommendation, "pose_recommendations", self._on,
+        self.sub = peer.node.create_subscription(PoseRecommendation, f"{NODE_NS}/pose_recommendations", self._on,
                                                  reliable_qos(1000))
 
     def _on(self, m):
@@ -170,9 +172,9 @@ class PoseClient:
 
 @pytest.fixture(scope="module")
 def tf_node(start_node):
-    """A node of its own, stopped at the module's end: left running, it would answer the candidates of the
-    session's later files too."""
-    n = start_node("--ros-args", "-p", "gravity_frame:=world", "-p", f"tf_timeout:={TF_TIMEOUT}",
+    """A node of its own, in a namespace of its own (the session's default node, started by an earlier file,
+    would answer these candidates too, from their own gravity), stopped at the module's end."""
+    n = start_node("--ros-args", "-r", f"__ns:={NODE_NS}", "-p", "gravity_frame:=world", "-p", f"tf_timeout:={TF_TIMEOUT}",
                    "-p", "record:=false", name="grasp_orient node (gravity_frame world)")
     yield n
     n.stop_and_check()
@@ -181,7 +183,7 @@ def tf_node(start_node):
 @pytest.fixture(scope="module")
 def clients(peer, tf_node):
     tf = Broadcasters(peer)
-    grasps = GraspClient(peer)
+    grasps = GraspClient(peer, ns=NODE_NS)
     poses = PoseClient(peer)
     tf.wait_matched()
     grasps.wait_matched()
@@ -398,7 +400,7 @@ def test_sets_are_turned_member_by_member_and_refused_whole(clients, peer):
         ref["gravity"] = vec(tr.in_world(frame, stamp)[:3, :3].T @ GRAVITY)
         members.append(c)
         refs.append(ref)
-    recommend = peer.node.create_client(Recommend, "grasp_orient/recommend")
+    recommend = peer.node.create_client(Recommend, f"{NODE_NS}/grasp_orient/recommend")
     assert recommend.wait_for_service(timeout_sec=10.0), "no ~/recommend"
 
     def call(cset: dict) -> dict:
@@ -441,8 +443,8 @@ def test_sets_are_turned_member_by_member_and_refused_whole(clients, peer):
     del ref["object"]["frame_id"]
     ref["gravity"] = vec(header_in_world[:3, :3].T @ GRAVITY)
     answers: dict[str, object] = {}
-    pub = peer.node.create_publisher(PoseCandidateSet, "pose_candidate_sets", reliable_qos(10))
-    sub = peer.node.create_subscription(PoseRecommendationSet, "pose_recommendation_sets",
+    pub = peer.node.create_publisher(PoseCandidateSet, f"{NODE_NS}/pose_candidate_sets", reliable_qos(10))
+    sub = peer.node.create_subscription(PoseRecommendationSet, f"{NODE_NS}/pose_recommendation_sets",
                                         lambda m: answers.setdefault(m.set_id, m), reliable_qos(10))
     try:
         assert peer.spin_until(lambda: pub.get_subscription_count() > 0 and sub.get_publisher_count() > 0, 15.0)
