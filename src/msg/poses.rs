@@ -26,12 +26,12 @@ ros_message! {
 ros_message! {
     /// `msg/Mesh.msg`: a triangle mesh given inline (shape_msgs/Mesh's fields).
     Mesh = grasp_orient/Mesh [] {
-        /// The triangles; empty: no inline mesh. At most [`limit_inline_mesh_decoding`]'s
-        /// bound and one more are kept.
+        /// The triangles; empty: no inline mesh. Decoding keeps at most the bound the node's
+        /// parameter `max_inline_mesh_triangles` sets and one more.
         #[serde(default, deserialize_with = "bounded_triangles")]
         triangles: Vec<MeshTriangle>,
-        /// The vertices, object frame, the mesh's units. At most three times
-        /// [`limit_inline_mesh_decoding`]'s bound and one more are kept.
+        /// The vertices, object frame, the mesh's units. Decoding keeps at most three times
+        /// that bound and one more.
         #[serde(default, deserialize_with = "bounded_vertices")]
         vertices: Vec<Point>,
     }

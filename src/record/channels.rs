@@ -182,7 +182,7 @@ impl RecordedFields {
     }
 
     /// Whether the recording has field `field` of `M` wherever `M` appears.
-    pub fn has<M: RosMessage>(&self, field: &str) -> bool {
+    pub(crate) fn has<M: RosMessage>(&self, field: &str) -> bool {
         let Some((package, name)) = split_type_name(M::TYPE_NAME) else {
             return true;
         };

@@ -14,7 +14,8 @@ pub(crate) use compare::differences;
 pub(crate) use compare::{compare_one, pair, TOLERANCE};
 pub use compare::{Summary, RECORDED_BEHIND_TANGENT};
 use plan::objective_like;
-pub use plan::{Override, Plan, ReplayError};
+pub(crate) use plan::Override;
+pub use plan::{Plan, ReplayError};
 
 use crate::answer::Answering;
 use crate::kind::{Candidates, Streams};

@@ -37,7 +37,7 @@ pub enum ReplayError {
 }
 
 /// A parameter set on the command line: its name and value.
-pub type Override = (String, Value);
+pub(crate) type Override = (String, Value);
 
 /// The settings each candidate of a recording is solved with.
 ///

@@ -67,9 +67,11 @@ mod tests {
     use super::*;
     use crate::kind::{Candidates, PoseSets, Poses, Sets};
     use crate::msg::{
-        GraspCandidate, GraspCandidateSet, Header, PoseCandidate, PoseCandidateSet, Time,
-        TransformStamped,
+        GraspCandidate, GraspCandidateSet, Header, PoseCandidate, Time, TransformStamped,
     };
+
+    /// The pose set's message, named through its kind.
+    type PoseSet = <PoseSets as crate::kind::Kind>::Request;
 
     const S: i32 = 1;
 
@@ -179,9 +181,9 @@ mod tests {
         };
         let r = resolve::<Poses>(&b, &gravity, &p).expect("camera at 2 s");
         assert!(near(g(&r.gravity), in_camera(std::f64::consts::FRAC_PI_4)));
-        let ps = PoseCandidateSet {
+        let ps = PoseSet {
             header: header("camera", 3),
-            ..PoseCandidateSet::default()
+            ..PoseSet::default()
         };
         let r = resolve::<PoseSets>(&b, &gravity, &ps).expect("camera at 3 s");
         assert!(near(g(&r.gravity), in_camera(std::f64::consts::FRAC_PI_2)));
@@ -225,10 +227,10 @@ mod tests {
             "{q:?}"
         );
         assert_eq!(g(&r.gravity), [0.0, -9.0, 0.0]);
-        let ps = PoseCandidateSet {
+        let ps = PoseSet {
             header: p.header.clone(),
             object: p.object.clone(),
-            ..PoseCandidateSet::default()
+            ..PoseSet::default()
         };
         let r = resolve::<PoseSets>(&b, &none, &ps).expect("table to camera");
         assert_eq!(r.object, o.clone());

@@ -7,7 +7,9 @@
 - no file longer than MAX_LINES before its tests (the line of its first `#[cfg(test)]`);
 - at most MAX_LIBRARY_PUB public items in the root library and MAX_BINARY_PUB in the node and
   the command line (`src/node/`, `src/cli/`), an item being a `pub` fn, struct, enum, trait,
-  type, const, static, mod or use (struct fields are the messages' contract and not counted).
+  type, const, static, mod or use (struct fields are the messages' contract and not counted);
+- at most MAX_FILES_NAMING_A_KIND files under `src/` naming KIND_NAMED (tests included): the
+  other files reach a kind through `kind::Kind`.
 
 Run from the repository's root: `python3 tests/shape/check.py`; it prints what it found and
 exits 1 when a bound is broken.
@@ -19,7 +21,11 @@ from collections import defaultdict
 
 CRATES = ["src", "crates/solver/src", "crates/geometry/src", "crates/python/src"]
 MAX_LINES = 700
-MAX_LIBRARY_PUB = 152
+MAX_LIBRARY_PUB = 150
+# At most this many files under src/ name a message kind's request type: its own module, the
+# kinds' table, the answerer of its kind and the messages' definitions (docs/architecture.md).
+MAX_FILES_NAMING_A_KIND = 5
+KIND_NAMED = "PoseCandidateSet"
 MAX_BINARY_PUB = 10
 BINARY = ("src/node/", "src/cli/", "src/main.rs")
 PUB_ITEM = re.compile(
@@ -181,6 +187,11 @@ def main():
         broken.append(f"{library} public items in the library")
     if binary > MAX_BINARY_PUB:
         broken.append(f"{binary} public items in src/node and src/cli")
+    naming = sorted(p for p in module_files("src").values()
+                    if re.search(rf"\b{KIND_NAMED}\b", open(p, encoding="utf-8").read()))
+    print(f"files naming {KIND_NAMED}: {len(naming)} (at most {MAX_FILES_NAMING_A_KIND})")
+    if len(naming) > MAX_FILES_NAMING_A_KIND:
+        broken.append(f"{len(naming)} files under src/ name {KIND_NAMED}: {', '.join(naming)}")
     for b in broken:
         print(b)
     print("the shape holds" if not broken else f"{len(broken)} bounds broken")
