@@ -15,7 +15,7 @@ use std::collections::HashMap;
 #[derive(Debug, Default)]
 pub(crate) struct Columns {
     status: Vec<u8>,
-    message: Vec<CompactString>,
+    message: Texts,
     wrist_rotation: Vec<f64>,
     rotation: Vec<f64>,
     rotation_axis: Vec<f64>,
@@ -30,9 +30,9 @@ pub(crate) struct Columns {
     internal_force_current: Vec<f64>,
     finger_force_current: Vec<f64>,
     candidate_c: Vec<u8>,
-    grasp_case: Vec<CompactString>,
-    recommended_label: Vec<CompactString>,
-    objective: Vec<CompactString>,
+    grasp_case: Texts,
+    recommended_label: Texts,
+    objective: Texts,
     /// The pose fields, filled by [`Columns::push_pose`] only.
     geometry: Geometry,
 }
@@ -65,7 +65,7 @@ impl Columns {
     pub(crate) fn with_capacity(rows: usize) -> Self {
         Columns {
             status: Vec::with_capacity(rows),
-            message: Vec::with_capacity(rows),
+            message: Texts::with_capacity(rows),
             wrist_rotation: Vec::with_capacity(rows),
             rotation: Vec::with_capacity(4 * rows),
             rotation_axis: Vec::with_capacity(3 * rows),
@@ -80,9 +80,9 @@ impl Columns {
             internal_force_current: Vec::with_capacity(rows),
             finger_force_current: Vec::with_capacity(rows),
             candidate_c: Vec::with_capacity(rows),
-            grasp_case: Vec::with_capacity(rows),
-            recommended_label: Vec::with_capacity(rows),
-            objective: Vec::with_capacity(rows),
+            grasp_case: Texts::with_capacity(rows),
+            recommended_label: Texts::with_capacity(rows),
+            objective: Texts::with_capacity(rows),
             geometry: Geometry::default(),
         }
     }
@@ -95,7 +95,7 @@ impl Columns {
     /// One answer; `message` is its message as the caller reports it (the row named).
     pub(crate) fn push(&mut self, r: &GripRecommendation, message: CompactString) {
         self.status.push(r.status);
-        self.message.push(message);
+        self.message.push(&message);
         self.wrist_rotation.push(r.wrist_rotation);
         quaternion(&mut self.rotation, &r.rotation);
         vector(&mut self.rotation_axis, &r.rotation_axis);
@@ -110,9 +110,9 @@ impl Columns {
         self.internal_force_current.push(r.internal_force_current);
         self.finger_force_current.push(r.finger_force_current);
         self.candidate_c.push(r.candidate_c);
-        self.grasp_case.push(r.grasp_case.clone());
-        self.recommended_label.push(r.recommended_label.clone());
-        self.objective.push(r.objective.clone());
+        self.grasp_case.push(&r.grasp_case);
+        self.recommended_label.push(&r.recommended_label);
+        self.objective.push(&r.objective);
     }
 
     /// One pose's answer, and the quaternion `orientation` its pose's rotation became.
@@ -140,7 +140,7 @@ impl Columns {
             };
         }
         each!(status);
-        each!(message);
+        self.message.append(other.message);
         each!(wrist_rotation);
         each!(rotation);
         each!(rotation_axis);
@@ -155,9 +155,9 @@ impl Columns {
         each!(internal_force_current);
         each!(finger_force_current);
         each!(candidate_c);
-        each!(grasp_case);
-        each!(recommended_label);
-        each!(objective);
+        self.grasp_case.append(other.grasp_case);
+        self.recommended_label.append(other.recommended_label);
+        self.objective.append(other.objective);
         each!(geometry.contact_1);
         each!(geometry.contact_2);
         each!(geometry.normal_1);
@@ -172,7 +172,7 @@ impl Columns {
         let n = self.len();
         let d = PyDict::new(py);
         d.set_item("status", PyArray1::from_vec(py, self.status))?;
-        d.set_item("message", texts(py, &self.message)?)?;
+        d.set_item("message", self.message.into_list(py)?)?;
         d.set_item(
             "wrist_rotation",
             PyArray1::from_vec(py, self.wrist_rotation),
@@ -208,9 +208,9 @@ impl Columns {
             PyArray1::from_vec(py, self.finger_force_current),
         )?;
         d.set_item("candidate_c", PyArray1::from_vec(py, self.candidate_c))?;
-        d.set_item("grasp_case", texts(py, &self.grasp_case)?)?;
-        d.set_item("recommended_label", texts(py, &self.recommended_label)?)?;
-        d.set_item("objective", texts(py, &self.objective)?)?;
+        d.set_item("grasp_case", self.grasp_case.into_list(py)?)?;
+        d.set_item("recommended_label", self.recommended_label.into_list(py)?)?;
+        d.set_item("objective", self.objective.into_list(py)?)?;
         if poses {
             let g = self.geometry;
             d.set_item("contact_1", rows(py, g.contact_1, n, 3)?)?;
@@ -229,26 +229,70 @@ fn rows(py: Python<'_>, values: Vec<f64>, n: usize, k: usize) -> PyResult<Bound<
     Ok(PyArray1::from_vec(py, values).reshape([n, k])?.into_any())
 }
 
-/// A list of str; equal texts share one str object (most rows' messages are empty, and the
-/// labels take a few values), so a million rows do not make a million strings. A text equal to
-/// the row before's takes its object without a look-up.
-fn texts<'py>(py: Python<'py>, values: &[CompactString]) -> PyResult<Bound<'py, PyList>> {
-    let mut seen: HashMap<&str, Bound<'py, PyString>> = HashMap::new();
-    let mut items: Vec<Bound<'py, PyString>> = Vec::with_capacity(values.len());
-    let mut previous: Option<(&str, Bound<'py, PyString>)> = None;
-    for v in values {
-        let s = match &previous {
-            Some((text, object)) if *text == v.as_str() => object.clone(),
-            _ => {
-                let object = seen
-                    .entry(v.as_str())
-                    .or_insert_with(|| PyString::new(py, v))
-                    .clone();
-                previous = Some((v.as_str(), object.clone()));
-                object
-            }
-        };
-        items.push(s);
+/// A column of texts, each row the index of its text among the column's distinct ones: equal
+/// texts are stored once (most rows' messages are empty, and the labels take a few values), and
+/// become one str object each, shared by their rows, so a million rows make neither a million
+/// strings in Rust nor in Python.
+#[derive(Debug, Default)]
+struct Texts {
+    rows: Vec<usize>,
+    distinct: Vec<CompactString>,
+    /// The index of each distinct text, once there are more than [`Texts::SCANNED`].
+    index: HashMap<CompactString, usize>,
+}
+
+impl Texts {
+    /// Up to this many distinct texts are found by comparing with each (the labels'
+    /// columns never need more); beyond, through `index`.
+    const SCANNED: usize = 16;
+
+    fn with_capacity(rows: usize) -> Self {
+        Texts {
+            rows: Vec::with_capacity(rows),
+            ..Texts::default()
+        }
     }
-    PyList::new(py, items)
+
+    /// The index of `text`, added if new.
+    fn intern(&mut self, text: &str) -> usize {
+        let found = if self.distinct.len() <= Self::SCANNED {
+            self.distinct.iter().position(|d| d == text)
+        } else {
+            self.index.get(text).copied()
+        };
+        found.unwrap_or_else(|| {
+            let i = self.distinct.len();
+            self.distinct.push(text.into());
+            if self.distinct.len() > Self::SCANNED {
+                if self.index.is_empty() {
+                    self.index = self.distinct.iter().cloned().zip(0..).collect();
+                } else {
+                    self.index.insert(text.into(), i);
+                }
+            }
+            i
+        })
+    }
+
+    /// One row; a text equal to the row before's takes its index without a look-up.
+    fn push(&mut self, text: &str) {
+        let i = match self.rows.last() {
+            Some(&last) if self.distinct[last] == text => last,
+            _ => self.intern(text),
+        };
+        self.rows.push(i);
+    }
+
+    /// `other`'s rows after these.
+    fn append(&mut self, other: Texts) {
+        let to: Vec<usize> = other.distinct.iter().map(|t| self.intern(t)).collect();
+        self.rows.extend(other.rows.iter().map(|&i| to[i]));
+    }
+
+    /// The rows as a list of str, one object per distinct text.
+    fn into_list(self, py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
+        let objects: Vec<Bound<'_, PyString>> =
+            self.distinct.iter().map(|t| PyString::new(py, t)).collect();
+        PyList::new(py, self.rows.iter().map(|&i| objects[i].clone()))
+    }
 }
