@@ -157,6 +157,29 @@ impl CompactBvh {
         CompactBvh { quads }
     }
 
+    /// This tree for its mesh scaled uniformly by `factor` (`> 0`, the mesh's vertices each
+    /// multiplied by it): each bound multiplied by it and rounded outward to `f32` again, in one
+    /// pass without building anything. Each bound held its subtree's corners (at most the least
+    /// coordinate, at least the greatest); a product by a positive factor is monotone, exact and
+    /// rounded alike, so the scaled bound holds the scaled corners, and a first hit is found as
+    /// in any tree whose boxes hold their triangles (the module's "Exactness"). An empty slot
+    /// stays empty (infinite bounds stay infinite).
+    pub(crate) fn scaled(&self, factor: f64) -> Self {
+        let scale = |bounds: [[f32; 4]; 3], round: fn(f64) -> f32| {
+            bounds.map(|axis| axis.map(|b| round(f64::from(b) * factor)))
+        };
+        let quads = self
+            .quads
+            .iter()
+            .map(|q| Quad {
+                mins: scale(q.mins, down),
+                maxs: scale(q.maxs, up),
+                child: q.child,
+            })
+            .collect();
+        CompactBvh { quads }
+    }
+
     /// What it holds, bytes.
     pub(crate) fn bytes(&self) -> usize {
         std::mem::size_of_val(&self.quads[..])

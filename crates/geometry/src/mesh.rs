@@ -235,8 +235,9 @@ impl Mesh {
     /// This mesh scaled uniformly by `factor`, without merging its vertices, checking its
     /// closedness or building its BVH again: the vertices are multiplied by `factor` (the same
     /// products, bit for bit, as [`Mesh::from_triangles`] takes of vertices at this mesh's
-    /// scale), the BVH's boxes too (a product is monotone in its factor, so each scaled box still
-    /// holds its scaled triangles), the volume and centroid are summed again over the scaled
+    /// scale), the BVH's boxes too, parry's and the compact copy's (a product is monotone in its
+    /// factor, so each scaled box still holds its scaled triangles; [`CompactBvh::scaled`]), in
+    /// one pass over each without building either again, the volume and centroid are summed again over the scaled
     /// triangles, and the topology (merged vertices, closedness, triangles at each vertex) is
     /// the same. Where scaling would change what merging finds (a coordinate that underflows to
     /// a subnormal number or zero, two corners of a triangle that round to one point), the mesh
@@ -269,7 +270,7 @@ impl Mesh {
                 })
             }
         });
-        let compact = CompactBvh::new(&trimesh);
+        let compact = self.compact.scaled(factor);
         let aabb = trimesh.local_aabb();
         Ok(Mesh {
             resource: self.resource.clone(),

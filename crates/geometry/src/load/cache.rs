@@ -45,16 +45,22 @@ const UNIT: [f64; 3] = [1.0; 3];
 ///   the kept mesh's vertices and triangles again ([`Mesh::rescaled`]). The vertices are the
 ///   same, bit for bit, as a load at that scale. [`MeshCache::loads`] counts the parses.
 /// - **Access.** What may be read and what refusals say is the cache's [`Access`].
-/// - **Bound.** When a new mesh does not fit, the least recently used ones are dropped until it
-///   does; a mesh larger than the whole bound is returned but not kept. Meshes handed out stay
-///   alive while a caller holds them. A resource whose file changed drops the meshes kept of its
+/// - **Bound.** When a new mesh does not fit, kept meshes are dropped until it does: first those
+///   at a scale other than 1, least recently used first (each is remade from its file's mesh at
+///   scale 1 in one pass over it, without reading the file), then meshes at scale 1 (whose
+///   remaking is a parse), least recently used first. A mesh at another scale never drops its
+///   own file's mesh at scale 1: when the two do not fit together, it is returned but not kept.
+///   A mesh larger than the whole bound is returned but not kept. Meshes handed out stay alive
+///   while a caller holds them. A resource whose file changed drops the meshes kept of its
 ///   former content when it is loaded again.
 /// - **Locking.** The cache's lock is held only to look up and to store, never while a file is
 ///   read, parsed and indexed: a lookup of a kept mesh is not delayed by another file's load.
-///   Callers asking at once for a file not kept queue on a lock of that file's own: the first
-///   loads it, the others then find it kept. If the first fails, or its mesh is too large to
-///   keep, each of the others loads it in turn (and gets its own error): failures are quick,
-///   and a mesh beyond the bound is not worth a second mechanism.
+///   Callers asking at once for a file's meshes not kept, at any scales, queue on a turn of that
+///   file's own: the first loads the file, and its mesh at scale 1 is handed to the others in
+///   the queue through the turn (kept or not: a mesh beyond the bound is parsed once for them
+///   all), each of which then makes its own scale from it. The turn lasts while callers queue
+///   on it. If the load fails, the next in the queue loads the file (and gets its own error):
+///   failures are quick.
 #[derive(Debug)]
 pub struct MeshCache {
     index: AmentIndex,
@@ -73,11 +79,30 @@ struct Key {
 #[derive(Debug, Default)]
 struct CacheInner {
     entries: HashMap<Key, Entry>,
-    /// The files being loaded, each with the lock its loader holds while it loads.
-    loading: HashMap<Identity, Arc<Mutex<()>>>,
+    /// The files whose meshes are being made, each with the turn its callers queue on and how
+    /// many callers are in it.
+    loading: HashMap<Identity, (Arc<Turn>, usize)>,
     bytes: usize,
     clock: u64,
     loads: u64,
+}
+
+/// The turn of a file's callers: held by the one making a mesh of the file, and the file's mesh
+/// at scale 1 once one of them has loaded it (for the next, even if the cache does not keep it).
+type Turn = Mutex<Option<Arc<Mesh>>>;
+
+/// A caller's place in a file's turn; when dropped (a panic too), the caller leaves the turn,
+/// which ends with its last caller.
+struct Queued<'a> {
+    cache: &'a MeshCache,
+    identity: Identity,
+    turn: Arc<Turn>,
+}
+
+impl Drop for Queued<'_> {
+    fn drop(&mut self) {
+        self.cache.lock().leave_turn(&self.identity);
+    }
 }
 
 #[derive(Debug)]
@@ -120,31 +145,37 @@ impl MeshCache {
             identity: opened.identity,
             scale: scale_bits(scale),
         };
-        let turn = {
+        let queued = {
             let mut inner = self.lock();
             if let Some(mesh) = inner.kept(&key) {
                 return Ok(mesh);
             }
-            Arc::clone(inner.loading.entry(key.identity).or_default())
+            let (turn, callers) = inner.loading.entry(key.identity).or_default();
+            *callers += 1;
+            Queued {
+                cache: self,
+                identity: key.identity,
+                turn: Arc::clone(turn),
+            }
         };
-        let held = turn.lock().unwrap_or_else(|e| e.into_inner());
-        let made = self.make(resource, &key, &opened, scale);
-        let mut inner = self.lock();
-        inner.end_turn(&key.identity, &turn);
-        drop(inner);
+        let mut held = queued.turn.lock().unwrap_or_else(|e| e.into_inner());
+        let made = self.make(resource, &key, &opened, scale, &mut held);
         drop(held);
+        drop(queued);
         made
     }
 
     /// The mesh of `key` made and kept, the caller holding its file's turn: kept already (by
-    /// the caller before in the queue), or made from the file's mesh at scale 1, loaded first
-    /// if it is not kept.
+    /// the caller before in the queue), or made from the file's mesh at scale 1 (kept, or handed
+    /// over in the turn by the caller that loaded it), loaded first if there is none (and then
+    /// handed over in the turn).
     fn make(
         &self,
         resource: &str,
         key: &Key,
         opened: &Opened,
         scale: [f64; 3],
+        loaded: &mut Option<Arc<Mesh>>,
     ) -> Result<Arc<Mesh>, GeometryError> {
         let unit = {
             let mut inner = self.lock();
@@ -153,7 +184,7 @@ impl MeshCache {
             }
             inner.unit_of(&key.identity)
         };
-        let unit = match unit {
+        let unit = match unit.or_else(|| loaded.clone()) {
             Some(unit) => unit,
             None => {
                 let bytes = read(resource, opened, &self.access)?;
@@ -162,6 +193,7 @@ impl MeshCache {
                 let unit = Mesh::from_triangles(resource, &vertices, &triangles, UNIT);
                 drop((vertices, triangles));
                 let unit = Arc::new(unit?);
+                *loaded = Some(Arc::clone(&unit));
                 let mut inner = self.lock();
                 inner.loads += 1;
                 inner.forget_former(resource, &key.identity);
@@ -263,28 +295,40 @@ impl CacheInner {
         }
     }
 
-    /// The file's lock is no longer the one to queue on, if it still is `turn` (callers
-    /// already queued on it find the mesh kept, or load it in turn).
-    fn end_turn(&mut self, identity: &Identity, turn: &Arc<Mutex<()>>) {
-        if self
-            .loading
-            .get(identity)
-            .is_some_and(|t| Arc::ptr_eq(t, turn))
-        {
-            self.loading.remove(identity);
+    /// A caller leaves its file's turn, which ends (is no longer the one to queue on, and lets
+    /// the file's mesh it handed over go) with its last caller.
+    fn leave_turn(&mut self, identity: &Identity) {
+        if let Some((_, callers)) = self.loading.get_mut(identity) {
+            *callers -= 1;
+            if *callers == 0 {
+                self.loading.remove(identity);
+            }
         }
     }
 
-    /// Keeps a mesh just made, dropping the least recently used ones to make room; not at all
-    /// if it is larger than the whole bound.
+    /// Keeps a mesh just made, dropping kept ones to make room ([`CacheInner::to_drop`]); not at
+    /// all (and nothing dropped) if it is larger than the whole bound, or than the bound less
+    /// the mesh it was made from.
     fn keep(&mut self, key: Key, mesh: &Arc<Mesh>, max_bytes: usize) {
         self.remove(&key);
         let size = mesh.bytes();
-        if size > max_bytes {
+        // What may not be dropped for it: the mesh at scale 1 of its file, when it is at another.
+        let unit = Key {
+            scale: scale_bits(UNIT),
+            ..key
+        };
+        let kept_for_it = match self.entries.get(&unit) {
+            Some(entry) if unit != key => entry.mesh.bytes(),
+            _ => 0,
+        };
+        if kept_for_it.saturating_add(size) > max_bytes {
             return;
         }
-        while self.bytes + size > max_bytes && !self.entries.is_empty() {
-            self.evict_oldest();
+        while self.bytes + size > max_bytes {
+            match self.to_drop(&key) {
+                Some(victim) => self.remove(&victim),
+                None => return,
+            }
         }
         self.clock += 1;
         self.bytes += size;
@@ -295,21 +339,23 @@ impl CacheInner {
         self.entries.insert(key, entry);
     }
 
+    /// The kept mesh to drop first to make room for `key`'s: the least recently used at a scale
+    /// other than 1 (remade from its file's mesh at scale 1 without a parse), else the least
+    /// recently used at scale 1, never the mesh at scale 1 of `key`'s file when `key` is at
+    /// another scale (it is what `key`'s mesh is made from).
+    fn to_drop(&self, key: &Key) -> Option<Key> {
+        let unit = scale_bits(UNIT);
+        let derived = key.scale != unit;
+        self.entries
+            .iter()
+            .filter(|(k, _)| !(derived && k.scale == unit && k.identity == key.identity))
+            .min_by_key(|(k, e)| (k.scale == unit, e.last_used))
+            .map(|(k, _)| *k)
+    }
+
     fn remove(&mut self, key: &Key) {
         if let Some(entry) = self.entries.remove(key) {
             self.bytes -= entry.mesh.bytes();
-        }
-    }
-
-    fn evict_oldest(&mut self) {
-        let oldest = self
-            .entries
-            .iter()
-            .min_by_key(|(_, e)| e.last_used)
-            .map(|(k, _)| *k);
-        match oldest {
-            Some(key) => self.remove(&key),
-            None => self.bytes = 0,
         }
     }
 }

@@ -339,6 +339,95 @@ fn callers_asking_at_once_for_a_new_resource_load_it_once() {
     assert!(meshes.iter().all(|m| std::sync::Arc::ptr_eq(m, &meshes[0])));
 }
 
+/// With room for one mesh of a large file but not two, a sweep of scales parses the file once: a
+/// mesh at another scale never drops the file's mesh at scale 1 it is made from (before, each
+/// one did, and the next scale parsed the file again); it is served without being kept, and
+/// drops nothing else for room it cannot have. Meshes at other scales go before meshes at
+/// scale 1 to make room.
+#[test]
+fn a_scale_sweep_in_room_for_one_mesh_parses_the_file_once() {
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let big = dir.path().join("cylinder.stl");
+    write_binary_stl(&big, &faceted_cylinder(30.0, 100.0, 2_000));
+    let small = dir.path().join("l.stl");
+    write_binary_stl(&small, &l_mm());
+    let (big, small) = (big.display().to_string(), small.display().to_string());
+    let size = |r: &str| {
+        load(r, [1.0; 3], &AmentIndex::default())
+            .expect("loads")
+            .bytes()
+    };
+    let (b, s) = (size(&big), size(&small));
+    assert!(4 * s < b, "{s} and {b} bytes");
+    let cache = MeshCache::new(AmentIndex::default(), b + b / 2);
+    let scales = [1.0, 1.0 + 1e-12, 1.001, 0.5, 2.0, 1.5];
+    for round in 0..2 {
+        for k in scales {
+            let mesh = cache.get(&big, [k; 3]).expect("made");
+            let direct = load(&big, [k; 3], &AmentIndex::default()).expect("loads");
+            assert_eq!(mesh.size().to_bits(), direct.size().to_bits(), "{k}");
+            assert_eq!(cache.loads(), 1, "round {round}, scale {k}");
+        }
+    }
+    assert_eq!((cache.len(), cache.bytes()), (1, b));
+    // The small file at two scales fits beside it.
+    cache.get(&small, [1.0; 3]).expect("loads");
+    cache.get(&small, [2.0; 3]).expect("made");
+    assert_eq!((cache.loads(), cache.len()), (2, 3));
+    // Another scale of the large file: not kept, and the small file's meshes stay.
+    cache.get(&big, [3.0; 3]).expect("made");
+    assert_eq!(
+        (cache.loads(), cache.len(), cache.bytes()),
+        (2, 3, b + 2 * s)
+    );
+    // A second large file makes room: the mesh at another scale goes first, then the meshes at
+    // scale 1, least recently used first.
+    let other = dir.path().join("other.stl");
+    write_binary_stl(&other, &faceted_cylinder(30.0, 100.0, 2_000));
+    let other = other.display().to_string();
+    cache.get(&other, [1.0; 3]).expect("loads");
+    assert_eq!((cache.loads(), cache.len()), (3, 1));
+    assert!(cache.holds(&other, [1.0; 3]));
+}
+
+/// Callers asking at once for one file at different scales wait for one parse, even when its
+/// mesh is too large to keep: the loader hands it over to the others through the file's turn
+/// (before, each of them parsed the file again in turn).
+#[test]
+fn callers_at_other_scales_share_one_parse_even_unkept() {
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let path = dir.path().join("cylinder.stl");
+    write_binary_stl(&path, &faceted_cylinder(30.0, 100.0, 20_000));
+    let resource = path.display().to_string();
+    let cache = MeshCache::new(AmentIndex::default(), 1);
+    let scales = [1.0, 1.0 + 1e-12, 1.001, 0.5];
+    let start = std::sync::Barrier::new(scales.len());
+    let sizes: Vec<f64> = std::thread::scope(|s| {
+        let handles: Vec<_> = scales
+            .iter()
+            .map(|&k| {
+                let (cache, resource, start) = (&cache, &resource, &start);
+                s.spawn(move || {
+                    start.wait();
+                    cache.get(resource, [k; 3]).expect("made").size()
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("no panic"))
+            .collect()
+    });
+    assert_eq!((cache.loads(), cache.len()), (1, 0));
+    for (k, size) in scales.iter().zip(&sizes) {
+        let direct = load(&resource, [*k; 3], &AmentIndex::default()).expect("loads");
+        assert_eq!(size.to_bits(), direct.size().to_bits(), "{k}");
+    }
+    // The turn ended with its last caller: the next asks load the file again (nothing is kept).
+    cache.get(&resource, [1.0; 3]).expect("loads");
+    assert_eq!(cache.loads(), 2);
+}
+
 /// The node will share meshes across its solver threads.
 #[test]
 fn meshes_and_the_cache_can_be_shared_across_threads() {

@@ -138,6 +138,11 @@ pub const MAX_TRACKED_CHANGES_PER_WRITER: usize = DEFAULT_WRITER_MAX_SAMPLES;
 // are handed over.
 pub const MAX_WITHHELD_BYTES_PER_TOPIC: usize = 16 * 1024 * 1024;
 
+// Most payload bytes a TopicCache retains of samples that every local DataReader
+// of the topic has taken (none reads them again), whatever the sample count
+// limits; beyond this, the oldest of them are dropped as they are taken.
+pub const MAX_TAKEN_BYTES_PER_TOPIC: usize = 4 * 1024 * 1024;
+
 // Default / fallback UDP-payload budget (RTPS header + submessages) used to
 // size datagrams built by the writer's DATA-coalescing and DATAFRAG packing
 // paths when the per-peer path MTU is unknown (peer behind a router, IPv6, or

@@ -19,7 +19,7 @@ use crate::{
     typedesc::TypeDesc,
     CreateError, CreateResult,
   },
-  rtps::constant::MAX_WITHHELD_BYTES_PER_TOPIC,
+  rtps::constant::{MAX_TAKEN_BYTES_PER_TOPIC, MAX_WITHHELD_BYTES_PER_TOPIC},
   structure::{sequence_number::SequenceNumber, time::Timestamp},
   GUID,
 };
@@ -154,6 +154,40 @@ pub(crate) struct TopicCache {
   // Therefore, data before the marker SN can be handed off to a Reliable DataReader.
   // Initially, we consider the marker for each Writer (GUID) to be SequenceNumber::new(1)
   received_reliably_before: BTreeMap<GUID, SequenceNumber>,
+
+  // How far each local DataReader of the topic has taken samples. A change that
+  // every one of them has read past is never read again, so whatever the sample
+  // count limits, such changes hold at most MAX_TAKEN_BYTES_PER_TOPIC of payload
+  // (oldest dropped first).
+  readers: BTreeMap<GUID, ReadPosition>,
+
+  // At least the payload bytes of the changes every reader has taken (more after
+  // other removals): when it passes MAX_TAKEN_BYTES_PER_TOPIC, they are counted
+  // again and dropped down to it.
+  taken_bytes_bound: usize,
+}
+
+// Where one DataReader has taken samples up to, as its own read pointers: a
+// Reliable one reads after the last SequenceNumber it took from each Writer, a
+// BestEffort one after the latest receive Timestamp it took.
+#[derive(Debug)]
+struct ReadPosition {
+  reliable: bool,
+  latest_instant: Timestamp,
+  last_read_sn: BTreeMap<GUID, SequenceNumber>,
+}
+
+impl ReadPosition {
+  fn has_passed(&self, instant: Timestamp, cc: &CacheChange) -> bool {
+    if self.reliable {
+      self
+        .last_read_sn
+        .get(&cc.writer_guid)
+        .is_some_and(|sn| cc.sequence_number <= *sn)
+    } else {
+      instant <= self.latest_instant
+    }
+  }
 }
 
 impl TopicCache {
@@ -170,6 +204,8 @@ impl TopicCache {
       last_added_instant: Timestamp::ZERO,
       sequence_numbers: BTreeMap::new(),
       received_reliably_before: BTreeMap::new(),
+      readers: BTreeMap::new(),
+      taken_bytes_bound: 0,
     };
 
     new_self.update_keep_limits(topic_qos);
@@ -294,6 +330,78 @@ impl TopicCache {
       gave_up = true;
     }
     gave_up
+  }
+
+  // A local DataReader of the topic, Reliable or not, is created: until it takes
+  // them, no change counts as taken.
+  pub(crate) fn add_reader(&mut self, reader: GUID, reliable: bool) {
+    self.readers.insert(
+      reader,
+      ReadPosition {
+        reliable,
+        latest_instant: Timestamp::ZERO,
+        last_read_sn: BTreeMap::new(),
+      },
+    );
+  }
+
+  // A local DataReader is dropped: what only it had not taken yet is taken by all.
+  pub(crate) fn remove_reader(&mut self, reader: GUID) {
+    if self.readers.remove(&reader).is_some() {
+      self.drop_taken_over_limit();
+    }
+  }
+
+  // `reader` took the change at `instant`, SequenceNumber `sn` of `writer` (and
+  // moved its read pointers as the DataReader does). Once every reader has taken
+  // it, its payload counts against MAX_TAKEN_BYTES_PER_TOPIC.
+  pub(crate) fn mark_taken(
+    &mut self,
+    reader: GUID,
+    instant: Timestamp,
+    writer: GUID,
+    sn: SequenceNumber,
+  ) {
+    let Some(position) = self.readers.get_mut(&reader) else {
+      return;
+    };
+    position.latest_instant = max(position.latest_instant, instant);
+    position.last_read_sn.insert(writer, sn);
+    let size = match self.changes.get(&instant) {
+      Some(cc) if self.taken_by_all(instant, cc) => cc.data_value.payload_size(),
+      _ => return,
+    };
+    self.taken_bytes_bound = self.taken_bytes_bound.saturating_add(size);
+    if self.taken_bytes_bound > MAX_TAKEN_BYTES_PER_TOPIC {
+      self.drop_taken_over_limit();
+    }
+  }
+
+  // Whether every local reader has read past the change (none: nothing is).
+  fn taken_by_all(&self, instant: Timestamp, cc: &CacheChange) -> bool {
+    !self.readers.is_empty() && self.readers.values().all(|r| r.has_passed(instant, cc))
+  }
+
+  // While the changes every reader has taken hold more than
+  // MAX_TAKEN_BYTES_PER_TOPIC of payload, drops the oldest of them.
+  fn drop_taken_over_limit(&mut self) {
+    let taken: Vec<(Timestamp, usize)> = self
+      .changes
+      .iter()
+      .filter(|(instant, cc)| self.taken_by_all(**instant, cc))
+      .map(|(instant, cc)| (*instant, cc.data_value.payload_size()))
+      .collect();
+    let mut bytes: usize = taken.iter().map(|(_, size)| size).sum();
+    for (instant, size) in taken {
+      if bytes <= MAX_TAKEN_BYTES_PER_TOPIC {
+        break;
+      }
+      if let Some(cc) = self.changes.remove(&instant) {
+        self.remove_sn(&cc);
+      }
+      bytes -= size;
+    }
+    self.taken_bytes_bound = bytes;
   }
 
   pub fn get_change(&self, instant: &Timestamp) -> Option<&CacheChange> {
@@ -576,6 +684,16 @@ impl TopicCache {
   pub(crate) fn max_keep_samples(&self) -> i32 {
     self.max_keep_samples
   }
+
+  // The payload bytes the cache holds.
+  #[cfg(test)]
+  pub(crate) fn payload_bytes(&self) -> usize {
+    self
+      .changes
+      .values()
+      .map(|cc| cc.data_value.payload_size())
+      .sum()
+  }
 }
 
 type ChangesInRangeBestEffort<'a, F> = iter::Map<btree_map::Range<'a, Timestamp, CacheChange>, F>;
@@ -630,7 +748,7 @@ mod tests {
     thread,
   };
 
-  use super::{DDSCache, TopicCache};
+  use super::{DDSCache, TopicCache, MAX_TAKEN_BYTES_PER_TOPIC};
   use crate::{
     dds::{
       ddsdata::DDSData,
@@ -802,6 +920,108 @@ mod tests {
       SequenceNumber::new(201)
     );
     assert!(topic_cache.changes.len() <= topic_cache.max_keep_samples as usize + 1);
+  }
+
+  fn reader(n: u8) -> GUID {
+    GUID::new(
+      GuidPrefix::new(&[9; 12]),
+      EntityId::new([0, 0, n], EntityKind::READER_WITH_KEY_USER_DEFINED),
+    )
+  }
+
+  fn sequence_numbers_held(topic_cache: &TopicCache) -> Vec<i64> {
+    topic_cache
+      .changes
+      .values()
+      .map(|cc| i64::from(cc.sequence_number))
+      .collect()
+  }
+
+  // Samples that every local reader (one Reliable, one BestEffort) has taken hold
+  // at most MAX_TAKEN_BYTES_PER_TOPIC of payload, oldest dropped first, whatever
+  // the sample count limits (KeepLast 10 within 64 here); a sample one reader has
+  // not taken stays, and is taken by all when that reader goes.
+  #[test]
+  fn samples_taken_by_every_reader_are_bounded_in_bytes() {
+    let mut topic_cache = TopicCache::new(
+      "Blobs".to_string(),
+      TypeDesc::new("Blob".to_string()),
+      &QosPolicyBuilder::new()
+        .history(History::KeepLast { depth: 10 })
+        .build(),
+    );
+    let writer = user_writer();
+    let (reliable, best_effort) = (reader(1), reader(2));
+    topic_cache.add_reader(reliable, true);
+    topic_cache.add_reader(best_effort, false);
+    let size = 3 * 1024 * 1024;
+    for sn in 1..=5 {
+      topic_cache.add_change(
+        &Timestamp::now(),
+        CacheChange::new(
+          writer,
+          SequenceNumber::new(sn),
+          WriteOptions::default(),
+          DDSData::new(SerializedPayload::new(
+            RepresentationIdentifier::CDR_LE,
+            vec![0; size],
+          )),
+        ),
+      );
+    }
+    topic_cache.mark_reliably_received_before(writer, SequenceNumber::new(6));
+    let held: Vec<(Timestamp, SequenceNumber)> = topic_cache
+      .changes
+      .iter()
+      .map(|(t, cc)| (*t, cc.sequence_number))
+      .collect();
+    let payload = |n: usize| n * (size + 4);
+
+    // One reader took them all, the other none: nothing is taken by all.
+    for (instant, sn) in &held {
+      topic_cache.mark_taken(reliable, *instant, writer, *sn);
+    }
+    assert_eq!(topic_cache.payload_bytes(), payload(5));
+
+    // The other takes the first three: 9 MiB taken by all, of which only the
+    // latest fits within the bound.
+    for (instant, sn) in &held[..3] {
+      topic_cache.mark_taken(best_effort, *instant, writer, *sn);
+    }
+    assert!(payload(1) <= MAX_TAKEN_BYTES_PER_TOPIC && payload(2) > MAX_TAKEN_BYTES_PER_TOPIC);
+    assert_eq!(sequence_numbers_held(&topic_cache), [3, 4, 5]);
+    assert_eq!(topic_cache.payload_bytes(), payload(3));
+
+    // The collection by count keeps what is left.
+    topic_cache.remove_changes_before(Timestamp::ZERO);
+    assert_eq!(sequence_numbers_held(&topic_cache), [3, 4, 5]);
+
+    // The BestEffort reader goes: what only it had not taken is taken by all.
+    topic_cache.remove_reader(best_effort);
+    assert_eq!(sequence_numbers_held(&topic_cache), [5]);
+    // The others' SequenceNumbers are gone from the index too.
+    assert_eq!(topic_cache.sequence_numbers[&writer].len(), 1);
+    assert_eq!(topic_cache.payload_bytes(), payload(1));
+  }
+
+  // Without local readers, nothing counts as taken: the count limits alone apply.
+  #[test]
+  fn without_readers_nothing_is_taken() {
+    let mut topic_cache = keep_all_topic_cache();
+    let writer = user_writer();
+    for sn in 1..=3 {
+      add_after_missing_first(&mut topic_cache, writer, sn, 3 * 1024 * 1024);
+    }
+    topic_cache.mark_reliably_received_before(writer, SequenceNumber::new(4));
+    let held: Vec<(Timestamp, SequenceNumber)> = topic_cache
+      .changes
+      .iter()
+      .map(|(t, cc)| (*t, cc.sequence_number))
+      .collect();
+    for (instant, sn) in held {
+      topic_cache.mark_taken(reader(1), instant, writer, sn);
+    }
+    assert_eq!(sequence_numbers_held(&topic_cache), [1, 2, 3]);
   }
 
   #[test]

@@ -1386,6 +1386,138 @@ mod tests {
     assert_eq!(result_vec2.unwrap().len(), 0);
   }
 
+  // A sample the DataReader has taken is not held on in the topic cache beyond a
+  // bound in bytes: three samples of 5 MB each are gone from it once taken (the
+  // count limit alone kept them until 64 later samples came), while small ones
+  // stay as before.
+  #[test]
+  fn large_samples_taken_are_not_held_in_the_topic_cache() {
+    let dp = DomainParticipant::new(test_domain_id(0)).expect("Participant creation failed!");
+    let qos = QosPolicies::qos_none();
+    let sub = dp.create_subscriber(&qos).unwrap();
+    let topic = dp
+      .create_topic(
+        "dr large taken".to_string(),
+        "large taken test".to_string(),
+        &qos,
+        TopicKind::WithKey,
+      )
+      .unwrap();
+    let topic_cache =
+      dp.dds_cache()
+        .write()
+        .unwrap()
+        .add_new_topic(topic.name(), topic.get_type(), &topic.qos());
+    let held = |tc: &Arc<Mutex<crate::structure::dds_cache::TopicCache>>| -> (usize, usize) {
+      let tc = tc.lock().unwrap();
+      let changes: Vec<usize> = tc
+        .get_changes_in_range_best_effort(crate::Timestamp::ZERO, crate::Timestamp::now())
+        .map(|(_, cc)| cc.data_value.payload_size())
+        .collect();
+      (changes.len(), changes.iter().sum())
+    };
+
+    let (notification_sender, _notification_receiver) =
+      crate::mio_source::notification_channel(100);
+    let (_notification_event_source, notification_event_sender) =
+      mio_source::make_poll_channel().unwrap();
+    let (status_sender, _status_receiver) = sync_status_channel::<DataReaderStatus>(4).unwrap();
+    let (participant_status_sender, _participant_status_receiver) =
+      sync_status_channel(16).unwrap();
+    let (_reader_command_sender, reader_command_receiver) =
+      wake_channel::<ReaderCommand>(10, &LoopWaker::new());
+    let reader_ing = ReaderIngredients {
+      guid: GUID::new_with_prefix_and_id(dp.guid_prefix(), EntityId::default()),
+      notification_sender,
+      status_sender,
+      topic_name: topic.name(),
+      topic_cache_handle: topic_cache.clone(),
+      like_stateless: false,
+      qos_policy: QosPolicies::qos_none(),
+      data_reader_command_receiver: reader_command_receiver,
+      data_reader_waker: Arc::new(Mutex::new(None)),
+      poll_event_sender: notification_event_sender,
+      security_plugins: None,
+      discovery_notify: None,
+    };
+    let mut reader = Reader::new(
+      reader_ing,
+      Rc::new(UDPSender::new_with_random_port().unwrap()),
+      new_shared_timer(),
+      participant_status_sender,
+    );
+    let mut datareader = sub
+      .create_datareader::<RandomData, CDRDeserializerAdapter<RandomData>>(&topic, None)
+      .unwrap();
+    let writer_guid = GUID {
+      prefix: GuidPrefix::new(&[2; 12]),
+      entity_id: EntityId::create_custom_entity_id(
+        [2; 3],
+        EntityKind::WRITER_WITH_KEY_USER_DEFINED,
+      ),
+    };
+    let mr_state = MessageReceiverState {
+      source_guid_prefix: writer_guid.prefix,
+      ..Default::default()
+    };
+    reader.matched_writer_add(
+      writer_guid,
+      EntityId::UNKNOWN,
+      mr_state.unicast_reply_locator_list.to_vec(),
+      mr_state.multicast_reply_locator_list.to_vec(),
+      &QosPolicies::qos_none(),
+    );
+    let mut sn = 0;
+    let mut send = |reader: &mut Reader, a: i64, len: usize| {
+      sn += 1;
+      let data = RandomData {
+        a,
+        b: "x".repeat(len),
+      };
+      let data_msg = Data {
+        reader_id: reader.entity_id(),
+        writer_id: writer_guid.entity_id,
+        writer_sn: SequenceNumber::from(sn),
+        serialized_payload: Some(
+          SerializedPayload {
+            representation_identifier: RepresentationIdentifier::CDR_LE,
+            representation_options: [0, 0],
+            value: Bytes::from(to_vec::<RandomData, LittleEndian>(&data).unwrap()),
+          }
+          .into(),
+        ),
+        ..Data::default()
+      };
+      reader.handle_data_msg(
+        data_msg,
+        DATA_Flags::Endianness | DATA_Flags::Data,
+        &mr_state,
+      );
+    };
+
+    let large = 5_000_000;
+    for a in 0..3 {
+      send(&mut reader, a, large);
+    }
+    let (count, bytes) = held(&topic_cache);
+    assert_eq!(count, 3);
+    assert!(bytes > 3 * large, "{bytes}");
+    let taken = datareader.take(100, ReadCondition::any()).unwrap();
+    assert_eq!(taken.len(), 3);
+    assert_eq!(
+      held(&topic_cache),
+      (0, 0),
+      "(samples, payload bytes) the topic cache still holds of the samples taken"
+    );
+
+    // Small samples taken stay, as the count limit keeps them.
+    for a in 3..6 {
+      send(&mut reader, a, 100);
+    }
+    assert_eq!(datareader.take(100, ReadCondition::any()).unwrap().len(), 3);
+    assert_eq!(held(&topic_cache).0, 3);
+  }
+
   #[test]
   fn read_and_take_with_instance() {
     // Test the methods read_instance and take_instance of the DataReader

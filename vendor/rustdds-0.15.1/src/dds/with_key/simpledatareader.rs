@@ -120,6 +120,10 @@ where
   DA: DeserializerAdapter<D>,
 {
   fn drop(&mut self) {
+    // What only this reader had not taken yet no longer waits for it.
+    if let Ok(mut topic_cache) = self.topic_cache.lock() {
+      topic_cache.remove_reader(self.my_guid);
+    }
     // Tell dp_event_loop
     self.my_subscriber.remove_reader(self.my_guid);
 
@@ -178,6 +182,11 @@ where
         ),
       });
     }
+    let reliable = matches!(
+      qos_policy.reliability(),
+      Some(policy::Reliability::Reliable { .. })
+    );
+    topic_cache.lock().unwrap().add_reader(my_guid, reliable);
 
     Ok(Self {
       my_subscriber: subscriber,
@@ -348,7 +357,7 @@ where
       Some(policy::Reliability::Reliable { .. })
     );
 
-    let topic_cache = self.acquire_the_topic_cache_guard();
+    let mut topic_cache = self.acquire_the_topic_cache_guard();
 
     let mut read_state_ref = self.read_state.lock().unwrap();
     let latest_instant = read_state_ref.latest_instant;
@@ -382,6 +391,9 @@ where
         read_state_ref
           .last_read_sn
           .insert(writer_guid, sequence_number);
+        // Every local reader past it: its payload is no longer held beyond
+        // MAX_TAKEN_BYTES_PER_TOPIC.
+        topic_cache.mark_taken(self.my_guid, timestamp, writer_guid, sequence_number);
 
         // // Debug sanity check:
         // use crate::Duration;
