@@ -197,7 +197,11 @@ pub(crate) fn answer_line(line: &[u8], number: usize, with: &Answering) -> GripR
     reply
 }
 
-/// The answer to one line: to a `GraspCandidate`, or to a `PoseCandidate`.
+/// The answer to one line: to a `GraspCandidate`, or to a `PoseCandidate`. One lives at a time,
+/// written and dropped before the next line, so the pose answer's 208 bytes more than a grasp
+/// answer cost nothing; boxing it would leave the grasp answer the one far larger than the box,
+/// and boxing that would cost an allocation on every line of `solve`'s grasp candidates.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) enum LineAnswer {
     /// A `GraspCandidate`'s (or a line that is none).

@@ -8,7 +8,7 @@
 use super::{Negative, SolveOptions};
 use crate::config::Config;
 use crate::kind::{self, Kind, Streams, Visit};
-use crate::msg::{GripRecommendation, RosMessage};
+use crate::msg::{GripRecommendation, PoseRecommendation, RosMessage};
 use crate::record::bag::{self, Bag, Recorded};
 use crate::record::output::{Pending, Replacement};
 use crate::record::{BagWriter, Entry, Payload, Topics};
@@ -140,15 +140,25 @@ fn replay_file(
             kind::request_types()
         );
     }
-    let missing = bag.fields.missing::<GripRecommendation>();
-    if !missing.is_empty() {
-        writeln!(
-            std::io::stdout(),
-            "{}: recorded before {} were added to {}: not compared",
-            path.display(),
-            missing.join(", "),
-            GripRecommendation::TYPE_NAME
-        )?;
+    let missing = [
+        (
+            bag.fields.missing::<GripRecommendation>(),
+            GripRecommendation::TYPE_NAME,
+        ),
+        (
+            bag.fields.missing::<PoseRecommendation>(),
+            PoseRecommendation::TYPE_NAME,
+        ),
+    ];
+    for (missing, type_name) in missing {
+        if !missing.is_empty() {
+            writeln!(
+                std::io::stdout(),
+                "{}: recorded before {} were added to {type_name}: not compared",
+                path.display(),
+                missing.join(", "),
+            )?;
+        }
     }
     if bag.undecodable_count > 0 {
         trouble.push(format!(

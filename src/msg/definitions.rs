@@ -52,14 +52,14 @@ use super::{
     ColorRgba, CompressedImage, Duration, GraspCandidate, GraspCandidateSet, GraspObject,
     GraspPose, GripRecommendation, GripRecommendationSet, Header, Marker, MarkerArray, Mesh,
     MeshFile, MeshTriangle, Point, Pose, PoseCandidate, PoseCandidateSet, PoseRecommendation,
-    PoseRecommendationSet, Quaternion, RosMessage, SolidPrimitive, TfMessage, Time, Transform,
-    TransformStamped, UvCoordinate, Vector3,
+    PoseRecommendationSet, PoseStamped, Quaternion, RosMessage, SolidPrimitive, TfMessage, Time,
+    Transform, TransformStamped, UvCoordinate, Vector3,
 };
 use std::collections::BTreeSet;
 
 /// Every message type this crate reads or writes, by full name, with its `.msg` text exactly as
 /// its package ships it.
-pub const DEFINITIONS: [(&str, &str); 29] = [
+pub const DEFINITIONS: [(&str, &str); 30] = [
     (
         GraspCandidate::TYPE_NAME,
         include_str!("../../msg/GraspCandidate.msg"),
@@ -137,6 +137,10 @@ pub const DEFINITIONS: [(&str, &str); 29] = [
     (
         Pose::TYPE_NAME,
         include_str!("jazzy/geometry_msgs/Pose.msg"),
+    ),
+    (
+        PoseStamped::TYPE_NAME,
+        include_str!("jazzy/geometry_msgs/PoseStamped.msg"),
     ),
     (
         Transform::TYPE_NAME,

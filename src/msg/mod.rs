@@ -104,5 +104,6 @@ pub use poses::{
 
 mod visualization;
 pub use visualization::{
-    ColorRgba, CompressedImage, Duration, Marker, MarkerArray, MeshFile, Pose, UvCoordinate,
+    ColorRgba, CompressedImage, Duration, Marker, MarkerArray, MeshFile, Pose, PoseStamped,
+    UvCoordinate,
 };

@@ -9,7 +9,8 @@
 //! unbounded (shape_msgs: `float64[<=3]`).
 
 use super::{
-    CompactString, GripRecommendation, Header, Point, Pose, RosFields, RosMessage, RosType, Vector3,
+    CompactString, GripRecommendation, Header, Point, Pose, PoseStamped, RosFields, RosMessage,
+    RosType, Vector3,
 };
 use serde::{Deserialize, Serialize};
 use std::marker::PhantomData;
@@ -265,6 +266,11 @@ ros_message! {
         normal_2: Vector3,
         /// The centre of mass, m.
         center_of_mass: Point,
+        /// The tool frame after the recommended rotation about the grasp centre, in the header
+        /// frame or the node's `gravity_frame` (`docs/poses.md`, "The tool pose"); all NaN where
+        /// the answer has no rotation.
+        #[serde(default)]
+        tool_pose: PoseStamped,
     }
 }
 

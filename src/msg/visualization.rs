@@ -1,5 +1,7 @@
 //! `visualization_msgs/MarkerArray` and the types it needs, as in ROS 2 Jazzy (checked against
-//! the Jazzy `.msg` files shipped with the `ros-visualization-msgs` 5.3.6 wheel).
+//! the Jazzy `.msg` files shipped with the `ros-visualization-msgs` 5.3.6 wheel); and
+//! `geometry_msgs/PoseStamped` (a pose answer's tool pose), next to the `Pose` it holds (checked
+//! against the `ros-geometry-msgs` 5.3.6 wheel's file).
 
 use super::{Header, Point, Quaternion, RosMessage, RosType, Vector3};
 use serde::{Deserialize, Serialize};
@@ -35,6 +37,17 @@ ros_message! {
         position: Point,
         /// Orientation.
         orientation: Quaternion,
+    }
+}
+
+ros_message! {
+    /// `geometry_msgs/PoseStamped`: a pose with the frame it is given in and its time.
+    PoseStamped = geometry_msgs/PoseStamped [] {
+        /// The frame of `pose` and its time.
+        #[serde(default)]
+        header: Header,
+        /// The pose in `header.frame_id`.
+        pose: Pose,
     }
 }
 

@@ -393,6 +393,7 @@ impl Answerer {
             markers_on: self.draws(version.config.publish_markers, audience),
             echo: self.echo,
             load_time: load_time(version.config.max_mesh_load_time),
+            tool_frame: None,
         }
     }
 

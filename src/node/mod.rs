@@ -322,7 +322,7 @@ async fn serve(
             }
             received = poses.select_next_some() => match received {
                 Ok((candidate, info)) => {
-                    let request = Request::Pose(Box::new(candidate));
+                    let request = Request::Pose(Box::new(candidate), None);
                     tf_serve::admit(node, endpoints, state, request, message_times(&info)).await;
                 }
                 Err(e) => {

@@ -5,6 +5,7 @@ use crate::answer::{markers, Answering};
 use crate::msg::{
     GraspCandidate, GripRecommendation, MarkerArray, PoseCandidate, PoseRecommendation,
 };
+use crate::tf::ToolFrame;
 
 /// The fewest triangles of an inline mesh (`object.inline_mesh`) for which a single pose candidate
 /// is answered off the node's thread. An inline mesh is indexed anew for every candidate that
@@ -31,9 +32,19 @@ pub(crate) struct PoseWork {
     pub(super) echo: bool,
     /// `max_mesh_load_time`.
     pub(super) load_time: std::time::Duration,
+    /// Where the answer's tool pose goes: `gravity_frame`, by the transform looked up when the
+    /// candidate was turned by TF; `None`: it stays in the header frame.
+    pub(super) tool_frame: Option<ToolFrame>,
 }
 
 impl PoseWork {
+    /// The same work, its answer's tool pose re-expressed by `frame` (`None`: in the header
+    /// frame).
+    pub(crate) fn with_tool_frame(mut self, frame: Option<ToolFrame>) -> Self {
+        self.tool_frame = frame;
+        self
+    }
+
     /// How long the answer waits for its mesh (`max_mesh_load_time`).
     pub(crate) fn load_time(&self) -> std::time::Duration {
         self.load_time
@@ -51,11 +62,21 @@ impl PoseWork {
             .map(|why| refused(candidate, &why.to_string()))
     }
 
-    /// The answer, and its markers when they are on and wanted and the answer has status 0.
+    /// The answer, and its markers when they are on and wanted and the answer has status 0;
+    /// its tool pose in [`PoseWork::with_tool_frame`]'s frame.
     pub(crate) fn run(
         &self,
         candidate: &PoseCandidate,
     ) -> (PoseRecommendation, Option<MarkerArray>) {
+        let (mut reply, markers) = self.answer(candidate);
+        if let Some(frame) = &self.tool_frame {
+            frame.express(&mut reply.tool_pose);
+        }
+        (reply, markers)
+    }
+
+    /// [`PoseWork::run`] with the tool pose in the header frame.
+    fn answer(&self, candidate: &PoseCandidate) -> (PoseRecommendation, Option<MarkerArray>) {
         if let Some(reply) = self.refusal(candidate) {
             return (reply, None);
         }

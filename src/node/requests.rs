@@ -16,6 +16,7 @@ use crate::msg::{
     short_id, GraspCandidate, GripRecommendation, MarkerArray, PoseCandidate, PoseRecommendation,
 };
 use crate::record::{now_ns, Topics};
+use crate::tf::ToolFrame;
 use anyhow::Context as _;
 use ros2_client::Node;
 
@@ -90,17 +91,20 @@ pub(super) async fn answer_one(
 /// of a second and more for 100,000 triangles) holds up no other topic, and a load that never
 /// ends holds up nothing. Never on the node's thread: with every loader busy the candidate
 /// waits, and with the queue full it is refused at once. Answers may then come back in another
-/// order than their candidates.
+/// order than their candidates. Its answer's tool pose goes into `tool_frame` (`gravity_frame`,
+/// by the transform looked up when the candidate was turned by TF), if any.
 pub(super) async fn take_pose(
     node: &Node,
     endpoints: &Endpoints,
     answerer: &mut Answerer,
     loading: &mut Loading,
-    candidate: PoseCandidate,
+    (candidate, tool_frame): (PoseCandidate, Option<ToolFrame>),
     (received, sent): (u64, u64),
 ) {
     let audience = endpoints.markers.heard(node);
-    let work = answerer.pose_work(received, audience);
+    let work = answerer
+        .pose_work(received, audience)
+        .with_tool_frame(tool_frame);
     if work.refusal(&candidate).is_none() && answerer.answers_off_thread(&candidate) {
         if let Err(refused) = loading.take(work, candidate, received, sent) {
             send_loaded(node, endpoints, answerer, *refused).await;

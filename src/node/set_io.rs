@@ -7,7 +7,7 @@ use super::set_kinds::{NodeSet, SetEndpoints, Solving};
 use crate::answer::{Answering, Rules, SetAnswer};
 use crate::msg::{CompactString, GripRecommendation, MarkerArray};
 use crate::record::Payload;
-use crate::tf::{self, Gravity, TfBuffer, TfFailure};
+use crate::tf::{self, Gravity, TfBuffer, TfFailure, ToolFrame};
 use futures::future::LocalBoxFuture;
 use ros2_client::RmwRequestId;
 #[cfg(test)]
@@ -48,8 +48,9 @@ trait HeldSet: std::fmt::Debug + Send {
     fn as_any_mut(&mut self) -> &mut dyn Any;
 }
 
-/// A set of kind `K`.
-struct Held<K: NodeSet>(K::Request);
+/// A set of kind `K`, and the frame its answer's tool poses go into once it was turned by TF
+/// with `gravity_frame` set (`None`: the header frame, or a kind without tool poses).
+struct Held<K: NodeSet>(K::Request, Option<ToolFrame>);
 
 impl<K: NodeSet> std::fmt::Debug for Held<K> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -72,14 +73,23 @@ impl<K: NodeSet> HeldSet for Held<K> {
         SetReply::new::<K>(K::echo(&self.0))
     }
     fn solve(&self, s: &Solving) -> (SetReply, Option<MarkerArray>) {
-        let (reply, markers) = K::solve(s, &self.0);
+        let (mut reply, markers) = K::solve(s, &self.0);
+        if let Some(frame) = &self.1 {
+            K::express(&mut reply, frame);
+        }
         (SetReply::new::<K>(reply), markers)
     }
     fn needs_tf(&self, gravity: &Gravity) -> bool {
         tf::needs::<K>(gravity, &self.0)
     }
     fn resolve(&self, buffer: &TfBuffer, gravity: &Gravity) -> Result<SetInput, TfFailure> {
-        tf::resolve::<K>(buffer, gravity, &self.0).map(SetInput::new::<K>)
+        let turned = tf::resolve::<K>(buffer, gravity, &self.0)?;
+        // The same pair of frames at the same stamp as the gravity's: found when it was.
+        let frame = match K::tool_header(&self.0) {
+            Some(header) => tf::tool_frame(buffer, &gravity.frame, header).transpose()?,
+            None => None,
+        };
+        Ok(SetInput(Box::new(Held::<K>(turned, frame))))
     }
     fn refused(&self, with: &Answering, why: &str) -> SetReply {
         SetReply::new::<K>(K::refused(with, &self.0, why))
@@ -96,7 +106,7 @@ impl<K: NodeSet> HeldSet for Held<K> {
 impl SetInput {
     /// A set of kind `K`.
     pub(crate) fn new<K: NodeSet>(set: K::Request) -> Self {
-        Self(Box::new(Held::<K>(set)))
+        Self(Box::new(Held::<K>(set, None)))
     }
 
     /// The set's id (the test hook's trigger).

@@ -12,10 +12,11 @@ use super::session::qos;
 use crate::answer::{answer_in_full, markers, Answering, Halt, Interrupt, Refused, SetKind};
 use crate::kind::{Framing, PoseSets, Sets};
 use crate::msg::{
-    GraspCandidate, GripRecommendation, MarkerArray, PoseCandidate, RecommendPosesRequest,
+    GraspCandidate, GripRecommendation, Header, MarkerArray, PoseCandidate, RecommendPosesRequest,
     RecommendPosesResponse, RecommendRequest, RecommendResponse,
 };
 use crate::record::Topics;
+use crate::tf::ToolFrame;
 use anyhow::Context as _;
 use grasp_orient_geometry::{MeshCache, Object};
 use ros2_client::{Message, Name, Node, Server, ServiceMapping, ServiceTypeName};
@@ -70,6 +71,12 @@ pub(crate) trait NodeSet: SetKind + Framing {
     /// The set's answer, solved, and its best member's markers when they are drawn (the set's
     /// clock is running, and echo mode is not on).
     fn solve(s: &Solving, set: &Self::Request) -> (Self::Answer, Option<MarkerArray>);
+    /// The header whose frame the answer's tool poses are given in, for a kind that has them.
+    fn tool_header(_set: &Self::Request) -> Option<&Header> {
+        None
+    }
+    /// The answer's tool poses re-expressed by `frame` (`gravity_frame`; docs/node.md#tf).
+    fn express(_answer: &mut Self::Answer, _frame: &ToolFrame) {}
 }
 
 /// A set kind's topics (sets in, answers out) and its service.
@@ -200,6 +207,14 @@ impl NodeSet for PoseSets {
     fn response(answer: Self::Answer) -> RecommendPosesResponse {
         RecommendPosesResponse {
             recommendation_set: answer,
+        }
+    }
+    fn tool_header(set: &Self::Request) -> Option<&Header> {
+        Some(&set.header)
+    }
+    fn express(answer: &mut Self::Answer, frame: &ToolFrame) {
+        for r in &mut answer.recommendations {
+            frame.express(&mut r.tool_pose);
         }
     }
     fn solve(s: &Solving, set: &Self::Request) -> (Self::Answer, Option<MarkerArray>) {

@@ -129,14 +129,14 @@ async fn dispatch(node: &Node, endpoints: &Endpoints, state: &mut Loop<'_>, arri
         Request::Candidate(c) => {
             answer_one(node, endpoints, state.answerer, *c, (received, sent)).await;
         }
-        Request::Pose(p) => {
+        Request::Pose(p, tool_frame) => {
             let loading = &mut *state.loading;
             take_pose(
                 node,
                 endpoints,
                 state.answerer,
                 loading,
-                *p,
+                (*p, tool_frame),
                 (received, sent),
             )
             .await;
@@ -175,7 +175,7 @@ async fn refuse(
             let answers = &endpoints.candidates.answers;
             send_answer(node, endpoints, answerer, answers, outcome).await;
         }
-        Request::Pose(p) => {
+        Request::Pose(p, _) => {
             let reply = Poses::refused(&with, &p, why);
             let outcome = answerer.account_pose(*p, reply, None, received, sent);
             let answers = &endpoints.poses.answers;

@@ -11,7 +11,7 @@
 use super::answer::SetInput;
 use crate::kind::{Candidates, Framing, Poses};
 use crate::msg::{GraspCandidate, PoseCandidate};
-use crate::tf::{self, Gravity, TfBuffer, TfFailure};
+use crate::tf::{self, Gravity, TfBuffer, TfFailure, ToolFrame};
 use ros2_client::RmwRequestId;
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
@@ -30,8 +30,9 @@ pub(crate) const RETRY: Duration = Duration::from_millis(2);
 pub(crate) enum Request {
     /// On `grasp_candidates`.
     Candidate(Box<GraspCandidate>),
-    /// On `pose_candidates`.
-    Pose(Box<PoseCandidate>),
+    /// On `pose_candidates`; once turned by TF with `gravity_frame` set, with the frame its
+    /// answer's tool pose goes into.
+    Pose(Box<PoseCandidate>, Option<ToolFrame>),
     /// A set on its topic (`None`) or in a call of its service.
     Set(SetInput, Option<RmwRequestId>),
 }
@@ -52,7 +53,7 @@ impl Request {
     fn needs(&self, gravity: &Gravity) -> bool {
         match self {
             Request::Candidate(c) => tf::needs::<Candidates>(gravity, c),
-            Request::Pose(p) => tf::needs::<Poses>(gravity, p),
+            Request::Pose(p, _) => tf::needs::<Poses>(gravity, p),
             Request::Set(s, _) => s.needs_tf(gravity),
         }
     }
@@ -63,7 +64,12 @@ impl Request {
             Request::Candidate(c) => {
                 Request::Candidate(Box::new(resolve::<Candidates>(buffer, gravity, c)?))
             }
-            Request::Pose(p) => Request::Pose(Box::new(resolve::<Poses>(buffer, gravity, p)?)),
+            Request::Pose(p, _) => {
+                let turned = resolve::<Poses>(buffer, gravity, p)?;
+                // The same pair of frames at the same stamp as the gravity's: found when it was.
+                let frame = tf::tool_frame(buffer, &gravity.frame, &p.header).transpose()?;
+                Request::Pose(Box::new(turned), frame)
+            }
             Request::Set(s, via) => Request::Set(s.resolve(buffer, gravity)?, *via),
         })
     }

@@ -9,7 +9,8 @@ use crate::kind;
 use crate::msg::definitions::split_type_name;
 use crate::msg::schema::RecordedType;
 use crate::msg::{
-    cdr, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet, RosMessage,
+    cdr, GraspCandidate, GraspCandidateSet, GripRecommendation, GripRecommendationSet,
+    PoseRecommendation, RosMessage,
 };
 use serde::de::DeserializeOwned;
 use std::collections::hash_map::Entry;
@@ -136,7 +137,7 @@ type FieldList = fn() -> Vec<(&'static str, String)>;
 
 /// The field-type name (`pkg/Name`, as a field names a type) of each of our message types with
 /// trailing fields, with its fields: the keys of [`RecordedFields`].
-fn our_types() -> [(String, FieldList); 4] {
+fn our_types() -> [(String, FieldList); 5] {
     fn entry<M: RosMessage>() -> (String, FieldList) {
         (format!("{}/{}", M::PACKAGE, M::NAME), M::fields)
     }
@@ -145,6 +146,7 @@ fn our_types() -> [(String, FieldList); 4] {
         entry::<GripRecommendation>(),
         entry::<GraspCandidateSet>(),
         entry::<GripRecommendationSet>(),
+        entry::<PoseRecommendation>(),
     ]
 }
 

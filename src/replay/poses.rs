@@ -17,9 +17,10 @@ use crate::answer::{cut_like, uncast};
 use crate::kind::{Kind, PoseSets, Poses};
 use crate::msg::{
     short_id, GraspObject, GripRecommendation, GripRecommendationSet, Point, PoseRecommendation,
-    PoseRecommendationSet, Vector3,
+    PoseRecommendationSet, PoseStamped, Vector3,
 };
 use crate::record::bag::{keep_example, Bag, Recorded};
+use crate::record::channels::RecordedFields;
 use grasp_orient_geometry::MeshCache;
 
 /// The new answers of a replay's pose candidates and pose sets, each with its candidate's (or
@@ -55,7 +56,7 @@ pub(super) fn replay_poses(
             let label = || format!("pose candidate {:?}", short_id(&c.message.id));
             let a = (&ours.recommendation, &theirs.recommendation);
             let differ = compare_one(label, a.0, a.1, &bag.fields, &mut summary);
-            if !differ && compare_geometry(label, &ours, theirs, &mut summary) {
+            if !differ && compare_geometry(label, &ours, theirs, &bag.fields, &mut summary) {
                 summary.differing += 1;
             }
         }
@@ -145,7 +146,7 @@ fn compare_pose_set(
                 short_id(id)
             )
         };
-        differ |= compare_geometry(label, a, b, summary);
+        differ |= compare_geometry(label, a, b, &bag.fields, summary);
     }
     if differ {
         summary.sets_differing += 1;
@@ -178,6 +179,15 @@ fn check_mesh(object: &GraspObject, answered: bool, meshes: &MeshCache) -> Resul
         })
 }
 
+/// Whether a recorded answer's tool pose is compared: the recording has the field (one made
+/// before it decodes it as zeros), and the pose is in the answer's header frame. A node with
+/// `gravity_frame` set gives it in that frame, by TF at the candidate's stamp; `replay` has no
+/// TF and gives it in the header frame, so it cannot say where such a pose would be.
+fn tool_pose_compared(theirs: &PoseRecommendation, recorded: &RecordedFields) -> bool {
+    recorded.has::<PoseRecommendation>("tool_pose")
+        && theirs.tool_pose.header.frame_id == theirs.recommendation.header.frame_id
+}
+
 /// A pose set's answer as a candidate set's: the members' recommendations.
 fn as_grip(r: &PoseRecommendationSet) -> GripRecommendationSet {
     GripRecommendationSet {
@@ -196,15 +206,37 @@ fn as_grip(r: &PoseRecommendationSet) -> GripRecommendationSet {
 }
 
 /// The contacts, normals and centre of mass of a new answer against the recorded ones (NaN
-/// equals NaN: a refused pose has none); true when any differs beyond [`TOLERANCE`].
+/// equals NaN: a refused pose has none), and the tool pose where the recording has it
+/// ([`tool_pose_compared`]); true when any differs beyond [`TOLERANCE`].
 fn compare_geometry(
     label: impl FnOnce() -> String,
     ours: &PoseRecommendation,
     theirs: &PoseRecommendation,
+    recorded: &RecordedFields,
     summary: &mut Summary,
 ) -> bool {
     let point = |p: &Point| [p.x, p.y, p.z];
     let vector = |v: &Vector3| [v.x, v.y, v.z];
+    let tool = |p: &PoseStamped| {
+        let (t, q) = (&p.pose.position, &p.pose.orientation);
+        [t.x, t.y, t.z, q.x, q.y, q.z, q.w]
+    };
+    let mut beyond = Vec::new();
+    if tool_pose_compared(theirs, recorded) {
+        let (a, b) = (&ours.tool_pose, &theirs.tool_pose);
+        let gap = tool(a)
+            .iter()
+            .zip(&tool(b))
+            .map(|(x, y)| number_gap(*x, *y))
+            .fold(0.0, f64::max);
+        let gap = if a.header == b.header { gap } else { 1.0 };
+        if gap > 0.0 {
+            summary.note_gap("tool_pose", gap);
+        }
+        if gap > TOLERANCE {
+            beyond.push(format!("tool_pose (gap {gap:.3e})"));
+        }
+    }
     let fields: [(&'static str, [f64; 3], [f64; 3]); 5] = [
         (
             "contact_1",
@@ -224,7 +256,6 @@ fn compare_geometry(
             point(&theirs.center_of_mass),
         ),
     ];
-    let mut beyond = Vec::new();
     for (field, a, b) in fields {
         let gap = a
             .iter()

@@ -25,10 +25,12 @@ mod lookup;
 mod request;
 #[cfg(test)]
 mod tests;
+mod tool;
 
 pub(crate) use apply::{gravity_in, pose_in, TfFailure};
 pub(crate) use error::TfError;
 pub(crate) use request::{needs, resolve, Gravity};
+pub(crate) use tool::{tool_frame, ToolFrame};
 
 use crate::msg::{TfMessage, Time, TransformStamped};
 use crate::solver::MAX_COORDINATE;

@@ -119,10 +119,37 @@ fn random_grasps_with_refused_ones_replay_unchanged() {
 /// `bags/node_poses.mcap`, recorded from `grasp_orient node` by `bags/record_node_poses.py`:
 /// its pose candidates and pose sets (an inline mesh, a mesh by `package://`, primitives,
 /// refusals, a set through the service) cast and solved again, without a difference, with
-/// `package://grasp_orient` found in the test prefix `tests/prefix`.
+/// `package://grasp_orient` found in the test prefix `tests/prefix`. It was recorded before
+/// `tool_pose` was added to PoseRecommendation: its answers decode with it at zero (alone and
+/// inside the sets' answers), and replay says it leaves it out.
 #[test]
 fn the_pose_bag_the_node_recorded_replays() {
+    use grasp_orient::msg::{PoseRecommendation, PoseStamped};
     let path = format!("{}/bags/node_poses.mcap", env!("CARGO_MANIFEST_DIR"));
+    let recorded =
+        grasp_orient::record::bag::read(std::path::Path::new(&path)).expect("the pose bag reads");
+    assert_eq!(
+        recorded.fields.missing::<PoseRecommendation>(),
+        ["tool_pose"]
+    );
+    assert_eq!(recorded.undecodable_count, 0, "{:?}", recorded.undecodable);
+    let s = &recorded.streams;
+    let answers: Vec<&PoseRecommendation> = s
+        .poses
+        .answers
+        .iter()
+        .map(|r| &r.message)
+        .chain(
+            s.pose_sets
+                .answers
+                .iter()
+                .flat_map(|r| r.message.recommendations.iter()),
+        )
+        .collect();
+    assert!(answers.len() > 29, "{}", answers.len());
+    assert!(answers
+        .iter()
+        .all(|a| a.tool_pose == PoseStamped::default()));
     let prefix = format!("{}/tests/prefix", env!("CARGO_MANIFEST_DIR"));
     let out = bin()
         .args(["replay", &path])
@@ -136,7 +163,11 @@ fn the_pose_bag_the_node_recorded_replays() {
         text.contains("29 pose candidates, 29 recorded pose answers, 5 pose sets, 5 recorded pose set answers")
             && text.contains("54 compared with a recorded recommendation, 0 differ")
             && text.contains("5 compared with a recorded answer, 0 differ")
-            && text.contains("0 recorded recommendations unmatched"),
+            && text.contains("0 recorded recommendations unmatched")
+            && text.contains(
+                "recorded before tool_pose were added to grasp_orient/msg/PoseRecommendation: not \
+                 compared"
+            ),
         "{text}"
     );
 }

@@ -16,7 +16,7 @@ use grasp_orient::msg::{
     ColorRgba, CompressedImage, Duration, GraspCandidate, GraspCandidateSet, GraspObject,
     GraspPose, GripRecommendation, GripRecommendationSet, Header, Marker, MarkerArray, Mesh,
     MeshFile, MeshTriangle, Point, Pose, PoseCandidate, PoseCandidateSet, PoseRecommendation,
-    PoseRecommendationSet, Quaternion, RecommendPosesRequest, RecommendPosesResponse,
+    PoseRecommendationSet, PoseStamped, Quaternion, RecommendPosesRequest, RecommendPosesResponse,
     RecommendRequest, RecommendResponse, RosMessage, SolidPrimitive, TfMessage, Time, Transform,
     TransformStamped, UvCoordinate, Vector3,
 };
@@ -330,6 +330,7 @@ fn peer_standard_structs_match_the_jazzy_msg_files() {
         (Vector3::TYPE_NAME, check::<Vector3>),
         (Quaternion::TYPE_NAME, check::<Quaternion>),
         (Pose::TYPE_NAME, check::<Pose>),
+        (PoseStamped::TYPE_NAME, check::<PoseStamped>),
         (Transform::TYPE_NAME, check::<Transform>),
         (TransformStamped::TYPE_NAME, check::<TransformStamped>),
         (TfMessage::TYPE_NAME, check::<TfMessage>),

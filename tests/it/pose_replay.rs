@@ -165,6 +165,36 @@ fn a_changed_contact_fails_the_replay() {
     );
 }
 
+/// A recorded tool pose off by 1e-6 m fails the replay; one recorded in another frame than the
+/// answer's header (a node with `gravity_frame` set, by TF) is not compared, since replay has no
+/// TF to say where it would be.
+#[test]
+fn a_changed_tool_pose_fails_the_replay_and_one_in_another_frame_is_left_alone() {
+    let dir = temp_dir("pose_replay_tool");
+    let bag = dir.path().join("poses.mcap");
+    write_bag(&bag, |a| {
+        if a.recommendation.candidate_id == "pose-2" {
+            assert!(a.tool_pose.pose.position.z.is_finite(), "{a:?}");
+            a.tool_pose.pose.position.z += 1e-6;
+        }
+    });
+    let (code, text) = replay(&bag, true);
+    assert_eq!(code, Some(1), "{text}");
+    assert!(
+        text.contains("pose candidate \"pose-2\": tool_pose"),
+        "{text}"
+    );
+    let elsewhere = dir.path().join("elsewhere.mcap");
+    write_bag(&elsewhere, |a| {
+        if a.recommendation.candidate_id == "pose-2" {
+            a.tool_pose.header.frame_id = "world".into();
+            a.tool_pose.pose.position.z += 1.0;
+        }
+    });
+    let (code, text) = replay(&elsewhere, true);
+    assert_eq!(code, Some(0), "{text}");
+}
+
 #[test]
 fn a_mesh_missing_at_replay_is_an_error() {
     let dir = temp_dir("pose_replay_no_mesh");

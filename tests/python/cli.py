@@ -83,6 +83,10 @@ def compare(ours: dict, theirs: list[dict], poses: bool = False) -> int:
                 for k, key in enumerate(keys):
                     assert same_number(ours[field][i, k], line[field][key]), (where, field, key)
                     compared += 1
+            tool = line["tool_pose"]["pose"]
+            for k, v in enumerate([*(tool["position"][c] for c in XYZ), *(tool["orientation"][c] for c in XYZW)]):
+                assert same_number(ours["tool_pose"][i, k], v), (where, "tool_pose", k, ours["tool_pose"][i, k], v)
+                compared += 1
     return compared
 
 

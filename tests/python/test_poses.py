@@ -227,3 +227,30 @@ def test_each_pose_is_its_matrix_and_the_fingers_close_along_its_axis(closing_ax
     # Finger 1 starts on the negative side of the axis, finger 2 on the positive.
     along = np.einsum("ij,ij->i", out["contact_2"][ok] - out["contact_1"][ok], axis)
     assert (along > 0).all()
+
+
+def test_tool_poses_are_the_poses_turned_about_the_grasp_centre():
+    """tool_pose (N, 7) against numpy: each pose's matrix turned by the answer's rotation (Rodrigues from
+    rotation_axis and wrist_rotation, not the answer's quaternion) about the midpoint m of its contacts,
+    R @ R_tool at m + R (t - m); NaN where the answer has no rotation."""
+    vertices, triangles = box_mesh(0.04, 0.06, 0.08)
+    poses, widths = poses_around(300, 0.08, seed=11)
+    out = grasp_orient.solve_poses(vertices, triangles, poses, widths, 0.3, 0.6, GRAVITY,
+                                   center_of_mass=(0.004, -0.006, 0.01))
+    assert out["tool_pose"].shape == (300, 7) and out["tool_pose"].dtype == np.float64
+    turned = 0
+    for i in range(300):
+        if not np.isfinite(out["rotation"][i]).all():
+            assert np.isnan(out["tool_pose"][i]).all(), (i, out["tool_pose"][i])
+            continue
+        k = out["rotation_axis"][i]
+        kk = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+        phi = out["wrist_rotation"][i]
+        r = np.eye(3) + math.sin(phi) * kk + (1 - math.cos(phi)) * kk @ kk
+        m = (out["contact_1"][i] + out["contact_2"][i]) / 2
+        t = poses[i, :3, 3]
+        np.testing.assert_allclose(out["tool_pose"][i, :3], m + r @ (t - m), rtol=0, atol=1e-12)
+        np.testing.assert_allclose(rotation_of(out["tool_pose"][i, 3:]), r @ poses[i, :3, :3], rtol=0, atol=1e-12)
+        turned += 1
+    big = int((out["wrist_rotation"][np.isfinite(out["wrist_rotation"])] > 0.1).sum())
+    assert turned >= 40 and big >= 10, (turned, big)

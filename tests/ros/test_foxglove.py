@@ -361,3 +361,73 @@ def test_live_recording_with_markers_decodes_with_foxglove(foxglove_dir, rclpy_c
     assert_decodes_everything(stream, f"{path.name} (stream reader)")
     diff = compare_decodings(stream.recs(), fox)
     assert not diff, f"{path}: the stream reader decodes differently from the indexed one:\n  " + "\n  ".join(diff[:20])
+
+
+# ---------------------------------------------------------------------------------------------------
+# A live recording of pose candidates: the tool poses
+# ---------------------------------------------------------------------------------------------------
+POSES_NS = "/foxglove_poses"
+
+
+def test_live_pose_recording_holds_the_tool_poses(foxglove_dir, rclpy_context, start_node, tmp_path):
+    """The node records pose candidates and their answers; Foxglove's decoders read every message, and the
+    tool_pose of each recorded answer equals what the peer received over DDS and numpy's tool pose
+    (tf_cases.tool_pose_by_numpy) from the recorded candidate's gripper pose and the recorded answer's axis,
+    angle and contacts; an answer without a rotation holds NaN. mcap_ros2 and rosbags read the same."""
+    require_environment()
+    import pose_cases as pc
+    from grasp_orient.msg import PoseCandidate, PoseRecommendation
+    from tf_cases import tool_pose_by_numpy, tool_pose_gap
+
+    record_dir = tmp_path / "runs"
+    node = start_node("--ros-args", "-r", f"__ns:={POSES_NS}", "-p", "record:=true", "-p",
+                      f"record_dir:={record_dir}", name="recording node (tool poses)")
+    peer = Peer("grasp_orient_foxglove_pose_peer")
+    cands = pc.singles()
+    answers: dict[str, object] = {}
+    try:
+        pub = peer.node.create_publisher(PoseCandidate, f"{POSES_NS}/pose_candidates", reliable_qos())
+        sub = peer.node.create_subscription(PoseRecommendation, f"{POSES_NS}/pose_recommendations",
+                                            lambda m: answers.setdefault(m.recommendation.candidate_id, m),
+                                            reliable_qos())
+        assert peer.spin_until(lambda: pub.get_subscription_count() > 0 and sub.get_publisher_count() > 0, 15.0), \
+            "no match on the pose topics"
+        for c in cands:
+            pub.publish(pc.fill(PoseCandidate(), c))
+        assert peer.spin_until(lambda: all(c["id"] in answers for c in cands), 60.0), \
+            f"not answered: {[c['id'] for c in cands if c['id'] not in answers]}"
+        node.stop_and_check(signal.SIGINT)
+    finally:
+        peer.destroy()
+        node.kill()
+
+    files = sorted(record_dir.rglob("*.mcap"))
+    assert len(files) == 1, f"expected one recording in {record_dir}, found {files}"
+    path = files[0]
+    d = foxglove_decode(foxglove_dir, tmp_path, path)
+    assert_decodes_everything(d, f"the node's pose recording {path.name}")
+    fox = d.recs()
+    recorded_cands = {r.msg["id"]: r.msg for r in fox if r.topic == f"{POSES_NS}/pose_candidates"}
+    recorded = {r.msg["recommendation"]["candidate_id"]: r.msg for r in fox
+                if r.topic == f"{POSES_NS}/pose_recommendations"}
+    assert sorted(recorded) == sorted(c["id"] for c in cands), sorted(recorded)
+    problems, turned, refused = [], 0, 0
+    for cid, a in recorded.items():
+        problems += [f"answer to {cid}: {x}" for x in mu.differences(a, mu.plain(answers[cid]))[:4]]
+        tp = a["tool_pose"]
+        if tp["header"]["frame_id"] != "base_link":
+            problems.append(f"answer to {cid}: tool_pose in {tp['header']['frame_id']!r}")
+        numbers = [*tp["pose"]["position"].values(), *tp["pose"]["orientation"].values()]
+        if math.isnan(a["recommendation"]["rotation"]["w"]):
+            refused += 1
+            if not all(math.isnan(v) for v in numbers):
+                problems.append(f"answer to {cid}: no rotation, tool_pose {tp['pose']}")
+            continue
+        turned += 1
+        gap = tool_pose_gap(tp["pose"], tool_pose_by_numpy(recorded_cands[cid]["grasp_pose"], a))
+        if not gap <= 1e-9:
+            problems.append(f"answer to {cid}: tool_pose {tp['pose']} is {gap:.3g} from numpy's")
+    assert not problems, f"{path}: {len(problems)} problems:\n  " + "\n  ".join(problems[:30])
+    assert turned >= 20 and refused >= 5, (turned, refused)
+    diff = same_as_python_readers(fox, path)
+    assert not diff, f"{path}: Foxglove's decoders and the Python readers disagree:\n  " + "\n  ".join(diff[:20])

@@ -20,6 +20,7 @@ from conftest import (
     LINE_PREFIX, Peer, binary_path, compare, load_paper_cases, reliable_qos, run_solve, to_plain,
 )
 import pose_cases as pc
+from tf_cases import tool_pose_by_numpy, tool_pose_gap
 
 from grasp_orient.msg import (  # noqa: E402
     PoseCandidate, PoseCandidateSet, PoseRecommendation, PoseRecommendationSet,
@@ -123,6 +124,51 @@ def test_single_pose_candidates_equal_solves(poses):
         assert statuses[k] == 2, (k, statuses[k])
     block = got["package-mid"]
     assert block["contact_1"] is not None and block["recommendation"]["status"] == 0, block
+
+
+def check_tool_poses(pairs: list[tuple[dict, dict, dict]]) -> tuple[int, int]:
+    """Each (grasp pose, header, answer): an answer with a rotation carries the tool pose numpy computes
+    (tf_cases.tool_pose_by_numpy) within 1e-9, with the candidate's header; one without (refused, NaN rotation)
+    carries the header and a pose all NaN (None here). Returns how many of each."""
+    turned = refused = 0
+    for grasp_pose, header, a in pairs:
+        tp = a["tool_pose"]
+        rid = a["recommendation"]["candidate_id"]
+        assert tp["header"] == header, (rid, tp["header"], header)
+        numbers = [*tp["pose"]["position"].values(), *tp["pose"]["orientation"].values()]
+        if a["recommendation"]["rotation"]["w"] is None:
+            assert all(v is None for v in numbers), (rid, tp)
+            refused += 1
+            continue
+        gap = tool_pose_gap(tp["pose"], tool_pose_by_numpy(grasp_pose, a))
+        assert gap <= 1e-9, (rid, gap, tp)
+        turned += 1
+    return turned, refused
+
+
+def test_tool_poses_equal_numpy(poses):
+    """The tool pose of every single pose and every pose set member, against numpy on the answer's axis, angle and
+    contacts (the node, in the candidate's frame: this node has no gravity_frame)."""
+    cands = pc.singles()
+    got = poses.send(cands)
+    pairs = [(c["grasp_pose"], c["header"], got[c["id"]]) for c in cands]
+    for s in pc.sets():
+        answer = poses.send_set(s)
+        if answer["recommendations"]:
+            pairs += [(m["grasp_pose"], s["header"], r) for m, r in zip(s["poses"], answer["recommendations"])]
+    turned, refused = check_tool_poses(pairs)
+    assert turned >= 30 and refused >= 5, (turned, refused)
+    # the turn is a real one somewhere, and the grasp centre is not the tool origin everywhere
+    assert any((got[c["id"]]["recommendation"]["wrist_rotation"] or 0.0) > 0.1 for c in cands)
+
+    def off_centre(c: dict) -> bool:
+        a = got[c["id"]]
+        if a["contact_1"]["x"] is None:
+            return False
+        m = [(a["contact_1"][k] + a["contact_2"][k]) / 2 for k in "xyz"]
+        return max(abs(m[i] - c["grasp_pose"]["position"][k]) for i, k in enumerate("xyz")) > 1e-4
+
+    assert sum(map(off_centre, cands)) >= 3
 
 
 @pytest.mark.parametrize("index", range(len(pc.sets())), ids=[s["id"] for s in pc.sets()])

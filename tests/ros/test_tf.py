@@ -31,7 +31,8 @@ from conftest import (
 )
 import pose_cases as pc
 from tf_cases import (
-    GRAVITY, NS, T1, T2, Tree, homogeneous, matrix_of, pose_of, random_quaternion, stamp_of, transform_msg, vec,
+    GRAVITY, NS, T1, T2, Tree, homogeneous, matrix, matrix_of, pose_of, random_quaternion, stamp_of,
+    tool_pose_by_numpy, tool_pose_gap, transform_msg, vec,
 )
 
 from geometry_msgs.msg import TransformStamped  # noqa: E402
@@ -120,6 +121,32 @@ def close(ros, ref, path: str = "", gaps: Gaps | None = None) -> list[str]:
             if gap <= 1e-9:
                 return []
     return [] if ros == ref else [f"{p}: {ros!r} vs solve {ref!r}"]
+
+
+def without_tool_poses(answer: dict) -> dict:
+    """A pose answer (or a pose set's) without its tool poses: `solve` and `rank` give them in the header frame,
+    the node with gravity_frame in world; they are checked apart (check_tool_pose)."""
+    if "recommendations" in answer:
+        return {**answer, "recommendations": [without_tool_poses(r) for r in answer["recommendations"]]}
+    return {k: v for k, v in answer.items() if k != "tool_pose"}
+
+
+def check_tool_pose(ours: dict, grasp_pose: dict, header: dict, header_in_world: np.ndarray) -> bool:
+    """The node's tool pose, with gravity_frame world, is numpy's tool pose in the header frame
+    (tool_pose_by_numpy, from the node's own axis, angle and contacts) carried into world by T_world_header at the
+    candidate's stamp, within 1e-9, its header world at the candidate's stamp; an answer without a rotation keeps
+    the candidate's header and NaN. True when the pose was turned."""
+    tp = ours["tool_pose"]
+    rid = ours["recommendation"]["candidate_id"]
+    if ours["recommendation"]["rotation"]["w"] is None:
+        assert tp["header"] == header, (rid, tp["header"], header)
+        assert all(v is None for v in [*tp["pose"]["position"].values(), *tp["pose"]["orientation"].values()]), tp
+        return False
+    assert tp["header"] == {**header, "frame_id": "world"}, (rid, tp["header"], header)
+    want = header_in_world @ tool_pose_by_numpy(grasp_pose, ours)
+    gap = tool_pose_gap(tp["pose"], want)
+    assert gap <= 1e-9, (rid, gap, tp["pose"])
+    return True
 
 
 def wait_known(client: "GraspClient", rng: random.Random, frame: str):
@@ -269,12 +296,16 @@ def test_answers_equal_solve_with_gravity_and_poses_turned_by_numpy(clients):
     got = pose_client.send(poses)
     want = run_solve(pose_refs)
     statuses = []
-    for c, ref in zip(poses, want):
+    turned = 0
+    for tr, c, ref in zip(trees, poses, want):
         ours = got[c["id"]]
-        diffs = close(ours, ref, gaps=gaps)
+        diffs = close(without_tool_poses(ours), without_tool_poses(ref), gaps=gaps)
         assert not diffs, f"{c['id']}: {ours['recommendation']['message']!r} {diffs[:5]}"
         statuses.append(ours["recommendation"]["status"])
+        stamp = c["header"]["stamp"]["sec"] * NS + c["header"]["stamp"]["nanosec"]
+        turned += check_tool_pose(ours, c["grasp_pose"], c["header"], tr.in_world(c["header"]["frame_id"], stamp))
     assert statuses.count(2) < len(statuses) // 10, statuses
+    assert turned >= TREES // 2, f"{turned} tool poses turned into world"
     print(f"{len(trees)} frame trees: {len(grasps)} candidates ({moving} turned between two samples of the moving "
           f"transform) and {len(poses)} pose candidates ({moving_poses}); {gaps.numbers} numbers compared, the "
           f"largest relative difference {gaps.worst:.3g} ({gaps.where})")
@@ -349,13 +380,21 @@ def test_a_candidate_waits_for_a_transform_that_comes_later(clients):
     grasp_client.pub.publish(candidate_msg(cand))
     grasp_client.peer.spin_for(0.15)
     assert len(grasp_client.order) == n, "answered before its transform came"
-    tf.send_static([transform_msg("world", "late_frame", 0, [0, 0, 0], [1, 0, 0, 0])])
+    # Tilted by 1.1 rad about (1, 1, 0)/sqrt(2): gravity keeps a part in the planar candidate's x-y plane, so the
+    # answer is a real one (a turn by 180 deg about x would leave it only +z, which the planar model refuses).
+    half = 0.55
+    s = math.sin(half) / math.sqrt(2.0)
+    q = [s, s, 0.0, math.cos(half)]
+    tf.send_static([transform_msg("world", "late_frame", 0, [0.3, -0.2, 0.1], q)])
     ok = grasp_client.peer.spin_until(lambda: "late" in grasp_client.answers, 5.0)
     assert ok, "not answered once its transform came"
     ref = copy.deepcopy(cand)
-    # Turned 180 deg about x: world's -z is the frame's +z.
-    ref["gravity"] = vec([0.0, 0.0, 9.80665])
-    diffs = close(to_plain(grasp_client.answers["late"][0]), run_solve([ref])[0])
+    # g in the frame: R_world_frame^T g_world.
+    ref["gravity"] = vec(matrix(q).T @ GRAVITY)
+    assert math.hypot(ref["gravity"]["x"], ref["gravity"]["y"]) > 5.0, ref["gravity"]
+    got = to_plain(grasp_client.answers["late"][0])
+    assert got["status"] in (0, 3), (got["status"], got["message"])
+    diffs = close(got, run_solve([ref])[0])
     assert not diffs, diffs
 
 
@@ -452,9 +491,12 @@ def test_sets_are_turned_member_by_member_and_refused_whole(clients, peer):
         assert peer.spin_until(lambda: "tf-pose-set" in answers, 30.0), "no answer to the pose set"
         got = to_plain(answers["tf-pose-set"])
         want = rank_json([ref])
-        diffs = close({**got, "ranking": []}, {**want, "ranking": []})
+        diffs = close({**without_tool_poses(got), "ranking": []}, {**without_tool_poses(want), "ranking": []})
         assert not diffs, diffs[:5]
         assert_ranked_alike(got, want)
+        turned = sum(check_tool_pose(r, p["grasp_pose"], pset["header"], header_in_world)
+                     for p, r in zip(poses, got["recommendations"]))
+        assert turned >= 3, turned
     finally:
         peer.node.destroy_publisher(pub)
         peer.node.destroy_subscription(sub)

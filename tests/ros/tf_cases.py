@@ -150,3 +150,37 @@ def matrix_of(p: dict) -> np.ndarray:
     o = p["orientation"]
     pos = p["position"]
     return homogeneous([pos["x"], pos["y"], pos["z"]], [o["x"], o["y"], o["z"], o["w"]])
+
+
+def rodrigues(k, phi: float) -> np.ndarray:
+    """The rotation by phi about the unit axis k: I + sin(phi) K + (1 - cos(phi)) K^2."""
+    k = np.asarray(k, float)
+    kk = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + math.sin(phi) * kk + (1 - math.cos(phi)) * kk @ kk
+
+
+def tool_pose_by_numpy(grasp_pose: dict, answer: dict) -> np.ndarray:
+    """The tool pose to carry the object in (docs/poses.md, "The tool pose"), as a 4x4 matrix in the candidate's
+    header frame: the gripper pose turned by the answer's rotation (Rodrigues from `rotation_axis` and
+    `wrist_rotation`, not the answer's quaternion) about the midpoint m of its contacts: R R_tool at
+    m + R (t - m). `answer` is a PoseRecommendation as a dict."""
+    r = answer["recommendation"]
+    axis = r["rotation_axis"]
+    rot = rodrigues([axis["x"], axis["y"], axis["z"]], r["wrist_rotation"])
+    o = grasp_pose["orientation"]
+    q = np.array([o["x"], o["y"], o["z"], o["w"]])
+    tool = homogeneous([grasp_pose["position"][c] for c in "xyz"], q / np.linalg.norm(q))
+    c1, c2 = (np.array([answer[k][c] for c in "xyz"]) for k in ("contact_1", "contact_2"))
+    m = (c1 + c2) / 2
+    out = np.eye(4)
+    out[:3, :3] = rot @ tool[:3, :3]
+    out[:3, 3] = m + rot @ (tool[:3, 3] - m)
+    return out
+
+
+def tool_pose_gap(got: dict, want: np.ndarray) -> float:
+    """The largest difference between a tool pose (a geometry_msgs/Pose as a dict) and a 4x4 matrix: of the
+    position relative to max(1, |x|), and of the rotation matrices' entries."""
+    m = matrix_of(got)
+    position = max(abs(a - b) / max(1.0, abs(a), abs(b)) for a, b in zip(m[:3, 3], want[:3, 3]))
+    return max(position, float(np.max(np.abs(m[:3, :3] - want[:3, :3]))))

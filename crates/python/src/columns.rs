@@ -46,6 +46,8 @@ struct Geometry {
     normal_2: Vec<f64>,
     center_of_mass: Vec<f64>,
     grasp_orientation: Vec<f64>,
+    /// `x, y, z, qx, qy, qz, qw` of the tool pose to carry the object in.
+    tool_pose: Vec<f64>,
 }
 
 fn point(out: &mut Vec<f64>, p: &Point) {
@@ -130,6 +132,8 @@ impl Columns {
         vector(&mut g.normal_2, &p.normal_2);
         point(&mut g.center_of_mass, &p.center_of_mass);
         quaternion(&mut g.grasp_orientation, orientation);
+        point(&mut g.tool_pose, &p.tool_pose.pose.position);
+        quaternion(&mut g.tool_pose, &p.tool_pose.pose.orientation);
     }
 
     /// `other`'s rows after these.
@@ -164,6 +168,7 @@ impl Columns {
         each!(geometry.normal_2);
         each!(geometry.center_of_mass);
         each!(geometry.grasp_orientation);
+        each!(geometry.tool_pose);
     }
 
     /// The columns as a dict of numpy arrays and lists of str, the pose fields only when
@@ -219,6 +224,7 @@ impl Columns {
             d.set_item("normal_2", rows(py, g.normal_2, n, 3)?)?;
             d.set_item("center_of_mass", rows(py, g.center_of_mass, n, 3)?)?;
             d.set_item("grasp_orientation", rows(py, g.grasp_orientation, n, 4)?)?;
+            d.set_item("tool_pose", rows(py, g.tool_pose, n, 7)?)?;
         }
         Ok(d)
     }

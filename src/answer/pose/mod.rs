@@ -24,6 +24,7 @@
 
 mod checks;
 mod refusal;
+mod tool;
 
 use super::reply::no_closure;
 use super::sets::SetAnswer;
@@ -44,6 +45,7 @@ use refusal::MAX_WIDTH;
 pub(crate) use refusal::{NumberFault, PoseRefusal, Refused};
 use std::fmt::Display;
 use std::sync::Arc;
+use tool::{no_tool_pose, tool_pose};
 
 /// The most bytes of meshes a [`PoseAnswerer`] keeps loaded (least recently used dropped first).
 pub const MESH_CACHE_BYTES: usize = 512 << 20;
@@ -143,6 +145,7 @@ impl PoseAnswerer {
             Ok(grasp) => finish(
                 answer_one(&target.candidate(&grasp), settings, rules),
                 &grasp,
+                &m.grasp_pose,
             ),
             Err(why) => target.refused(&why.into()),
         };
@@ -277,7 +280,7 @@ impl PoseAnswerer {
             .into_iter()
             .zip(set.poses.iter().zip(&placed))
             .map(|(reply, (p, g))| match g {
-                Ok(grasp) => finish(reply, grasp),
+                Ok(grasp) => finish(reply, grasp, &p.grasp_pose),
                 Err(why) => target(&p.id).refused(why),
             })
             .collect();
@@ -512,8 +515,9 @@ pub(crate) fn uncast(set: &PoseCandidateSet) -> GraspCandidateSet {
 }
 
 /// The answer to a pose candidate refused before it had contacts: the refusal, and NaN for the
-/// geometry.
+/// geometry and the tool pose (with the recommendation's header).
 pub(crate) fn without_geometry(recommendation: GripRecommendation) -> PoseRecommendation {
+    let tool_pose = no_tool_pose(&recommendation.header);
     let nan = Point {
         x: f64::NAN,
         y: f64::NAN,
@@ -531,12 +535,20 @@ pub(crate) fn without_geometry(recommendation: GripRecommendation) -> PoseRecomm
         normal_1: nan_vector.clone(),
         normal_2: nan_vector,
         center_of_mass: nan,
+        tool_pose,
     }
 }
 
-/// The answer with the grasp's geometry, and a note on a contact at an edge or a vertex.
-fn finish(mut reply: GripRecommendation, grasp: &Grasp) -> PoseRecommendation {
+/// The answer with the grasp's geometry, the tool pose `tool` (the candidate's gripper pose)
+/// turned by the answer's rotation about the grasp centre ([`tool::tool_pose`]), and a note on a
+/// contact at an edge or a vertex.
+fn finish(mut reply: GripRecommendation, grasp: &Grasp, tool: &Pose) -> PoseRecommendation {
     let [c1, c2] = &grasp.contacts;
+    // The pose was checked when the grasp was made from it: this is that isometry again.
+    let carried = match isometry(tool, &"grasp_pose") {
+        Ok(tool) => tool_pose(&reply.header, &tool, grasp, &reply.rotation),
+        Err(_) => no_tool_pose(&reply.header),
+    };
     let notes = feature_notes(grasp);
     if !notes.is_empty() {
         let mut message = reply.message.to_string();
@@ -555,6 +567,7 @@ fn finish(mut reply: GripRecommendation, grasp: &Grasp) -> PoseRecommendation {
         normal_1: vector(&c1.normal),
         normal_2: vector(&c2.normal),
         center_of_mass: point(&grasp.center_of_mass),
+        tool_pose: carried,
     }
 }
 

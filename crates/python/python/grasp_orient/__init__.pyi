@@ -69,7 +69,9 @@ def solve_poses(
     """Solve N gripper poses, (N, 4, 4) float64 homogeneous transforms of the tool frame in the
     mesh's frame, with (N,) openings (m), on one mesh: (V, 3) float64 vertices and (T, 3) integer
     triangles. Returns solve()'s fields and contact_1, contact_2, normal_1, normal_2,
-    center_of_mass (N, 3; NaN where refused) and grasp_orientation (N, 4 xyzw)."""
+    center_of_mass (N, 3; NaN where refused), grasp_orientation (N, 4 xyzw) and tool_pose
+    (N, 7: x, y, z, qx, qy, qz, qw in the mesh's frame; the tool frame after the recommended
+    rotation about the midpoint of the contacts; NaN where there is no rotation)."""
 
 def load_mesh(resource: str) -> Tuple[Floats, npt.NDArray[np.int64]]:
     """Read an STL, OBJ or COLLADA file (a path, file:// or package://): (vertices (V, 3) float64
