@@ -236,7 +236,7 @@ impl Mesh {
     /// closedness or building its BVH again: the vertices are multiplied by `factor` (the same
     /// products, bit for bit, as [`Mesh::from_triangles`] takes of vertices at this mesh's
     /// scale), the BVH's boxes too, parry's and the compact copy's (a product is monotone in its
-    /// factor, so each scaled box still holds its scaled triangles; [`CompactBvh::scaled`]), in
+    /// factor, so each scaled box still holds its scaled triangles; `CompactBvh::scaled`), in
     /// one pass over each without building either again, the volume and centroid are summed again over the scaled
     /// triangles, and the topology (merged vertices, closedness, triangles at each vertex) is
     /// the same. Where scaling would change what merging finds (a coordinate that underflows to
