@@ -798,7 +798,7 @@ fn replay_of_malformed_collada_files_finishes() {
     use grasp_orient::config::Config;
     use grasp_orient::geometry::{AmentIndex, ClosingAxis};
     use grasp_orient::msg::PoseCandidate;
-    use grasp_orient::record::{BagWriter, Entry, Payload};
+    use grasp_orient::record::{BagWriter, Payload};
 
     let dir = temp_dir("cli_replay_malformed_collada");
     let mut entries = Vec::new();
@@ -825,17 +825,8 @@ fn replay_of_malformed_collada_files_finishes() {
         entries.push(Payload::answer::<grasp_orient::kind::Poses>(a));
     }
     let bag = dir.path().join("malformed.mcap");
-    let mut w = BagWriter::create(&bag, &crate::util::pose_bag_topics(), 100).expect("create");
-    for (k, payload) in entries.into_iter().enumerate() {
-        let t = 1_000 + k as u64;
-        w.write(&Entry {
-            payload,
-            log_time: t,
-            publish_time: t,
-        })
-        .expect("write");
-    }
-    w.finish().expect("finish");
+    let w = BagWriter::create(&bag, &crate::util::pose_bag_topics(), 100).expect("create");
+    crate::util::write_in_order(w, entries, 1_000, 1);
     let out = bin().arg("replay").arg(&bag).output().expect("runs");
     let text =
         String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);

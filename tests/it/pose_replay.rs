@@ -10,7 +10,7 @@ use grasp_orient::config::Config;
 use grasp_orient::geometry::{AmentIndex, ClosingAxis};
 use grasp_orient::msg::{PoseCandidate, PoseCandidateSet, PoseRecommendation};
 use grasp_orient::record::settings::SettingsRecord;
-use grasp_orient::record::{BagWriter, Entry, Payload};
+use grasp_orient::record::{BagWriter, Payload};
 use std::path::{Path, PathBuf};
 
 /// The test install prefix: `package://grasp_orient/meshes/block_mm.obj` resolves there.
@@ -75,7 +75,7 @@ fn write_bag(path: &Path, change: impl Fn(&mut PoseRecommendation)) {
         ))
         .expect("valid");
     let topics = crate::util::pose_bag_topics();
-    let mut w = BagWriter::create(path, &topics, 100).expect("create");
+    let w = BagWriter::create(path, &topics, 100).expect("create");
     let mut entries = vec![Payload::settings(SettingsRecord {
         since: 0,
         node: "/grasp_orient".into(),
@@ -102,16 +102,7 @@ fn write_bag(path: &Path, change: impl Fn(&mut PoseRecommendation)) {
         entries.push(Payload::request::<grasp_orient::kind::PoseSets>(s));
         entries.push(Payload::answer::<grasp_orient::kind::PoseSets>(a));
     }
-    for (k, payload) in entries.into_iter().enumerate() {
-        let t = 1_000_000_000 + k as u64 * 1000;
-        w.write(&Entry {
-            payload,
-            log_time: t,
-            publish_time: t,
-        })
-        .expect("write");
-    }
-    w.finish().expect("finish");
+    crate::util::write_in_order(w, entries, 1_000_000_000, 1000);
 }
 
 fn replay(bag: &Path, with_prefix: bool) -> (Option<i32>, String) {
@@ -268,7 +259,7 @@ fn a_recorded_refusal_of_a_cut_inline_mesh_replays_unchanged() {
         unbounded.recommendation.message,
         answer.recommendation.message
     );
-    let mut w = BagWriter::create(&bag, &crate::util::pose_bag_topics(), 100).expect("create");
+    let w = BagWriter::create(&bag, &crate::util::pose_bag_topics(), 100).expect("create");
     let entries = [
         Payload::settings(SettingsRecord {
             since: 0,
@@ -281,16 +272,7 @@ fn a_recorded_refusal_of_a_cut_inline_mesh_replays_unchanged() {
         Payload::request::<grasp_orient::kind::PoseSets>(pose_set),
         Payload::answer::<grasp_orient::kind::PoseSets>(set_answer),
     ];
-    for (k, payload) in entries.into_iter().enumerate() {
-        let t = 1_000_000_000 + k as u64 * 1000;
-        w.write(&Entry {
-            payload,
-            log_time: t,
-            publish_time: t,
-        })
-        .expect("write");
-    }
-    w.finish().expect("finish");
+    crate::util::write_in_order(w, entries, 1_000_000_000, 1000);
     let (code, text) = replay(&bag, false);
     assert_eq!(code, Some(0), "{text}");
     assert!(

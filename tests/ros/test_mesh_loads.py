@@ -78,6 +78,21 @@ def contact_and_params(single: GraspClient, params, tag: str, n: int = 3) -> flo
     return longest
 
 
+def pose_endpoints(peer, ns: str, depth: int = 100):
+    """A publisher on NS/pose_candidates and the answers on NS/pose_recommendations, by candidate id as
+    (message, arrival time), once both directions have matched (answers sent before the node's publisher
+    matches ours would be lost)."""
+    from conftest import reliable_qos
+    from grasp_orient.msg import PoseRecommendation
+    pub = peer.node.create_publisher(PoseCandidate, f"{ns}/pose_candidates", reliable_qos(depth))
+    answers: dict = {}
+    sub = peer.node.create_subscription(
+        PoseRecommendation, f"{ns}/pose_recommendations",
+        lambda m: answers.setdefault(m.recommendation.candidate_id, (m, time.monotonic())), reliable_qos(depth))
+    assert peer.spin_until(lambda: pub.get_subscription_count() > 0 and sub.get_publisher_count() > 0, 15.0)
+    return pub, answers
+
+
 def test_a_set_that_panicked_the_parser_leaves_later_sets_answered(start_node, peer, tmp_path):
     dae = tmp_path / "past_vertices.dae"
     dae.write_text(BAD_DAE)
@@ -129,15 +144,7 @@ def test_fifo_meshes_block_nothing(start_node, peer, tmp_path):
     single = GraspClient(peer, ns)
     single.ensure_roundtrip()
     params = TN.Params(peer, f"{ns}/grasp_orient")
-    from conftest import reliable_qos
-    from grasp_orient.msg import PoseRecommendation
-    pub = peer.node.create_publisher(PoseCandidate, f"{ns}/pose_candidates", reliable_qos(100))
-    answers: dict = {}
-    sub = peer.node.create_subscription(
-        PoseRecommendation, f"{ns}/pose_recommendations",
-        lambda m: answers.setdefault(m.recommendation.candidate_id, (m, time.monotonic())), reliable_qos(100))
-    # Both directions: answers sent before the node's publisher matches ours would be lost.
-    assert peer.spin_until(lambda: pub.get_subscription_count() > 0 and sub.get_publisher_count() > 0, 15.0)
+    pub, answers = pose_endpoints(peer, ns)
     ids = [f"fifo-{k}" for k in range(6)]  # more than the 4 loading slots
     t0 = time.monotonic()
     for i in ids:
@@ -180,15 +187,7 @@ def test_inline_meshes_are_bounded(start_node, peer):
                       "-p", "max_inline_mesh_triangles:=50000", name="grasp_orient node (inline)")
     single = GraspClient(peer, ns)
     single.ensure_roundtrip()
-    from conftest import reliable_qos
-    from grasp_orient.msg import PoseRecommendation
-    pub = peer.node.create_publisher(PoseCandidate, f"{ns}/pose_candidates", reliable_qos(100))
-    answers: dict = {}
-    sub = peer.node.create_subscription(PoseRecommendation, f"{ns}/pose_recommendations",
-                                        lambda m: answers.setdefault(m.recommendation.candidate_id, m),
-                                        reliable_qos(100))
-    # Both directions: answers sent before the node's publisher matches ours would be lost.
-    assert peer.spin_until(lambda: pub.get_subscription_count() > 0 and sub.get_publisher_count() > 0, 15.0)
+    pub, answers = pose_endpoints(peer, ns)
     base = pc.singles()[0]
     base["object"] = {"pose": pc.pose(0, 0, 0), "scale": pc.ONE, "mass": 0.25, "friction": 0.5}
     base["grasp_pose"] = pc.pose(0, 0, 0)
@@ -198,8 +197,9 @@ def test_inline_meshes_are_bounded(start_node, peer):
     pub.publish(big)
     assert peer.spin_until(lambda: "big" in answers, 5.0)
     assert time.monotonic() - t0 < 2.0
-    assert answers["big"].recommendation.status == 2
-    assert "max_inline_mesh_triangles (50000)" in answers["big"].recommendation.message
+    big_answer = answers["big"][0].recommendation
+    assert big_answer.status == 2
+    assert "max_inline_mesh_triangles (50000)" in big_answer.message
     ids = [f"under-{k}" for k in range(5)]
     for i in ids:
         pub.publish(pc.fill(PoseCandidate(), dict(base, id=i, object={**base["object"], "inline_mesh": under})))
@@ -256,15 +256,7 @@ def test_a_huge_inline_mesh_is_refused_without_being_decoded_whole(start_node, p
     node = start_node("--ros-args", "-r", f"__ns:={ns}", "-p", "record:=false", name="grasp_orient node (huge inline)")
     single = GraspClient(peer, ns)
     single.ensure_roundtrip()
-    from conftest import reliable_qos
-    from grasp_orient.msg import PoseRecommendation
-    pub = peer.node.create_publisher(PoseCandidate, f"{ns}/pose_candidates", reliable_qos(10))
-    answers: dict = {}
-    sub = peer.node.create_subscription(PoseRecommendation, f"{ns}/pose_recommendations",
-                                        lambda m: answers.setdefault(m.recommendation.candidate_id,
-                                                                     (m, time.monotonic())),
-                                        reliable_qos(10))
-    assert peer.spin_until(lambda: pub.get_subscription_count() > 0 and sub.get_publisher_count() > 0, 15.0)
+    pub, answers = pose_endpoints(peer, ns, depth=10)
     pid = node.proc.pid
     case = load_paper_cases()[0]
     for k in range(3):  # warm: the first answers' allocations are part of "before"
@@ -352,15 +344,7 @@ def test_a_scale_sweep_on_a_large_mesh_is_answered_in_time(start_node, peer, tmp
                       "-p", "max_mesh_load_time:=30.0", name="grasp_orient node (scale sweep)")
     single = GraspClient(peer, ns)
     single.ensure_roundtrip()
-    from conftest import reliable_qos
-    from grasp_orient.msg import PoseRecommendation
-    pub = peer.node.create_publisher(PoseCandidate, f"{ns}/pose_candidates", reliable_qos(100))
-    answers: dict = {}
-    sub = peer.node.create_subscription(
-        PoseRecommendation, f"{ns}/pose_recommendations",
-        lambda m: answers.setdefault(m.recommendation.candidate_id, (m, time.monotonic())), reliable_qos(100))
-    # Both directions: answers sent before the node's publisher matches ours would be lost.
-    assert peer.spin_until(lambda: pub.get_subscription_count() > 0 and sub.get_publisher_count() > 0, 15.0)
+    pub, answers = pose_endpoints(peer, ns)
     pid = node.proc.pid
     scales = [1.0, 1.0 + 1e-12, 1.001, 0.5, 2.0, 1.5]
     # Across the sphere along the tool's y axis (the closing axis), a little off its centre along the tool's x

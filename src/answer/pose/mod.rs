@@ -754,17 +754,23 @@ mod tests {
         assert_eq!(answerer.meshes().loads(), 0);
     }
 
+    /// `cube_mm`'s cube as an inline mesh.
+    fn inline_cube_mm() -> crate::msg::Mesh {
+        let (corners, triangles) = cube_mm();
+        crate::msg::Mesh {
+            vertices: corners.iter().map(|&[x, y, z]| Point { x, y, z }).collect(),
+            triangles: triangles
+                .into_iter()
+                .map(|vertex_indices| MeshTriangle { vertex_indices })
+                .collect(),
+        }
+    }
+
     #[test]
     fn an_inline_mesh_is_the_same_cube() {
         let answerer = PoseAnswerer::new(ClosingAxis::Y, AmentIndex::default());
         let mut set = set_on("", 1);
-        let (corners, triangles) = cube_mm();
-        set.object.inline_mesh.vertices =
-            corners.iter().map(|&[x, y, z]| Point { x, y, z }).collect();
-        set.object.inline_mesh.triangles = triangles
-            .into_iter()
-            .map(|vertex_indices| MeshTriangle { vertex_indices })
-            .collect();
+        set.object.inline_mesh = inline_cube_mm();
         let r = answerer.answer(
             &PoseCandidate {
                 id: "inline".into(),
@@ -790,13 +796,7 @@ mod tests {
     #[test]
     fn an_inline_mesh_beyond_the_bound_is_refused_in_words_without_its_count() {
         let mut set = set_on("", 2);
-        let (corners, triangles) = cube_mm();
-        set.object.inline_mesh.vertices =
-            corners.iter().map(|&[x, y, z]| Point { x, y, z }).collect();
-        set.object.inline_mesh.triangles = triangles
-            .into_iter()
-            .map(|vertex_indices| MeshTriangle { vertex_indices })
-            .collect();
+        set.object.inline_mesh = inline_cube_mm();
         let single = |object: &GraspObject| PoseCandidate {
             id: "inline".into(),
             grasp_pose: set.poses[0].grasp_pose.clone(),

@@ -24,6 +24,26 @@ pub fn pose_bag_topics() -> grasp_orient::record::Topics {
         .with::<grasp_orient::kind::PoseSets>("/pose_candidate_sets", "/pose_recommendation_sets")
 }
 
+/// Writes `payloads` to `w` in order, the k-th logged and published at `first + k * step` ns,
+/// and finishes the recording.
+pub fn write_in_order(
+    mut w: grasp_orient::record::BagWriter,
+    payloads: impl IntoIterator<Item = grasp_orient::record::Payload>,
+    first: u64,
+    step: u64,
+) {
+    for (k, payload) in payloads.into_iter().enumerate() {
+        let t = first + k as u64 * step;
+        w.write(&grasp_orient::record::Entry {
+            payload,
+            log_time: t,
+            publish_time: t,
+        })
+        .expect("write");
+    }
+    w.finish().expect("finish");
+}
+
 /// A candidate's answer through the library's front door, with `settings` and the default
 /// rules (no gripper limit, no default tolerances).
 pub fn answer(
