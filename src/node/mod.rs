@@ -15,6 +15,7 @@
 pub(crate) mod answer;
 pub(crate) mod demo;
 mod endpoint;
+mod grip;
 pub(crate) mod loads;
 
 mod markers_out;
@@ -153,6 +154,7 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
         loaders.clone(),
     )
     .context("cannot start the set thread")?;
+    let shared_for_grip = shared.clone();
     let mut answerer = Answerer::new(
         shared,
         options.echo,
@@ -162,6 +164,7 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
         on_stop,
         meshes,
     );
+    let grip = grip::Grip::offer(&mut session, &config, &shared_for_grip, answerer.recent())?;
     let started = answerer
         .start()
         .map_err(|e| anyhow::Error::new(e).context("recording is off"))?;
@@ -185,6 +188,7 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
         let local = smol::LocalExecutor::new();
         let _services = local.spawn(services.serve(node));
         let _markers_watch = local.spawn(endpoints.markers.watch(node));
+        let _grip = local.spawn(grip.serve(node));
         let mut loading = PoseLoads::new(loaders);
         let mut tf = TfWait::new();
         let mut loop_state = Loop {
@@ -214,6 +218,7 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
     drop(worker);
     drop(endpoints);
     drop(services);
+    drop(grip);
     if let Some(demo) = demo {
         demo.stop();
     }

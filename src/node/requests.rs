@@ -169,6 +169,7 @@ pub(super) async fn send_answer<A: Recommends + serde::Serialize + std::fmt::Deb
         r.gripping_power
     );
     tell(node, outcome.notes);
+    answerer.recent().note(r);
     if let Err(e) = answers.async_publish(outcome.reply).await {
         let why = format!("cannot publish the answer to a {}: {e:?}", A::WHAT);
         say(node, log::Level::Error, &why);
