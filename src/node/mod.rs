@@ -2,8 +2,8 @@
 //! `grip_markers`; answers sets on `grasp_candidate_sets` → `grip_recommendation_sets` and through
 //! the service `~/recommend` ([`sets`]); gripper poses on `pose_candidates` →
 //! `pose_recommendations`, their sets on `pose_candidate_sets` → `pose_recommendation_sets` and
-//! through `~/recommend_poses`; with parameters, rosout, remapping and a clean exit on Ctrl-C and
-//! SIGTERM.
+//! through `~/recommend_poses`; an answer's grip force sent to the gripper's action through
+//! `~/grip` ([`grip`]); with parameters, rosout, remapping and a clean exit on Ctrl-C and SIGTERM.
 //!
 //! [`run`] reads the settings, opens the [`session::Session`], creates the endpoints and the
 //! parameter services, and then only moves messages: each candidate goes to
@@ -117,6 +117,8 @@ fn load_config(ros: &RosArgs, node: &str) -> anyhow::Result<(Config, crate::solv
             .with_context(|| format!("-p {name}:={value}"))?;
     }
     let settings = config.solver_settings()?;
+    // The gripper's action is refused here, before the node joins the graph.
+    grip::action_name(&config, |name| ros.topic(name, node))?;
     Ok((config, settings))
 }
 

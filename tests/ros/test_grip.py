@@ -26,7 +26,8 @@ from mcap_util import random_grasp
 import pose_cases as pc
 
 from control_msgs.action import GripperCommand, ParallelGripperCommand  # noqa: E402
-from grasp_orient.msg import GraspCandidateSet  # noqa: E402
+from conftest import reliable_qos
+from grasp_orient.msg import GraspCandidateSet, PoseCandidate, PoseRecommendation  # noqa: E402
 from grasp_orient.srv import Grip, Recommend  # noqa: E402
 from rclpy.action import ActionServer, CancelResponse, GoalResponse  # noqa: E402
 from rclpy.task import Future  # noqa: E402
@@ -220,6 +221,30 @@ def test_a_parallel_gripper_command_server_gets_every_joint_at_the_force(peer, c
     assert list(cmd.effort) == [force, force] and list(cmd.velocity) == [], cmd
     assert r.sent and r.force == force and r.goal_status == SUCCEEDED, r
     assert r.position == POSITION + 0.002 and r.effort == force and r.stalled and not r.reached_goal, r
+
+
+def test_a_pose_candidates_answer_is_sent(peer, grippers):
+    """A pose candidate (a box between the fingers, docs/poses.md): its grip force, equal to solve's on it."""
+    _, parallel = grippers
+    cand = next(c for c in pc.singles() if c["id"] == "box-mid")
+    (want,) = run_solve([cand])
+    assert want["recommendation"]["status"] == 0, want
+    got: dict = {}
+    sub = peer.node.create_subscription(PoseRecommendation, f"{PARALLEL_NS}/pose_recommendations",
+                                        lambda m: got.setdefault(m.recommendation.candidate_id, m), reliable_qos(10))
+    pub = peer.node.create_publisher(PoseCandidate, f"{PARALLEL_NS}/pose_candidates", reliable_qos(10))
+    try:
+        assert peer.spin_until(lambda: pub.get_subscription_count() > 0 and sub.get_publisher_count() > 0, 15.0)
+        pub.publish(pc.fill(PoseCandidate(), cand))
+        assert peer.spin_until(lambda: "box-mid" in got, 15.0), "no answer to the pose candidate"
+    finally:
+        peer.node.destroy_subscription(sub)
+        peer.node.destroy_publisher(pub)
+    force = got["box-mid"].recommendation.internal_force
+    assert math.isclose(force, want["recommendation"]["internal_force"], rel_tol=1e-12, abs_tol=0)
+    r = grip(peer, grip_client(peer, PARALLEL_NS), "box-mid")
+    assert r.sent and r.recommended_force == force and r.force == force * FACTOR, r
+    assert list(parallel.goals[-1].command.effort) == [force * FACTOR] * 2
 
 
 def test_bad_calls_are_refused_clearly_and_the_node_goes_on(peer, cases, grippers):

@@ -60,35 +60,43 @@ enum Gripper {
     ),
 }
 
+/// The action `~/grip` sends to, by parameter and resolved name (as a topic's: in the namespace,
+/// remapped), when one is set; both set, or a name that is not a ROS name, is refused.
+pub(super) fn action_name(
+    config: &Config,
+    resolve: impl Fn(&str) -> String,
+) -> anyhow::Result<Option<(&'static str, String, Name)>> {
+    let (command, parallel) = (&config.gripper_action, &config.parallel_gripper_action);
+    let (param, name) = match (command.is_empty(), parallel.is_empty()) {
+        (true, true) => return Ok(None),
+        (false, true) => ("gripper_action", command),
+        (true, false) => ("parallel_gripper_action", parallel),
+        (false, false) => anyhow::bail!(
+            "parameters gripper_action ({command}) and parallel_gripper_action ({parallel}) are \
+             both set: ~/grip sends to one gripper, set only one of them"
+        ),
+    };
+    let full = resolve(name);
+    let parsed = Name::parse(&full)
+        .map_err(|e| anyhow::anyhow!("parameter {param}: {name:?} is not a ROS name: {e:?}"))?;
+    Ok(Some((param, full, parsed)))
+}
+
 impl Grip {
     /// Offers `~/grip` and, when `gripper_action` or `parallel_gripper_action` is set, the client
-    /// of that action (its name resolved and remapped as a topic's is), and says so. Both set is
-    /// refused.
+    /// of that action ([`action_name`]), and says so.
     pub(super) fn offer(
         session: &mut Session,
         config: &Config,
         shared: &Shared,
         recent: &Recent,
     ) -> anyhow::Result<Self> {
-        let (command, parallel) = (&config.gripper_action, &config.parallel_gripper_action);
-        if !command.is_empty() && !parallel.is_empty() {
-            anyhow::bail!(
-                "gripper_action ({command}) and parallel_gripper_action ({parallel}) are both \
-                 set: ~/grip sends to one gripper, set only one of them"
-            );
-        }
-        let named = |param: &str, name: &str| -> anyhow::Result<(String, Name)> {
-            let full = session.topic_name(name);
-            let parsed = Name::parse(&full)
-                .map_err(|e| anyhow::anyhow!("{param} {name:?} is not a ROS name: {e:?}"))?;
-            Ok((full, parsed))
+        let named = action_name(config, |name| session.topic_name(name))?;
+        let (command, parallel) = match named {
+            Some(("gripper_action", full, name)) => (Some((full, name)), None),
+            Some((_, full, name)) => (None, Some((full, name))),
+            None => (None, None),
         };
-        let command = (!command.is_empty())
-            .then(|| named("gripper_action", command))
-            .transpose()?;
-        let parallel = (!parallel.is_empty())
-            .then(|| named("parallel_gripper_action", parallel))
-            .transpose()?;
         let node = session.node_mut();
         let gripper = if let Some((full, name)) = command {
             let client = action_client(node, &name, "GripperCommand")?;
@@ -544,6 +552,52 @@ mod tests {
         c.max_grip_force = 0.0;
         let p = plan(&recent, &c, "ok", true).expect("planned");
         assert_eq!((p.recommended, p.force, p.capped), (9.0, 18.0, false));
+    }
+
+    /// The defaults (no gripper, factor 1, closed, 5 s) and the domains' ends.
+    #[test]
+    fn the_grip_parameters_are_checked() {
+        let c = Config::default();
+        assert_eq!(
+            (
+                c.gripper_action.as_str(),
+                c.parallel_gripper_action.as_str()
+            ),
+            ("", "")
+        );
+        assert_eq!(
+            (c.grip_safety_factor, c.grip_position, c.grip_timeout),
+            (1.0, 0.0, 5.0)
+        );
+        assert!(c.parallel_gripper_joints.is_empty());
+        assert!(action_name(&c, str::to_string).expect("none").is_none());
+        for (name, value, message) in [
+            (
+                "grip_safety_factor",
+                "0.5",
+                "parameter grip_safety_factor: must be in [1, 1000], got 0.5",
+            ),
+            (
+                "grip_timeout",
+                "0",
+                "parameter grip_timeout: must be in [0.001, 3600], got 0",
+            ),
+        ] {
+            let mut c = Config::default();
+            c.set_from_yaml(name, value).expect("the type is right");
+            let e = c.solver_settings().expect_err(value);
+            assert_eq!(e.to_string(), message);
+        }
+        let mut c = Config::default();
+        c.set_from_yaml("parallel_gripper_action", "gripper_cmd")
+            .expect("a string");
+        let (param, full, _) = action_name(&c, |n| format!("/arm/{n}"))
+            .expect("a name")
+            .expect("set");
+        assert_eq!(
+            (param, full.as_str()),
+            ("parallel_gripper_action", "/arm/gripper_cmd")
+        );
     }
 
     #[test]
