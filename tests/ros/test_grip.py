@@ -18,19 +18,22 @@ from __future__ import annotations
 import copy
 import math
 import random
+from pathlib import Path
 
 import pytest
 
-from conftest import GraspClient, Peer, run_solve
+from conftest import GraspClient, Peer, reliable_qos, run_solve
 from mcap_util import random_grasp
 import pose_cases as pc
 
 from control_msgs.action import GripperCommand, ParallelGripperCommand  # noqa: E402
-from conftest import reliable_qos
 from grasp_orient.msg import GraspCandidateSet, PoseCandidate, PoseRecommendation  # noqa: E402
 from grasp_orient.srv import Grip, Recommend  # noqa: E402
 from rclpy.action import ActionServer, CancelResponse, GoalResponse  # noqa: E402
 from rclpy.task import Future  # noqa: E402
+from ament_index_python.packages import get_package_share_directory  # noqa: E402
+
+JAZZY = Path(__file__).resolve().parent.parent.parent / "src" / "msg" / "jazzy"
 
 NODE_NS = "/grip_case"
 PARALLEL_NS = "/grip_parallel"
@@ -41,6 +44,18 @@ GRIP_TIMEOUT = 2.0
 POSITION = 0.01
 JOINTS = ["left_finger_joint", "right_finger_joint"]
 SUCCEEDED, CANCELED = 4, 5
+
+
+def test_the_definitions_the_node_is_checked_against_are_the_peers():
+    """src/msg/jazzy/ holds the texts the node's wire structs are held to (src/node/grip/wire.rs): control_msgs'
+    as the peer built them, sensor_msgs/JointState as the ros-sensor-msgs wheel (Jazzy) installs it."""
+    for package, files in (("control_msgs", ["msg/GripperCommand.msg", "action/GripperCommand.action",
+                                              "action/ParallelGripperCommand.action"]),
+                           ("sensor_msgs", ["msg/JointState.msg"])):
+        share = Path(get_package_share_directory(package))
+        for f in files:
+            ours = (JAZZY / package / Path(f).name).read_text()
+            assert (share / f).read_text() == ours, f"{package}/{f} differs from src/msg/jazzy/{package}/"
 
 
 def candidates() -> dict[str, dict]:
