@@ -16,6 +16,7 @@ pub(crate) mod answer;
 pub(crate) mod demo;
 mod endpoint;
 mod grip;
+mod intake;
 pub(crate) mod loads;
 
 mod markers_out;
@@ -41,6 +42,7 @@ use answer::Answerer;
 use anyhow::Context as _;
 use demo::Demo;
 use futures::{FutureExt, StreamExt};
+use intake::OffThread;
 use loads::{Loaders, PoseLoads};
 use param_services::ParameterServices;
 use params::Shared;
@@ -287,8 +289,16 @@ async fn serve(
     demo: Option<&Demo>,
 ) -> anyhow::Result<()> {
     let mut stream = pin!(endpoints.candidates.requests.async_stream());
-    let mut poses = pin!(endpoints.poses.requests.async_stream());
-    let mut arrivals = pin!(sets::arrivals(&endpoints.sets, &endpoints.topics).fuse());
+    // Pose candidates and sets may carry inline meshes: decoded on threads of their own.
+    let mut poses = OffThread::spawn(
+        "grasp_orient poses",
+        endpoints.poses.requests.clone(),
+        |s| s.async_stream().boxed_local(),
+    )?;
+    let sets_in = (endpoints.sets.clone(), endpoints.topics.clone());
+    let mut arrivals = OffThread::spawn("grasp_orient sets", sets_in, |(s, t)| {
+        sets::arrivals(s, t).boxed_local()
+    })?;
     let mut tf_dynamic = pin!(endpoints.tf.dynamic.async_stream());
     let mut tf_static = pin!(endpoints.tf.fixed.async_stream());
     let mut demo_done = pin!(async {

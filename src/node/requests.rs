@@ -25,7 +25,8 @@ pub(super) struct Endpoints {
     pub(super) topics: Topics,
     pub(super) candidates: Endpoint<Candidates>,
     pub(super) markers: MarkersOut,
-    pub(super) sets: SetEndpoints,
+    /// Shared with the thread that reads the sets (`intake.rs`).
+    pub(super) sets: std::sync::Arc<SetEndpoints>,
     pub(super) poses: Endpoint<Poses>,
     /// `/tf` and `/tf_static`.
     pub(super) tf: tf::TfListener,
@@ -43,7 +44,7 @@ impl Endpoints {
         let markers = create_topic::<MarkerArray>(node, &markers_name, &qos)?;
         Ok(Self {
             candidates: Endpoint::create(node, &topics, &qos)?,
-            sets: SetEndpoints::create(node, &topics, qos_depth)?,
+            sets: std::sync::Arc::new(SetEndpoints::create(node, &topics, qos_depth)?),
             poses: Endpoint::create(node, &topics, &qos)?,
             tf: tf::TfListener::create(node, &tf_name, &tf_static_name)?,
             markers: MarkersOut::new(
