@@ -120,6 +120,11 @@ parameters! {
     /// object pose's frame to its own, at its stamp) to arrive on /tf or /tf_static; then it gets
     /// status 2 naming both frames. 0: no wait.
     tf_timeout: f64 = 0.1, "s", in Domain::Real { min: 0.0, max: 10.0 };
+    /// A YAML file giving the mass and friction (and optionally the centre of mass, or a density
+    /// instead of the mass) of named objects: MoveIt CollisionObjects by id, and pose candidates'
+    /// mesh resources whose mass or friction is 0 (docs/node.md#objects). Read once at start, at
+    /// most 1 MiB. Empty (the default): no table.
+    objects_file (fixed): String = String::new(), "";
 }
 
 impl super::choices::Choice for ClosingAxis {
