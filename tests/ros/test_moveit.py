@@ -19,11 +19,12 @@ from __future__ import annotations
 import copy
 import math
 import random
+import subprocess
 
 import numpy as np
 import pytest
 
-from conftest import reliable_qos, run_solve, to_plain
+from conftest import binary_path, reliable_qos, run_solve, to_plain
 import pose_cases as pc
 from tf_cases import GRAVITY, homogeneous, matrix_of, pose_of, random_quaternion, transform_msg, vec
 from test_tf import check_tool_pose, close, without_tool_poses
@@ -78,7 +79,8 @@ def moveit_node(start_node, tmp_path_factory):
     n = start_node("--ros-args", "-r", f"__ns:={NODE_NS}", "-p", "gravity_frame:=world", "-p", "tf_timeout:=0.5",
                    "-p", f"objects_file:={objects}", "-p", "record:=false", name="grasp_orient node (MoveIt)")
     yield n
-    n.stop_and_check()
+    if n.proc.poll() is None:
+        n.stop_and_check()
 
 
 class MoveIt:
@@ -286,3 +288,52 @@ def test_bad_calls_are_refused_and_the_node_goes_on(moveit):
     good = moveit.call(box_object("box", "table", pose, pose), grasps)
     assert good["recommendation_set"]["status"] == 0, good["recommendation_set"]["message"]
     assert len(good["recommendation_set"]["recommendations"]) == 3
+
+
+def test_a_recording_of_rank_grasps_replays_as_pose_sets(start_node, peer, tmp_path):
+    """A node of its own, recording: its rank_grasps calls are recorded as pose sets, turned by TF, with their
+    answers, and `grasp_orient replay` (no TF, no MoveIt, no objects_file) answers every one alike."""
+    ns = "/moveit_replay"
+    objects = tmp_path / "objects.yaml"
+    objects.write_text(TABLE)
+    runs = tmp_path / "runs"
+    n = start_node("--ros-args", "-r", f"__ns:={ns}", "-p", "gravity_frame:=world", "-p", "tf_timeout:=10.0",
+                   "-p", f"objects_file:={objects}", "-p", "record:=true", "-p", f"record_dir:={runs}",
+                   name="grasp_orient node (MoveIt, recording)")
+    world = World(random.Random(39))
+    static_qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, history=HistoryPolicy.KEEP_LAST,
+                            durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    tf = peer.node.create_publisher(TFMessage, "/tf_static", static_qos)
+    rank = peer.node.create_client(RankGrasps, f"{ns}/grasp_orient/rank_grasps")
+    try:
+        # Published once the node's reader is there; kept (transient-local) for it however late it matches.
+        assert peer.spin_until(lambda: tf.get_subscription_count() > 0, 15.0), "the node did not subscribe /tf_static"
+        tf.publish(TFMessage(transforms=world.messages()))
+        assert rank.wait_for_service(timeout_sec=15.0), "no ~/rank_grasps"
+        peer.spin_for(0.5)
+        rng = random.Random(5)
+        for k in range(3):
+            pose, shape_pose = rand_transform(rng), rand_transform(rng)
+            obj = box_object("box", "table", pose_of(homogeneous(*pose)), pose_of(homogeneous(*shape_pose)))
+            shape_in_table = homogeneous(*pose) @ homogeneous(*shape_pose)
+            grasps = grasps_on(world.a_in_b("table", "camera") @ shape_in_table, 6, rng)
+            req = RankGrasps.Request()
+            pc.fill(req.object, obj)
+            req.grasps = [pc.fill(Grasp(), g) for g in grasps]
+            req.width = 0.09
+            a = to_plain(peer.call(rank, req, timeout=30.0))
+            assert a["recommendation_set"]["status"] == 0, a["recommendation_set"]["message"]
+            assert a["grasps"], a["recommendation_set"]
+    finally:
+        peer.node.destroy_client(rank)
+        peer.node.destroy_publisher(tf)
+        n.stop_and_check()
+    bags = sorted(runs.glob("*.mcap"))
+    assert len(bags) == 1, bags
+    r = subprocess.run([str(binary_path()), "replay", str(bags[0])], capture_output=True, text=True, timeout=120)
+    out = r.stdout + r.stderr
+    assert r.returncode == 0, out[-3000:]
+    for words in ("3 pose sets, 3 recorded pose set answers",
+                  "18 compared with a recorded recommendation, 0 differ beyond 1e-9, 0 recorded recommendations unmatched",
+                  "3 sets (their candidates counted above): 3 compared with a recorded answer, 0 differ"):
+        assert words in out, out[-3000:]
