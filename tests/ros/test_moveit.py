@@ -30,7 +30,8 @@ from tf_cases import GRAVITY, homogeneous, matrix_of, pose_of, random_quaternion
 from test_tf import check_tool_pose, close, without_tool_poses
 
 from moveit_msgs.msg import CollisionObject, Grasp, PlanningScene  # noqa: E402
-from grasp_orient.srv import RankGrasps  # noqa: E402
+from grasp_orient.msg import PoseCandidateSet, PoseRecommendationSet  # noqa: E402
+from grasp_orient.srv import RankGrasps, RecommendPoses  # noqa: E402
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
 from tf2_msgs.msg import TFMessage  # noqa: E402
 
@@ -43,6 +44,8 @@ TABLE = f"""objects:
   box: {{mass: {MASS}, friction: {FRICTION}}}
   meshbox: {{density: {DENSITY}, friction: 0.5, center_of_mass: [0.001, -0.002, 0.003]}}
   nomass_neighbour: {{mass: 1.0, friction: 1.0}}
+meshes:
+  "{pc.BLOCK_RESOURCE}": {{mass: 0.35, friction: 0.45, center_of_mass: [0.002, 0.001, -0.003]}}
 """
 
 
@@ -337,3 +340,55 @@ def test_a_recording_of_rank_grasps_replays_as_pose_sets(start_node, peer, tmp_p
                   "18 compared with a recorded recommendation, 0 differ beyond 1e-9, 0 recorded recommendations unmatched",
                   "3 sets (their candidates counted above): 3 compared with a recorded answer, 0 differ"):
         assert words in out, out[-3000:]
+
+
+def test_a_mesh_resource_with_no_mass_takes_the_tables(moveit, peer):
+    """A pose set on ~/recommend_poses and one on its topic naming the block's package:// resource with mass
+    and friction 0 and no centre of mass: answered as solve answers the same poses with the table's mass,
+    friction and centre of mass. An object without a resource (its mesh inline) is not looked up: refused for
+    its mass."""
+    rng = random.Random(6)
+    obj = {**pc.objects()["package"], "mass": 0.0, "friction": 0.0}
+    at = matrix_of(obj["pose"])
+    poses = [{"id": f"p{k}", "grasp_pose": pose_of(at @ homogeneous([rng.uniform(-0.01, 0.01), 0.0, 0.0],
+                                                                    [0.0, 0.0, math.sin(t / 2), math.cos(t / 2)])),
+              "width": 0.09} for k, t in enumerate([0.0, 0.3, -0.4, 1.2])]
+    pset = {"header": {"frame_id": "world"}, "id": "table-mesh", "object": obj, "poses": poses,
+            "gravity": {"x": 0.0, "y": 0.0, "z": -9.80665}}
+    service = peer.node.create_client(RecommendPoses, f"{NODE_NS}/grasp_orient/recommend_poses")
+    try:
+        req = RecommendPoses.Request()
+        req.pose_set = pc.fill(PoseCandidateSet(), pset)
+        got = to_plain(peer.call(service, req, timeout=30.0).recommendation_set)
+    finally:
+        peer.node.destroy_client(service)
+    filled = {**obj, "mass": 0.35, "friction": 0.45, "has_center_of_mass": True,
+              "center_of_mass": {"x": 0.002, "y": 0.001, "z": -0.003}}
+    want = run_solve([{"header": {"frame_id": "world", "stamp": {"sec": 0, "nanosec": 0}}, "id": p["id"],
+                       "grasp_pose": p["grasp_pose"], "width": p["width"], "object": filled,
+                       "gravity": pset["gravity"]} for p in poses])
+    assert got["status"] == 0, got["message"]
+    diffs = close(without_tool_poses(got)["recommendations"], [without_tool_poses(w) for w in want])
+    assert not diffs, diffs[:5]
+    assert sum(r["recommendation"]["status"] == 0 for r in got["recommendations"]) >= 3
+    # On the topic too; and an inline mesh, which names no resource, keeps its mass 0 and is refused.
+    answers: dict[str, object] = {}
+    pub = peer.node.create_publisher(PoseCandidateSet, f"{NODE_NS}/pose_candidate_sets", reliable_qos(10))
+    sub = peer.node.create_subscription(PoseRecommendationSet, f"{NODE_NS}/pose_recommendation_sets",
+                                        lambda m: answers.setdefault(m.set_id, m), reliable_qos(10))
+    try:
+        assert peer.spin_until(lambda: pub.get_subscription_count() > 0 and sub.get_publisher_count() > 0, 15.0)
+        other = copy.deepcopy(pset)
+        other["id"] = "no-entry"
+        other["object"] = {**pc.objects()["inline"], "mass": 0.0}
+        for s in (pset, other):
+            pub.publish(pc.fill(PoseCandidateSet(), s))
+        assert peer.spin_until(lambda: {"table-mesh", "no-entry"} <= set(answers), 30.0), sorted(answers)
+    finally:
+        peer.node.destroy_publisher(pub)
+        peer.node.destroy_subscription(sub)
+    on_topic = to_plain(answers["table-mesh"])
+    assert not close(without_tool_poses(on_topic)["recommendations"], [without_tool_poses(w) for w in want])
+    refused = to_plain(answers["no-entry"])["recommendations"]
+    assert all(r["recommendation"]["status"] == 2 and "object.mass must be greater than zero" in
+               r["recommendation"]["message"] for r in refused), refused[0]["recommendation"]["message"]
