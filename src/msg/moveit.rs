@@ -519,5 +519,15 @@ mod tests {
         let bytes = cdr::encode(&scene).expect("encoded");
         let back: PlanningScene = cdr::decode(&bytes).expect("decoded");
         assert_eq!(back, scene);
+        // Every cut of it is an error, never a panic; so is a name claiming 4 GiB.
+        for end in 0..bytes.len() {
+            assert!(
+                cdr::decode::<PlanningScene>(&bytes[..end]).is_err(),
+                "cut at {end}"
+            );
+        }
+        let mut lying = bytes[..8].to_vec();
+        lying.extend_from_slice(&u32::MAX.to_le_bytes());
+        assert!(cdr::decode::<PlanningScene>(&lying).is_err());
     }
 }
