@@ -130,6 +130,23 @@ def moveit(peer, moveit_node):
     return MoveIt(peer, World(random.Random(39)))
 
 
+def test_the_node_offers_rank_grasps_and_listens_to_moveit(moveit, peer):
+    """The service and the two subscriptions in the ROS graph, with their types; the subscriptions reliable and
+    volatile, as move_group's publishers offer."""
+    assert peer.spin_until(lambda: ("grasp_orient", NODE_NS) in peer.node.get_node_names_and_namespaces(), 15.0)
+    services = dict(peer.node.get_service_names_and_types_by_node("grasp_orient", NODE_NS))
+    assert "grasp_orient/srv/RankGrasps" in services.get(f"{NODE_NS}/grasp_orient/rank_grasps", []), services
+    for topic, typ in [("/collision_object", "moveit_msgs/msg/CollisionObject"),
+                       ("/planning_scene", "moveit_msgs/msg/PlanningScene")]:
+        ours = [i for i in peer.node.get_subscriptions_info_by_topic(topic)
+                if (i.node_name, i.node_namespace) == ("grasp_orient", NODE_NS)]
+        assert ours, f"the node does not subscribe {topic}"
+        for i in ours:
+            assert i.topic_type == typ, (topic, i.topic_type)
+            q = i.qos_profile
+            assert (q.reliability, q.durability) == (ReliabilityPolicy.RELIABLE, DurabilityPolicy.VOLATILE), (topic, q)
+
+
 def box_object(oid: str, frame: str, pose: dict, shape_pose: dict, op: int = 0) -> dict:
     return {"header": {"frame_id": frame}, "id": oid, "pose": pose, "operation": bytes([op]),
             "primitives": [{"type": 1, "dimensions": BOX}], "primitive_poses": [shape_pose]}
