@@ -173,46 +173,28 @@ impl Scene {
         }
     }
 
-    /// APPEND: the message's shapes added to the known object's (their poses, given against
-    /// the message's own pose, re-expressed against the known object's; both in one frame), or
-    /// an ADD for an object not known.
+    /// APPEND: the message's shapes added to the known object's, their poses taken against the
+    /// known object's pose (the message's header and pose are left alone), as MoveIt's
+    /// `World::addToObject` does; an object not known is added as by ADD.
     fn append(&mut self, o: CollisionObject) -> Result<(), String> {
         let Some(known) = self.known.get(&o.id) else {
             return self.add(o);
         };
-        if known.header.frame_id != o.header.frame_id {
-            return Err(format!(
-                "collision object {:?}: APPEND in frame {:?} to an object in frame {:?} is not \
-                 supported; ignored",
-                crate::msg::clip(&o.id),
-                crate::msg::clip(&o.header.frame_id),
-                crate::msg::clip(&known.header.frame_id)
-            ));
-        }
         let mut merged = known.clone();
-        // A shape at `s` against the message's pose `m` is at `k⁻¹ m s` against the known `k`.
-        let relative = iso(&known.pose).inverse() * iso(&o.pose);
-        let moved = |poses: &[Pose]| -> Vec<Pose> {
-            poses.iter().map(|p| pose(&(relative * iso(p)))).collect()
-        };
-        merged.primitives.extend(o.primitives.iter().cloned());
-        merged.primitive_poses.extend(moved(&o.primitive_poses));
-        merged.meshes.extend(o.meshes.iter().cloned());
-        merged.mesh_poses.extend(moved(&o.mesh_poses));
-        merged.planes.extend(o.planes.iter().cloned());
-        merged.plane_poses.extend(moved(&o.plane_poses));
+        merged.primitives.extend(o.primitives);
+        merged.primitive_poses.extend(o.primitive_poses);
+        merged.meshes.extend(o.meshes);
+        merged.mesh_poses.extend(o.mesh_poses);
+        merged.planes.extend(o.planes);
+        merged.plane_poses.extend(o.plane_poses);
         merged.operation = CollisionObject::ADD;
         self.add(merged)
     }
 
-    /// MOVE: a new header and pose for the known object (MoveIt's: the geometry arrays empty).
+    /// MOVE: a new header and pose for the known object, its shapes kept. Shapes in the message
+    /// are ignored with a warning, as MoveIt's `processCollisionObjectMove` does.
     fn move_to(&mut self, o: &CollisionObject) -> Result<(), String> {
         let id = crate::msg::clip(&o.id);
-        if !o.primitives.is_empty() || !o.meshes.is_empty() || !o.planes.is_empty() {
-            return Err(format!(
-                "collision object {id:?}: MOVE with shapes (MoveIt wants them empty); ignored"
-            ));
-        }
         let Some(known) = self.known.get_mut(&o.id) else {
             return Err(format!(
                 "collision object {id:?}: MOVE of an unknown object; ignored"
@@ -220,6 +202,11 @@ impl Scene {
         };
         known.header = o.header.clone();
         known.pose = o.pose.clone();
+        if !o.primitives.is_empty() || !o.meshes.is_empty() || !o.planes.is_empty() {
+            return Err(format!(
+                "collision object {id:?}: moved; the shapes in the MOVE message are ignored"
+            ));
+        }
         Ok(())
     }
 
@@ -512,6 +499,40 @@ mod tests {
             ..CollisionObject::default()
         });
         assert!(e.expect_err("bad operation").contains("operation 9"));
+    }
+
+    /// APPEND keeps the known object's pose and takes the new shapes' poses against it; MOVE with
+    /// shapes moves the object, ignores the shapes and warns; as MoveIt does.
+    #[test]
+    fn append_and_move_as_moveit_takes_them() {
+        let mut s = Scene::new(table());
+        s.apply(boxed("box", [1.0, 0.0, 0.0])).expect("added");
+        let mut more = boxed("box", [5.0, 5.0, 5.0]).with_frame("elsewhere");
+        more.operation = CollisionObject::APPEND;
+        more.primitive_poses[0].position.x = 0.25;
+        s.apply(more).expect("appended");
+        let known = &s.known["box"];
+        assert_eq!(
+            (known.header.frame_id.as_str(), known.pose.position.x),
+            ("world", 1.0)
+        );
+        assert_eq!(known.primitives.len(), 2);
+        assert_eq!(known.primitive_poses[1].position.x, 0.25);
+        let mut moved = boxed("box", [0.0, 3.0, 0.0]);
+        moved.operation = CollisionObject::MOVE;
+        let warning = s.apply(moved).expect_err("a warning");
+        assert!(
+            warning.contains("shapes in the MOVE message are ignored"),
+            "{warning}"
+        );
+        let known = &s.known["box"];
+        assert_eq!((known.pose.position.y, known.primitives.len()), (3.0, 2));
+        let mut lost = boxed("cup", [0.0; 3]);
+        lost.operation = CollisionObject::MOVE;
+        assert!(s
+            .apply(lost)
+            .expect_err("unknown")
+            .contains("MOVE of an unknown object"));
     }
 
     /// A planning scene's diff applies in order; a whole scene replaces what is known.
