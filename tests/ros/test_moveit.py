@@ -56,9 +56,11 @@ def rand_transform(rng: random.Random) -> tuple[list[float], list[float]]:
 class World:
     """The frame tree, as numpy matrices: each frame in world."""
 
-    def __init__(self, rng: random.Random):
-        self.edges = {"base": ("world", *rand_transform(rng)), "camera": ("base", *rand_transform(rng)),
-                      "table": ("world", *rand_transform(rng))}
+    def __init__(self, rng: random.Random, suffix: str = ""):
+        self.suffix = suffix
+        self.edges = {f"base{suffix}": ("world", *rand_transform(rng)),
+                      f"camera{suffix}": (f"base{suffix}", *rand_transform(rng)),
+                      f"table{suffix}": ("world", *rand_transform(rng))}
 
     def in_world(self, frame: str) -> np.ndarray:
         if frame == "world":
@@ -67,7 +69,12 @@ class World:
         return self.in_world(parent) @ homogeneous(t, q)
 
     def a_in_b(self, a: str, b: str) -> np.ndarray:
-        return np.linalg.inv(self.in_world(b)) @ self.in_world(a)
+        """Frame `a` in frame `b`, both named without the tree's suffix."""
+        name = (lambda f: f if f == "world" else f + self.suffix)
+        return np.linalg.inv(self.in_world(name(b))) @ self.in_world(name(a))
+
+    def frame(self, f: str) -> str:
+        return f + self.suffix
 
     def messages(self):
         return [transform_msg(parent, child, 0, t, q) for child, (parent, t, q) in self.edges.items()]
@@ -152,13 +159,13 @@ def box_object(oid: str, frame: str, pose: dict, shape_pose: dict, op: int = 0) 
             "primitives": [{"type": 1, "dimensions": BOX}], "primitive_poses": [shape_pose]}
 
 
-def grasps_on(shape_in_camera: np.ndarray, n: int, rng: random.Random) -> list[dict]:
+def grasps_on(shape_in_camera: np.ndarray, n: int, rng: random.Random, camera: str = "camera") -> list[dict]:
     """Grasps in the camera frame closing across the box's y faces, shifted and turned about its z."""
     out = []
     for k in range(n):
         dx, turn = rng.uniform(-0.01, 0.01), rng.uniform(-0.6, 0.6)
         along_z = homogeneous([dx, 0.0, rng.uniform(-0.01, 0.01)], [0.0, 0.0, math.sin(turn / 2), math.cos(turn / 2)])
-        out.append({"id": f"g{k}", "grasp_pose": {"header": {"frame_id": "camera"},
+        out.append({"id": f"g{k}", "grasp_pose": {"header": {"frame_id": camera},
                                                   "pose": pose_of(shape_in_camera @ along_z)},
                     "grasp_posture": {"joint_names": ["left_finger", "right_finger"],
                                       "points": [{"positions": [0.0, 0.0]}]}})
@@ -169,24 +176,25 @@ def expected(world: World, obj_frame: str, shape_in_frame: np.ndarray, shape: di
              mass: float, friction: float, com: list[float] | None = None) -> list[dict]:
     """The equivalent PoseCandidates, turned into the camera frame by numpy."""
     frame_in_camera = world.a_in_b(obj_frame, "camera")
-    gravity = world.in_world("camera")[:3, :3].T @ GRAVITY
+    gravity = world.in_world(world.frame("camera"))[:3, :3].T @ GRAVITY
     obj = {"pose": pose_of(frame_in_camera @ shape_in_frame), "scale": {"x": 1.0, "y": 1.0, "z": 1.0},
            "mass": mass, "friction": friction, **shape}
     if com is not None:
         obj.update(has_center_of_mass=True, center_of_mass=vec(com))
-    return [{"header": {"frame_id": "camera", "stamp": {"sec": 0, "nanosec": 0}}, "id": g["id"],
+    return [{"header": {"frame_id": world.frame("camera"), "stamp": {"sec": 0, "nanosec": 0}}, "id": g["id"],
              "grasp_pose": g["grasp_pose"]["pose"], "width": 0.09, "object": copy.deepcopy(obj), "gravity": vec(gravity)}
             for g in grasps]
 
 
-def check(moveit: MoveIt, answer: dict, grasps: list[dict], cands: list[dict]) -> int:
+def check(moveit: MoveIt, answer: dict, grasps: list[dict], cands: list[dict], world: World | None = None) -> int:
     """The answer equals solve's field for field; the response's grasps are the ranked ones, filled."""
     rs = answer["recommendation_set"]
     assert rs["status"] == 0, rs["message"]
     want = run_solve(cands)
     diffs = close(without_tool_poses(rs)["recommendations"], [without_tool_poses(w) for w in want], "recommendations")
     assert not diffs, diffs[:5]
-    camera_in_world = moveit.world.in_world("camera")
+    world = world or moveit.world
+    camera_in_world = world.in_world(world.frame("camera"))
     for g, r in zip(grasps, rs["recommendations"]):
         check_tool_pose(r, g["grasp_pose"]["pose"], rs["header"], camera_in_world)
     forces = [w["recommendation"]["internal_force"] for w in want]
@@ -199,7 +207,7 @@ def check(moveit: MoveIt, answer: dict, grasps: list[dict], cands: list[dict]) -
     for i, g in zip(answer["indices"], answer["grasps"]):
         grip = rs["recommendations"][i]["recommendation"]["internal_force"]
         assert g["id"] == grasps[i]["id"]
-        assert g["grasp_pose"] == {**grasps[i]["grasp_pose"], "header": {"frame_id": "camera",
+        assert g["grasp_pose"] == {**grasps[i]["grasp_pose"], "header": {"frame_id": world.frame("camera"),
                                                                           "stamp": {"sec": 0, "nanosec": 0}}}
         assert g["max_contact_force"] == float(np.float32(grip)), (g["max_contact_force"], grip)
         assert abs(g["grasp_quality"] - least / grip) <= 1e-12, (g["grasp_quality"], least, grip)
@@ -409,3 +417,23 @@ def test_a_mesh_resource_with_no_mass_takes_the_tables(moveit, peer):
     refused = to_plain(answers["no-entry"])["recommendations"]
     assert all(r["recommendation"]["status"] == 2 and "object.mass must be greater than zero" in
                r["recommendation"]["message"] for r in refused), refused[0]["recommendation"]["message"]
+
+
+def test_grasps_in_many_frame_trees_equal_solve(moveit):
+    """30 more trees, each turned and moved at random (world -> base_k -> camera_k, world -> table_k), published
+    in one /tf_static message as a static broadcaster does; per tree a box given whole in the call, in table_k,
+    and grasps in camera_k: every answer equals solve's on the pose candidates turned by numpy."""
+    rng = random.Random(7)
+    worlds = [World(rng, f"_{k}") for k in range(30)]
+    moveit.tf.publish(TFMessage(transforms=moveit.world.messages() + [m for w in worlds for m in w.messages()]))
+    held = 0
+    for w in worlds:
+        pose, shape_pose = rand_transform(rng), rand_transform(rng)
+        obj = box_object("box", w.frame("table"), pose_of(homogeneous(*pose)), pose_of(homogeneous(*shape_pose)))
+        shape_in_table = homogeneous(*pose) @ homogeneous(*shape_pose)
+        grasps = grasps_on(w.a_in_b("table", "camera") @ shape_in_table, 5, rng, w.frame("camera"))
+        answer = moveit.until(obj, grasps, lambda a: "no transform" not in a["recommendation_set"]["message"])
+        cands = expected(w, "table", shape_in_table, {"primitive": {"type": 1, "dimensions": BOX}}, grasps,
+                         MASS, FRICTION)
+        held += check(moveit, answer, grasps, cands, w)
+    assert held >= 100, held
