@@ -6,6 +6,7 @@
 pub(crate) mod choices;
 pub(crate) mod declare;
 pub(crate) mod error;
+pub(crate) mod objects;
 mod params;
 pub(crate) mod render;
 

@@ -146,6 +146,11 @@ parameters! {
     /// the goal accepted and its result; then the call fails saying which step was missing (a
     /// goal accepted but without a result is canceled).
     grip_timeout: f64 = 5.0, "s", in Domain::Real { min: 0.001, max: 3600.0 };
+    /// A YAML file giving the mass and friction (and optionally the centre of mass, or a density
+    /// instead of the mass) of named objects: MoveIt CollisionObjects by id, and pose candidates'
+    /// mesh resources whose mass or friction is 0 (docs/node.md#objects). Read once at start, at
+    /// most 1 MiB. Empty (the default): no table.
+    objects_file (fixed): String = String::new(), "";
 }
 
 impl super::choices::Choice for ClosingAxis {

@@ -63,6 +63,49 @@ macro_rules! ros_message {
     };
 }
 
+/// [`ros_message!`] for a message the crate keeps to itself (another project's, as MoveIt's):
+/// the struct and its fields are `pub(crate)`, off the front door.
+macro_rules! crate_message {
+    (
+        $(#[$meta:meta])*
+        $name:ident = $package:ident / $ros_name:ident
+        [ $( $cname:ident : $cty:ty = $cval:expr ),* $(,)? ]
+        {
+            $( $(#[$fmeta:meta])* $field:ident $(as $wire:literal)? : $fty:ty ),* $(,)?
+        }
+    ) => {
+        $(#[$meta])*
+        #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+        #[serde(deny_unknown_fields)]
+        pub(crate) struct $name {
+            $( $(#[$fmeta])* $(#[serde(rename = $wire)])? pub(crate) $field: $fty, )*
+        }
+
+        impl $name {
+            $( #[allow(missing_docs, dead_code)] pub(crate) const $cname: $cty = $cval; )*
+        }
+
+        impl RosMessage for $name {
+            const PACKAGE: &'static str = stringify!($package);
+            const NAME: &'static str = stringify!($ros_name);
+            const TYPE_NAME: &'static str =
+                concat!(stringify!($package), "/msg/", stringify!($ros_name));
+            fn fields() -> Vec<(&'static str, String)> {
+                vec![ $( (wire_name!($field $(, $wire)?), <$fty as RosType>::ros_type()) ),* ]
+            }
+            fn constants() -> Vec<(&'static str, String, String)> {
+                vec![ $( (stringify!($cname), <$cty as RosType>::ros_type(), ($cval).to_string()) ),* ]
+            }
+        }
+
+        impl RosType for $name {
+            fn ros_type() -> String {
+                concat!(stringify!($package), "/", stringify!($ros_name)).to_string()
+            }
+        }
+    };
+}
+
 /// The paper's Table 1 as messages (`examples/paper_cases.jsonl`; `tests/it/paper.rs` holds it to
 /// the solver's Table 1 fixture), for tests.
 #[cfg(test)]
@@ -101,6 +144,8 @@ pub use poses::{
     PoseRecommendation, PoseRecommendationSet, RecommendPosesRequest, RecommendPosesResponse,
     SolidPrimitive,
 };
+
+pub(crate) mod moveit;
 
 mod visualization;
 pub use visualization::{

@@ -111,9 +111,10 @@ impl<'de, T: Deserialize<'de>> serde::de::Visitor<'de> for BoundedSeq<T> {
     }
 }
 
-fn bounded_triangles<'de, D: serde::Deserializer<'de>>(
+/// An inline mesh's triangles (this package's or shape_msgs'), decoded within the bound.
+pub(super) fn bounded_triangles<'de, D: serde::Deserializer<'de>, T: Deserialize<'de>>(
     d: D,
-) -> Result<Vec<MeshTriangle>, D::Error> {
+) -> Result<Vec<T>, D::Error> {
     let keep = triangles_kept();
     d.deserialize_seq(BoundedSeq {
         keep,
@@ -121,7 +122,10 @@ fn bounded_triangles<'de, D: serde::Deserializer<'de>>(
     })
 }
 
-fn bounded_vertices<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<Point>, D::Error> {
+/// An inline mesh's vertices, decoded within three times the bound and one more.
+pub(super) fn bounded_vertices<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<Vec<Point>, D::Error> {
     // Three per triangle kept, and one more: `3 × bound + 1`.
     let keep = match triangles_kept() {
         usize::MAX => usize::MAX,

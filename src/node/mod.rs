@@ -19,13 +19,16 @@ mod grip;
 mod intake;
 pub(crate) mod loads;
 
+mod grasps;
 mod markers_out;
+mod moveit_in;
 mod param_services;
 mod params;
 pub(crate) mod play;
 pub(crate) mod pose_work;
 mod requests;
 pub(crate) mod ros_args;
+mod scene;
 pub(crate) mod session;
 pub(crate) mod set_io;
 mod set_kinds;
@@ -50,7 +53,7 @@ use requests::{send_loaded, Endpoints, Loading, Loop};
 use ros2_client::{Node, NodeOptions};
 use ros_args::RosArgs;
 use session::{message_times, say, tell, Session, Shutdown, Start};
-use set_worker::SetWorker;
+use set_worker::{SetWorker, Via};
 use std::pin::pin;
 use std::time::Duration;
 use tf_wait::{Request, TfWait};
@@ -124,12 +127,23 @@ fn load_config(ros: &RosArgs, node: &str) -> anyhow::Result<(Config, crate::solv
     Ok((config, settings))
 }
 
+/// The mass and friction of named objects, from `objects_file` (read once, at start).
+fn objects_table(config: &Config) -> anyhow::Result<crate::config::objects::ObjectTable> {
+    let objects = crate::config::objects::ObjectTable::load(&config.objects_file)
+        .map_err(anyhow::Error::msg)?;
+    if objects.len() > 0 {
+        log::info!("objects_file: {} objects and meshes", objects.len());
+    }
+    Ok(objects)
+}
+
 /// Runs the node until Ctrl-C or SIGTERM (or until the demo is done).
 pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
     let start = Start::new(ros_argv)?;
     let name = start.node_name(NODE_NAME);
     start.ros.check_distinct(&TOPICS, &name)?;
     let (config, settings) = load_config(&start.ros, &name)?;
+    let objects = objects_table(&config)?;
     // Inline meshes are decoded no further than the node would answer them (later values too:
     // `Live::push`).
     crate::msg::limit_inline_mesh_decoding(config.max_inline_mesh_triangles);
@@ -195,12 +209,14 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
         let _grip = local.spawn(grip.serve(node));
         let mut loading = PoseLoads::new(loaders);
         let mut tf = TfWait::new();
+        let mut scene = scene::Scene::new(objects);
         let mut loop_state = Loop {
             answerer: &mut answerer,
             worker: &mut worker,
             woken: &mut woken,
             loading: &mut loading,
             tf: &mut tf,
+            scene: &mut scene,
         };
         let outcome = local
             .run(serve(
@@ -301,6 +317,8 @@ async fn serve(
     })?;
     let mut tf_dynamic = pin!(endpoints.tf.dynamic.async_stream());
     let mut tf_static = pin!(endpoints.tf.fixed.async_stream());
+    let mut objects = pin!(endpoints.moveit.objects.async_stream());
+    let mut scenes = pin!(endpoints.moveit.scenes.async_stream());
     let mut demo_done = pin!(async {
         match demo {
             Some(d) => d.finished().await,
@@ -350,18 +368,23 @@ async fn serve(
             },
             arrival = arrivals.select_next_some() => match arrival {
                 sets::Arrival::Topic(set, info) => {
-                    let request = Request::Set(set, None);
+                    let request = Request::Set(set, Via::Topic { taken: Duration::ZERO });
                     tf_serve::admit(node, endpoints, state, request, message_times(&info)).await;
                 }
                 sets::Arrival::Call(id, set) => {
                     let now = now_ns();
-                    tf_serve::admit(node, endpoints, state, Request::Set(set, Some(id)), (now, now)).await;
+                    tf_serve::admit(node, endpoints, state, Request::Set(set, Via::Service(id)), (now, now)).await;
+                }
+                sets::Arrival::Grasps(id, call) => {
+                    moveit_in::take_call(node, endpoints, state, id, *call).await;
                 }
                 sets::Arrival::Undecodable(topic, why) => {
                     tell(node, vec![state.answerer.undecodable(&topic, &why)]);
                 }
             },
             received = tf_static.select_next_some() => tf_serve::keep(state.tf, received, true),
+            received = objects.select_next_some() => moveit_in::learn_object(node, state, received),
+            received = scenes.select_next_some() => moveit_in::learn_scene(node, state, received),
             received = tf_dynamic.select_next_some() => tf_serve::keep(state.tf, received, false),
         }
     }

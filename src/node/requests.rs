@@ -6,6 +6,7 @@ use super::answer::{self, Answerer};
 use super::endpoint::Endpoint;
 use super::loads::{Loaded, PoseLoads};
 use super::markers_out::MarkersOut;
+use super::scene::{self, Scene, SceneListener};
 use super::session::{create_topic, qos, say, tell, Session};
 use super::set_worker::SetWorker;
 use super::sets::SetEndpoints;
@@ -30,6 +31,8 @@ pub(super) struct Endpoints {
     pub(super) poses: Endpoint<Poses>,
     /// `/tf` and `/tf_static`.
     pub(super) tf: tf::TfListener,
+    /// `/collision_object` and `/planning_scene`.
+    pub(super) moveit: SceneListener,
 }
 
 impl Endpoints {
@@ -40,6 +43,8 @@ impl Endpoints {
         let markers_name = topics.markers.clone().unwrap_or_default();
         let tf_name = session.topic_name(tf::TF_TOPIC);
         let tf_static_name = session.topic_name(tf::TF_STATIC_TOPIC);
+        let objects_name = session.topic_name(scene::COLLISION_OBJECT_TOPIC);
+        let scenes_name = session.topic_name(scene::PLANNING_SCENE_TOPIC);
         let node = session.node_mut();
         let markers = create_topic::<MarkerArray>(node, &markers_name, &qos)?;
         Ok(Self {
@@ -47,6 +52,7 @@ impl Endpoints {
             sets: std::sync::Arc::new(SetEndpoints::create(node, &topics, qos_depth)?),
             poses: Endpoint::create(node, &topics, &qos)?,
             tf: tf::TfListener::create(node, &tf_name, &tf_static_name)?,
+            moveit: SceneListener::create(node, &objects_name, &scenes_name, &qos)?,
             markers: MarkersOut::new(
                 node.create_publisher(&markers, None)
                     .context("cannot publish markers")?,
@@ -64,6 +70,8 @@ pub(super) struct Loop<'a> {
     pub(super) woken: &'a mut futures::channel::mpsc::UnboundedReceiver<()>,
     pub(super) loading: &'a mut Loading,
     pub(super) tf: &'a mut TfWait,
+    /// The objects learned from MoveIt, and the table of their mass and friction.
+    pub(super) scene: &'a mut Scene,
 }
 
 /// Single pose candidates answered off the node's thread because their mesh was not loaded yet

@@ -5,6 +5,7 @@
 
 use super::set_kinds::{NodeSet, SetEndpoints, Solving};
 use crate::answer::{Answering, Rules, SetAnswer};
+use crate::config::objects::ObjectTable;
 use crate::msg::{CompactString, GripRecommendation, MarkerArray};
 use crate::record::Payload;
 use crate::tf::{self, Gravity, TfBuffer, TfFailure, ToolFrame};
@@ -26,6 +27,8 @@ pub(crate) enum Via {
     /// A call of `~/recommend` (a candidate set) or of `~/recommend_poses` (a pose set),
     /// answered to this request.
     Service(RmwRequestId),
+    /// A call of `~/rank_grasps`, answered as a pose set and mapped onto its grasps.
+    Grasps(RmwRequestId),
 }
 
 /// A set as it came, of any set kind: from its topic or a call of its service.
@@ -43,6 +46,7 @@ trait HeldSet: std::fmt::Debug + Send {
     fn needs_tf(&self, gravity: &Gravity) -> bool;
     fn resolve(&self, buffer: &TfBuffer, gravity: &Gravity) -> Result<SetInput, TfFailure>;
     fn refused(&self, with: &Answering, why: &str) -> SetReply;
+    fn fill(&mut self, table: &ObjectTable) -> bool;
     fn payload(self: Box<Self>) -> Payload;
     #[cfg(test)]
     fn as_any_mut(&mut self) -> &mut dyn Any;
@@ -93,6 +97,9 @@ impl<K: NodeSet> HeldSet for Held<K> {
     }
     fn refused(&self, with: &Answering, why: &str) -> SetReply {
         SetReply::new::<K>(K::refused(with, &self.0, why))
+    }
+    fn fill(&mut self, table: &ObjectTable) -> bool {
+        K::object_mut(&mut self.0).is_some_and(|o| table.fill(o))
     }
     fn payload(self: Box<Self>) -> Payload {
         Payload::request::<K>(self.0)
@@ -160,6 +167,12 @@ impl SetInput {
     /// ([`crate::answer::Answer::refused`]).
     pub(crate) fn refused(&self, with: &Answering, why: &str) -> SetReply {
         self.0.refused(with, why)
+    }
+
+    /// Its object's mass and friction filled from `table` where it has a mesh resource in it
+    /// and gives none ([`ObjectTable::fill`]); whether any was.
+    pub(crate) fn fill(&mut self, table: &ObjectTable) -> bool {
+        self.0.fill(table)
     }
 
     /// The message for the recording.
@@ -234,6 +247,10 @@ impl<K: NodeSet> HeldReply for Replied<K> {
                     .async_send_response(id, K::response(self.0))
                     .await
                     .map_err(|e| format!("cannot send a {} response: {e:?}", K::SERVICE)),
+                Via::Grasps(id) => match K::pose_answer(self.0) {
+                    Some(answer) => endpoints.grasps.respond(id, answer).await,
+                    None => Err(format!("{} answer for a rank_grasps call", K::ONE)),
+                },
             }
         })
     }

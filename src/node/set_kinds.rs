@@ -6,14 +6,15 @@
 //! through this trait (`set_io.rs`, `set_worker.rs`, `sets.rs`).
 
 use super::endpoint::Endpoint;
+use super::grasps::GraspsService;
 use super::loads::{too_slow, Loaders, LOAD_PANICKED};
 use super::pose_work::INLINE_OFF_THREAD_TRIANGLES;
 use super::session::qos;
 use crate::answer::{answer_in_full, markers, Answering, Halt, Interrupt, Refused, SetKind};
-use crate::kind::{Framing, PoseSets, Sets};
+use crate::kind::{Framing, Kind, PoseSets, Sets};
 use crate::msg::{
-    GraspCandidate, GripRecommendation, Header, MarkerArray, PoseCandidate, RecommendPosesRequest,
-    RecommendPosesResponse, RecommendRequest, RecommendResponse,
+    GraspCandidate, GraspObject, GripRecommendation, Header, MarkerArray, PoseCandidate,
+    RecommendPosesRequest, RecommendPosesResponse, RecommendRequest, RecommendResponse,
 };
 use crate::record::Topics;
 use crate::tf::ToolFrame;
@@ -77,6 +78,14 @@ pub(crate) trait NodeSet: SetKind + Framing {
     }
     /// The answer's tool poses re-expressed by `frame` (`gravity_frame`; docs/node.md#tf).
     fn express(_answer: &mut Self::Answer, _frame: &ToolFrame) {}
+    /// The answer as a pose set's, for the kind `~/rank_grasps` is answered as.
+    fn pose_answer(_answer: Self::Answer) -> Option<<PoseSets as Kind>::Answer> {
+        None
+    }
+    /// The set's object, for a kind that has one (filled from `objects_file`).
+    fn object_mut(_set: &mut Self::Request) -> Option<&mut GraspObject> {
+        None
+    }
 }
 
 /// A set kind's topics (sets in, answers out) and its service.
@@ -106,6 +115,8 @@ pub(crate) struct SetEndpoints {
     sets: SetEndpoint<Sets>,
     /// `pose_candidate_sets`, `pose_recommendation_sets` and `~/recommend_poses`.
     pose_sets: SetEndpoint<PoseSets>,
+    /// `~/rank_grasps`, answered as pose sets.
+    pub(super) grasps: GraspsService,
 }
 
 impl std::fmt::Debug for SetEndpoints {
@@ -121,6 +132,7 @@ impl SetEndpoints {
         Ok(Self {
             pose_sets: SetEndpoint::create(node, topics, &qos)?,
             sets: SetEndpoint::create(node, topics, &qos)?,
+            grasps: GraspsService::offer(node, &qos)?,
         })
     }
 
@@ -216,6 +228,12 @@ impl NodeSet for PoseSets {
         for r in &mut answer.recommendations {
             frame.express(&mut r.tool_pose);
         }
+    }
+    fn pose_answer(answer: Self::Answer) -> Option<Self::Answer> {
+        Some(answer)
+    }
+    fn object_mut(set: &mut Self::Request) -> Option<&mut GraspObject> {
+        Some(&mut set.object)
     }
     fn solve(s: &Solving, set: &Self::Request) -> (Self::Answer, Option<MarkerArray>) {
         let object =

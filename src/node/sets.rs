@@ -14,6 +14,7 @@ pub(crate) use super::set_kinds::NodeSet;
 pub(crate) use super::set_kinds::SetEndpoints;
 use super::set_kinds::{SetEndpoint, VisitSetEndpoint};
 use super::set_worker::{SetDone, SetJob, SetWorker, Via};
+use crate::msg::moveit::RankGraspsRequest;
 use crate::msg::short_id;
 use crate::record::{now_ns, Topics};
 use futures::stream::{LocalBoxStream, StreamExt as _};
@@ -26,6 +27,8 @@ pub(crate) enum Arrival {
     Topic(SetInput, MessageInfo),
     /// In a call of its service.
     Call(RmwRequestId, SetInput),
+    /// A call of `~/rank_grasps`, to be turned into its pose set (`grasps.rs`).
+    Grasps(RmwRequestId, Box<RankGraspsRequest>),
     /// A message on a set topic or service that did not decode: where, and why.
     Undecodable(String, Why),
 }
@@ -83,6 +86,19 @@ pub(crate) fn arrivals<'a>(
         streams: Vec::new(),
     };
     endpoints.each(&mut collect);
+    collect.streams.push(
+        endpoints
+            .grasps
+            .server
+            .receive_request_stream()
+            .map(|call| match call {
+                Ok((id, request)) => Arrival::Grasps(id, Box::new(request)),
+                Err(e) => {
+                    Arrival::Undecodable(super::grasps::SERVICE.into(), Why(format!("{e:?}")))
+                }
+            })
+            .boxed_local(),
+    );
     futures::stream::select_all(collect.streams)
 }
 
@@ -123,7 +139,7 @@ pub(crate) async fn take_call(
     markers: &MarkersOut,
     answerer: &mut Answerer,
     worker: &SetWorker,
-    (id, set): (RmwRequestId, SetInput),
+    (via, set): (Via, SetInput),
     received: u64,
 ) {
     let (record, record_markers) = answerer.records_sets();
@@ -131,7 +147,7 @@ pub(crate) async fn take_call(
         set,
         received,
         sent: received,
-        via: Via::Service(id),
+        via,
         record,
         record_markers,
         audience: markers.heard(node),
@@ -165,6 +181,7 @@ pub(crate) async fn answer_done(
     let (how, taken) = match via {
         Via::Topic { taken } => ("topic", Some(taken)),
         Via::Service(_) => ("service", None),
+        Via::Grasps(_) => ("rank_grasps", None),
     };
     let line = AnswerLine::new(&reply, how, taken, took, waited);
     answerer.recent().note_all(reply.members());

@@ -10,10 +10,11 @@ use super::set_worker::{done_at_once, SetJob, Via};
 use super::sets;
 use super::tf_wait::{Arrival, Request, TfWait, Verdict};
 use crate::answer::Answer;
+use crate::config::objects::ObjectTable;
 use crate::kind::{Candidates, Poses};
 use crate::msg::TfMessage;
 use ros2_client::{MessageInfo, Node};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// Takes `request`, received and sent at `times` (ns since the epoch), with the settings in
 /// force when it was received.
@@ -24,6 +25,8 @@ pub(super) async fn admit(
     request: Request,
     (received, sent): (u64, u64),
 ) {
+    let mut request = request;
+    fill(&mut request, state.scene.table());
     let now = Instant::now();
     let drained = endpoints.tf.drain(&mut state.tf.buffer);
     if drained.dynamic + drained.fixed > 0 {
@@ -41,6 +44,22 @@ pub(super) async fn admit(
     // from their answers.
     if state.tf.next_wake().is_some_and(|at| at <= Instant::now()) {
         due(node, endpoints, state).await;
+    }
+}
+
+/// A pose candidate's or pose set's object filled from `objects_file` where it names a mesh
+/// resource in it and gives no mass or friction (docs/node.md#objects): before TF and before
+/// the recording, so that the request is recorded, and replays, with the mass it was answered
+/// with.
+fn fill(request: &mut Request, table: &ObjectTable) {
+    match request {
+        Request::Pose(p, _) => {
+            table.fill(&mut p.object);
+        }
+        Request::Set(s, _) => {
+            s.fill(table);
+        }
+        Request::Candidate(_) => {}
     }
 }
 
@@ -141,20 +160,20 @@ async fn dispatch(node: &Node, endpoints: &Endpoints, state: &mut Loop<'_>, arri
             )
             .await;
         }
-        Request::Set(set, None) => {
+        Request::Set(set, Via::Topic { .. }) => {
             let (answerer, worker) = (&mut *state.answerer, &*state.worker);
             sets::take_topic(node, sets, markers, answerer, worker, set, (received, sent)).await;
         }
-        Request::Set(set, Some(id)) => {
+        Request::Set(set, via) => {
             let (answerer, worker) = (&mut *state.answerer, &*state.worker);
-            sets::take_call(node, sets, markers, answerer, worker, (id, set), received).await;
+            sets::take_call(node, sets, markers, answerer, worker, (via, set), received).await;
         }
     }
 }
 
 /// A request refused with status 2, `invalid input: {why}`, through its kind's
 /// [`Answer::refused`]; counted and recorded as it came, with its refusal.
-async fn refuse(
+pub(super) async fn refuse(
     node: &Node,
     endpoints: &Endpoints,
     state: &mut Loop<'_>,
@@ -184,12 +203,6 @@ async fn refuse(
         Request::Set(set, via) => {
             let reply = set.refused(&with, why);
             let (record, record_markers) = answerer.records_sets();
-            let via = match via {
-                Some(id) => Via::Service(id),
-                None => Via::Topic {
-                    taken: Duration::ZERO,
-                },
-            };
             let job = SetJob {
                 set,
                 received,

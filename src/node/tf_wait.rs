@@ -9,10 +9,10 @@
 //! wait at once; one more is refused at once, saying so and why it would have waited.
 
 use super::answer::SetInput;
+use super::set_worker::Via;
 use crate::kind::{Candidates, Framing, Poses};
 use crate::msg::{GraspCandidate, PoseCandidate};
 use crate::tf::{self, Gravity, TfBuffer, TfFailure, ToolFrame};
-use ros2_client::RmwRequestId;
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
@@ -33,8 +33,9 @@ pub(crate) enum Request {
     /// On `pose_candidates`; once turned by TF with `gravity_frame` set, with the frame its
     /// answer's tool pose goes into.
     Pose(Box<PoseCandidate>, Option<ToolFrame>),
-    /// A set on its topic (`None`) or in a call of its service.
-    Set(SetInput, Option<RmwRequestId>),
+    /// A set on its topic, in a call of its service, or made from a call of `~/rank_grasps`:
+    /// where its answer goes (a topic's `taken` is set when it is handed to the set thread).
+    Set(SetInput, Via),
 }
 
 /// A request and its times, ns since the epoch (a call's are both when it was taken).

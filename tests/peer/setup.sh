@@ -139,6 +139,7 @@ MSG_HASH="$(
     {
         echo "req=$REQ_HASH peer=$PEER_DIR"
         for f in CMakeLists.txt package.xml msg/*.msg srv/*.srv meshes/* src/msg/jazzy/tf2_msgs/*.msg \
+                 src/msg/jazzy/moveit_msgs/*.msg src/msg/jazzy/octomap_msgs/*.msg src/msg/jazzy/object_recognition_msgs/*.msg \
                  src/msg/jazzy/control_msgs/*; do
             if [ -f "$f" ]; then printf '%s %s\n' "$f" "$(sha256sum <"$f" | cut -d' ' -f1)"; fi
         done
@@ -278,6 +279,75 @@ XML
     rm -rf "$build"
 }
 
+# moveit_msgs for the MoveIt tests (tests/ros/test_moveit.py), built here from their Jazzy definitions
+# as tf2_msgs is above: moveit_msgs 2.6.0 (its ros2 branch, released into Jazzy), octomap_msgs 2.0.0
+# and object_recognition_msgs 2.0.0 (their ros2 branches), each cut to the messages a CollisionObject,
+# a PlanningScene and a Grasp are made of (the rest needs action_msgs and other packages the wheels
+# lack). Their .msg files are the ones in src/msg/jazzy/<pkg>/, verbatim, which the node's own wire
+# structs are checked against. shape_msgs and trajectory_msgs come from their Jazzy wheels
+# (requirements.txt). Built before the repository's package, whose srv/RankGrasps.srv uses them.
+MOVEIT_MSGS=(Grasp GripperTranslation CollisionObject PlanningScene PlanningSceneWorld RobotState
+    AttachedCollisionObject AllowedCollisionMatrix AllowedCollisionEntry LinkPadding LinkScale ObjectColor)
+build_trimmed_interfaces() {   # package version "deps..." msg names...
+    local pkg="$1" version="$2" deps="$3"; shift 3
+    local src="$(dirname "$SRC")/$pkg" build="$BUILD-$pkg" files="" name dep finds="" xml=""
+    rm -rf "$src" "$build"
+    mkdir -p "$src/msg" "$build"
+    for name in "$@"; do
+        cp "$REPO_ROOT/src/msg/jazzy/$pkg/$name.msg" "$src/msg/"
+        files="$files \"msg/$name.msg\""
+    done
+    for dep in $deps; do
+        finds="${finds}find_package($dep REQUIRED)"$'\n'
+        xml="$xml  <depend>$dep</depend>"$'\n'
+    done
+    cat >"$src/CMakeLists.txt" <<CMAKE
+cmake_minimum_required(VERSION 3.5)
+project($pkg)
+find_package(ament_cmake)
+find_package(rosidl_default_generators REQUIRED)
+$finds
+rosidl_generate_interfaces(\${PROJECT_NAME}
+ $files
+  DEPENDENCIES $deps
+)
+ament_package()
+CMAKE
+    cat >"$src/package.xml" <<XML
+<?xml version="1.0"?>
+<package format="3">
+  <name>$pkg</name>
+  <version>$version</version>
+  <description>$pkg (Jazzy), cut to the messages grasp_orient's tests use</description>
+  <maintainer email="none@example.invalid">grasp_orient tests</maintainer>
+  <license>BSD</license>
+  <buildtool_depend>ament_cmake</buildtool_depend>
+  <buildtool_depend>rosidl_default_generators</buildtool_depend>
+$xml  <exec_depend>rosidl_default_runtime</exec_depend>
+  <member_of_group>rosidl_interface_packages</member_of_group>
+  <export><build_type>ament_cmake</build_type></export>
+</package>
+XML
+    run_logged "$pkg-configure" "${BUILD_ENV[@]}" "$VENV/bin/cmake" -S "$src" -B "$build" \
+        -G "Unix Makefiles" \
+        -DCMAKE_BUILD_TYPE=Release \
+        -DCMAKE_PREFIX_PATH="$PREFIX;$VENV" \
+        -DCMAKE_INSTALL_PREFIX="$PREFIX" \
+        -DPython3_EXECUTABLE="$VENV/bin/python" \
+        -DPYTHON_EXECUTABLE="$VENV/bin/python" \
+        -DBUILD_TESTING=OFF
+    run_logged "$pkg-build" "${BUILD_ENV[@]}" "$VENV/bin/cmake" --build "$build" --parallel "$(nproc 2>/dev/null || echo 2)"
+    run_logged "$pkg-install" "${BUILD_ENV[@]}" "$VENV/bin/cmake" --install "$build"
+    rm -rf "$build"
+}
+build_moveit_msgs() {
+    build_trimmed_interfaces object_recognition_msgs 2.0.0 "" ObjectType
+    build_trimmed_interfaces octomap_msgs 2.0.0 "std_msgs geometry_msgs" Octomap OctomapWithPose
+    build_trimmed_interfaces moveit_msgs 2.6.0 \
+        "std_msgs geometry_msgs sensor_msgs trajectory_msgs shape_msgs object_recognition_msgs octomap_msgs" \
+        "${MOVEIT_MSGS[@]}"
+}
+
 if [ -f "$MSG_STAMP" ] && [ "$(cat "$MSG_STAMP")" = "$MSG_HASH" ] && [ -d "$PREFIX" ]; then
     log "grasp_orient interfaces up to date: $PREFIX"
 else
@@ -286,6 +356,7 @@ else
     # Build from a copy: with a peer dir inside the repository (e.g. <repo>/.ros-peer) the venv lies inside it,
     # and CMake refuses to export include dirs of the venv (numpy) that are "prefixed in the source directory".
     mkdir -p "$BUILD" "$SRC/msg" "$SRC/srv"
+    build_moveit_msgs
     cp "$REPO_ROOT/CMakeLists.txt" "$REPO_ROOT/package.xml" "$SRC/"
     cp "$REPO_ROOT"/msg/*.msg "$SRC/msg/"
     cp "$REPO_ROOT"/srv/*.srv "$SRC/srv/"
@@ -293,7 +364,7 @@ else
     run_logged cmake-configure "${BUILD_ENV[@]}" "$VENV/bin/cmake" -S "$SRC" -B "$BUILD" \
         -G "Unix Makefiles" \
         -DCMAKE_BUILD_TYPE=Release \
-        -DCMAKE_PREFIX_PATH="$VENV" \
+        -DCMAKE_PREFIX_PATH="$PREFIX;$VENV" \
         -DCMAKE_INSTALL_PREFIX="$PREFIX" \
         -DPython3_EXECUTABLE="$VENV/bin/python" \
         -DPYTHON_EXECUTABLE="$VENV/bin/python" \
@@ -375,7 +446,7 @@ mv "$ENV_SH.tmp" "$ENV_SH"
 # 6. Check that the result imports
 # ---------------------------------------------------------------------------------------------------
 # shellcheck disable=SC1090
-if ! ( source "$ENV_SH" && python -c 'import rclpy; from grasp_orient.msg import GraspCandidate, GripRecommendation, GraspCandidateSet, GripRecommendationSet, PoseCandidate, PoseRecommendation, PoseCandidateSet, PoseRecommendationSet; from grasp_orient.srv import Recommend, RecommendPoses, Grip; from tf2_msgs.msg import TFMessage; from control_msgs.action import GripperCommand, ParallelGripperCommand; from control_msgs.msg import GripperCommand as GripperCommandMsg; from action_msgs.msg import GoalStatus; from unique_identifier_msgs.msg import UUID; from sensor_msgs.msg import JointState; from rclpy.action import ActionServer, ActionClient' ) >"$LOGS/import-check.log" 2>&1; then
+if ! ( source "$ENV_SH" && python -c 'import rclpy; from grasp_orient.msg import GraspCandidate, GripRecommendation, GraspCandidateSet, GripRecommendationSet, PoseCandidate, PoseRecommendation, PoseCandidateSet, PoseRecommendationSet; from grasp_orient.srv import Recommend, RecommendPoses, Grip; from tf2_msgs.msg import TFMessage; from control_msgs.action import GripperCommand, ParallelGripperCommand; from control_msgs.msg import GripperCommand as GripperCommandMsg; from action_msgs.msg import GoalStatus; from unique_identifier_msgs.msg import UUID; from sensor_msgs.msg import JointState; from rclpy.action import ActionServer, ActionClient' && python -c 'from moveit_msgs.msg import CollisionObject, PlanningScene, Grasp; from octomap_msgs.msg import OctomapWithPose; from object_recognition_msgs.msg import ObjectType; from shape_msgs.msg import Mesh, SolidPrimitive; from trajectory_msgs.msg import JointTrajectory; from grasp_orient.srv import RankGrasps' ) >"$LOGS/import-check.log" 2>&1; then
     cat "$LOGS/import-check.log" >&2
     die "rclpy / grasp_orient.msg import check failed with $ENV_SH"
 fi
