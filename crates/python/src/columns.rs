@@ -109,6 +109,9 @@ impl Columns {
         for (i, r) in answers.iter_mut().enumerate() {
             let text = message(i, r).unwrap_or_else(|| std::mem::take(&mut r.message));
             self.message.push(first + i, text);
+            self.grasp_case.push(&r.grasp_case);
+            self.recommended_label.push(&r.recommended_label);
+            self.objective.push(&r.objective);
         }
         let a = answers.as_slice();
         macro_rules! each {
@@ -131,11 +134,6 @@ impl Columns {
         each!(internal_force_current, |r| r.internal_force_current);
         each!(finger_force_current, |r| r.finger_force_current);
         each!(candidate_c, |r| r.candidate_c);
-        for r in a {
-            self.grasp_case.push(&r.grasp_case);
-            self.recommended_label.push(&r.recommended_label);
-            self.objective.push(&r.objective);
-        }
     }
 
     /// One answer; `message` is its message as the caller reports it (the row named).
@@ -381,10 +379,27 @@ impl Texts {
         self.rows.extend(other.rows.iter().map(|&i| to[i as usize]));
     }
 
-    /// The rows as a list of str, one object per distinct text.
+    /// The rows as a list of str, one object per distinct text: the most frequent text
+    /// repeated (one repeat, as Python's `[t] * n`), then each other row set to its own.
     fn into_list(self, py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
         let objects: Vec<Bound<'_, PyString>> =
             self.distinct.iter().map(|t| PyString::new(py, t)).collect();
-        PyList::new(py, self.rows.iter().map(|&i| objects[i as usize].clone()))
+        let mut counts = vec![0usize; objects.len()];
+        for &i in &self.rows {
+            counts[i as usize] += 1;
+        }
+        let Some(most) = (0..counts.len()).max_by_key(|&i| counts[i]) else {
+            return Ok(PyList::empty(py));
+        };
+        let list = PyList::new(py, [&objects[most]])?
+            .as_sequence()
+            .repeat(self.rows.len())?
+            .cast_into::<PyList>()?;
+        for (row, &i) in self.rows.iter().enumerate() {
+            if i as usize != most {
+                list.set_item(row, &objects[i as usize])?;
+            }
+        }
+        Ok(list)
     }
 }
