@@ -13,7 +13,9 @@ The Rust path is crates/python/benches/rust_path.rs, built and run here by cargo
 script writes (the same numbers, the poses' quaternions the ones the module made of their
 matrices). The rounds alternate between the module and the Rust path. The module is timed on one thread (threads=1: the same work as the Rust path, plus
 reading the arrays and writing the columns) and on every core (the default). Each figure is the
-median of --rounds rounds; the ratios are module / Rust (target: at most 1.2 on one thread).
+median of --rounds rounds; the ratios are module / Rust (target: at most 1.2 on one thread). On
+one thread both are also timed on a core (the calling thread's CPU time,
+CLOCK_THREAD_CPUTIME_ID), which other processes' time slices on a shared machine do not reach.
 
     bash tests/python/setup.sh --release     # the module in release, into its venv
     "$(bash tests/python/setup.sh --release | tail -n1)" benches/bench_python.py
@@ -94,13 +96,14 @@ def poses_on_torus(n: int, major: float = 0.05, seed: int = 2):
     return poses, np.full(n, 0.05)
 
 
-def timed(rounds: int, f):
-    times, out = [], None
-    for _ in range(rounds):
-        start = time.perf_counter()
-        out = f()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times), out
+def timed(f):
+    """The wall time and the calling thread's time on a core of f(), in seconds; what f returns is
+    freed after both are read (freeing a million rows' columns is not part of the call)."""
+    start, core = time.perf_counter(), time.thread_time()
+    out = f()
+    wall, core = time.perf_counter() - start, time.thread_time() - core
+    del out
+    return wall, core
 
 
 def build_rust_path() -> Path:
@@ -114,12 +117,12 @@ def build_rust_path() -> Path:
 
 
 def rust_round(exe: Path, folder: Path) -> dict:
-    """One round of the Rust path: {"grasps": (n, s), "poses": (n, s)}."""
+    """One round of the Rust path: {"grasps": (n, wall s, on-core s), "grasps_batch": ..., "poses": ...}."""
     done = subprocess.run([str(exe), str(folder), "1"], check=True, capture_output=True, text=True)
     out = {}
     for line in done.stdout.splitlines():
-        name, n, seconds = line.split()
-        out[name] = (int(n), float(seconds))
+        name, n, seconds, core = line.split()
+        out[name] = (int(n), float(seconds), float(core))
     return out
 
 
@@ -145,7 +148,8 @@ def main() -> None:
     pose_ok = int((pose_out["status"] == 0).sum())
 
     exe = build_rust_path()
-    times = {k: [] for k in ("t_one", "t_all", "p_one", "p_all", "r_grasps", "r_batch", "r_poses")}
+    keys = ("t_one", "t_all", "p_one", "p_all", "r_grasps", "r_batch", "r_poses", "c_one", "c_batch", "c_p_one", "c_poses")
+    times = {k: [] for k in keys}
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         rows = np.concatenate([grasps["contact_1"], grasps["normal_1"], grasps["contact_2"], grasps["normal_2"],
@@ -160,14 +164,20 @@ def main() -> None:
         # Rounds interleaved, the module and the Rust path in turn, so that a slow moment of a
         # shared machine slows both alike; medians over the rounds.
         for _ in range(args.rounds):
-            for key, f in (("t_one", solve_one), ("t_all", solve_all), ("p_one", poses_one), ("p_all", poses_all)):
-                times[key].append(timed(1, f)[0])
+            for key, core_key, f in (("t_one", "c_one", solve_one), ("t_all", None, solve_all),
+                                     ("p_one", "c_p_one", poses_one), ("p_all", None, poses_all)):
+                wall, core = timed(f)
+                times[key].append(wall)
+                if core_key:
+                    times[core_key].append(core)
             rust = rust_round(exe, folder)
             times["r_grasps"].append(rust["grasps"][1])
             times["r_batch"].append(rust["grasps_batch"][1])
+            times["c_batch"].append(rust["grasps_batch"][2])
             times["r_poses"].append(rust["poses"][1])
-    t_one, t_all, p_one, p_all, r_grasps, r_batch, r_poses = (
-        statistics.median(times[k]) for k in ("t_one", "t_all", "p_one", "p_all", "r_grasps", "r_batch", "r_poses"))
+            times["c_poses"].append(rust["poses"][2])
+    t_one, t_all, p_one, p_all, r_grasps, r_batch, r_poses, c_one, c_batch, c_p_one, c_poses = (
+        statistics.median(times[k]) for k in keys)
     n, m = rust["grasps"][0], rust["poses"][0]
     print(f"python {sys.version.split()[0]}, numpy {np.__version__}, {os.cpu_count()} cores; medians of {args.rounds} rounds")
     print(f"{n:,} planar grasps ({ok:,} solved), one solve call:")
@@ -178,11 +188,15 @@ def main() -> None:
           f"({r_batch / n * 1e6:.3f} us a grasp)")
     print(f"  ratio module / Rust batch: {t_one / r_batch:.3f} on one thread (target <= 1.2), "
           f"{t_all / r_batch:.3f} on every core; module / Rust one by one: {t_one / r_grasps:.3f}")
+    print(f"  on a core, one thread: module {c_one / n * 1e6:.3f} us a grasp, Rust batch {c_batch / n * 1e6:.3f} us: "
+          f"ratio {c_one / c_batch:.3f}")
     print(f"{m:,} poses on a {len(triangles):,}-triangle torus ({pose_ok:,} solved), one solve_poses call:")
     print(f"  module, threads=1:   {p_one:.3f} s ({p_one / m * 1e6:.3f} us a pose)")
     print(f"  module, every core:  {p_all:.3f} s ({p_all / m * 1e6:.3f} us a pose)")
     print(f"  Rust Answering (one pose set), one core: {r_poses:.3f} s ({r_poses / m * 1e6:.3f} us a pose)")
     print(f"  ratio module / Rust: {p_one / r_poses:.3f} on one thread (target <= 1.2), {p_all / r_poses:.3f} on every core")
+    print(f"  on a core, one thread: module {c_p_one / m * 1e6:.3f} us a pose, Rust {c_poses / m * 1e6:.3f} us: "
+          f"ratio {c_p_one / c_poses:.3f}")
 
 
 if __name__ == "__main__":

@@ -59,6 +59,18 @@ def test_a_bad_array_is_a_value_error_naming_it(changed, words):
         grasp_orient.solve(**grasps(**changed))
 
 
+@pytest.mark.parametrize("rows,first,then", [(300, (250, 2), (260, 0)), (300, (22, 0), (22, 2)), (7, (6, 2), None)])
+def test_the_first_value_not_finite_is_named_in_a_large_array(rows, first, then):
+    """The check reads blocks of values; the one named is still the first in C order."""
+    c = np.tile([0.0, 0.05, 0.0], (rows, 1))
+    c[first] = np.inf
+    if then is not None:
+        c[then] = np.nan
+    a = {k: np.resize(v, (rows, *v.shape[1:])) for k, v in grasps().items()}
+    with pytest.raises(ValueError, match=rf"contact_1\[{first[0]}, {first[1]}\] is inf"):
+        grasp_orient.solve(**{**a, "contact_1": c})
+
+
 @pytest.mark.parametrize("option,words", [
     ({"objective": "norm3"}, "objective"),
     ({"model": "flat"}, "model"),

@@ -4,8 +4,8 @@
 //! the answering object, as `grasp_orient solve` answers its lines, and in slices of 64 through
 //! its batch path (`Answering::answer_many`), as the module answers them; the poses as one pose
 //! set through it, as `cargo bench --bench poses` times them. Prints one line each:
-//! `grasps N SECONDS`, `grasps_batch N SECONDS` and `poses N SECONDS` (the median of `ROUNDS`
-//! rounds).
+//! `grasps N SECONDS ON_CORE`, `grasps_batch N SECONDS ON_CORE` and `poses N SECONDS ON_CORE`
+//! (the medians of `ROUNDS` rounds of the wall time and of the time on a core).
 //!
 //! `cargo bench -p grasp_orient_python --bench rust_path -- DIR [ROUNDS]`, DIR holding
 //! `grasps.f64` (rows of 20 values: contact_1, normal_1, contact_2, normal_2, center_of_mass,
@@ -26,7 +26,7 @@ use grasp_orient::msg::{
 use grasp_orient::solver::Settings;
 use std::hint::black_box;
 use std::path::Path;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 fn floats(path: &Path) -> std::io::Result<Vec<f64>> {
     let bytes = std::fs::read(path)?;
@@ -85,6 +85,30 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
+/// The time this thread has run on a core (`CLOCK_THREAD_CPUTIME_ID`): on a shared machine,
+/// the wall time less the time others' processes had the core.
+fn on_core() -> Duration {
+    let t = rustix::time::clock_gettime(rustix::time::ClockId::ThreadCPUTime);
+    Duration::new(
+        u64::try_from(t.tv_sec).unwrap_or(0),
+        u32::try_from(t.tv_nsec).unwrap_or(0),
+    )
+}
+
+/// The wall time and the time on a core `f` takes, in seconds.
+fn timed(f: impl FnOnce()) -> (f64, f64) {
+    let (wall, core) = (Instant::now(), on_core());
+    f();
+    let core = on_core().saturating_sub(core);
+    (wall.elapsed().as_secs_f64(), core.as_secs_f64())
+}
+
+/// `NAME N WALL ON_CORE`, the medians of `times`.
+fn report(name: &str, n: usize, times: Vec<(f64, f64)>) {
+    let (wall, core): (Vec<f64>, Vec<f64>) = times.into_iter().unzip();
+    println!("{name} {n} {:.6} {:.6}", median(wall), median(core));
+}
+
 fn grasps(dir: &Path, rounds: usize) -> std::io::Result<()> {
     let values = floats(&dir.join("grasps.f64"))?;
     let with = Answering::new(
@@ -97,22 +121,22 @@ fn grasps(dir: &Path, rounds: usize) -> std::io::Result<()> {
     let mut batch = Vec::with_capacity(rounds);
     let mut candidates = Vec::with_capacity(SLICE);
     for _ in 0..rounds {
-        let start = Instant::now();
-        for r in &rows {
-            black_box(with.answer::<Candidates>(&candidate(r)));
-        }
-        one_by_one.push(start.elapsed().as_secs_f64());
+        one_by_one.push(timed(|| {
+            for r in &rows {
+                black_box(with.answer::<Candidates>(&candidate(r)));
+            }
+        }));
         // The module's way: slices of its size made into candidates, answered together.
-        let start = Instant::now();
-        for slice in rows.chunks(SLICE) {
-            candidates.clear();
-            candidates.extend(slice.iter().map(|r| candidate(r)));
-            black_box(with.answer_many::<Candidates>(&candidates));
-        }
-        batch.push(start.elapsed().as_secs_f64());
+        batch.push(timed(|| {
+            for slice in rows.chunks(SLICE) {
+                candidates.clear();
+                candidates.extend(slice.iter().map(|r| candidate(r)));
+                black_box(with.answer_many::<Candidates>(&candidates));
+            }
+        }));
     }
-    println!("grasps {} {:.6}", rows.len(), median(one_by_one));
-    println!("grasps_batch {} {:.6}", rows.len(), median(batch));
+    report("grasps", rows.len(), one_by_one);
+    report("grasps_batch", rows.len(), batch);
     Ok(())
 }
 
@@ -178,12 +202,12 @@ fn poses(dir: &Path, rounds: usize) -> std::io::Result<()> {
     );
     let times = (0..rounds)
         .map(|_| {
-            let start = Instant::now();
-            black_box(with.answer::<PoseSets>(&set));
-            start.elapsed().as_secs_f64()
+            timed(|| {
+                black_box(with.answer::<PoseSets>(&set));
+            })
         })
         .collect();
-    println!("poses {} {:.6}", set.poses.len(), median(times));
+    report("poses", set.poses.len(), times);
     Ok(())
 }
 

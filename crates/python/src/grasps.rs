@@ -74,14 +74,10 @@ impl Grasps<'_> {
     }
 }
 
-/// The message a row's answer is reported with: a refusal of its input (status 2) names the
-/// row, as `solve` names the line.
-pub(crate) fn row_message(row: usize, r: &GripRecommendation) -> CompactString {
-    if r.status == GripRecommendation::STATUS_INVALID_INPUT {
-        compact_str_row(row, &r.message)
-    } else {
-        r.message.clone()
-    }
+/// The message a row's answer is reported with when it is not the answer's own: a refusal of
+/// its input (status 2) names the row, as `solve` names the line.
+fn row_message(row: usize, r: &GripRecommendation) -> Option<CompactString> {
+    (r.status == GripRecommendation::STATUS_INVALID_INPUT).then(|| compact_str_row(row, &r.message))
 }
 
 /// `row I: MESSAGE`.
@@ -106,13 +102,9 @@ fn answer_range(with: &Answering, g: &Grasps<'_>, range: Range<usize>) -> Column
         let rows = start..(start + SLICE).min(range.end);
         candidates.clear();
         candidates.extend(rows.clone().map(|i| g.candidate(i)));
-        for (i, r) in with
-            .answer_many::<Candidates>(&candidates)
-            .iter()
-            .enumerate()
-        {
-            out.push(r, row_message(start + i, r));
-        }
+        out.push_all(with.answer_many::<Candidates>(&candidates), |i, r| {
+            row_message(start + i, r)
+        });
     }
     out
 }
