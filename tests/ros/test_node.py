@@ -508,7 +508,7 @@ def test_parameters_are_described_listed_and_set_atomically(peer, client):
     node = "/grasp_orient"
     describe = peer.node.create_client(DescribeParameters, f"{node}/describe_parameters")
     names = ["friction_safety_factor", "qos_depth", "objective", "range_min", "use_sim_time", "no_such_parameter",
-             "gravity", "gravity_frame", "tf_timeout"]
+             "gravity", "gravity_frame", "tf_timeout", "objects_file"]
     ds = peer.call(describe, DescribeParameters.Request(names=names)).descriptors
     assert [d.name for d in ds] == names, [d.name for d in ds]
     by = dict(zip(names, ds))
@@ -532,7 +532,7 @@ def test_parameters_are_described_listed_and_set_atomically(peer, client):
             "solver_threads", "max_set_time", "max_queued_sets",
             "center_of_mass_tolerance", "mass_tolerance", "closing_axis", "max_mesh_load_time",
             "max_inline_mesh_triangles", "mesh_roots", "max_mesh_file_bytes", "max_message_bytes", "gravity_frame",
-            "gravity", "tf_timeout", "use_sim_time"}
+            "gravity", "tf_timeout", "objects_file", "use_sim_time"}
     assert set(listed) == want, sorted(listed)
     g = by["gravity"]
     assert g.type == ParameterType.PARAMETER_DOUBLE_ARRAY and "[m/s²]" in g.description, g
@@ -540,6 +540,8 @@ def test_parameters_are_described_listed_and_set_atomically(peer, client):
     assert by["gravity_frame"].type == ParameterType.PARAMETER_STRING, by["gravity_frame"]
     t = by["tf_timeout"]
     assert [(r.from_value, r.to_value) for r in t.floating_point_range] == [(0.0, 10.0)], t
+    o = by["objects_file"]
+    assert o.type == ParameterType.PARAMETER_STRING and o.read_only and "mass and friction" in o.description, o
     types = peer.call(peer.node.create_client(GetParameterTypes, f"{node}/get_parameter_types"),
                       GetParameterTypes.Request(names=["qos_depth", "record", "mesh_roots", "nothing"])).types
     assert list(types) == [ParameterType.PARAMETER_INTEGER, ParameterType.PARAMETER_BOOL,
