@@ -437,3 +437,39 @@ def test_grasps_in_many_frame_trees_equal_solve(moveit):
                          MASS, FRICTION)
         held += check(moveit, answer, grasps, cands, w)
     assert held >= 100, held
+
+
+def test_without_gravity_frame_the_parameter_holds_in_the_grasps_frame(start_node, peer, tmp_path):
+    """A node without gravity_frame: a call's gravity is the parameter `gravity`, taken as given in the grasps'
+    frame; the object, in that same frame, needs no TF at all."""
+    ns = "/moveit_plain"
+    objects = tmp_path / "objects.yaml"
+    objects.write_text(TABLE)
+    g = [1.5, -2.0, -9.0]
+    n = start_node("--ros-args", "-r", f"__ns:={ns}", "-p", f"gravity:=[{g[0]}, {g[1]}, {g[2]}]",
+                   "-p", f"objects_file:={objects}", "-p", "record:=false", name="grasp_orient node (no gravity_frame)")
+    rank = peer.node.create_client(RankGrasps, f"{ns}/grasp_orient/rank_grasps")
+    try:
+        rng = random.Random(8)
+        shape = homogeneous(*rand_transform(rng))
+        obj = box_object("box", "gripper_base", pose_of(shape), pose_of(np.eye(4)))
+        grasps = grasps_on(shape, 6, rng, "gripper_base")
+        req = RankGrasps.Request()
+        pc.fill(req.object, obj)
+        req.grasps = [pc.fill(Grasp(), x) for x in grasps]
+        req.width = 0.09
+        got = to_plain(peer.call(rank, req, timeout=30.0))
+    finally:
+        peer.node.destroy_client(rank)
+        n.stop_and_check()
+    rs = got["recommendation_set"]
+    assert rs["status"] == 0, rs["message"]
+    cands = [{"header": {"frame_id": "gripper_base", "stamp": {"sec": 0, "nanosec": 0}}, "id": x["id"],
+              "grasp_pose": x["grasp_pose"]["pose"], "width": 0.09,
+              "object": {"pose": pose_of(shape), "scale": {"x": 1.0, "y": 1.0, "z": 1.0}, "mass": MASS,
+                         "friction": FRICTION, "primitive": {"type": 1, "dimensions": BOX}},
+              "gravity": vec(g)} for x in grasps]
+    want = run_solve(cands)
+    diffs = close(rs["recommendations"], want, "recommendations")
+    assert not diffs, diffs[:5]
+    assert sum(r["recommendation"]["status"] == 0 for r in rs["recommendations"]) >= 4
