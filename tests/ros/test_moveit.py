@@ -37,7 +37,7 @@ from tf2_msgs.msg import TFMessage  # noqa: E402
 
 NODE_NS = "/moveit_case"
 # CollisionObject's operations: rclpy takes a `byte` field as bytes (an int there is serialized as garbage).
-ADD, REMOVE, MOVE = bytes([0]), bytes([1]), bytes([3])
+ADD, REMOVE, APPEND, MOVE = bytes([0]), bytes([1]), bytes([2]), bytes([3])
 BOX = [0.04, 0.06, 0.08]
 MASS, FRICTION, DENSITY = 0.4, 0.6, 500.0
 TABLE = f"""objects:
@@ -241,7 +241,8 @@ def test_grasps_on_a_collision_object_equal_solve(moveit):
 
 def test_a_planning_scene_diff_adds_moves_and_removes(moveit):
     """An inline mesh added in a planning-scene diff (its mass from its density and closed volume, its centre
-    of mass from the table), then moved by a MOVE diff, then removed by a REMOVE on /collision_object."""
+    of mass from the table), then moved by a MOVE diff, given a second shape by an APPEND diff, then removed by a
+    REMOVE on /collision_object."""
     rng = random.Random(2)
     mesh = pc.block_mesh()
     for v in mesh["vertices"]:
@@ -275,6 +276,14 @@ def test_a_planning_scene_diff_adds_moves_and_removes(moveit):
                           send=lambda: moveit.scenes.publish(moved))
     assert check(moveit, answer, grasps, expected(moveit.world, "table", shape_in_table, shape, grasps, mass, 0.5,
                                                   list(com))) >= 4
+    # APPEND in a diff: a box joins the mesh, and an object of two shapes is refused, saying so.
+    appended = PlanningScene(is_diff=True)
+    appended.world.collision_objects = [pc.fill(CollisionObject(), {
+        "id": "meshbox", "operation": APPEND, "primitives": [{"type": 1, "dimensions": BOX}],
+        "primitive_poses": [pose_of(np.eye(4))]})]
+    answer = moveit.until({"id": "meshbox"}, grasps, lambda a: a["recommendation_set"]["status"] == 2,
+                          send=lambda: moveit.scenes.publish(appended))
+    assert "1 primitives and 1 meshes" in answer["recommendation_set"]["message"], answer["recommendation_set"]
     # REMOVE on /collision_object: the next call naming it is refused, saying so.
     remove = pc.fill(CollisionObject(), {"id": "meshbox", "operation": REMOVE})
     answer = moveit.until({"id": "meshbox"}, grasps, lambda a: a["recommendation_set"]["status"] == 2,
