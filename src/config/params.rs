@@ -120,6 +120,32 @@ parameters! {
     /// object pose's frame to its own, at its stamp) to arrive on /tf or /tf_static; then it gets
     /// status 2 naming both frames. 0: no wait.
     tf_timeout: f64 = 0.1, "s", in Domain::Real { min: 0.0, max: 10.0 };
+    /// The control_msgs/action/GripperCommand server (ros2_control's gripper controllers, e.g.
+    /// /gripper_controller/gripper_cmd) that the service ~/grip sends an answer's grip force to,
+    /// as command.max_effort (docs/node.md#grip). Empty (the default): none. Not with
+    /// parallel_gripper_action.
+    gripper_action (fixed): String = String::new(), "";
+    /// The control_msgs/action/ParallelGripperCommand server (Jazzy's parallel gripper
+    /// controller) that ~/grip sends an answer's grip force to, as the effort of each joint of
+    /// parallel_gripper_joints. Empty (the default): none. Not with gripper_action.
+    parallel_gripper_action (fixed): String = String::new(), "";
+    /// The joints a ParallelGripperCommand goal names (command.name), each commanded to
+    /// grip_position with the grip force as its effort; at least one when
+    /// parallel_gripper_action is set.
+    parallel_gripper_joints: Vec<String> = Vec::new(), "";
+    /// Multiplies an answer's grip force before ~/grip sends it (the result capped by
+    /// max_grip_force): a margin on the force itself, on top of friction_safety_factor's on the
+    /// friction the answer was solved with.
+    grip_safety_factor: f64 = 1.0, "", in Domain::Real { min: 1.0, max: MAX_SAFETY_FACTOR };
+    /// The position ~/grip commands (GripperCommand's command.position, each joint's position of
+    /// ParallelGripperCommand), in the controller's units (m or rad): a position the fingers
+    /// cannot reach around the object, so that they stop on it at the force sent. 0 (the
+    /// default): closed, for controllers whose 0 is closed.
+    grip_position: f64 = 0.0, "m", in Domain::FINITE;
+    /// The most time a ~/grip call waits for the gripper's action: for its server to be found,
+    /// the goal accepted and its result; then the call fails saying which step was missing (a
+    /// goal accepted but without a result is canceled).
+    grip_timeout: f64 = 5.0, "s", in Domain::Real { min: 0.001, max: 3600.0 };
     /// A YAML file giving the mass and friction (and optionally the centre of mass, or a density
     /// instead of the mass) of named objects: MoveIt CollisionObjects by id, and pose candidates'
     /// mesh resources whose mass or friction is 0 (docs/node.md#objects). Read once at start, at

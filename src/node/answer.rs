@@ -101,6 +101,8 @@ pub(crate) struct Answerer {
     seen_version: u64,
     /// Sets of the recording parameters acted on.
     seen_recording_sets: u64,
+    /// The last answers sent, which `~/grip` may send to the gripper.
+    recent: super::grip::Recent,
 }
 
 impl Answerer {
@@ -133,7 +135,13 @@ impl Answerer {
             recording: Recording::new(node, topics, qos_depth, on_stop),
             seen_version: 0,
             seen_recording_sets: 0,
+            recent: super::grip::Recent::default(),
         }
+    }
+
+    /// The last answers sent (noted as they go out), for `~/grip`.
+    pub(crate) fn recent(&self) -> &super::grip::Recent {
+        &self.recent
     }
 
     /// What has been done so far.

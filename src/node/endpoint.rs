@@ -6,11 +6,13 @@ use crate::kind::Kind;
 use crate::record::Topics;
 use anyhow::Context;
 use ros2_client::{Node, Publisher, QosProfile, Subscription};
+use std::sync::Arc;
 
 /// The requests of kind `K` the node takes, and the publisher of its answers.
 pub(crate) struct Endpoint<K: Kind> {
-    /// Its requests' topic.
-    pub(crate) requests: Subscription<K::Request>,
+    /// Its requests' topic (shared with the thread that reads it, for the kinds read off the
+    /// node's thread: `intake.rs`).
+    pub(crate) requests: Arc<Subscription<K::Request>>,
     /// Its answers' topic.
     pub(crate) answers: Publisher<K::Answer>,
 }
@@ -34,9 +36,10 @@ impl<K: Kind> Endpoint<K> {
         let requests = create_topic::<K::Request>(node, asked, qos)?;
         let answers = create_topic::<K::Answer>(node, answered, qos)?;
         Ok(Self {
-            requests: node
-                .create_subscription(&requests, None)
-                .with_context(|| format!("cannot subscribe to {} on {asked}", K::PLURAL))?,
+            requests: Arc::new(
+                node.create_subscription(&requests, None)
+                    .with_context(|| format!("cannot subscribe to {} on {asked}", K::PLURAL))?,
+            ),
             answers: node
                 .create_publisher(&answers, None)
                 .with_context(|| format!("cannot publish answers on {answered}"))?,

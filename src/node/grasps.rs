@@ -11,8 +11,8 @@ use crate::kind::{Kind, PoseSets};
 use crate::msg::moveit::{Grasp, RankGraspsRequest, RankGraspsResponse};
 use crate::msg::{GraspObject, GraspPose, Header, Vector3};
 use ros2_client::{Name, Node, RmwRequestId, Server, ServiceMapping, ServiceTypeName};
-use std::cell::RefCell;
 use std::collections::BTreeMap;
+use std::sync::{Mutex, PoisonError};
 
 /// The set a call is answered as (named through its kind).
 type PoseSet = <PoseSets as Kind>::Request;
@@ -35,7 +35,9 @@ pub(crate) struct Pending {
 pub(crate) struct GraspsService {
     /// The server.
     pub(crate) server: Server<RankGraspsRequest, RankGraspsResponse>,
-    pending: RefCell<BTreeMap<RmwRequestId, Pending>>,
+    /// Locked by the node's thread only; a mutex since the set endpoints are shared with the thread
+    /// that reads the sets (`intake.rs`).
+    pending: Mutex<BTreeMap<RmwRequestId, Pending>>,
 }
 
 impl GraspsService {
@@ -55,14 +57,15 @@ impl GraspsService {
             .map_err(|e| anyhow::anyhow!("cannot offer the service {fqn}/{SERVICE}: {e:?}"))?;
         Ok(Self {
             server,
-            pending: RefCell::new(BTreeMap::new()),
+            pending: Mutex::new(BTreeMap::new()),
         })
     }
 
     /// Keeps call `id`'s grasps until its answer comes.
     pub(crate) fn hold(&self, id: RmwRequestId, grasps: Vec<Grasp>, drive: GripperDrive) {
         self.pending
-            .borrow_mut()
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
             .insert(id, Pending { grasps, drive });
     }
 
@@ -72,7 +75,11 @@ impl GraspsService {
         id: RmwRequestId,
         answer: PoseSetAnswer,
     ) -> Result<(), String> {
-        let pending = self.pending.borrow_mut().remove(&id);
+        let pending = self
+            .pending
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .remove(&id);
         let Some(pending) = pending else {
             return Err(format!("a {SERVICE} answer for a call not held"));
         };

@@ -2,8 +2,8 @@
 //! `grip_markers`; answers sets on `grasp_candidate_sets` → `grip_recommendation_sets` and through
 //! the service `~/recommend` ([`sets`]); gripper poses on `pose_candidates` →
 //! `pose_recommendations`, their sets on `pose_candidate_sets` → `pose_recommendation_sets` and
-//! through `~/recommend_poses`; with parameters, rosout, remapping and a clean exit on Ctrl-C and
-//! SIGTERM.
+//! through `~/recommend_poses`; an answer's grip force sent to the gripper's action through
+//! `~/grip` ([`grip`]); with parameters, rosout, remapping and a clean exit on Ctrl-C and SIGTERM.
 //!
 //! [`run`] reads the settings, opens the [`session::Session`], creates the endpoints and the
 //! parameter services, and then only moves messages: each candidate goes to
@@ -15,6 +15,8 @@
 pub(crate) mod answer;
 pub(crate) mod demo;
 mod endpoint;
+mod grip;
+mod intake;
 pub(crate) mod loads;
 
 mod grasps;
@@ -43,6 +45,7 @@ use answer::Answerer;
 use anyhow::Context as _;
 use demo::Demo;
 use futures::{FutureExt, StreamExt};
+use intake::OffThread;
 use loads::{Loaders, PoseLoads};
 use param_services::ParameterServices;
 use params::Shared;
@@ -119,7 +122,19 @@ fn load_config(ros: &RosArgs, node: &str) -> anyhow::Result<(Config, crate::solv
             .with_context(|| format!("-p {name}:={value}"))?;
     }
     let settings = config.solver_settings()?;
+    // The gripper's action is refused here, before the node joins the graph.
+    grip::action_name(&config, |name| ros.topic(name, node))?;
     Ok((config, settings))
+}
+
+/// The mass and friction of named objects, from `objects_file` (read once, at start).
+fn objects_table(config: &Config) -> anyhow::Result<crate::config::objects::ObjectTable> {
+    let objects = crate::config::objects::ObjectTable::load(&config.objects_file)
+        .map_err(anyhow::Error::msg)?;
+    if objects.len() > 0 {
+        log::info!("objects_file: {} objects and meshes", objects.len());
+    }
+    Ok(objects)
 }
 
 /// Runs the node until Ctrl-C or SIGTERM (or until the demo is done).
@@ -128,11 +143,7 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
     let name = start.node_name(NODE_NAME);
     start.ros.check_distinct(&TOPICS, &name)?;
     let (config, settings) = load_config(&start.ros, &name)?;
-    let objects = crate::config::objects::ObjectTable::load(&config.objects_file)
-        .map_err(anyhow::Error::msg)?;
-    if objects.len() > 0 {
-        log::info!("objects_file: {} objects and meshes", objects.len());
-    }
+    let objects = objects_table(&config)?;
     // Inline meshes are decoded no further than the node would answer them (later values too:
     // `Live::push`).
     crate::msg::limit_inline_mesh_decoding(config.max_inline_mesh_triangles);
@@ -161,6 +172,7 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
         loaders.clone(),
     )
     .context("cannot start the set thread")?;
+    let shared_for_grip = shared.clone();
     let mut answerer = Answerer::new(
         shared,
         options.echo,
@@ -170,6 +182,7 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
         on_stop,
         meshes,
     );
+    let grip = grip::Grip::offer(&mut session, &config, &shared_for_grip, answerer.recent())?;
     let started = answerer
         .start()
         .map_err(|e| anyhow::Error::new(e).context("recording is off"))?;
@@ -193,6 +206,7 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
         let local = smol::LocalExecutor::new();
         let _services = local.spawn(services.serve(node));
         let _markers_watch = local.spawn(endpoints.markers.watch(node));
+        let _grip = local.spawn(grip.serve(node));
         let mut loading = PoseLoads::new(loaders);
         let mut tf = TfWait::new();
         let mut scene = scene::Scene::new(objects);
@@ -224,6 +238,7 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
     drop(worker);
     drop(endpoints);
     drop(services);
+    drop(grip);
     if let Some(demo) = demo {
         demo.stop();
     }
@@ -295,8 +310,16 @@ async fn serve(
     demo: Option<&Demo>,
 ) -> anyhow::Result<()> {
     let mut stream = pin!(endpoints.candidates.requests.async_stream());
-    let mut poses = pin!(endpoints.poses.requests.async_stream());
-    let mut arrivals = pin!(sets::arrivals(&endpoints.sets, &endpoints.topics).fuse());
+    // Pose candidates and sets may carry inline meshes: decoded on threads of their own.
+    let mut poses = OffThread::spawn(
+        "grasp_orient poses",
+        endpoints.poses.requests.clone(),
+        |s| s.async_stream().boxed_local(),
+    )?;
+    let sets_in = (endpoints.sets.clone(), endpoints.topics.clone());
+    let mut arrivals = OffThread::spawn("grasp_orient sets", sets_in, |(s, t)| {
+        sets::arrivals(s, t).boxed_local()
+    })?;
     let mut tf_dynamic = pin!(endpoints.tf.dynamic.async_stream());
     let mut tf_static = pin!(endpoints.tf.fixed.async_stream());
     let mut objects = pin!(endpoints.moveit.objects.async_stream());

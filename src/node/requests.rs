@@ -26,7 +26,8 @@ pub(super) struct Endpoints {
     pub(super) topics: Topics,
     pub(super) candidates: Endpoint<Candidates>,
     pub(super) markers: MarkersOut,
-    pub(super) sets: SetEndpoints,
+    /// Shared with the thread that reads the sets (`intake.rs`).
+    pub(super) sets: std::sync::Arc<SetEndpoints>,
     pub(super) poses: Endpoint<Poses>,
     /// `/tf` and `/tf_static`.
     pub(super) tf: tf::TfListener,
@@ -48,7 +49,7 @@ impl Endpoints {
         let markers = create_topic::<MarkerArray>(node, &markers_name, &qos)?;
         Ok(Self {
             candidates: Endpoint::create(node, &topics, &qos)?,
-            sets: SetEndpoints::create(node, &topics, qos_depth)?,
+            sets: std::sync::Arc::new(SetEndpoints::create(node, &topics, qos_depth)?),
             poses: Endpoint::create(node, &topics, &qos)?,
             tf: tf::TfListener::create(node, &tf_name, &tf_static_name)?,
             moveit: SceneListener::create(node, &objects_name, &scenes_name, &qos)?,
@@ -177,6 +178,7 @@ pub(super) async fn send_answer<A: Recommends + serde::Serialize + std::fmt::Deb
         r.gripping_power
     );
     tell(node, outcome.notes);
+    answerer.recent().note(r);
     if let Err(e) = answers.async_publish(outcome.reply).await {
         let why = format!("cannot publish the answer to a {}: {e:?}", A::WHAT);
         say(node, log::Level::Error, &why);

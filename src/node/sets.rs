@@ -184,6 +184,7 @@ pub(crate) async fn answer_done(
         Via::Grasps(_) => ("rank_grasps", None),
     };
     let line = AnswerLine::new(&reply, how, taken, took, waited);
+    answerer.recent().note_all(reply.members());
     let sending = Instant::now();
     let sent = reply.send(endpoints, via).await;
     let answered = now_ns();

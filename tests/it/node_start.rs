@@ -135,6 +135,26 @@ fn tolerances_every_candidate_would_be_refused_for_are_refused_at_start() {
 }
 
 #[test]
+fn a_gripper_action_that_cannot_be_used_is_refused_at_start() {
+    for (params, why) in [
+        (
+            &["gripper_action:=a", "parallel_gripper_action:=b"][..],
+            "parameters gripper_action (a) and parallel_gripper_action (b) are both set",
+        ),
+        (
+            &["gripper_action:=gripper//cmd"][..],
+            "parameter gripper_action: \"gripper//cmd\" is not a ROS name",
+        ),
+    ] {
+        let args: Vec<&str> = params.iter().flat_map(|p| ["-p", p]).collect();
+        let (code, stderr) = Node::start(&args).exit(false, Duration::from_secs(20));
+        assert_eq!(code, Some(2), "{params:?}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{params:?}: {stderr}");
+        assert!(stderr.contains(why), "{params:?}: {stderr}");
+    }
+}
+
+#[test]
 fn a_refusal_after_joining_the_graph_is_not_preceded_by_spinner_noise() {
     let dir = temp_dir("refusal");
     let file = dir.path().join("a_file");

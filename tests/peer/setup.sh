@@ -139,10 +139,12 @@ MSG_HASH="$(
     {
         echo "req=$REQ_HASH peer=$PEER_DIR"
         for f in CMakeLists.txt package.xml msg/*.msg srv/*.srv meshes/* src/msg/jazzy/tf2_msgs/*.msg \
-                 src/msg/jazzy/moveit_msgs/*.msg src/msg/jazzy/octomap_msgs/*.msg src/msg/jazzy/object_recognition_msgs/*.msg; do
+                 src/msg/jazzy/moveit_msgs/*.msg src/msg/jazzy/octomap_msgs/*.msg src/msg/jazzy/object_recognition_msgs/*.msg \
+                 src/msg/jazzy/control_msgs/*; do
             if [ -f "$f" ]; then printf '%s %s\n' "$f" "$(sha256sum <"$f" | cut -d' ' -f1)"; fi
         done
         echo "tf2_msgs=TFMessage"   # what build_tf2_msgs below builds
+        echo "control_msgs=GripperCommand,ParallelGripperCommand"   # what build_control_msgs below builds
     } | sha256sum | cut -d' ' -f1
 )"
 PREFIX="$PEER_DIR/install-${MSG_HASH:0:16}"
@@ -211,6 +213,69 @@ XML
         -DBUILD_TESTING=OFF
     run_logged tf2-msgs-build "${BUILD_ENV[@]}" "$VENV/bin/cmake" --build "$build" --parallel "$(nproc 2>/dev/null || echo 2)"
     run_logged tf2-msgs-install "${BUILD_ENV[@]}" "$VENV/bin/cmake" --install "$build"
+    rm -rf "$build"
+}
+
+# control_msgs for the gripper tests (tests/ros/test_grip.py), built here from its Jazzy definitions
+# (ros-controls/control_msgs, branch jazzy, 5.8.0) rather than taken from a wheel: GripperCommand.msg,
+# GripperCommand.action and ParallelGripperCommand.action verbatim (src/msg/jazzy/control_msgs/, the
+# texts the node's own definitions are checked against), with control_msgs' CMakeLists.txt and
+# package.xml cut to those three (the rest needs trajectory_msgs, which the wheels above lack). Same
+# package name, type names and fields: an rclpy action server of control_msgs/action/GripperCommand
+# from it is what ros2_control's gripper controllers offer on the wire.
+build_control_msgs() {
+    local src="$(dirname "$SRC")/control_msgs" build="$BUILD-control_msgs"
+    rm -rf "$src" "$build"
+    mkdir -p "$src/msg" "$src/action" "$build"
+    cp "$REPO_ROOT/src/msg/jazzy/control_msgs/GripperCommand.msg" "$src/msg/"
+    cp "$REPO_ROOT/src/msg/jazzy/control_msgs/GripperCommand.action" \
+        "$REPO_ROOT/src/msg/jazzy/control_msgs/ParallelGripperCommand.action" "$src/action/"
+    cat >"$src/CMakeLists.txt" <<'CMAKE'
+cmake_minimum_required(VERSION 3.10)
+project(control_msgs)
+find_package(action_msgs REQUIRED)
+find_package(ament_cmake REQUIRED)
+find_package(builtin_interfaces REQUIRED)
+find_package(rosidl_default_generators REQUIRED)
+find_package(sensor_msgs REQUIRED)
+find_package(std_msgs REQUIRED)
+rosidl_generate_interfaces(${PROJECT_NAME}
+  "action/GripperCommand.action"
+  "action/ParallelGripperCommand.action"
+  "msg/GripperCommand.msg"
+  DEPENDENCIES action_msgs builtin_interfaces sensor_msgs std_msgs
+)
+ament_package()
+CMAKE
+    cat >"$src/package.xml" <<'XML'
+<?xml version="1.0"?>
+<package format="3">
+  <name>control_msgs</name>
+  <version>5.8.0</version>
+  <description>control_msgs (Jazzy), the gripper commands only, for grasp_orient's tests</description>
+  <maintainer email="none@example.invalid">grasp_orient tests</maintainer>
+  <license>BSD-3-Clause</license>
+  <buildtool_depend>ament_cmake</buildtool_depend>
+  <buildtool_depend>rosidl_default_generators</buildtool_depend>
+  <depend>action_msgs</depend>
+  <depend>builtin_interfaces</depend>
+  <depend>sensor_msgs</depend>
+  <depend>std_msgs</depend>
+  <exec_depend>rosidl_default_runtime</exec_depend>
+  <member_of_group>rosidl_interface_packages</member_of_group>
+  <export><build_type>ament_cmake</build_type></export>
+</package>
+XML
+    run_logged control-msgs-configure "${BUILD_ENV[@]}" "$VENV/bin/cmake" -S "$src" -B "$build" \
+        -G "Unix Makefiles" \
+        -DCMAKE_BUILD_TYPE=Release \
+        -DCMAKE_PREFIX_PATH="$VENV" \
+        -DCMAKE_INSTALL_PREFIX="$PREFIX" \
+        -DPython3_EXECUTABLE="$VENV/bin/python" \
+        -DPYTHON_EXECUTABLE="$VENV/bin/python" \
+        -DBUILD_TESTING=OFF
+    run_logged control-msgs-build "${BUILD_ENV[@]}" "$VENV/bin/cmake" --build "$build" --parallel "$(nproc 2>/dev/null || echo 2)"
+    run_logged control-msgs-install "${BUILD_ENV[@]}" "$VENV/bin/cmake" --install "$build"
     rm -rf "$build"
 }
 
@@ -307,6 +372,7 @@ else
     run_logged cmake-build "${BUILD_ENV[@]}" "$VENV/bin/cmake" --build "$BUILD" --parallel "$(nproc 2>/dev/null || echo 2)"
     run_logged cmake-install "${BUILD_ENV[@]}" "$VENV/bin/cmake" --install "$BUILD"
     build_tf2_msgs
+    build_control_msgs
     echo "$MSG_HASH" >"$MSG_STAMP"
     rm -rf "$BUILD" "$(dirname "$SRC")"   # only the install is needed from here on
 fi
@@ -380,7 +446,7 @@ mv "$ENV_SH.tmp" "$ENV_SH"
 # 6. Check that the result imports
 # ---------------------------------------------------------------------------------------------------
 # shellcheck disable=SC1090
-if ! ( source "$ENV_SH" && python -c 'import rclpy; from grasp_orient.msg import GraspCandidate, GripRecommendation, GraspCandidateSet, GripRecommendationSet, PoseCandidate, PoseRecommendation, PoseCandidateSet, PoseRecommendationSet; from grasp_orient.srv import Recommend, RecommendPoses; from tf2_msgs.msg import TFMessage' && python -c 'from moveit_msgs.msg import CollisionObject, PlanningScene, Grasp; from octomap_msgs.msg import OctomapWithPose; from object_recognition_msgs.msg import ObjectType; from shape_msgs.msg import Mesh, SolidPrimitive; from trajectory_msgs.msg import JointTrajectory; from grasp_orient.srv import RankGrasps' ) >"$LOGS/import-check.log" 2>&1; then
+if ! ( source "$ENV_SH" && python -c 'import rclpy; from grasp_orient.msg import GraspCandidate, GripRecommendation, GraspCandidateSet, GripRecommendationSet, PoseCandidate, PoseRecommendation, PoseCandidateSet, PoseRecommendationSet; from grasp_orient.srv import Recommend, RecommendPoses, Grip; from tf2_msgs.msg import TFMessage; from control_msgs.action import GripperCommand, ParallelGripperCommand; from control_msgs.msg import GripperCommand as GripperCommandMsg; from action_msgs.msg import GoalStatus; from unique_identifier_msgs.msg import UUID; from sensor_msgs.msg import JointState; from rclpy.action import ActionServer, ActionClient' && python -c 'from moveit_msgs.msg import CollisionObject, PlanningScene, Grasp; from octomap_msgs.msg import OctomapWithPose; from object_recognition_msgs.msg import ObjectType; from shape_msgs.msg import Mesh, SolidPrimitive; from trajectory_msgs.msg import JointTrajectory; from grasp_orient.srv import RankGrasps' ) >"$LOGS/import-check.log" 2>&1; then
     cat "$LOGS/import-check.log" >&2
     die "rclpy / grasp_orient.msg import check failed with $ENV_SH"
 fi

@@ -78,9 +78,12 @@ impl AssemblyBuffer {
     })
   }
 
-  // The bytes this buffer holds: what was reserved for the sample, and the fragment bitmap.
+  // The bytes this buffer holds: what was written of the sample (received, and the zeros below
+  // the highest fragment received), and the fragment bitmap. Patched for grasp_orient
+  // (0020-assembly-reserved-once.patch): the rest of the sample's reservation is address space
+  // that no page of memory backs until a fragment is written there, so it is not counted.
   fn held_bytes(&self) -> usize {
-    self.buffer_bytes.capacity() + self.fragment_count / 8
+    self.buffer_bytes.len() + self.fragment_count / 8
   }
 
   // The bytes a new buffer for `datafrag` holds before any fragment: its bitmap.
@@ -88,28 +91,35 @@ impl AssemblyBuffer {
     usize::from(datafrag.total_number_of_fragments()) / 8
   }
 
-  // Make room for bytes up to `end` (at most data_size): capacity doubles, capped at data_size,
-  // so a sample received in order is copied O(log n) times. `room` is how many more bytes the
-  // buffer may hold. Returns false, allocating nothing, when the growth exceeds `room` or the
-  // allocation fails.
+  // Make room for bytes up to `end` (at most data_size). `room` is how many more bytes the buffer
+  // may hold. Returns false, allocating nothing, when the growth exceeds `room` or the allocation
+  // fails.
+  //
+  // Patched for grasp_orient (0020-assembly-reserved-once.patch): the whole sample is reserved
+  // at the first growth, and the buffer is never moved. It grew by doubling before, and each
+  // doubling copied everything received so far into a new buffer, on the event loop's thread:
+  // for a 120 MB sample, steps of 50 to 130 ms in which no other submessage of any reader was
+  // handled. A reservation is address space only: the pages are backed as fragments are written
+  // (`held_bytes` counts those), so a claim still costs memory only as its bytes arrive.
   fn grow_to(&mut self, end: usize, room: usize) -> bool {
-    if end <= self.buffer_bytes.len() {
+    let len = self.buffer_bytes.len();
+    if end <= len {
       return true;
     }
-    let capacity = self.buffer_bytes.capacity();
-    if end > capacity {
-      let new_capacity = end.max(capacity.saturating_mul(2)).min(self.data_size);
-      if new_capacity - capacity > room {
-        return false;
-      }
-      if self
+    if end - len > room {
+      return false;
+    }
+    if self.buffer_bytes.capacity() < self.data_size
+      && self
         .buffer_bytes
-        .try_reserve_exact(new_capacity - self.buffer_bytes.len())
+        .try_reserve_exact(self.data_size - len)
         .is_err()
-      {
-        warn!("AssemblyBuffer: cannot allocate {new_capacity} bytes for a fragmented sample");
-        return false;
-      }
+    {
+      warn!(
+        "AssemblyBuffer: cannot reserve {} bytes for a fragmented sample",
+        self.data_size
+      );
+      return false;
     }
     self.buffer_bytes.resize(end, 0);
     true
@@ -480,6 +490,48 @@ mod tests {
       &whole[..],
       "reassembled bytes must match the original sample"
     );
+  }
+
+  // Patched for grasp_orient (0020-assembly-reserved-once.patch): fragments received in order are
+  // written into one buffer reserved for the whole sample at the first fragment, never moved to
+  // a larger one (each move copied everything received so far, on the event loop's thread), and
+  // what the buffer holds against the reader's budget is what was written.
+  #[test]
+  fn a_sample_is_assembled_in_one_buffer_never_moved() {
+    let frag_size = 1024u16;
+    let fragments = 300usize;
+    let data_size = u32::try_from(fragments * usize::from(frag_size)).expect("fits");
+    let whole: Vec<u8> = (0..data_size as usize).map(|i| (i % 241) as u8).collect();
+    let piece = |k: usize| {
+      let at = k * usize::from(frag_size);
+      let start = u32::try_from(k + 1).expect("fits");
+      let bytes = whole[at..at + usize::from(frag_size)].to_vec();
+      datafrag(start, 1, frag_size, data_size, bytes)
+    };
+    let first = piece(0);
+    let mut ab = AssemblyBuffer::new(&first).expect("valid first fragment");
+    assert!(ab.insert_frags(&first, frag_size, usize::MAX));
+    assert_eq!(
+      ab.buffer_bytes.capacity(),
+      data_size as usize,
+      "the first fragment reserves the whole sample"
+    );
+    assert_eq!(ab.held_bytes(), usize::from(frag_size) + fragments / 8);
+    let at_first = ab.buffer_bytes.as_ptr();
+    for k in 1..fragments {
+      assert!(ab.insert_frags(&piece(k), frag_size, usize::MAX));
+      assert_eq!(
+        ab.buffer_bytes.as_ptr(),
+        at_first,
+        "fragment {k} moved the buffer"
+      );
+      assert_eq!(
+        ab.held_bytes(),
+        (k + 1) * usize::from(frag_size) + fragments / 8
+      );
+    }
+    assert!(ab.is_complete());
+    assert_eq!(&ab.buffer_bytes[..], &whole[..]);
   }
 
   // A single DATAFRAG carrying the whole sample in one multi-fragment run.

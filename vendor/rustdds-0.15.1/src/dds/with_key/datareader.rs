@@ -1518,6 +1518,137 @@ mod tests {
     assert_eq!(held(&topic_cache).0, 3);
   }
 
+  // Patched for grasp_orient (0021-take-decodes-unlocked.patch): a take decodes the sample with
+  // the topic cache unlocked, so that the event loop's thread, which locks the same cache to add
+  // a change or answer a heartbeat, never waits for a decoding. `Probe`'s decoding looks at the
+  // lock from inside.
+  #[test]
+  fn a_take_decodes_with_the_topic_cache_unlocked() {
+    use std::cell::RefCell;
+
+    use serde::{Deserialize, Deserializer, Serialize};
+
+    type Cache = Arc<Mutex<crate::structure::dds_cache::TopicCache>>;
+    thread_local! {
+      static CACHE: RefCell<Option<Cache>> = const { RefCell::new(None) };
+      static SEEN_LOCKED: RefCell<Vec<bool>> = const { RefCell::new(Vec::new()) };
+    }
+    #[derive(Serialize, Debug)]
+    struct Probe {
+      a: i64,
+    }
+    impl<'de> Deserialize<'de> for Probe {
+      fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let locked = CACHE.with(|c| {
+          c.borrow()
+            .as_ref()
+            .is_some_and(|cache| cache.try_lock().is_err())
+        });
+        SEEN_LOCKED.with(|s| s.borrow_mut().push(locked));
+        let a = i64::deserialize(d)?;
+        Ok(Probe { a })
+      }
+    }
+
+    let dp = DomainParticipant::new(test_domain_id(0)).expect("Participant creation failed!");
+    let qos = QosPolicies::qos_none();
+    let sub = dp.create_subscriber(&qos).unwrap();
+    let topic = dp
+      .create_topic(
+        "dr unlocked decode".to_string(),
+        "unlocked decode test".to_string(),
+        &qos,
+        TopicKind::NoKey,
+      )
+      .unwrap();
+    let topic_cache =
+      dp.dds_cache()
+        .write()
+        .unwrap()
+        .add_new_topic(topic.name(), topic.get_type(), &topic.qos());
+    CACHE.with(|c| *c.borrow_mut() = Some(topic_cache.clone()));
+
+    let (notification_sender, _notification_receiver) =
+      crate::mio_source::notification_channel(100);
+    let (_notification_event_source, notification_event_sender) =
+      mio_source::make_poll_channel().unwrap();
+    let (status_sender, _status_receiver) = sync_status_channel::<DataReaderStatus>(4).unwrap();
+    let (participant_status_sender, _participant_status_receiver) =
+      sync_status_channel(16).unwrap();
+    let (_reader_command_sender, reader_command_receiver) =
+      wake_channel::<ReaderCommand>(10, &LoopWaker::new());
+    let reader_ing = ReaderIngredients {
+      guid: GUID::new_with_prefix_and_id(dp.guid_prefix(), EntityId::default()),
+      notification_sender,
+      status_sender,
+      topic_name: topic.name(),
+      topic_cache_handle: topic_cache.clone(),
+      like_stateless: false,
+      qos_policy: QosPolicies::qos_none(),
+      data_reader_command_receiver: reader_command_receiver,
+      data_reader_waker: Arc::new(Mutex::new(None)),
+      poll_event_sender: notification_event_sender,
+      security_plugins: None,
+      discovery_notify: None,
+    };
+    let mut reader = Reader::new(
+      reader_ing,
+      Rc::new(UDPSender::new_with_random_port().unwrap()),
+      new_shared_timer(),
+      participant_status_sender,
+    );
+    let simple = sub
+      .create_simple_datareader_no_key::<Probe, CDRDeserializerAdapter<Probe>>(&topic, None)
+      .unwrap();
+    let writer_guid = GUID {
+      prefix: GuidPrefix::new(&[3; 12]),
+      entity_id: EntityId::create_custom_entity_id([3; 3], EntityKind::WRITER_NO_KEY_USER_DEFINED),
+    };
+    let mr_state = MessageReceiverState {
+      source_guid_prefix: writer_guid.prefix,
+      ..Default::default()
+    };
+    reader.matched_writer_add(
+      writer_guid,
+      EntityId::UNKNOWN,
+      mr_state.unicast_reply_locator_list.to_vec(),
+      mr_state.multicast_reply_locator_list.to_vec(),
+      &QosPolicies::qos_none(),
+    );
+    for sn in 1..=2 {
+      let data_msg = Data {
+        reader_id: reader.entity_id(),
+        writer_id: writer_guid.entity_id,
+        writer_sn: SequenceNumber::from(sn),
+        serialized_payload: Some(
+          SerializedPayload {
+            representation_identifier: RepresentationIdentifier::CDR_LE,
+            representation_options: [0, 0],
+            value: Bytes::from(to_vec::<Probe, LittleEndian>(&Probe { a: sn }).unwrap()),
+          }
+          .into(),
+        ),
+        ..Data::default()
+      };
+      reader.handle_data_msg(
+        data_msg,
+        DATA_Flags::Endianness | DATA_Flags::Data,
+        &mr_state,
+      );
+    }
+    let taken: Vec<i64> = std::iter::from_fn(|| simple.try_take_one().unwrap())
+      .map(|change| change.into_value().a)
+      .collect();
+    assert_eq!(taken, [1, 2], "both samples are taken, in order, once each");
+    assert!(simple.try_take_one().unwrap().is_none());
+    let seen = SEEN_LOCKED.with(|s| s.borrow().clone());
+    assert_eq!(
+      seen,
+      [false, false],
+      "whether the topic cache was locked while each sample was decoded"
+    );
+  }
+
   #[test]
   fn read_and_take_with_instance() {
     // Test the methods read_instance and take_instance of the DataReader
