@@ -438,8 +438,7 @@ fn contract_fields_come_first_and_in_order() {
 /// crate's own wire structs of MoveIt's messages are checked against (`src/msg/moveit.rs`), are
 /// the peer's files byte for byte. The packages the peer builds from these very copies
 /// (moveit_msgs, octomap_msgs, object_recognition_msgs, control_msgs, tf2_msgs) are their
-/// upstream files,
-/// as `tests/peer/setup.sh` says where from.
+/// upstream files, as `tests/peer/setup.sh` says where from.
 #[test]
 #[ignore = "reads the ROS 2 peer's Jazzy .msg files: tests/run.sh runs it with --ignored"]
 fn peer_jazzy_copies_are_the_peers_files() {
