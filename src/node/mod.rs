@@ -254,7 +254,8 @@ fn announce(session: &Session, topics: &Topics) {
         &format!(
             "node {} on ROS_DOMAIN_ID={}{}: waiting for grasp_orient/msg/GraspCandidate on \
              {}; answers on {}, markers on {}; sets on {} -> {} and the service {}/{}; \
-             gripper poses on {} -> {}, their sets on {} -> {} and the service {}/{}. \
+             gripper poses on {} -> {}, their sets on {} -> {} and the service {}/{}; \
+             MoveIt's grasps through the service {}/{} on the objects of {} and {}. \
              Send a test grasp with: python3 examples/publish_test_grasp.py",
             session.node().fully_qualified_name(),
             session.graph.domain_id,
@@ -272,6 +273,10 @@ fn announce(session: &Session, topics: &Topics) {
             topics.answers::<PoseSets>().unwrap_or_default(),
             session.node().fully_qualified_name(),
             <PoseSets as sets::NodeSet>::SERVICE,
+            session.node().fully_qualified_name(),
+            grasps::SERVICE,
+            session.topic_name(scene::COLLISION_OBJECT_TOPIC),
+            session.topic_name(scene::PLANNING_SCENE_TOPIC),
         ),
     );
 }

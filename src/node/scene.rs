@@ -16,6 +16,7 @@ use crate::msg::{
 };
 use nalgebra::{Isometry3, Quaternion as Q, Translation3, UnitQuaternion};
 use ros2_client::{Node, QosProfile, Subscription};
+use std::cell::RefCell;
 use std::collections::{BTreeMap, BTreeSet};
 
 /// The most objects kept.
@@ -68,6 +69,10 @@ pub(crate) struct Scene {
     known: BTreeMap<String, CollisionObject>,
     removed: BTreeSet<String>,
     bytes: usize,
+    /// The volume of each known object's mesh, found the first time a density needs it (making
+    /// the mesh to find it takes up to a few tenths of a second for the largest meshes allowed):
+    /// forgotten when the object's shapes change.
+    mesh_volumes: RefCell<BTreeMap<String, Result<f64, String>>>,
 }
 
 /// The bytes an object's shapes take, as counted against [`MAX_BYTES`].
@@ -159,6 +164,7 @@ impl Scene {
         }
         self.bytes = self.bytes - old + new;
         self.removed.remove(&o.id);
+        self.mesh_volumes.borrow_mut().remove(&o.id);
         self.known.insert(o.id.clone(), o);
         Ok(())
     }
@@ -166,6 +172,7 @@ impl Scene {
     fn remove(&mut self, id: &str) {
         if let Some(o) = self.known.remove(id) {
             self.bytes -= bytes_of(&o);
+            self.mesh_volumes.borrow_mut().remove(id);
             if self.removed.len() >= MAX_REMOVED {
                 self.removed.pop_first();
             }
@@ -237,13 +244,28 @@ impl Scene {
         if self.table.object(&o.id).is_none() {
             return Err(missing(&o.id));
         }
-        to_grasp_object(o, &self.table).map_err(|why| format!("object {id:?}: {why}"))
+        // A known object's mesh volume is found once; one a call brings, each time.
+        let volume = |m: &Mesh| -> Result<f64, String> {
+            if brings {
+                return mesh_volume(m);
+            }
+            self.mesh_volumes
+                .borrow_mut()
+                .entry(o.id.clone())
+                .or_insert_with(|| mesh_volume(m))
+                .clone()
+        };
+        to_grasp_object(o, &self.table, &volume).map_err(|why| format!("object {id:?}: {why}"))
     }
 }
 
 /// A CollisionObject of exactly one primitive or one mesh, with its entry in `table`, as a
 /// `GraspObject`.
-fn to_grasp_object(o: &CollisionObject, table: &ObjectTable) -> Result<GraspObject, String> {
+fn to_grasp_object(
+    o: &CollisionObject,
+    table: &ObjectTable,
+    mesh_volume: &dyn Fn(&Mesh) -> Result<f64, String>,
+) -> Result<GraspObject, String> {
     if !o.planes.is_empty() {
         return Err("a plane cannot be grasped; give one primitive or one mesh".into());
     }
@@ -619,6 +641,25 @@ mod tests {
         let o = s.grasp_object(&cube).expect("a cube");
         assert!((o.mass - 1000.0).abs() < 1e-9, "{}", o.mass);
         assert_eq!(o.inline_mesh.triangles.len(), 12);
+        // Known by id: its volume is found once, and again once its shapes change.
+        let mut s = s;
+        s.apply(cube.clone()).expect("added");
+        let by_id = CollisionObject {
+            id: "cube".into(),
+            ..CollisionObject::default()
+        };
+        for _ in 0..2 {
+            let o = s.grasp_object(&by_id).expect("known");
+            assert!((o.mass - 1000.0).abs() < 1e-9, "{}", o.mass);
+        }
+        assert_eq!(s.mesh_volumes.borrow().len(), 1);
+        let mut bigger = cube;
+        for v in &mut bigger.meshes[0].vertices {
+            (v.x, v.y, v.z) = (2.0 * v.x, 2.0 * v.y, 2.0 * v.z);
+        }
+        s.apply(bigger).expect("replaced");
+        let o = s.grasp_object(&by_id).expect("known");
+        assert!((o.mass - 8000.0).abs() < 1e-9, "{}", o.mass);
     }
 
     /// The known objects are bounded in number.

@@ -37,7 +37,7 @@ from tf2_msgs.msg import TFMessage  # noqa: E402
 
 NODE_NS = "/moveit_case"
 # CollisionObject's operations: rclpy takes a `byte` field as bytes (an int there is serialized as garbage).
-ADD, REMOVE, MOVE = bytes([0]), bytes([1]), bytes([3])
+ADD, REMOVE, APPEND, MOVE = bytes([0]), bytes([1]), bytes([2]), bytes([3])
 BOX = [0.04, 0.06, 0.08]
 MASS, FRICTION, DENSITY = 0.4, 0.6, 500.0
 TABLE = f"""objects:
@@ -241,7 +241,8 @@ def test_grasps_on_a_collision_object_equal_solve(moveit):
 
 def test_a_planning_scene_diff_adds_moves_and_removes(moveit):
     """An inline mesh added in a planning-scene diff (its mass from its density and closed volume, its centre
-    of mass from the table), then moved by a MOVE diff, then removed by a REMOVE on /collision_object."""
+    of mass from the table), then moved by a MOVE diff, given a second shape by an APPEND diff, then removed by a
+    REMOVE on /collision_object."""
     rng = random.Random(2)
     mesh = pc.block_mesh()
     for v in mesh["vertices"]:
@@ -275,6 +276,14 @@ def test_a_planning_scene_diff_adds_moves_and_removes(moveit):
                           send=lambda: moveit.scenes.publish(moved))
     assert check(moveit, answer, grasps, expected(moveit.world, "table", shape_in_table, shape, grasps, mass, 0.5,
                                                   list(com))) >= 4
+    # APPEND in a diff: a box joins the mesh, and an object of two shapes is refused, saying so.
+    appended = PlanningScene(is_diff=True)
+    appended.world.collision_objects = [pc.fill(CollisionObject(), {
+        "id": "meshbox", "operation": APPEND, "primitives": [{"type": 1, "dimensions": BOX}],
+        "primitive_poses": [pose_of(np.eye(4))]})]
+    answer = moveit.until({"id": "meshbox"}, grasps, lambda a: a["recommendation_set"]["status"] == 2,
+                          send=lambda: moveit.scenes.publish(appended))
+    assert "1 primitives and 1 meshes" in answer["recommendation_set"]["message"], answer["recommendation_set"]
     # REMOVE on /collision_object: the next call naming it is refused, saying so.
     remove = pc.fill(CollisionObject(), {"id": "meshbox", "operation": REMOVE})
     answer = moveit.until({"id": "meshbox"}, grasps, lambda a: a["recommendation_set"]["status"] == 2,
@@ -437,3 +446,39 @@ def test_grasps_in_many_frame_trees_equal_solve(moveit):
                          MASS, FRICTION)
         held += check(moveit, answer, grasps, cands, w)
     assert held >= 100, held
+
+
+def test_without_gravity_frame_the_parameter_holds_in_the_grasps_frame(start_node, peer, tmp_path):
+    """A node without gravity_frame: a call's gravity is the parameter `gravity`, taken as given in the grasps'
+    frame; the object, in that same frame, needs no TF at all."""
+    ns = "/moveit_plain"
+    objects = tmp_path / "objects.yaml"
+    objects.write_text(TABLE)
+    g = [1.5, -2.0, -9.0]
+    n = start_node("--ros-args", "-r", f"__ns:={ns}", "-p", f"gravity:=[{g[0]}, {g[1]}, {g[2]}]",
+                   "-p", f"objects_file:={objects}", "-p", "record:=false", name="grasp_orient node (no gravity_frame)")
+    rank = peer.node.create_client(RankGrasps, f"{ns}/grasp_orient/rank_grasps")
+    try:
+        rng = random.Random(8)
+        shape = homogeneous(*rand_transform(rng))
+        obj = box_object("box", "gripper_base", pose_of(shape), pose_of(np.eye(4)))
+        grasps = grasps_on(shape, 6, rng, "gripper_base")
+        req = RankGrasps.Request()
+        pc.fill(req.object, obj)
+        req.grasps = [pc.fill(Grasp(), x) for x in grasps]
+        req.width = 0.09
+        got = to_plain(peer.call(rank, req, timeout=30.0))
+    finally:
+        peer.node.destroy_client(rank)
+        n.stop_and_check()
+    rs = got["recommendation_set"]
+    assert rs["status"] == 0, rs["message"]
+    cands = [{"header": {"frame_id": "gripper_base", "stamp": {"sec": 0, "nanosec": 0}}, "id": x["id"],
+              "grasp_pose": x["grasp_pose"]["pose"], "width": 0.09,
+              "object": {"pose": pose_of(shape), "scale": {"x": 1.0, "y": 1.0, "z": 1.0}, "mass": MASS,
+                         "friction": FRICTION, "primitive": {"type": 1, "dimensions": BOX}},
+              "gravity": vec(g)} for x in grasps]
+    want = run_solve(cands)
+    diffs = close(rs["recommendations"], want, "recommendations")
+    assert not diffs, diffs[:5]
+    assert sum(r["recommendation"]["status"] == 0 for r in rs["recommendations"]) >= 4

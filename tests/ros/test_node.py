@@ -508,7 +508,7 @@ def test_parameters_are_described_listed_and_set_atomically(peer, client):
     node = "/grasp_orient"
     describe = peer.node.create_client(DescribeParameters, f"{node}/describe_parameters")
     names = ["friction_safety_factor", "qos_depth", "objective", "range_min", "use_sim_time", "no_such_parameter",
-             "gravity", "gravity_frame", "tf_timeout"]
+             "gravity", "gravity_frame", "tf_timeout", "objects_file"]
     ds = peer.call(describe, DescribeParameters.Request(names=names)).descriptors
     assert [d.name for d in ds] == names, [d.name for d in ds]
     by = dict(zip(names, ds))
@@ -541,6 +541,8 @@ def test_parameters_are_described_listed_and_set_atomically(peer, client):
     assert by["gravity_frame"].type == ParameterType.PARAMETER_STRING, by["gravity_frame"]
     t = by["tf_timeout"]
     assert [(r.from_value, r.to_value) for r in t.floating_point_range] == [(0.0, 10.0)], t
+    o = by["objects_file"]
+    assert o.type == ParameterType.PARAMETER_STRING and o.read_only and "mass and friction" in o.description, o
     types = peer.call(peer.node.create_client(GetParameterTypes, f"{node}/get_parameter_types"),
                       GetParameterTypes.Request(names=["qos_depth", "record", "mesh_roots", "nothing"])).types
     assert list(types) == [ParameterType.PARAMETER_INTEGER, ParameterType.PARAMETER_BOOL,
