@@ -199,6 +199,11 @@ def tool_pose_text(tp) -> str:
             f"orientation ({o.x:.4f}, {o.y:.4f}, {o.z:.4f}, {o.w:.4f})")
 
 
+def finite(x: float) -> float | None:
+    """x, or None where it is inf or NaN (JSON has neither)."""
+    return x if math.isfinite(x) else None
+
+
 def tool_pose_json(tp) -> dict:
     p, o = tp.pose.position, tp.pose.orientation
     return {"frame_id": tp.header.frame_id, "position": [p.x, p.y, p.z], "orientation": [o.x, o.y, o.z, o.w]}
@@ -284,9 +289,11 @@ def main() -> int:
             answer = rs.recommendations[i]
             r = answer.recommendation
             print(f"  {k + 1}  {g.id:<12} grip force {g.max_contact_force:8.4f} N  quality {g.grasp_quality:.3f}  "
-                  f"wrist rotation {math.degrees(r.wrist_rotation):7.2f} deg  {tool_pose_text(answer.tool_pose)}")
+                  f"wrist rotation {math.degrees(r.wrist_rotation):7.2f} deg  {tool_pose_text(answer.tool_pose)}  "
+                  f"(internal_force_current, at the grasp pose before the turn: {r.internal_force_current:.4f} N)")
             summary["ranked"].append({"id": g.id, "index": int(i), "max_contact_force": g.max_contact_force,
                                       "internal_force": r.internal_force, "finger_force": r.finger_force,
+                                      "internal_force_current": finite(r.internal_force_current),
                                       "wrist_rotation": r.wrist_rotation,
                                       "grasp_quality": g.grasp_quality, "tool_pose": tool_pose_json(answer.tool_pose)})
         for answer in rs.recommendations:

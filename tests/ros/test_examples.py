@@ -132,6 +132,9 @@ def test_the_pick_example_ranks_as_solve_and_the_gripper_gets_the_force(case, pi
         assert math.isclose(g["internal_force"], force, rel_tol=1e-9, abs_tol=1e-12), (g, force)
         assert g["max_contact_force"] == float(np.float32(g["internal_force"])), g
         assert abs(g["grasp_quality"] - got["ranked"][0]["internal_force"] / g["internal_force"]) <= 1e-12, g
+        now = solve[g["id"]]["recommendation"]["internal_force_current"]  # None where inf
+        assert (g["internal_force_current"] is None) == (now is None), (g, now)
+        assert now is None or math.isclose(g["internal_force_current"], now, rel_tol=1e-9, abs_tol=1e-12), (g, now)
         assert math.isclose(g["wrist_rotation"], solve[g["id"]]["recommendation"]["wrist_rotation"], rel_tol=1e-9,
                             abs_tol=1e-9), (g, solve[g["id"]]["recommendation"])
         # The tool pose in world: solve's, in the camera frame, carried into world by numpy.
