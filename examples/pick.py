@@ -180,9 +180,14 @@ class FakeGripper:
         from rclpy.action import ActionServer, GoalResponse
         self.type = GripperCommand
         self.goals: list = []
+        self.accept = GoalResponse.ACCEPT
         self.server = ActionServer(node, GripperCommand, name, execute_callback=self._execute,
-                                   goal_callback=lambda goal: (self.goals.append(goal), GoalResponse.ACCEPT)[1])
+                                   goal_callback=self._goal)
         self.name = name
+
+    def _goal(self, goal):
+        self.goals.append(goal)
+        return self.accept
 
     def _execute(self, handle):
         cmd = handle.request.command

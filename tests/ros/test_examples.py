@@ -140,9 +140,9 @@ def test_the_pick_example_ranks_as_solve_and_the_gripper_gets_the_force(case, pi
         # The tool pose in world: solve's, in the camera frame, carried into world by numpy.
         tp = g["tool_pose"]
         assert tp["frame_id"] == "world", g
-        want = case["camera_in_world"] @ matrix_of(solve[g["id"]]["tool_pose"]["pose"])
+        tool_in_world = case["camera_in_world"] @ matrix_of(solve[g["id"]]["tool_pose"]["pose"])
         got_pose = {"position": dict(zip("xyz", tp["position"])), "orientation": dict(zip("xyzw", tp["orientation"]))}
-        assert tool_pose_gap(got_pose, want) <= 1e-9, (g["id"], tp, want)
+        assert tool_pose_gap(got_pose, tool_in_world) <= 1e-9, (g["id"], tp, tool_in_world)
     over = case["held"][-1][1]
     left_out = {n["id"]: n for n in got["not_ranked"]}
     assert left_out[over]["status"] == 3, left_out
