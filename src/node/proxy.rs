@@ -352,6 +352,34 @@ mod tests {
         }
     }
 
+    /// No proxy by default; the timeout and the width are checked against their domains.
+    #[test]
+    fn the_proxy_parameters_are_checked() {
+        let c = Config::default();
+        assert_eq!(c.grasp_planner_action, "");
+        assert_eq!(
+            (c.grasp_planner_timeout, c.grasp_planner_width),
+            (30.0, 0.1)
+        );
+        for (name, value, message) in [
+            (
+                "grasp_planner_timeout",
+                "0",
+                "parameter grasp_planner_timeout: must be in [0.001, 3600], got 0",
+            ),
+            (
+                "grasp_planner_width",
+                "-0.1",
+                "parameter grasp_planner_width: must be in [1e-6, 10], got -0.1",
+            ),
+        ] {
+            let mut c = Config::default();
+            c.set_from_yaml(name, value).expect("the type is right");
+            let e = c.solver_settings().expect_err(value);
+            assert_eq!(e.to_string(), message);
+        }
+    }
+
     /// An object is the call of its name, header, shapes and grasps.
     #[test]
     fn an_object_is_a_rank_grasps_call() {

@@ -8,8 +8,9 @@ tf2_ros's StaticTransformBroadcaster does). An rclpy `ActionClient` calls the no
 in the proxy's result must equal ~/rank_grasps' response on the same object and grasps, which itself must equal
 `grasp_orient solve` on the equivalent PoseCandidates turned by numpy (test_moveit.py's helpers); an object the
 node cannot answer (no mass) comes back with its grasps unranked, and everything else of the planner's result
-(the point cluster, the support surfaces) as it came. A planner that rejects the goal and a planner that is not
-there each abort the proxy's goal with a clear line in the log, and the node goes on answering.
+(the point cluster, the support surfaces) as it came. A planner that rejects the goal, a planner that is not
+there and a planner that keeps the goal past grasp_planner_timeout (its goal then canceled) each abort the proxy's
+goal with a clear line in the log, and the node goes on answering.
 Each node runs in a namespace of its own and is stopped at the module's end.
 """
 from __future__ import annotations
@@ -30,7 +31,8 @@ from grasping_msgs.action import FindGraspableObjects  # noqa: E402
 from grasping_msgs.msg import GraspableObject, Object  # noqa: E402
 from grasp_orient.srv import RankGrasps  # noqa: E402
 from moveit_msgs.msg import Grasp  # noqa: E402
-from rclpy.action import ActionClient, ActionServer, GoalResponse  # noqa: E402
+from rclpy.action import ActionClient, ActionServer, CancelResponse, GoalResponse  # noqa: E402
+from rclpy.task import Future  # noqa: E402
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
 from sensor_msgs.msg import PointField  # noqa: E402
 from tf2_msgs.msg import TFMessage  # noqa: E402
@@ -38,6 +40,7 @@ from tf2_msgs.msg import TFMessage  # noqa: E402
 JAZZY = Path(__file__).resolve().parent.parent.parent / "src" / "msg" / "jazzy"
 NODE_NS = "/grasp_proxy_case"
 ABSENT_NS = "/grasp_proxy_absent"
+SLOW_NS = "/grasp_proxy_slow"
 PLANNER = f"{NODE_NS}/planner"
 SUFFIX = "_proxy"  # this module's frames, apart from test_moveit.py's on the shared /tf_static
 SUCCEEDED, ABORTED = 4, 6
@@ -54,7 +57,8 @@ def test_point_cloud2_is_the_wheels():
 @pytest.fixture(scope="module")
 def proxy_nodes(start_node, tmp_path_factory):
     """A node whose proxy forwards to PLANNER (gravity_frame world, the objects table, width 0.09 as
-    test_moveit.expected takes it), and one whose planner is not there."""
+    test_moveit.expected takes it), one whose planner is not there, and one that forwards to PLANNER with
+    grasp_planner_timeout 1 s."""
     objects = tmp_path_factory.mktemp("proxy") / "objects.yaml"
     objects.write_text(TABLE)
     common = ["-p", "record:=false", "-p", "gravity_frame:=world", "-p", "tf_timeout:=0.5",
@@ -64,6 +68,8 @@ def proxy_nodes(start_node, tmp_path_factory):
                    "-p", "grasp_planner_timeout:=10.0", name="grasp_orient node (grasp proxy)"),
         start_node("--ros-args", "-r", f"__ns:={ABSENT_NS}", *common, "-p", "grasp_planner_action:=nobody_home",
                    "-p", "grasp_planner_timeout:=1.0", name="grasp_orient node (no planner)"),
+        start_node("--ros-args", "-r", f"__ns:={SLOW_NS}", *common, "-p", f"grasp_planner_action:={PLANNER}",
+                   "-p", "grasp_planner_timeout:=1.0", name="grasp_orient node (slow planner)"),
     ]
     yield started
     for n in started:
@@ -73,20 +79,34 @@ def proxy_nodes(start_node, tmp_path_factory):
 
 class Planner:
     """An rclpy FindGraspableObjects server, as a grasp planner offers it: it returns `result` (or rejects the
-    goal while `reject` is set) and records each goal."""
+    goal while `reject` is set, or keeps it executing until canceled while `hold` is set) and records each goal
+    and cancel."""
 
     def __init__(self, peer: Peer):
         self.goals: list = []
-        self.reject = False
+        self.cancels = 0
+        self.reject = self.hold = False
+        self.released: Future | None = None
         self.result = FindGraspableObjects.Result()
         self.server = ActionServer(peer.node, FindGraspableObjects, PLANNER, execute_callback=self._execute,
-                                   goal_callback=self._goal)
+                                   goal_callback=self._goal, cancel_callback=self._cancel)
 
     def _goal(self, goal):
         self.goals.append(goal)
         return GoalResponse.REJECT if self.reject else GoalResponse.ACCEPT
 
-    def _execute(self, handle):
+    def _cancel(self, _handle):
+        self.cancels += 1
+        if self.released is not None:
+            self.released.set_result(True)
+        return CancelResponse.ACCEPT
+
+    async def _execute(self, handle):
+        if self.hold:
+            self.released = Future()
+            await self.released
+            handle.canceled()
+            return FindGraspableObjects.Result()
         handle.succeed()
         return self.result
 
@@ -104,9 +124,10 @@ class Scene:
         self.proxy = ActionClient(peer.node, FindGraspableObjects, f"{NODE_NS}/grasp_orient/find_graspable_objects")
         self.absent = ActionClient(peer.node, FindGraspableObjects,
                                    f"{ABSENT_NS}/grasp_orient/find_graspable_objects")
+        self.slow = ActionClient(peer.node, FindGraspableObjects, f"{SLOW_NS}/grasp_orient/find_graspable_objects")
         self.rank = peer.node.create_client(RankGrasps, f"{NODE_NS}/grasp_orient/rank_grasps")
         assert peer.spin_until(lambda: self.tf.get_subscription_count() >= 2, 15.0), "no node subscribes /tf_static"
-        for c in (self.proxy, self.absent):
+        for c in (self.proxy, self.absent, self.slow):
             assert c.wait_for_server(timeout_sec=15.0), f"no action server {c._action_name}"
         assert self.rank.wait_for_service(timeout_sec=15.0), "no ~/rank_grasps"
         self.tf.publish(TFMessage(transforms=self.world.messages()))
@@ -214,3 +235,25 @@ def test_a_rejected_goal_and_an_absent_planner_abort_and_the_node_goes_on(scene,
     status, got = scene.find(scene.proxy)
     assert status == SUCCEEDED and len(got["objects"]) == len(scene.planner.result.objects)
     assert all(n.proc.poll() is None for n in proxy_nodes)
+
+
+def test_a_planner_without_a_result_in_time_is_canceled_and_the_goal_aborted(scene, proxy_nodes):
+    """A planner that keeps the goal past grasp_planner_timeout (1 s): the node cancels the planner's goal and
+    aborts its own, saying so; meanwhile and afterwards the other node's proxy answers."""
+    scene.planner.hold = True
+    try:
+        sent = scene.slow.send_goal_async(FindGraspableObjects.Goal(plan_grasps=True))
+        assert scene.peer.spin_until(sent.done, 10.0) and sent.result().accepted
+        got = sent.result().get_result_async()
+        assert scene.peer.spin_until(got.done, 10.0), "no result from the proxy"
+    finally:
+        scene.planner.hold = False
+        if scene.planner.released is not None and not scene.planner.released.done():
+            scene.planner.released.set_result(True)
+    assert got.result().status == ABORTED
+    assert scene.planner.cancels >= 1, "the planner's goal was not canceled"
+    proxy_nodes[2].wait_for_line(rf"find_graspable_objects: goal aborted: the goal went to the planner at "
+                                 rf"{PLANNER}, but no result came within grasp_planner_timeout \(1 s\); the goal "
+                                 r"was canceled", timeout=10.0)
+    status, got = scene.find(scene.proxy)
+    assert status == SUCCEEDED and len(got["objects"]) == len(scene.planner.result.objects)
