@@ -123,8 +123,9 @@ fn load_config(ros: &RosArgs, node: &str) -> anyhow::Result<(Config, crate::solv
             .with_context(|| format!("-p {name}:={value}"))?;
     }
     let settings = config.solver_settings()?;
-    // The gripper's action is refused here, before the node joins the graph.
+    // The gripper's and the planner's actions are refused here, before the node joins the graph.
     grip::action_name(&config, |name| ros.topic(name, node))?;
+    proxy::planner_name(&config, |name| ros.topic(name, node))?;
     Ok((config, settings))
 }
 

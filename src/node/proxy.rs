@@ -16,6 +16,8 @@
 //! `~/grip`'s does (the same [`exchange`]); goals are taken one after another, each bounded
 //! whole by `grasp_planner_timeout`: no planner found, the goal rejected, no result in time, or
 //! the rankings not all back in time aborts the proxy's goal, saying which in the log. The
+//! objects are ranked one after another, so that a result of many does not fill the set
+//! thread's queue. The
 //! planner's feedback is not forwarded, and a cancel of the proxy's goal is not taken.
 
 use super::grasps::{Caller, Reply};
@@ -63,6 +65,23 @@ pub(super) struct Proxy {
     next_key: Cell<u64>,
 }
 
+/// The planner's action, resolved (as a topic's name: in the namespace, remapped) and parsed,
+/// when `grasp_planner_action` is set; a name that is not a ROS name is refused.
+pub(super) fn planner_name(
+    config: &Config,
+    resolve: impl Fn(&str) -> String,
+) -> anyhow::Result<Option<(String, Name)>> {
+    let asked = &config.grasp_planner_action;
+    if asked.is_empty() {
+        return Ok(None);
+    }
+    let full = resolve(asked);
+    let parsed = Name::parse(&full).map_err(|e| {
+        anyhow::anyhow!("parameter grasp_planner_action: {asked:?} is not a ROS name: {e:?}")
+    })?;
+    Ok(Some((full, parsed)))
+}
+
 /// The type both actions have.
 fn action_type() -> ActionTypeName {
     ActionTypeName::new("grasping_msgs", "FindGraspableObjects")
@@ -78,14 +97,9 @@ impl Proxy {
         shared: &Shared,
     ) -> anyhow::Result<(Option<Self>, Relays)> {
         let (relays, relayed) = mpsc::unbounded();
-        let asked = &config.grasp_planner_action;
-        if asked.is_empty() {
+        let Some((planner_name, parsed)) = planner_name(config, |n| session.topic_name(n))? else {
             return Ok((None, relayed));
-        }
-        let planner_name = session.topic_name(asked);
-        let parsed = Name::parse(&planner_name).map_err(|e| {
-            anyhow::anyhow!("parameter grasp_planner_action: {asked:?} is not a ROS name: {e:?}")
-        })?;
+        };
         let node = session.node_mut();
         let planner = action_client(node, &parsed, ("grasping_msgs", "FindGraspableObjects"))?;
         let fqn = node.fully_qualified_name();
@@ -204,11 +218,11 @@ impl Proxy {
             ));
         }
         let width = self.shared.lock().config.grasp_planner_width;
-        let mut waiting = Vec::new();
-        for (i, object) in result.objects.iter().enumerate() {
-            if object.grasps.is_empty() {
-                continue;
-            }
+        // One object at a time: each waits for the set thread as a call would, and a result of
+        // many objects does not fill the set thread's queue (whose overflow is answered busy).
+        let (mut asked, mut ranked) = (0, 0);
+        for object in result.objects.iter_mut().filter(|o| !o.grasps.is_empty()) {
+            asked += 1;
             let key = self.next_key.get();
             self.next_key.set(key.wrapping_add(1));
             let (reply, ranking) = oneshot::channel();
@@ -220,32 +234,19 @@ impl Proxy {
             if self.relays.unbounded_send(relay).is_err() {
                 return Err("the node is stopping".into());
             }
-            waiting.push(async move { (i, ranking.await) });
-        }
-        let asked = waiting.len();
-        let Some(rankings) = within(deadline, futures::future::join_all(waiting)).await else {
-            return Err(format!(
-                "the rankings of the planner's {asked} objects with grasps were not all back \
-                 within grasp_planner_timeout ({timeout} s)"
-            ));
-        };
-        let mut ranked = 0;
-        for (i, ranking) in rankings {
-            let Some(object) = result.objects.get_mut(i) else {
-                continue;
-            };
-            match ranking {
-                Ok(r) => match take_ranking(object, r) {
+            let name = crate::msg::clip(&object.object.name);
+            match within(deadline, ranking).await {
+                None => {
+                    return Err(format!(
+                        "the ranking of object {name:?} was not back within \
+                         grasp_planner_timeout ({timeout} s)"
+                    ))
+                }
+                Some(Err(_)) => return Err("the node is stopping".into()),
+                Some(Ok(r)) => match take_ranking(object, r) {
                     Ok(()) => ranked += 1,
                     Err(why) => warn(node, &why),
                 },
-                Err(_) => warn(
-                    node,
-                    &format!(
-                        "object {:?}: its grasps are returned unranked: the node is stopping",
-                        crate::msg::clip(&object.object.name)
-                    ),
-                ),
             }
         }
         say(
@@ -357,6 +358,19 @@ mod tests {
     fn the_proxy_parameters_are_checked() {
         let c = Config::default();
         assert_eq!(c.grasp_planner_action, "");
+        assert!(planner_name(&c, str::to_string).expect("none").is_none());
+        let mut c = Config::default();
+        c.set_from_yaml("grasp_planner_action", "find_objects")
+            .expect("a string");
+        let (full, _) = planner_name(&c, |n| format!("/arm/{n}"))
+            .expect("a name")
+            .expect("set");
+        assert_eq!(full, "/arm/find_objects");
+        c.set_from_yaml("grasp_planner_action", "\"no good\"")
+            .expect("a string");
+        let e = planner_name(&c, |n| format!("/arm/{n}")).expect_err("refused");
+        assert!(e.to_string().contains("is not a ROS name"), "{e}");
+        let c = Config::default();
         assert_eq!(
             (c.grasp_planner_timeout, c.grasp_planner_width),
             (30.0, 0.1)
