@@ -151,6 +151,18 @@ parameters! {
     /// mesh resources whose mass or friction is 0 (docs/node.md#objects). Read once at start, at
     /// most 1 MiB. Empty (the default): no table.
     objects_file (fixed): String = String::new(), "";
+    /// The grasping_msgs/action/FindGraspableObjects server of a grasp planner (e.g.
+    /// simple_grasping's find_objects) whose goals the node's own action
+    /// ~/find_graspable_objects forwards, returning the planner's objects with each one's grasps
+    /// ranked as ~/rank_grasps ranks them (docs/node.md#moveit). Empty (the default): no proxy.
+    grasp_planner_action (fixed): String = String::new(), "";
+    /// The most time a goal of ~/find_graspable_objects takes: the planner found, its goal
+    /// accepted, its result back and every object's grasps ranked; then the goal is aborted
+    /// saying which step was missing (the planner's goal canceled).
+    grasp_planner_timeout: f64 = 30.0, "s", in Domain::Real { min: 0.001, max: 3600.0 };
+    /// The opening the fingers close from (a ~/rank_grasps call's width) for every grasp of a
+    /// planner's objects that ~/find_graspable_objects ranks.
+    grasp_planner_width: f64 = 0.1, "m", in Domain::Real { min: 1e-6, max: 10.0 };
 }
 
 impl super::choices::Choice for ClosingAxis {

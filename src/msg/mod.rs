@@ -145,6 +145,7 @@ pub use poses::{
     SolidPrimitive,
 };
 
+pub(crate) mod grasping;
 pub(crate) mod moveit;
 
 mod visualization;

@@ -331,7 +331,7 @@ impl RosFields for RankGraspsResponse {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::msg::cdr;
 
@@ -339,7 +339,10 @@ mod tests {
     /// types qualified with `package`, `byte` read as `uint8` (the same on the wire) and a
     /// bounded sequence as a sequence.
     #[allow(clippy::type_complexity)]
-    fn parse(text: &str, package: &str) -> (Vec<(String, String)>, Vec<(String, String, String)>) {
+    pub(crate) fn parse(
+        text: &str,
+        package: &str,
+    ) -> (Vec<(String, String)>, Vec<(String, String, String)>) {
         const PRIMITIVES: [&str; 14] = [
             "bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16",
             "int32", "uint32", "int64", "uint64", "string",
@@ -373,7 +376,7 @@ mod tests {
         (fields, constants)
     }
 
-    fn holds<M: RosMessage>(text: &str) {
+    pub(crate) fn holds<M: RosMessage>(text: &str) {
         let (fields, constants) = parse(text, M::PACKAGE);
         let ours: Vec<(String, String)> = M::fields()
             .into_iter()

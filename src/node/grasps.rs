@@ -5,6 +5,8 @@
 //! mass and friction from `objects_file`), and that set goes the pose sets' one path (the TF
 //! gate, the set thread, the recording: it is recorded, and replays, as a pose set). Its answer
 //! comes back to [`GraspsService::respond`], which maps it onto the call's grasps ([`ranked`]).
+//! The grasp planner proxy ([`super::proxy`]) ranks each object of a planner's result the same
+//! way: as a call, its answer sent back to the proxy's task instead of a caller ([`Caller`]).
 
 use crate::answer::GripperDrive;
 use crate::kind::{Kind, PoseSets};
@@ -22,6 +24,19 @@ type PoseSetAnswer = <PoseSets as Kind>::Answer;
 /// The service's name under the node.
 pub(crate) const SERVICE: &str = "rank_grasps";
 
+/// Who a ranking goes to: a caller of `~/rank_grasps`, or the proxy's task (its key for one
+/// object of a planner's result).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub(crate) enum Caller {
+    /// A call of `~/rank_grasps`.
+    Service(RmwRequestId),
+    /// An object of a goal of `~/find_graspable_objects`.
+    Proxy(u64),
+}
+
+/// Where the proxy's task waits for one object's ranking.
+pub(crate) type Reply = futures::channel::oneshot::Sender<RankGraspsResponse>;
+
 /// A call waiting for its set's answer: its grasps, and the gripper drive in force when it came
 /// (which force is the grip force).
 #[derive(Debug)]
@@ -37,7 +52,9 @@ pub(crate) struct GraspsService {
     pub(crate) server: Server<RankGraspsRequest, RankGraspsResponse>,
     /// Locked by the node's thread only; a mutex since the set endpoints are shared with the thread
     /// that reads the sets (`intake.rs`).
-    pending: Mutex<BTreeMap<RmwRequestId, Pending>>,
+    pending: Mutex<BTreeMap<Caller, Pending>>,
+    /// Where the proxy's rankings go, by key.
+    replies: Mutex<BTreeMap<u64, Reply>>,
 }
 
 impl GraspsService {
@@ -58,23 +75,28 @@ impl GraspsService {
         Ok(Self {
             server,
             pending: Mutex::new(BTreeMap::new()),
+            replies: Mutex::new(BTreeMap::new()),
         })
     }
 
     /// Keeps call `id`'s grasps until its answer comes.
-    pub(crate) fn hold(&self, id: RmwRequestId, grasps: Vec<Grasp>, drive: GripperDrive) {
+    pub(crate) fn hold(&self, id: Caller, grasps: Vec<Grasp>, drive: GripperDrive) {
         self.pending
             .lock()
             .unwrap_or_else(PoisonError::into_inner)
             .insert(id, Pending { grasps, drive });
     }
 
+    /// Sends the ranking of the proxy's object `key` to `reply` when it comes.
+    pub(crate) fn reply_to(&self, key: u64, reply: Reply) {
+        self.replies
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .insert(key, reply);
+    }
+
     /// Answers call `id` with its set's `answer`, mapped onto its grasps.
-    pub(crate) async fn respond(
-        &self,
-        id: RmwRequestId,
-        answer: PoseSetAnswer,
-    ) -> Result<(), String> {
+    pub(crate) async fn respond(&self, id: Caller, answer: PoseSetAnswer) -> Result<(), String> {
         let pending = self
             .pending
             .lock()
@@ -84,10 +106,28 @@ impl GraspsService {
             return Err(format!("a {SERVICE} answer for a call not held"));
         };
         let response = ranked(pending, answer);
-        self.server
-            .async_send_response(id, response)
-            .await
-            .map_err(|e| format!("cannot send a {SERVICE} response: {e:?}"))
+        match id {
+            Caller::Service(id) => self
+                .server
+                .async_send_response(id, response)
+                .await
+                .map_err(|e| format!("cannot send a {SERVICE} response: {e:?}")),
+            Caller::Proxy(key) => {
+                let reply = self
+                    .replies
+                    .lock()
+                    .unwrap_or_else(PoisonError::into_inner)
+                    .remove(&key);
+                let Some(reply) = reply else {
+                    return Err(format!("a ranking for the proxy's object {key}, not held"));
+                };
+                if reply.send(response).is_err() {
+                    // A goal that timed out no longer waits: its ranking is dropped.
+                    log::debug!("the proxy's object {key}: ranked after its goal ended");
+                }
+                Ok(())
+            }
+        }
     }
 }
 

@@ -26,6 +26,7 @@ mod param_services;
 mod params;
 pub(crate) mod play;
 pub(crate) mod pose_work;
+mod proxy;
 mod requests;
 pub(crate) mod ros_args;
 mod scene;
@@ -122,8 +123,9 @@ fn load_config(ros: &RosArgs, node: &str) -> anyhow::Result<(Config, crate::solv
             .with_context(|| format!("-p {name}:={value}"))?;
     }
     let settings = config.solver_settings()?;
-    // The gripper's action is refused here, before the node joins the graph.
+    // The gripper's and the planner's actions are refused here, before the node joins the graph.
     grip::action_name(&config, |name| ros.topic(name, node))?;
+    proxy::planner_name(&config, |name| ros.topic(name, node))?;
     Ok((config, settings))
 }
 
@@ -172,7 +174,7 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
         loaders.clone(),
     )
     .context("cannot start the set thread")?;
-    let shared_for_grip = shared.clone();
+    let for_grip = shared.clone();
     let mut answerer = Answerer::new(
         shared,
         options.echo,
@@ -182,7 +184,7 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
         on_stop,
         meshes,
     );
-    let grip = grip::Grip::offer(&mut session, &config, &shared_for_grip, answerer.recent())?;
+    let (grip, proxy, mut relays) = offer_actions(&mut session, &config, &for_grip, &answerer)?;
     let started = answerer
         .start()
         .map_err(|e| anyhow::Error::new(e).context("recording is off"))?;
@@ -207,6 +209,7 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
         let _services = local.spawn(services.serve(node));
         let _markers_watch = local.spawn(endpoints.markers.watch(node));
         let _grip = local.spawn(grip.serve(node));
+        let _proxy = proxy.as_ref().map(|p| local.spawn(p.serve(node)));
         let mut loading = PoseLoads::new(loaders);
         let mut tf = TfWait::new();
         let mut scene = scene::Scene::new(objects);
@@ -224,6 +227,7 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
                 shutdown,
                 &endpoints,
                 &mut loop_state,
+                &mut relays,
                 demo.as_ref(),
             ))
             .await;
@@ -238,12 +242,25 @@ pub(crate) fn run(options: Options, ros_argv: &[String]) -> anyhow::Result<()> {
     drop(worker);
     drop(endpoints);
     drop(services);
-    drop(grip);
+    drop((grip, proxy));
     if let Some(demo) = demo {
         demo.stop();
     }
     session.close();
     outcome
+}
+
+/// `~/grip` with the gripper's action client, and the grasp planner proxy with the stream of
+/// the objects it hands to the node's thread.
+fn offer_actions(
+    session: &mut Session,
+    config: &Config,
+    shared: &Shared,
+    answerer: &Answerer,
+) -> anyhow::Result<(grip::Grip, Option<proxy::Proxy>, proxy::Relays)> {
+    let grip = grip::Grip::offer(session, config, shared, answerer.recent())?;
+    let (proxy, relays) = proxy::Proxy::offer(session, config, shared)?;
+    Ok((grip, proxy, relays))
 }
 
 /// The first line a user reads: where the node listens and answers, and how to try it.
@@ -307,6 +324,7 @@ async fn serve(
     shutdown: &mut Shutdown,
     endpoints: &Endpoints,
     state: &mut Loop<'_>,
+    relays: &mut proxy::Relays,
     demo: Option<&Demo>,
 ) -> anyhow::Result<()> {
     let mut stream = pin!(endpoints.candidates.requests.async_stream());
@@ -381,12 +399,14 @@ async fn serve(
                     tf_serve::admit(node, endpoints, state, Request::Set(set, Via::Service(id)), (now, now)).await;
                 }
                 sets::Arrival::Grasps(id, call) => {
-                    moveit_in::take_call(node, endpoints, state, id, *call).await;
+                    let caller = grasps::Caller::Service(id);
+                    moveit_in::take_call(node, endpoints, state, caller, *call).await;
                 }
                 sets::Arrival::Undecodable(topic, why) => {
                     tell(node, vec![state.answerer.undecodable(&topic, &why)]);
                 }
             },
+            relay = relays.select_next_some() => proxy::take(node, endpoints, state, relay).await,
             received = tf_static.select_next_some() => tf_serve::keep(state.tf, received, true),
             received = objects.select_next_some() => moveit_in::learn_object(node, state, received),
             received = scenes.select_next_some() => moveit_in::learn_scene(node, state, received),

@@ -5,7 +5,7 @@
 //! two frames) goes the refusals' path, so that it too is answered, counted and recorded.
 
 use super::answer::SetInput;
-use super::grasps::pose_set;
+use super::grasps::{pose_set, Caller};
 use super::requests::{Endpoints, Loop};
 use super::session::say;
 use super::set_worker::Via;
@@ -14,14 +14,14 @@ use super::tf_wait::{Arrival, Request};
 use crate::kind::PoseSets;
 use crate::msg::moveit::{CollisionObject, PlanningScene, RankGraspsRequest};
 use crate::record::now_ns;
-use ros2_client::{MessageInfo, Node, RmwRequestId};
+use ros2_client::{MessageInfo, Node};
 
-/// Takes one call of `~/rank_grasps`.
+/// Takes one call of `~/rank_grasps` (or one object of the grasp planner proxy's, as a call).
 pub(super) async fn take_call(
     node: &Node,
     endpoints: &Endpoints,
     state: &mut Loop<'_>,
-    id: RmwRequestId,
+    id: Caller,
     call: RankGraspsRequest,
 ) {
     let received = now_ns();

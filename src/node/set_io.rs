@@ -27,8 +27,9 @@ pub(crate) enum Via {
     /// A call of `~/recommend` (a candidate set) or of `~/recommend_poses` (a pose set),
     /// answered to this request.
     Service(RmwRequestId),
-    /// A call of `~/rank_grasps`, answered as a pose set and mapped onto its grasps.
-    Grasps(RmwRequestId),
+    /// A call of `~/rank_grasps` (or an object of the grasp planner proxy's), answered as a pose
+    /// set and mapped onto its grasps.
+    Grasps(super::grasps::Caller),
 }
 
 /// A set as it came, of any set kind: from its topic or a call of its service.

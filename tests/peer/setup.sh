@@ -140,11 +140,12 @@ MSG_HASH="$(
         echo "req=$REQ_HASH peer=$PEER_DIR"
         for f in CMakeLists.txt package.xml msg/*.msg srv/*.srv meshes/* src/msg/jazzy/tf2_msgs/*.msg \
                  src/msg/jazzy/moveit_msgs/*.msg src/msg/jazzy/octomap_msgs/*.msg src/msg/jazzy/object_recognition_msgs/*.msg \
-                 src/msg/jazzy/control_msgs/*; do
+                 src/msg/jazzy/control_msgs/* src/msg/jazzy/grasping_msgs/*; do
             if [ -f "$f" ]; then printf '%s %s\n' "$f" "$(sha256sum <"$f" | cut -d' ' -f1)"; fi
         done
         echo "tf2_msgs=TFMessage"   # what build_tf2_msgs below builds
         echo "control_msgs=GripperCommand,ParallelGripperCommand"   # what build_control_msgs below builds
+        echo "grasping_msgs=FindGraspableObjects,GraspableObject,Object,ObjectProperty"   # build_grasping_msgs
     } | sha256sum | cut -d' ' -f1
 )"
 PREFIX="$PEER_DIR/install-${MSG_HASH:0:16}"
@@ -348,6 +349,72 @@ build_moveit_msgs() {
         "${MOVEIT_MSGS[@]}"
 }
 
+# grasping_msgs for the grasp planner proxy's test (tests/ros/test_grasp_proxy.py), built here from its
+# definitions (mikeferguson/grasping_msgs, branch ros2, 0.4.0): FindGraspableObjects.action,
+# GraspableObject.msg, Object.msg and ObjectProperty.msg verbatim (src/msg/jazzy/grasping_msgs/, the
+# texts the node's own definitions are checked against), with its CMakeLists.txt and package.xml cut
+# to those four (GraspPlanning.action is left out: nothing here uses it). It needs the trimmed
+# moveit_msgs above (Grasp) and sensor_msgs' PointCloud2 from its Jazzy wheel.
+build_grasping_msgs() {
+    local src="$(dirname "$SRC")/grasping_msgs" build="$BUILD-grasping_msgs" d="$REPO_ROOT/src/msg/jazzy/grasping_msgs"
+    rm -rf "$src" "$build"
+    mkdir -p "$src/msg" "$src/action" "$build"
+    cp "$d/GraspableObject.msg" "$d/Object.msg" "$d/ObjectProperty.msg" "$src/msg/"
+    cp "$d/FindGraspableObjects.action" "$src/action/"
+    cat >"$src/CMakeLists.txt" <<'CMAKE'
+cmake_minimum_required(VERSION 3.5)
+project(grasping_msgs)
+find_package(ament_cmake REQUIRED)
+find_package(rosidl_default_generators REQUIRED)
+find_package(action_msgs REQUIRED)
+find_package(geometry_msgs REQUIRED)
+find_package(moveit_msgs REQUIRED)
+find_package(sensor_msgs REQUIRED)
+find_package(shape_msgs REQUIRED)
+find_package(std_msgs REQUIRED)
+rosidl_generate_interfaces(${PROJECT_NAME}
+  "action/FindGraspableObjects.action"
+  "msg/GraspableObject.msg"
+  "msg/Object.msg"
+  "msg/ObjectProperty.msg"
+  DEPENDENCIES action_msgs geometry_msgs moveit_msgs sensor_msgs shape_msgs std_msgs
+)
+ament_package()
+CMAKE
+    cat >"$src/package.xml" <<'XML'
+<?xml version="1.0"?>
+<package format="3">
+  <name>grasping_msgs</name>
+  <version>0.4.0</version>
+  <description>grasping_msgs (ros2 branch), FindGraspableObjects and its messages, for grasp_orient's tests</description>
+  <maintainer email="none@example.invalid">grasp_orient tests</maintainer>
+  <license>BSD</license>
+  <buildtool_depend>ament_cmake</buildtool_depend>
+  <buildtool_depend>rosidl_default_generators</buildtool_depend>
+  <depend>action_msgs</depend>
+  <depend>geometry_msgs</depend>
+  <depend>moveit_msgs</depend>
+  <depend>sensor_msgs</depend>
+  <depend>shape_msgs</depend>
+  <depend>std_msgs</depend>
+  <exec_depend>rosidl_default_runtime</exec_depend>
+  <member_of_group>rosidl_interface_packages</member_of_group>
+  <export><build_type>ament_cmake</build_type></export>
+</package>
+XML
+    run_logged grasping-msgs-configure "${BUILD_ENV[@]}" "$VENV/bin/cmake" -S "$src" -B "$build" \
+        -G "Unix Makefiles" \
+        -DCMAKE_BUILD_TYPE=Release \
+        -DCMAKE_PREFIX_PATH="$PREFIX;$VENV" \
+        -DCMAKE_INSTALL_PREFIX="$PREFIX" \
+        -DPython3_EXECUTABLE="$VENV/bin/python" \
+        -DPYTHON_EXECUTABLE="$VENV/bin/python" \
+        -DBUILD_TESTING=OFF
+    run_logged grasping-msgs-build "${BUILD_ENV[@]}" "$VENV/bin/cmake" --build "$build" --parallel "$(nproc 2>/dev/null || echo 2)"
+    run_logged grasping-msgs-install "${BUILD_ENV[@]}" "$VENV/bin/cmake" --install "$build"
+    rm -rf "$build"
+}
+
 if [ -f "$MSG_STAMP" ] && [ "$(cat "$MSG_STAMP")" = "$MSG_HASH" ] && [ -d "$PREFIX" ]; then
     log "grasp_orient interfaces up to date: $PREFIX"
 else
@@ -373,6 +440,7 @@ else
     run_logged cmake-install "${BUILD_ENV[@]}" "$VENV/bin/cmake" --install "$BUILD"
     build_tf2_msgs
     build_control_msgs
+    build_grasping_msgs
     echo "$MSG_HASH" >"$MSG_STAMP"
     rm -rf "$BUILD" "$(dirname "$SRC")"   # only the install is needed from here on
 fi
@@ -446,7 +514,7 @@ mv "$ENV_SH.tmp" "$ENV_SH"
 # 6. Check that the result imports
 # ---------------------------------------------------------------------------------------------------
 # shellcheck disable=SC1090
-if ! ( source "$ENV_SH" && python -c 'import rclpy; from grasp_orient.msg import GraspCandidate, GripRecommendation, GraspCandidateSet, GripRecommendationSet, PoseCandidate, PoseRecommendation, PoseCandidateSet, PoseRecommendationSet; from grasp_orient.srv import Recommend, RecommendPoses, Grip; from tf2_msgs.msg import TFMessage; from control_msgs.action import GripperCommand, ParallelGripperCommand; from control_msgs.msg import GripperCommand as GripperCommandMsg; from action_msgs.msg import GoalStatus; from unique_identifier_msgs.msg import UUID; from sensor_msgs.msg import JointState; from rclpy.action import ActionServer, ActionClient' && python -c 'from moveit_msgs.msg import CollisionObject, PlanningScene, Grasp; from octomap_msgs.msg import OctomapWithPose; from object_recognition_msgs.msg import ObjectType; from shape_msgs.msg import Mesh, SolidPrimitive; from trajectory_msgs.msg import JointTrajectory; from grasp_orient.srv import RankGrasps' ) >"$LOGS/import-check.log" 2>&1; then
+if ! ( source "$ENV_SH" && python -c 'import rclpy; from grasp_orient.msg import GraspCandidate, GripRecommendation, GraspCandidateSet, GripRecommendationSet, PoseCandidate, PoseRecommendation, PoseCandidateSet, PoseRecommendationSet; from grasp_orient.srv import Recommend, RecommendPoses, Grip; from tf2_msgs.msg import TFMessage; from control_msgs.action import GripperCommand, ParallelGripperCommand; from control_msgs.msg import GripperCommand as GripperCommandMsg; from action_msgs.msg import GoalStatus; from unique_identifier_msgs.msg import UUID; from sensor_msgs.msg import JointState; from rclpy.action import ActionServer, ActionClient' && python -c 'from moveit_msgs.msg import CollisionObject, PlanningScene, Grasp; from octomap_msgs.msg import OctomapWithPose; from object_recognition_msgs.msg import ObjectType; from shape_msgs.msg import Mesh, SolidPrimitive; from trajectory_msgs.msg import JointTrajectory; from grasp_orient.srv import RankGrasps' && python -c 'from grasping_msgs.action import FindGraspableObjects; from grasping_msgs.msg import GraspableObject, Object, ObjectProperty; from sensor_msgs.msg import PointCloud2' ) >"$LOGS/import-check.log" 2>&1; then
     cat "$LOGS/import-check.log" >&2
     die "rclpy / grasp_orient.msg import check failed with $ENV_SH"
 fi

@@ -533,7 +533,8 @@ def test_parameters_are_described_listed_and_set_atomically(peer, client):
             "center_of_mass_tolerance", "mass_tolerance", "closing_axis", "max_mesh_load_time",
             "max_inline_mesh_triangles", "mesh_roots", "max_mesh_file_bytes", "max_message_bytes", "gravity_frame",
             "gravity", "tf_timeout", "use_sim_time", "gripper_action", "parallel_gripper_action",
-            "parallel_gripper_joints", "grip_safety_factor", "grip_position", "grip_timeout", "objects_file"}
+            "parallel_gripper_joints", "grip_safety_factor", "grip_position", "grip_timeout", "objects_file",
+            "grasp_planner_action", "grasp_planner_timeout", "grasp_planner_width"}
     assert set(listed) == want, sorted(listed)
     g = by["gravity"]
     assert g.type == ParameterType.PARAMETER_DOUBLE_ARRAY and "[m/s²]" in g.description, g

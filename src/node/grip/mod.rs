@@ -99,10 +99,10 @@ impl Grip {
         };
         let node = session.node_mut();
         let gripper = if let Some((full, name)) = command {
-            let client = action_client(node, &name, "GripperCommand")?;
+            let client = action_client(node, &name, ("control_msgs", "GripperCommand"))?;
             Some(Gripper::Command(full, client))
         } else if let Some((full, name)) = parallel {
-            let client = action_client(node, &name, "ParallelGripperCommand")?;
+            let client = action_client(node, &name, ("control_msgs", "ParallelGripperCommand"))?;
             Some(Gripper::Parallel(full, client))
         } else {
             None
@@ -198,7 +198,8 @@ impl Grip {
                         max_effort: plan.force,
                     },
                 };
-                let outcome = exchange(node, client, goal, deadline, config.grip_timeout).await;
+                let timeout = ("grip_timeout", config.grip_timeout);
+                let outcome = exchange(node, client, goal, deadline, timeout).await;
                 plan.respond(
                     name,
                     outcome.map(|(status, r)| ActionResult {
@@ -229,7 +230,8 @@ impl Grip {
                         effort: vec![plan.force; joints.len()],
                     },
                 };
-                let outcome = exchange(node, client, goal, deadline, config.grip_timeout).await;
+                let timeout = ("grip_timeout", config.grip_timeout);
+                let outcome = exchange(node, client, goal, deadline, timeout).await;
                 plan.respond(
                     name,
                     outcome.map(|(status, r)| ActionResult {
@@ -248,10 +250,10 @@ impl Grip {
 
 /// An action client on the ROS 2 action QoS: reliable, volatile services and feedback, and the
 /// status read volatile (which matches the server's transient-local writer).
-fn action_client<G, R, F>(
+pub(super) fn action_client<G, R, F>(
     node: &mut Node,
     name: &Name,
-    action_type: &str,
+    (package, action_type): (&str, &str),
 ) -> anyhow::Result<ActionClient<G, R, F>>
 where
     G: Message + Clone + 'static,
@@ -269,7 +271,7 @@ where
     node.create_action_client::<G, R, F>(
         ServiceMapping::Enhanced,
         name,
-        &ActionTypeName::new("control_msgs", action_type),
+        &ActionTypeName::new(package, action_type),
         policies,
     )
     .map_err(|e| {
@@ -372,7 +374,7 @@ struct ActionResult {
 
 /// How an exchange failed.
 #[derive(Debug, Clone, PartialEq)]
-enum Failed {
+pub(super) enum Failed {
     /// Not sent: the message says why.
     NotSent(String),
     /// Accepted, but no result: the message says why.
@@ -435,7 +437,7 @@ impl From<String> for Failed {
 }
 
 /// `fut`, or `None` once `deadline` has passed.
-async fn within<T>(deadline: Instant, fut: impl Future<Output = T>) -> Option<T> {
+pub(super) async fn within<T>(deadline: Instant, fut: impl Future<Output = T>) -> Option<T> {
     smol::future::or(async { Some(fut.await) }, async {
         smol::Timer::at(deadline).await;
         None
@@ -443,15 +445,15 @@ async fn within<T>(deadline: Instant, fut: impl Future<Output = T>) -> Option<T>
     .await
 }
 
-/// One goal and its result, all before `deadline` (`timeout` s from the call, for the messages):
-/// the server's goal and result services matched, the goal accepted, the result back. A goal
-/// accepted but without a result by then is canceled.
-async fn exchange<G, R, F>(
+/// One goal and its result, all before `deadline` (`timeout`: the parameter and its value in s,
+/// for the messages): the server's goal and result services matched, the goal accepted, the
+/// result back. A goal accepted but without a result by then is canceled.
+pub(super) async fn exchange<G, R, F>(
     node: &Node,
     client: &ActionClient<G, R, F>,
     goal: G,
     deadline: Instant,
-    timeout: f64,
+    (param, timeout): (&str, f64),
 ) -> std::result::Result<(GoalStatusEnum, R), Failed>
 where
     G: Message + Clone + 'static,
@@ -465,13 +467,13 @@ where
     );
     if within(deadline, found).await.is_none() {
         return Err(Failed::NotSent(format!(
-            "no action server at {name} (none found within grip_timeout, {timeout} s)"
+            "no action server at {name} (none found within {param}, {timeout} s)"
         )));
     }
     let (goal_id, response) = match within(deadline, client.async_send_goal(goal)).await {
         None => {
             return Err(Failed::NotSent(format!(
-                "the action server at {name} did not answer the goal within grip_timeout \
+                "the action server at {name} did not answer the goal within {param} \
                  ({timeout} s)"
             )))
         }
@@ -494,7 +496,7 @@ where
                 Err(e) => format!("its cancel failed: {e:?}"),
             };
             Err(Failed::NoResult(format!(
-                "no result came within grip_timeout ({timeout} s); {canceled}"
+                "no result came within {param} ({timeout} s); {canceled}"
             )))
         }
     }
