@@ -437,16 +437,17 @@ fn contract_fields_come_first_and_in_order() {
 /// wheels (std_msgs, geometry_msgs, sensor_msgs, shape_msgs, trajectory_msgs, …), which the
 /// crate's own wire structs of MoveIt's messages are checked against (`src/msg/moveit.rs`), are
 /// the peer's files byte for byte. The packages the peer builds from these very copies
-/// (moveit_msgs, octomap_msgs, object_recognition_msgs, control_msgs, tf2_msgs) are their
-/// upstream files, as `tests/peer/setup.sh` says where from.
+/// (moveit_msgs, octomap_msgs, object_recognition_msgs, control_msgs, grasping_msgs, tf2_msgs)
+/// are their upstream files, as `tests/peer/setup.sh` says where from.
 #[test]
 #[ignore = "reads the ROS 2 peer's Jazzy .msg files: tests/run.sh runs it with --ignored"]
 fn peer_jazzy_copies_are_the_peers_files() {
-    const BUILT_FROM_HERE: [&str; 5] = [
+    const BUILT_FROM_HERE: [&str; 6] = [
         "moveit_msgs",
         "octomap_msgs",
         "object_recognition_msgs",
         "control_msgs",
+        "grasping_msgs",
         NOT_IN_THE_PEER,
     ];
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src/msg/jazzy");
