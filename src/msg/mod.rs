@@ -19,6 +19,35 @@ pub(crate) use convert::{clip, invalid, short_id, MAX_TEXT_BYTES};
 
 pub use compact_str::CompactString;
 
+/// The [`RosMessage`] and [`RosType`] impls of a struct declared by [`ros_message!`] or
+/// `crate_message!`: its ROS name, and its fields and constants as ROS types.
+macro_rules! ros_description {
+    (
+        $name:ident = $package:ident / $ros_name:ident
+        [ $( $cname:ident : $cty:ty = $cval:expr ),* ]
+        { $( $field:ident $(as $wire:literal)? : $fty:ty ),* }
+    ) => {
+        impl RosMessage for $name {
+            const PACKAGE: &'static str = stringify!($package);
+            const NAME: &'static str = stringify!($ros_name);
+            const TYPE_NAME: &'static str =
+                concat!(stringify!($package), "/msg/", stringify!($ros_name));
+            fn fields() -> Vec<(&'static str, String)> {
+                vec![ $( (wire_name!($field $(, $wire)?), <$fty as RosType>::ros_type()) ),* ]
+            }
+            fn constants() -> Vec<(&'static str, String, String)> {
+                vec![ $( (stringify!($cname), <$cty as RosType>::ros_type(), ($cval).to_string()) ),* ]
+            }
+        }
+
+        impl RosType for $name {
+            fn ros_type() -> String {
+                concat!(stringify!($package), "/", stringify!($ros_name)).to_string()
+            }
+        }
+    };
+}
+
 /// Declares a wire struct, its constants, and its [`RosMessage`] description; the ROS name is
 /// written `package/Name`. A field whose ROS name is a Rust keyword is written
 /// `rust_name as "ros_name": type`.
@@ -42,23 +71,10 @@ macro_rules! ros_message {
             $( #[allow(missing_docs)] pub const $cname: $cty = $cval; )*
         }
 
-        impl RosMessage for $name {
-            const PACKAGE: &'static str = stringify!($package);
-            const NAME: &'static str = stringify!($ros_name);
-            const TYPE_NAME: &'static str =
-                concat!(stringify!($package), "/msg/", stringify!($ros_name));
-            fn fields() -> Vec<(&'static str, String)> {
-                vec![ $( (wire_name!($field $(, $wire)?), <$fty as RosType>::ros_type()) ),* ]
-            }
-            fn constants() -> Vec<(&'static str, String, String)> {
-                vec![ $( (stringify!($cname), <$cty as RosType>::ros_type(), ($cval).to_string()) ),* ]
-            }
-        }
-
-        impl RosType for $name {
-            fn ros_type() -> String {
-                concat!(stringify!($package), "/", stringify!($ros_name)).to_string()
-            }
+        ros_description! {
+            $name = $package / $ros_name
+            [ $( $cname : $cty = $cval ),* ]
+            { $( $field $(as $wire)? : $fty ),* }
         }
     };
 }
@@ -85,23 +101,10 @@ macro_rules! crate_message {
             $( #[allow(missing_docs, dead_code)] pub(crate) const $cname: $cty = $cval; )*
         }
 
-        impl RosMessage for $name {
-            const PACKAGE: &'static str = stringify!($package);
-            const NAME: &'static str = stringify!($ros_name);
-            const TYPE_NAME: &'static str =
-                concat!(stringify!($package), "/msg/", stringify!($ros_name));
-            fn fields() -> Vec<(&'static str, String)> {
-                vec![ $( (wire_name!($field $(, $wire)?), <$fty as RosType>::ros_type()) ),* ]
-            }
-            fn constants() -> Vec<(&'static str, String, String)> {
-                vec![ $( (stringify!($cname), <$cty as RosType>::ros_type(), ($cval).to_string()) ),* ]
-            }
-        }
-
-        impl RosType for $name {
-            fn ros_type() -> String {
-                concat!(stringify!($package), "/", stringify!($ros_name)).to_string()
-            }
+        ros_description! {
+            $name = $package / $ros_name
+            [ $( $cname : $cty = $cval ),* ]
+            { $( $field $(as $wire)? : $fty ),* }
         }
     };
 }
