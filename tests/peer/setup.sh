@@ -163,6 +163,23 @@ BUILD_ENV=(
     "LD_LIBRARY_PATH=$VENV/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
 )
 
+# cmake_install NAME SRC BUILD PREFIX_PATH: configures the interface package in SRC (build folder
+# BUILD, dependencies found in PREFIX_PATH), builds it and installs it into $PREFIX; the logs are
+# $LOGS/NAME-configure.log, NAME-build.log and NAME-install.log.
+cmake_install() {
+    local name="$1" src="$2" build="$3" prefix_path="$4"
+    run_logged "$name-configure" "${BUILD_ENV[@]}" "$VENV/bin/cmake" -S "$src" -B "$build" \
+        -G "Unix Makefiles" \
+        -DCMAKE_BUILD_TYPE=Release \
+        -DCMAKE_PREFIX_PATH="$prefix_path" \
+        -DCMAKE_INSTALL_PREFIX="$PREFIX" \
+        -DPython3_EXECUTABLE="$VENV/bin/python" \
+        -DPYTHON_EXECUTABLE="$VENV/bin/python" \
+        -DBUILD_TESTING=OFF
+    run_logged "$name-build" "${BUILD_ENV[@]}" "$VENV/bin/cmake" --build "$build" --parallel "$(nproc 2>/dev/null || echo 2)"
+    run_logged "$name-install" "${BUILD_ENV[@]}" "$VENV/bin/cmake" --install "$build"
+}
+
 # tf2_msgs for the TF tests (tests/ros/test_tf.py), built here from its Jazzy definition rather than
 # taken from a wheel: TFMessage.msg as geometry2's jazzy branch has it (src/msg/jazzy/tf2_msgs/, the
 # text the node's own definition is checked against), with tf2_msgs' CMakeLists.txt and package.xml
@@ -204,16 +221,7 @@ CMAKE
   <export><build_type>ament_cmake</build_type></export>
 </package>
 XML
-    run_logged tf2-msgs-configure "${BUILD_ENV[@]}" "$VENV/bin/cmake" -S "$src" -B "$build" \
-        -G "Unix Makefiles" \
-        -DCMAKE_BUILD_TYPE=Release \
-        -DCMAKE_PREFIX_PATH="$VENV" \
-        -DCMAKE_INSTALL_PREFIX="$PREFIX" \
-        -DPython3_EXECUTABLE="$VENV/bin/python" \
-        -DPYTHON_EXECUTABLE="$VENV/bin/python" \
-        -DBUILD_TESTING=OFF
-    run_logged tf2-msgs-build "${BUILD_ENV[@]}" "$VENV/bin/cmake" --build "$build" --parallel "$(nproc 2>/dev/null || echo 2)"
-    run_logged tf2-msgs-install "${BUILD_ENV[@]}" "$VENV/bin/cmake" --install "$build"
+    cmake_install tf2-msgs "$src" "$build" "$VENV"
     rm -rf "$build"
 }
 
@@ -267,16 +275,7 @@ CMAKE
   <export><build_type>ament_cmake</build_type></export>
 </package>
 XML
-    run_logged control-msgs-configure "${BUILD_ENV[@]}" "$VENV/bin/cmake" -S "$src" -B "$build" \
-        -G "Unix Makefiles" \
-        -DCMAKE_BUILD_TYPE=Release \
-        -DCMAKE_PREFIX_PATH="$VENV" \
-        -DCMAKE_INSTALL_PREFIX="$PREFIX" \
-        -DPython3_EXECUTABLE="$VENV/bin/python" \
-        -DPYTHON_EXECUTABLE="$VENV/bin/python" \
-        -DBUILD_TESTING=OFF
-    run_logged control-msgs-build "${BUILD_ENV[@]}" "$VENV/bin/cmake" --build "$build" --parallel "$(nproc 2>/dev/null || echo 2)"
-    run_logged control-msgs-install "${BUILD_ENV[@]}" "$VENV/bin/cmake" --install "$build"
+    cmake_install control-msgs "$src" "$build" "$VENV"
     rm -rf "$build"
 }
 
@@ -329,16 +328,7 @@ $xml  <exec_depend>rosidl_default_runtime</exec_depend>
   <export><build_type>ament_cmake</build_type></export>
 </package>
 XML
-    run_logged "$pkg-configure" "${BUILD_ENV[@]}" "$VENV/bin/cmake" -S "$src" -B "$build" \
-        -G "Unix Makefiles" \
-        -DCMAKE_BUILD_TYPE=Release \
-        -DCMAKE_PREFIX_PATH="$PREFIX;$VENV" \
-        -DCMAKE_INSTALL_PREFIX="$PREFIX" \
-        -DPython3_EXECUTABLE="$VENV/bin/python" \
-        -DPYTHON_EXECUTABLE="$VENV/bin/python" \
-        -DBUILD_TESTING=OFF
-    run_logged "$pkg-build" "${BUILD_ENV[@]}" "$VENV/bin/cmake" --build "$build" --parallel "$(nproc 2>/dev/null || echo 2)"
-    run_logged "$pkg-install" "${BUILD_ENV[@]}" "$VENV/bin/cmake" --install "$build"
+    cmake_install "$pkg" "$src" "$build" "$PREFIX;$VENV"
     rm -rf "$build"
 }
 build_moveit_msgs() {
@@ -402,16 +392,7 @@ CMAKE
   <export><build_type>ament_cmake</build_type></export>
 </package>
 XML
-    run_logged grasping-msgs-configure "${BUILD_ENV[@]}" "$VENV/bin/cmake" -S "$src" -B "$build" \
-        -G "Unix Makefiles" \
-        -DCMAKE_BUILD_TYPE=Release \
-        -DCMAKE_PREFIX_PATH="$PREFIX;$VENV" \
-        -DCMAKE_INSTALL_PREFIX="$PREFIX" \
-        -DPython3_EXECUTABLE="$VENV/bin/python" \
-        -DPYTHON_EXECUTABLE="$VENV/bin/python" \
-        -DBUILD_TESTING=OFF
-    run_logged grasping-msgs-build "${BUILD_ENV[@]}" "$VENV/bin/cmake" --build "$build" --parallel "$(nproc 2>/dev/null || echo 2)"
-    run_logged grasping-msgs-install "${BUILD_ENV[@]}" "$VENV/bin/cmake" --install "$build"
+    cmake_install grasping-msgs "$src" "$build" "$PREFIX;$VENV"
     rm -rf "$build"
 }
 
@@ -428,16 +409,7 @@ else
     cp "$REPO_ROOT"/msg/*.msg "$SRC/msg/"
     cp "$REPO_ROOT"/srv/*.srv "$SRC/srv/"
     cp -r "$REPO_ROOT/meshes" "$SRC/"   # installed into share/grasp_orient: package://grasp_orient/meshes/...
-    run_logged cmake-configure "${BUILD_ENV[@]}" "$VENV/bin/cmake" -S "$SRC" -B "$BUILD" \
-        -G "Unix Makefiles" \
-        -DCMAKE_BUILD_TYPE=Release \
-        -DCMAKE_PREFIX_PATH="$PREFIX;$VENV" \
-        -DCMAKE_INSTALL_PREFIX="$PREFIX" \
-        -DPython3_EXECUTABLE="$VENV/bin/python" \
-        -DPYTHON_EXECUTABLE="$VENV/bin/python" \
-        -DBUILD_TESTING=OFF
-    run_logged cmake-build "${BUILD_ENV[@]}" "$VENV/bin/cmake" --build "$BUILD" --parallel "$(nproc 2>/dev/null || echo 2)"
-    run_logged cmake-install "${BUILD_ENV[@]}" "$VENV/bin/cmake" --install "$BUILD"
+    cmake_install cmake "$SRC" "$BUILD" "$PREFIX;$VENV"
     build_tf2_msgs
     build_control_msgs
     build_grasping_msgs
