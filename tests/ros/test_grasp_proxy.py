@@ -22,6 +22,7 @@ import numpy as np
 import pytest
 
 from conftest import Peer, to_plain
+from fake_action import FakeActionServer
 import pose_cases as pc
 from tf_cases import homogeneous, pose_of
 from test_moveit import BOX, FRICTION, MASS, TABLE, World, check, expected, grasps_on, rand_transform
@@ -31,8 +32,7 @@ from grasping_msgs.action import FindGraspableObjects  # noqa: E402
 from grasping_msgs.msg import GraspableObject, Object  # noqa: E402
 from grasp_orient.srv import RankGrasps  # noqa: E402
 from moveit_msgs.msg import Grasp  # noqa: E402
-from rclpy.action import ActionClient, ActionServer, CancelResponse, GoalResponse  # noqa: E402
-from rclpy.task import Future  # noqa: E402
+from rclpy.action import ActionClient  # noqa: E402
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
 from sensor_msgs.msg import PointField  # noqa: E402
 from tf2_msgs.msg import TFMessage  # noqa: E402
@@ -77,36 +77,16 @@ def proxy_nodes(start_node, tmp_path_factory):
             n.stop_and_check()
 
 
-class Planner:
+class Planner(FakeActionServer):
     """An rclpy FindGraspableObjects server, as a grasp planner offers it: it returns `result` (or rejects the
     goal while `reject` is set, or keeps it executing until canceled while `hold` is set) and records each goal
     and cancel."""
 
     def __init__(self, peer: Peer):
-        self.goals: list = []
-        self.cancels = 0
-        self.reject = self.hold = False
-        self.released: Future | None = None
+        super().__init__(peer.node, FindGraspableObjects, PLANNER)
         self.result = FindGraspableObjects.Result()
-        self.server = ActionServer(peer.node, FindGraspableObjects, PLANNER, execute_callback=self._execute,
-                                   goal_callback=self._goal, cancel_callback=self._cancel)
 
-    def _goal(self, goal):
-        self.goals.append(goal)
-        return GoalResponse.REJECT if self.reject else GoalResponse.ACCEPT
-
-    def _cancel(self, _handle):
-        self.cancels += 1
-        if self.released is not None:
-            self.released.set_result(True)
-        return CancelResponse.ACCEPT
-
-    async def _execute(self, handle):
-        if self.hold:
-            self.released = Future()
-            await self.released
-            handle.canceled()
-            return FindGraspableObjects.Result()
+    def finish(self, handle):
         handle.succeed()
         return self.result
 

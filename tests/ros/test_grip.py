@@ -23,14 +23,13 @@ from pathlib import Path
 import pytest
 
 from conftest import GraspClient, Peer, reliable_qos, run_solve
+from fake_action import FakeActionServer
 from mcap_util import random_grasp
 import pose_cases as pc
 
 from control_msgs.action import GripperCommand, ParallelGripperCommand  # noqa: E402
 from grasp_orient.msg import GraspCandidateSet, PoseCandidate, PoseRecommendation  # noqa: E402
 from grasp_orient.srv import Grip, Recommend  # noqa: E402
-from rclpy.action import ActionServer, CancelResponse, GoalResponse  # noqa: E402
-from rclpy.task import Future  # noqa: E402
 from ament_index_python.packages import get_package_share_directory  # noqa: E402
 
 JAZZY = Path(__file__).resolve().parent.parent.parent / "src" / "msg" / "jazzy"
@@ -106,38 +105,17 @@ def nodes(start_node, cases):
         n.stop_and_check()
 
 
-class Gripper:
+class Gripper(FakeActionServer):
     """An rclpy action server of `action_type` at `name`, like a ros2_control gripper controller: it records each
     goal, accepts it (or rejects it while `reject` is set), and ends it at once with the commanded position and
     effort, stalled (or, while `hold` is set, keeps it executing until canceled)."""
 
     def __init__(self, peer: Peer, action_type, name: str):
-        self.peer, self.type = peer, action_type
-        self.goals: list = []
-        self.cancels = 0
-        self.reject = False
-        self.hold = False
-        self.released: Future | None = None
-        self.server = ActionServer(peer.node, action_type, name, execute_callback=self._execute,
-                                   goal_callback=self._goal, cancel_callback=self._cancel)
+        super().__init__(peer.node, action_type, name)
+        self.peer = peer
 
-    def _goal(self, goal):
-        self.goals.append(goal)
-        return GoalResponse.REJECT if self.reject else GoalResponse.ACCEPT
-
-    def _cancel(self, _handle):
-        self.cancels += 1
-        if self.released is not None:
-            self.released.set_result(True)
-        return CancelResponse.ACCEPT
-
-    async def _execute(self, handle):
+    def finish(self, handle):
         result = self.type.Result()
-        if self.hold:
-            self.released = Future()
-            await self.released
-            handle.canceled()
-            return result
         cmd = handle.request.command
         if self.type is GripperCommand:
             result.position, result.effort = cmd.position + 0.002, cmd.max_effort
