@@ -11,9 +11,7 @@
 use super::session::create_topic;
 use crate::config::objects::{missing, ObjectTable};
 use crate::msg::moveit::{CollisionObject, PlanningScene, ShapePrimitive};
-use crate::msg::{
-    GraspObject, Mesh, MeshTriangle, Point, Pose, Quaternion, SolidPrimitive, Vector3,
-};
+use crate::msg::{GraspObject, Mesh, MeshTriangle, Point, Pose, SolidPrimitive, Vector3};
 use nalgebra::{Isometry3, Quaternion as Q, Translation3, UnitQuaternion};
 use ros2_client::{Node, QosProfile, Subscription};
 use std::cell::RefCell;
@@ -292,7 +290,7 @@ fn to_grasp_object(
     let shape_in_object = iso(shape_pose.unwrap_or(&Pose::default()));
     let placed = iso(&o.pose) * shape_in_object;
     let mut out = GraspObject {
-        pose: pose(&placed),
+        pose: Pose::from(&placed),
         scale: Vector3 {
             x: 1.0,
             y: 1.0,
@@ -378,28 +376,11 @@ fn iso(p: &Pose) -> Isometry3<f64> {
     )
 }
 
-/// An isometry as a pose.
-fn pose(i: &Isometry3<f64>) -> Pose {
-    let (t, q) = (i.translation.vector, i.rotation.quaternion());
-    Pose {
-        position: Point {
-            x: t.x,
-            y: t.y,
-            z: t.z,
-        },
-        orientation: Quaternion {
-            x: q.i,
-            y: q.j,
-            z: q.k,
-            w: q.w,
-        },
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::msg::moveit::{PlanningSceneWorld, ShapeMesh, ShapeMeshTriangle};
+    use crate::msg::Quaternion;
 
     fn table() -> ObjectTable {
         ObjectTable::parse(
