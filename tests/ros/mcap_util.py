@@ -255,15 +255,16 @@ def read_rosbags(path: Path | str) -> list[Rec]:
     return out
 
 
-def read_mcap(path: Path | str) -> list[Rec]:
-    """Every message decoded by the mcap library with mcap_ros2's DecoderFactory, in log-time order."""
+def read_mcap(path: Path | str, topics: list[str] | None = None) -> list[Rec]:
+    """Every message (or every one on `topics`) decoded by the mcap library with mcap_ros2's DecoderFactory, in
+    log-time order."""
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory
 
     out = []
     with open(path, "rb") as f:
         reader = make_reader(f, decoder_factories=[DecoderFactory()])
-        for schema, channel, message, decoded in reader.iter_decoded_messages(log_time_order=True):
+        for schema, channel, message, decoded in reader.iter_decoded_messages(topics=topics, log_time_order=True):
             out.append(Rec(channel.topic, message.log_time, message.publish_time,
                            schema.name if schema else "", plain(decoded)))
     return out
