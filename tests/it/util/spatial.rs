@@ -591,8 +591,8 @@ fn off_axis_local(
     // the cut's bounding box. A point is still uniform over the same region. Sixty-four draws in
     // the whole square would find a point with probability 1 − (1 − a)^64, `a` the cut's share of
     // the square, so a pair is kept with that probability: pairs whose cut is a sliver (contacts
-    // almost touching, normals almost opposed) stay as rare as they were. 360 such grasps take
-    // about a fifth of a second instead of 15 s.
+    // almost touching, normals almost opposed) stay as rare as they were. The three tests on
+    // these grasps went from 18 to 19 s each to about 4 s.
     let (tries, square) = if behind.contains(&true) {
         let mid = ((p1.x + p2.x) / 2.0, (p1.y + p2.y) / 2.0);
         let (square, area) = region_behind(mid, 2.0, [p1, p2], [n1, n2], behind, 1e-3 * dist)?;
